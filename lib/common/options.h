@@ -1,0 +1,28 @@
+/*
+ * Versioned options structs.  Each public options struct starts with a
+ * uint32_t struct_size; the library reads min(struct_size, own size) bytes
+ * and keeps its defaults for the rest, so binaries built against an older,
+ * smaller struct keep working.  A caller's larger struct (from a newer
+ * header) is accepted only if the bytes this library does not know are zero.
+ */
+#ifndef NERF_COMMON_OPTIONS_H
+#define NERF_COMMON_OPTIONS_H
+
+#include <stddef.h>
+
+/*
+ * Write defaults (own_size bytes) into the caller's struct, truncated to
+ * struct_size, and set its struct_size.  name is used in error messages.
+ */
+int nerf__options_init(void *opts, size_t struct_size, const void *defaults,
+                       size_t own_size, const char *name);
+
+/*
+ * Overlay the caller's struct src onto dst (which holds own_size bytes of
+ * defaults).  Returns NERF_EINVAL for a NULL or impossibly small struct and
+ * NERF_EVERSION for unknown non-zero trailing bytes.
+ */
+int nerf__options_read(void *dst, size_t own_size, const void *src,
+                       const char *name);
+
+#endif
