@@ -1,0 +1,332 @@
+#include "network.h"
+
+#include <cblas.h>
+#include <math.h>
+#include <string.h>
+
+#include "fused.h"
+#include "rng.h"
+
+static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
+{
+    nerf__linear l = {in, out, *offset, *offset + (size_t)in * out};
+    *offset += (size_t)in * out + out;
+    return l;
+}
+
+void nerf__network_layout(nerf__network *net, size_t offset)
+{
+    net->pos_width = nerf__encoding_width(&net->pos_enc);
+    net->dir_width = net->use_viewdirs ? nerf__encoding_width(&net->dir_enc) : 0;
+    net->offset = offset;
+    size_t at = offset;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        uint32_t in = i == 0 ? net->pos_width : net->width;
+        if (i > 0 && i == net->skip) {
+            in += net->pos_width;
+        }
+        net->trunk[i] = place(in, net->width, &at);
+    }
+    if (net->use_viewdirs) {
+        net->head = place(net->width, net->width + 1, &at);
+        net->view = place(net->width + net->dir_width, net->view_width, &at);
+        net->rgb = place(net->view_width, 3, &at);
+    } else {
+        net->head = place(net->width, 4, &at);
+        memset(&net->view, 0, sizeof net->view);
+        memset(&net->rgb, 0, sizeof net->rgb);
+    }
+    net->count = at - offset;
+}
+
+static void init_linear(const nerf__linear *l, float *params, uint64_t seed,
+                        uint64_t stream)
+{
+    nerf__rng rng = nerf__rng_make(seed, stream);
+    float bound = 1.0f / sqrtf((float)l->in);
+    size_t total = (size_t)l->in * l->out + l->out; /* W then b, contiguous */
+    for (size_t k = 0; k < total; k++) {
+        params[l->w + k] = (2.0f * nerf__rng_uniform(&rng) - 1.0f) * bound;
+    }
+}
+
+void nerf__network_init(const nerf__network *net, float *params,
+                        uint64_t seed, uint64_t stream_base)
+{
+    for (uint32_t i = 0; i < net->depth; i++) {
+        init_linear(&net->trunk[i], params, seed, stream_base + i);
+    }
+    /* The fused head initialises its two parts as the reference's two
+     * separate layers would be: same fan-in, so the same bound. */
+    init_linear(&net->head, params, seed, stream_base + NERF__MAX_DEPTH);
+    if (net->use_viewdirs) {
+        init_linear(&net->view, params, seed, stream_base + NERF__MAX_DEPTH + 1);
+        init_linear(&net->rgb, params, seed, stream_base + NERF__MAX_DEPTH + 2);
+    }
+}
+
+/* ---- workspace ---------------------------------------------------------- */
+
+static size_t grad_width(const nerf__network *net)
+{
+    size_t g = net->width + 1;
+    if (net->view_width > g) {
+        g = net->view_width;
+    }
+    return g;
+}
+
+static size_t round64(size_t floats)
+{
+    return (floats + 15) & ~(size_t)15; /* keep every buffer 64-byte aligned */
+}
+
+int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
+                            const nerf__network *net, size_t n, bool keep)
+{
+    if (n <= ws->cap && (ws->keep || !keep)) {
+        ws->n = n;
+        return NERF_OK;
+    }
+    /* cblas takes int dimensions: refuse batches whose matrices it cannot
+     * address. */
+    if (n > (size_t)1 << 24) {
+        return nerf__error(NERF_EINVAL, "batch of %zu samples is too large "
+                           "(at most %d per call)", n, 1 << 24);
+    }
+    size_t layers = keep ? net->depth : 2;
+    size_t sizes[8] = {
+        round64(n * net->pos_width),
+        round64(n * net->dir_width),
+        round64(layers * n * net->width),
+        round64(n * nerf__network_head_width(net)),
+        round64(n * net->view_width),
+        round64(n * 3),
+        keep ? round64(n * grad_width(net)) : 0,
+        keep ? round64(n * grad_width(net)) : 0,
+    };
+    size_t total = 0;
+    for (int i = 0; i < 8; i++) {
+        total += sizes[i];
+    }
+    float *block = nerf__alloc(env, total * sizeof(float));
+    if (block == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__workspace_release(env, ws);
+    float **slots[8] = {&ws->enc_pos, &ws->enc_dir, &ws->trunk, &ws->head,
+                        &ws->view, &ws->rgb, &ws->grad_a, &ws->grad_b};
+    float *at = block;
+    for (int i = 0; i < 8; i++) {
+        *slots[i] = sizes[i] ? at : NULL;
+        at += sizes[i];
+    }
+    ws->enc_pos = block; /* first slot: also the block to free */
+    ws->cap = n;
+    ws->n = n;
+    ws->keep = keep;
+    return NERF_OK;
+}
+
+void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws)
+{
+    nerf__free(env, ws->enc_pos);
+    memset(ws, 0, sizeof *ws);
+}
+
+/* ---- products ----------------------------------------------------------- */
+
+/* Y[n, out] = beta Y + X[n, in] W^T, W a column block of a [out, ldw]. */
+static void gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
+                         size_t ldx, const float *w, size_t ldw, float beta,
+                         float *y, size_t ldy)
+{
+    cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)out,
+                (int)in, 1.0f, x, (int)ldx, w, (int)ldw, beta, y, (int)ldy);
+}
+
+/* dW[out, in] += dY[n, out]^T X[n, in]. */
+static void gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
+                             const float *dy, size_t lddy, const float *x,
+                             size_t ldx, float *dw, size_t lddw)
+{
+    cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)out, (int)in,
+                (int)n, 1.0f, dy, (int)lddy, x, (int)ldx, 1.0f, dw, (int)lddw);
+}
+
+/* dX[n, in] = dY[n, out] W, W a column block of a [out, ldw]. */
+static void gemm_input_grad(size_t n, uint32_t out, uint32_t in,
+                            const float *dy, size_t lddy, const float *w,
+                            size_t ldw, float *dx, size_t lddx)
+{
+    cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)in,
+                (int)out, 1.0f, dy, (int)lddy, w, (int)ldw, 0.0f, dx,
+                (int)lddx);
+}
+
+static float sigmoid(float z)
+{
+    return 1.0f / (1.0f + expf(-z));
+}
+
+static float *trunk_buffer(const nerf__network *net, nerf__workspace *ws,
+                           uint32_t layer)
+{
+    size_t slot = ws->keep ? layer : layer % 2;
+    return ws->trunk + slot * ws->n * net->width;
+}
+
+void nerf__network_forward(const nerf__network *net, const float *params,
+                           nerf__workspace *ws, size_t n,
+                           const float *positions, const float *directions,
+                           float *rgb_out, float *sigma_out)
+{
+    const uint32_t W = net->width, Ep = net->pos_width;
+    ws->n = n;
+    nerf__encoding_forward(&net->pos_enc, n, positions, 3, ws->enc_pos, Ep);
+
+    const float *x = ws->enc_pos;
+    size_t ldx = Ep;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        const nerf__linear *l = &net->trunk[i];
+        float *y = trunk_buffer(net, ws, i);
+        if (i > 0 && i == net->skip) {
+            /* Input is [gamma(x), h]: one product per column block. */
+            gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in, 0.0f,
+                         y, W);
+            gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f, y, W);
+        } else {
+            gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f, y, W);
+        }
+        nerf__bias_relu(n, W, y, W, params + l->b);
+        x = y;
+        ldx = W;
+    }
+
+    const uint32_t HW = nerf__network_head_width(net);
+    gemm_forward(n, HW, W, x, ldx, params + net->head.w, W, 0.0f, ws->head, HW);
+    nerf__bias_add(n, HW, ws->head, HW, params + net->head.b);
+
+    if (net->use_viewdirs) {
+        const nerf__linear *v = &net->view, *r = &net->rgb;
+        const uint32_t Ed = net->dir_width, V = net->view_width;
+        nerf__encoding_forward(&net->dir_enc, n, directions, 3, ws->enc_dir, Ed);
+        gemm_forward(n, V, W, ws->head, HW, params + v->w, v->in, 0.0f,
+                     ws->view, V);
+        gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v->w + W, v->in, 1.0f,
+                     ws->view, V);
+        nerf__bias_relu(n, V, ws->view, V, params + v->b);
+        gemm_forward(n, 3, V, ws->view, V, params + r->w, V, 0.0f, ws->rgb, 3);
+        for (size_t i = 0; i < n; i++) {
+            for (int c = 0; c < 3; c++) {
+                ws->rgb[3 * i + c] = sigmoid(ws->rgb[3 * i + c] + params[r->b + c]);
+            }
+        }
+    } else {
+        for (size_t i = 0; i < n; i++) {
+            for (int c = 0; c < 3; c++) {
+                ws->rgb[3 * i + c] = sigmoid(ws->head[4 * i + c]);
+            }
+        }
+    }
+    if (rgb_out) {
+        memcpy(rgb_out, ws->rgb, n * 3 * sizeof(float));
+    }
+    if (sigma_out) {
+        const float *s = ws->head + (net->use_viewdirs ? W : 3);
+        for (size_t i = 0; i < n; i++) {
+            sigma_out[i] = s[i * HW];
+        }
+    }
+}
+
+/* dz = d_rgb * rgb (1 - rgb): the sigmoid's backward, into rows of ld. */
+static void sigmoid_backward(size_t n, const float *rgb, const float *d_rgb,
+                             float *dz, size_t ld)
+{
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++) {
+            float y = rgb[3 * i + c];
+            float g = d_rgb ? d_rgb[3 * i + c] : 0.0f;
+            dz[i * ld + c] = g * y * (1.0f - y);
+        }
+    }
+}
+
+void nerf__network_backward(const nerf__network *net, const float *params,
+                            float *grads, nerf__workspace *ws,
+                            const float *d_rgb, const float *d_sigma)
+{
+    const size_t n = ws->n;
+    const uint32_t W = net->width, Ep = net->pos_width;
+    const uint32_t HW = nerf__network_head_width(net);
+    float *d_head = ws->grad_a;
+
+    if (net->use_viewdirs) {
+        const nerf__linear *v = &net->view, *r = &net->rgb;
+        const uint32_t Ed = net->dir_width, V = net->view_width;
+        float *dz = ws->grad_b; /* [n, 3] */
+        sigmoid_backward(n, ws->rgb, d_rgb, dz, 3);
+        nerf__bias_backward(n, 3, dz, 3, grads + r->b);
+        gemm_weight_grad(n, 3, V, dz, 3, ws->view, V, grads + r->w, V);
+        float *d_view = ws->grad_a; /* [n, V] */
+        gemm_input_grad(n, 3, V, dz, 3, params + r->w, V, d_view, V);
+        nerf__relu_backward_bias(n, V, ws->view, V, d_view, V, grads + v->b);
+        gemm_weight_grad(n, V, W, d_view, V, ws->head, HW, grads + v->w, v->in);
+        gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed, grads + v->w + W,
+                         v->in);
+        /* d_view lives in grad_a, so the head gradient goes to grad_b. */
+        d_head = ws->grad_b;
+        gemm_input_grad(n, V, W, d_view, V, params + v->w, v->in, d_head, HW);
+        for (size_t i = 0; i < n; i++) {
+            d_head[i * HW + W] = d_sigma ? d_sigma[i] : 0.0f;
+        }
+    } else {
+        sigmoid_backward(n, ws->rgb, d_rgb, d_head, 4);
+        for (size_t i = 0; i < n; i++) {
+            d_head[i * 4 + 3] = d_sigma ? d_sigma[i] : 0.0f;
+        }
+    }
+
+    const float *h_last = trunk_buffer(net, ws, net->depth - 1);
+    nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
+    gemm_weight_grad(n, HW, W, d_head, HW, h_last, W, grads + net->head.w, W);
+    float *dh = d_head == ws->grad_a ? ws->grad_b : ws->grad_a;
+    gemm_input_grad(n, HW, W, d_head, HW, params + net->head.w, W, dh, W);
+
+    for (uint32_t i = net->depth; i-- > 0;) {
+        const nerf__linear *l = &net->trunk[i];
+        const float *y = trunk_buffer(net, ws, i);
+        nerf__relu_backward_bias(n, W, y, W, dh, W, grads + l->b);
+        if (i == 0) {
+            gemm_weight_grad(n, W, l->in, dh, W, ws->enc_pos, Ep, grads + l->w,
+                             l->in);
+            break;
+        }
+        const float *x = trunk_buffer(net, ws, i - 1);
+        size_t hidden_col = 0;
+        if (i == net->skip) {
+            gemm_weight_grad(n, W, Ep, dh, W, ws->enc_pos, Ep, grads + l->w,
+                             l->in);
+            hidden_col = Ep;
+        }
+        gemm_weight_grad(n, W, W, dh, W, x, W, grads + l->w + hidden_col, l->in);
+        float *dx = dh == ws->grad_a ? ws->grad_b : ws->grad_a;
+        gemm_input_grad(n, W, W, dh, W, params + l->w + hidden_col, l->in, dx, W);
+        dh = dx;
+    }
+}
+
+double nerf__network_flops_per_sample(const nerf__network *net)
+{
+    double f = 0.0;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        f += 2.0 * net->trunk[i].in * net->trunk[i].out;
+    }
+    f += 2.0 * net->head.in * net->head.out;
+    if (net->use_viewdirs) {
+        f += 2.0 * net->view.in * net->view.out;
+        f += 2.0 * net->rgb.in * net->rgb.out;
+    }
+    return f;
+}

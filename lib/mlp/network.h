@@ -1,0 +1,117 @@
+/*
+ * The NeRF network: a ReLU trunk with a skip connection, a head giving the
+ * 256-wide feature and sigma, and a view branch giving rgb.  Samples are
+ * rows of row-major matrices and every layer is one cblas_sgemm per pass
+ * (two where the input is a concatenation: the concatenation is never
+ * copied, each part multiplies its own column block of the weights).
+ *
+ * Weights are stored as PyTorch stores nn.Linear: W is [out, in] row-major,
+ * followed by the bias [out].  All parameters of a network are one slice of
+ * the model's parameter array, so the optimiser and the checkpoint see one
+ * flat vector.
+ */
+#ifndef NERF_MLP_NETWORK_H
+#define NERF_MLP_NETWORK_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "encoding.h"
+#include "env.h"
+
+#define NERF__MAX_DEPTH 32
+
+typedef struct nerf__linear {
+    uint32_t in, out;
+    size_t w; /* offset of W [out, in] in the parameter array */
+    size_t b; /* offset of the bias [out] */
+} nerf__linear;
+
+typedef struct nerf__network {
+    nerf__encoding pos_enc, dir_enc;
+    uint32_t pos_width, dir_width; /* encoded widths */
+    uint32_t depth, width, skip, view_width;
+    bool use_viewdirs;
+    nerf__linear trunk[NERF__MAX_DEPTH];
+    /* With view directions: rows [0, width) are the feature layer, row
+     * width is sigma (the reference's feature_linear and alpha_linear,
+     * fused so that one sgemm serves both).  Without: the 4-wide
+     * output_linear, [r, g, b, sigma]. */
+    nerf__linear head;
+    nerf__linear view; /* [feature, gamma(d)] -> view_width, ReLU */
+    nerf__linear rgb;  /* view_width -> 3, sigmoid */
+    size_t offset;     /* first parameter in the model's array */
+    size_t count;      /* number of parameters */
+} nerf__network;
+
+/*
+ * Lay the network's layers out from parameter offset `offset`.  The caller
+ * has filled the encodings and the shape fields.
+ */
+void nerf__network_layout(nerf__network *net, size_t offset);
+
+/* Floats per sample in the head's output. */
+static inline uint32_t nerf__network_head_width(const nerf__network *net)
+{
+    return net->use_viewdirs ? net->width + 1 : 4;
+}
+
+/*
+ * PyTorch's default nn.Linear initialisation (uniform in +-1/sqrt(in) for
+ * weights and biases), the one the reference port trains with.  Each layer
+ * draws from its own counter-based stream keyed by (seed, stream_base +
+ * layer), so results do not depend on the order layers are visited.
+ */
+void nerf__network_init(const nerf__network *net, float *params,
+                        uint64_t seed, uint64_t stream_base);
+
+/*
+ * Activation and gradient buffers for batches of up to `cap` samples.
+ * `keep` stores every trunk activation, which backward needs; without it
+ * the trunk alternates between two buffers.  Buffers grow on demand and are
+ * reused, so a training loop allocates only on its first step.
+ */
+typedef struct nerf__workspace {
+    size_t cap;
+    size_t n;      /* samples in the last forward */
+    bool keep;
+    float *enc_pos; /* [n, pos_width] */
+    float *enc_dir; /* [n, dir_width] */
+    float *trunk;   /* [depth or 2][n, width], after ReLU */
+    float *head;    /* [n, head_width] */
+    float *view;    /* [n, view_width], after ReLU */
+    float *rgb;     /* [n, 3], after the sigmoid */
+    float *grad_a;  /* [n, width + 1], gradient scratch */
+    float *grad_b;  /* [n, width + 1] */
+} nerf__workspace;
+
+int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
+                            const nerf__network *net, size_t n, bool keep);
+void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws);
+
+/*
+ * Forward n samples.  positions and directions are [n, 3]; directions may
+ * be NULL when the network ignores them.  rgb_out [n, 3] receives the
+ * sigmoid colours and sigma_out [n] the raw density (either may be NULL).
+ * The workspace must have been reserved for n samples.
+ */
+void nerf__network_forward(const nerf__network *net, const float *params,
+                           nerf__workspace *ws, size_t n,
+                           const float *positions, const float *directions,
+                           float *rgb_out, float *sigma_out);
+
+/*
+ * Backward the last forward (which must have kept its activations), given
+ * the loss gradient with respect to rgb [n, 3] (after the sigmoid) and raw
+ * sigma [n]; either may be NULL for zero.  Gradients are added to grads
+ * (same layout as params).
+ */
+void nerf__network_backward(const nerf__network *net, const float *params,
+                            float *grads, nerf__workspace *ws,
+                            const float *d_rgb, const float *d_sigma);
+
+/* Multiply-adds per sample of one forward pass. */
+double nerf__network_flops_per_sample(const nerf__network *net);
+
+#endif

@@ -1,0 +1,310 @@
+#include "model.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "options.h"
+
+/* Samples per block in nerf_model_query(): bounds its memory (about 10 MB
+ * for the reference network) while keeping each sgemm large. */
+#define QUERY_BLOCK 4096
+
+static void reference_options(nerf_model_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->encoding = NERF_ENCODING_FREQUENCY;
+    o->pos_frequencies = 10;
+    o->dir_frequencies = 4;
+    o->encoding_flags = NERF_ENCODING_INCLUDE_INPUT;
+    o->depth = 8;
+    o->width = 256;
+    o->skip_layer = 5;
+    o->view_width = 128;
+    o->use_viewdirs = 1;
+    o->use_fine = 1;
+}
+
+NERF_API int nerf_model_options_init(nerf_model_options *opts,
+                                     size_t struct_size)
+{
+    nerf_model_options d;
+    reference_options(&d);
+    return nerf__options_init(opts, struct_size, &d, sizeof d,
+                              "nerf_model_options");
+}
+
+NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
+{
+    nerf_model_options o;
+    reference_options(&o);
+    int rc = nerf__options_read(&o, sizeof o, opts, "nerf_model_options");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    uint64_t seed = o.seed;
+    const nerf_hooks *hooks = o.hooks;
+    switch (preset) {
+    case NERF_PRESET_REFERENCE:
+        reference_options(&o);
+        break;
+    case NERF_PRESET_TINY:
+        reference_options(&o);
+        o.depth = 4;
+        o.width = 64;
+        o.skip_layer = 2;
+        o.view_width = 32;
+        break;
+    default:
+        return nerf__error(NERF_EINVAL, "nerf_model_options_preset: unknown "
+                           "preset %d", preset);
+    }
+    o.seed = seed;
+    o.hooks = hooks;
+    size_t n = opts->struct_size < sizeof o ? opts->struct_size : sizeof o;
+    memcpy((char *)opts + sizeof o.struct_size,
+           (const char *)&o + sizeof o.struct_size, n - sizeof o.struct_size);
+    return NERF_OK;
+}
+
+int nerf__model_check_options(const nerf_model_options *o)
+{
+    const char *what = NULL;
+    if (o->encoding != NERF_ENCODING_FREQUENCY) {
+        what = "encoding is not a known nerf_encoding_kind";
+    } else if (o->encoding_flags & ~(NERF_ENCODING_INCLUDE_INPUT |
+                                     NERF_ENCODING_SCALE_PI)) {
+        what = "encoding_flags has unknown bits";
+    } else if (o->pos_frequencies > 20 || o->dir_frequencies > 20) {
+        what = "frequencies must be at most 20";
+    } else if (!(o->encoding_flags & NERF_ENCODING_INCLUDE_INPUT) &&
+               (o->pos_frequencies == 0 ||
+                (o->use_viewdirs && o->dir_frequencies == 0))) {
+        what = "0 frequencies without INCLUDE_INPUT leaves nothing to encode";
+    } else if (o->depth < 1 || o->depth > NERF__MAX_DEPTH) {
+        what = "depth must be 1..32";
+    } else if (o->width < 1 || o->width > 4096) {
+        what = "width must be 1..4096";
+    } else if (o->skip_layer >= o->depth) {
+        what = "skip_layer must be below depth (0 = no skip)";
+    } else if (o->use_viewdirs > 1 || o->use_fine > 1) {
+        what = "use_viewdirs and use_fine must be 0 or 1";
+    } else if (o->use_viewdirs && (o->view_width < 1 || o->view_width > 4096)) {
+        what = "view_width must be 1..4096";
+    } else if (o->reserved0 != 0) {
+        what = "reserved0 must be 0";
+    }
+    if (what) {
+        return nerf__error(NERF_EINVAL, "nerf_model_options: %s", what);
+    }
+    return NERF_OK;
+}
+
+static void setup_network(nerf__network *net, const nerf_model_options *o,
+                          size_t offset)
+{
+    memset(net, 0, sizeof *net);
+    bool raw = (o->encoding_flags & NERF_ENCODING_INCLUDE_INPUT) != 0;
+    bool pi = (o->encoding_flags & NERF_ENCODING_SCALE_PI) != 0;
+    net->pos_enc = (nerf__encoding){o->encoding, 3, o->pos_frequencies, raw, pi};
+    net->dir_enc = (nerf__encoding){o->encoding, 3, o->dir_frequencies, raw, pi};
+    net->depth = o->depth;
+    net->width = o->width;
+    net->skip = o->skip_layer;
+    net->view_width = o->use_viewdirs ? o->view_width : 0;
+    net->use_viewdirs = o->use_viewdirs != 0;
+    nerf__network_layout(net, offset);
+}
+
+int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
+                      const nerf__env *env)
+{
+    nerf_model *m = nerf__calloc(env, 1, sizeof *m);
+    if (m == NULL) {
+        return NERF_ENOMEM;
+    }
+    m->env = *env;
+    m->opts = *opts;
+    m->opts.hooks = NULL;
+    m->n_nets = opts->use_fine ? 2 : 1;
+    size_t offset = 0;
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        setup_network(&m->nets[i], opts, offset);
+        offset += m->nets[i].count;
+    }
+    m->n_params = offset;
+    m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7};
+    float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
+    for (int i = 0; i < 4; i++) {
+        *arrays[i] = nerf__calloc(env, m->n_params, sizeof(float));
+        if (*arrays[i] == NULL) {
+            nerf_model_destroy(m);
+            return NERF_ENOMEM;
+        }
+    }
+    *out = m;
+    return NERF_OK;
+}
+
+/* Read a caller's options struct over the defaults and validate it. */
+static int read_options(nerf_model_options *o, const nerf_model_options *in)
+{
+    reference_options(o);
+    int rc = nerf__options_read(o, sizeof *o, in, "nerf_model_options");
+    if (rc == NERF_OK) {
+        rc = nerf__model_check_options(o);
+    }
+    return rc;
+}
+
+NERF_API int nerf_model_create(nerf_model **out,
+                               const nerf_model_options *opts)
+{
+    if (out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_create: out is NULL");
+    }
+    *out = NULL;
+    nerf_model_options o;
+    int rc = read_options(&o, opts);
+    nerf__env env;
+    if (rc == NERF_OK) {
+        rc = nerf__env_from_hooks(&env, o.hooks);
+    }
+    nerf_model *m = NULL;
+    if (rc == NERF_OK) {
+        rc = nerf__model_alloc(&m, &o, &env);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        nerf__network_init(&m->nets[i], m->params, o.seed, 1000u * (i + 1));
+    }
+    nerf__log(&m->env, NERF_LOG_DEBUG,
+              "model: %u network(s), %zu parameters, depth %u, width %u",
+              m->n_nets, m->n_params, o.depth, o.width);
+    *out = m;
+    return NERF_OK;
+}
+
+NERF_API void nerf_model_destroy(nerf_model *model)
+{
+    if (model == NULL) {
+        return; /* support free on NULL */
+    }
+    nerf__env env = model->env;
+    nerf__free(&env, model->params);
+    nerf__free(&env, model->grads);
+    nerf__free(&env, model->adam_m);
+    nerf__free(&env, model->adam_v);
+    nerf__free(&env, model);
+}
+
+NERF_API int nerf_model_get_options(const nerf_model *model,
+                                    nerf_model_options *out)
+{
+    if (model == NULL || out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_get_options: NULL argument");
+    }
+    if (out->struct_size < sizeof(uint32_t) || out->struct_size > 65536) {
+        return nerf__error(NERF_EINVAL, "nerf_model_get_options: struct_size "
+                           "%u is invalid", (unsigned)out->struct_size);
+    }
+    size_t n = out->struct_size < sizeof model->opts ? out->struct_size
+                                                     : sizeof model->opts;
+    memcpy((char *)out + sizeof(uint32_t),
+           (const char *)&model->opts + sizeof(uint32_t), n - sizeof(uint32_t));
+    return NERF_OK;
+}
+
+NERF_API size_t nerf_model_param_count(const nerf_model *model)
+{
+    return model ? model->n_params : 0;
+}
+
+NERF_API uint64_t nerf_model_step(const nerf_model *model)
+{
+    return model ? model->step : 0;
+}
+
+int nerf__model_network(const nerf_model *m, int network)
+{
+    if (network == NERF_NETWORK_COARSE) {
+        return 0;
+    }
+    if (network == NERF_NETWORK_FINE && m->n_nets == 2) {
+        return 1;
+    }
+    return -1;
+}
+
+NERF_API int nerf_model_query(const nerf_model *model, int network, size_t n,
+                              const float *positions, const float *directions,
+                              float *rgb_out, float *sigma_out)
+{
+    if (model == NULL || positions == NULL || (rgb_out == NULL && sigma_out == NULL)) {
+        return nerf__error(NERF_EINVAL, "nerf_model_query: NULL model, "
+                           "positions or outputs");
+    }
+    int net_index = nerf__model_network(model, network);
+    if (net_index < 0) {
+        return nerf__error(NERF_EINVAL, "nerf_model_query: network %d is not "
+                           "in this model", network);
+    }
+    const nerf__network *net = &model->nets[net_index];
+    if (net->use_viewdirs && directions == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_query: the model uses "
+                           "view directions but directions is NULL");
+    }
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    size_t block = n < QUERY_BLOCK ? n : QUERY_BLOCK;
+    int rc = nerf__workspace_reserve(&model->env, &ws, net, block, false);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    for (size_t at = 0; at < n; at += block) {
+        size_t k = n - at < block ? n - at : block;
+        nerf__network_forward(net, model->params, &ws, k, positions + 3 * at,
+                              directions ? directions + 3 * at : NULL,
+                              rgb_out ? rgb_out + 3 * at : NULL,
+                              sigma_out ? sigma_out + at : NULL);
+    }
+    nerf__workspace_release(&model->env, &ws);
+    return NERF_OK;
+}
+
+int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, const float *positions,
+                        const float *directions, float *rgb_out,
+                        float *sigma_out)
+{
+    const nerf__network *net = &m->nets[network];
+    int rc = nerf__workspace_reserve(&m->env, ws, net, n, true);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__network_forward(net, m->params, ws, n, positions, directions,
+                          rgb_out, sigma_out);
+    return NERF_OK;
+}
+
+void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
+                          const float *d_rgb, const float *d_sigma)
+{
+    nerf__network_backward(&m->nets[network], m->params, m->grads, ws, d_rgb,
+                           d_sigma);
+}
+
+void nerf__model_zero_grad(nerf_model *m)
+{
+    memset(m->grads, 0, m->n_params * sizeof(float));
+}
+
+void nerf__model_adam_step(nerf_model *m)
+{
+    double lr = nerf__adam_rate(&m->adam, m->step);
+    m->step++;
+    nerf__adam_update(&m->adam, m->step, lr, m->n_params, m->params, m->grads,
+                      m->adam_m, m->adam_v);
+}

@@ -1,0 +1,61 @@
+/*
+ * The struct behind nerf_model, and the internal calls the renderer and the
+ * trainer use to run the networks with activations kept for backward.
+ */
+#ifndef NERF_MODEL_H
+#define NERF_MODEL_H
+
+#include <stdbool.h>
+
+#include "adam.h"
+#include "env.h"
+#include "network.h"
+
+struct nerf_model {
+    nerf__env env;
+    nerf_model_options opts; /* as created; opts.hooks is NULL */
+    nerf__network nets[2];   /* coarse, fine */
+    uint32_t n_nets;         /* 1 without a fine network */
+    size_t n_params;         /* both networks */
+    /* One flat vector each, networks back to back, so the optimiser and
+     * the checkpoint see the whole model as four arrays. */
+    float *params;
+    float *grads;
+    float *adam_m;
+    float *adam_v;
+    uint64_t step;           /* optimiser steps taken */
+    nerf__adam adam;
+};
+
+/* Validate options (already read into a full-size struct). */
+int nerf__model_check_options(const nerf_model_options *o);
+
+/*
+ * Allocate a model for opts with zeroed parameters and optimiser state
+ * (no initialisation): the loaders fill it.  env is copied.
+ */
+int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
+                      const nerf__env *env);
+
+/* Network index for a public nerf_network value; -1 if absent. */
+int nerf__model_network(const nerf_model *m, int network);
+
+/*
+ * Forward n samples through a network, keeping activations in ws for
+ * nerf__model_backward().  Grows ws if needed (the only allocation).
+ */
+int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, const float *positions,
+                        const float *directions, float *rgb_out,
+                        float *sigma_out);
+
+/* Accumulate the gradients of the forward held in ws into m->grads. */
+void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
+                          const float *d_rgb, const float *d_sigma);
+
+void nerf__model_zero_grad(nerf_model *m);
+
+/* Take one Adam step with the scheduled learning rate; step++. */
+void nerf__model_adam_step(nerf_model *m);
+
+#endif
