@@ -1,0 +1,300 @@
+/*
+ * The network against a plain double-precision reference written here:
+ * forward values, and every parameter's gradient against central finite
+ * differences of the reference.  Covers every layer, the skip
+ * concatenation, both heads and the view branch.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "../harness.h"
+#include "model.h"
+#include "rng.h"
+
+#define N 12
+#define MAXW 512
+
+static double enc_value(const nerf__encoding *e, const float *x, uint32_t j)
+{
+    if (e->include_input) {
+        if (j < 3) {
+            return x[j];
+        }
+        j -= 3;
+    }
+    uint32_t k = j / 6, r = j % 6;
+    double a = ldexp(e->scale_pi ? M_PI : 1.0, (int)k) * (double)x[r % 3];
+    return r < 3 ? sin(a) : cos(a);
+}
+
+static void linear(const nerf__linear *l, const double *P, const double *in,
+                   double *out, bool relu)
+{
+    for (uint32_t o = 0; o < l->out; o++) {
+        double s = P[l->b + o];
+        for (uint32_t j = 0; j < l->in; j++) {
+            s += P[l->w + (size_t)o * l->in + j] * in[j];
+        }
+        out[o] = relu && s < 0.0 ? 0.0 : s;
+    }
+}
+
+static void ref_forward(const nerf__network *net, const double *P,
+                        const float *x, const float *d, double rgb[3],
+                        double *sigma)
+{
+    double ex[MAXW], ed[MAXW], h[MAXW], in[MAXW], out[MAXW];
+    for (uint32_t j = 0; j < net->pos_width; j++) {
+        ex[j] = enc_value(&net->pos_enc, x, j);
+    }
+    memcpy(h, ex, net->pos_width * sizeof(double));
+    uint32_t hw = net->pos_width;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        uint32_t k = 0;
+        if (i > 0 && i == net->skip) {
+            memcpy(in, ex, net->pos_width * sizeof(double));
+            k = net->pos_width;
+        }
+        memcpy(in + k, h, hw * sizeof(double));
+        linear(&net->trunk[i], P, in, h, true);
+        hw = net->width;
+    }
+    linear(&net->head, P, h, out, false);
+    if (net->use_viewdirs) {
+        *sigma = out[net->width];
+        for (uint32_t j = 0; j < net->dir_width; j++) {
+            ed[j] = enc_value(&net->dir_enc, d, j);
+        }
+        memcpy(in, out, net->width * sizeof(double));
+        memcpy(in + net->width, ed, net->dir_width * sizeof(double));
+        double v[MAXW], z[3];
+        linear(&net->view, P, in, v, true);
+        linear(&net->rgb, P, v, z, false);
+        for (int c = 0; c < 3; c++) {
+            rgb[c] = 1.0 / (1.0 + exp(-z[c]));
+        }
+    } else {
+        *sigma = out[3];
+        for (int c = 0; c < 3; c++) {
+            rgb[c] = 1.0 / (1.0 + exp(-out[c]));
+        }
+    }
+}
+
+typedef struct problem {
+    float pos[N * 3], dir[N * 3];
+    float a_rgb[N * 3], a_sigma[N];
+} problem;
+
+static void make_problem(problem *p, uint64_t seed)
+{
+    nerf__rng r = nerf__rng_make(seed, 1);
+    for (int i = 0; i < N; i++) {
+        double n2 = 0.0;
+        for (int c = 0; c < 3; c++) {
+            p->pos[3 * i + c] = 2.0f * nerf__rng_uniform(&r) - 1.0f;
+            p->dir[3 * i + c] = 2.0f * nerf__rng_uniform(&r) - 1.0f;
+            n2 += p->dir[3 * i + c] * p->dir[3 * i + c];
+            p->a_rgb[3 * i + c] = 2.0f * nerf__rng_uniform(&r) - 1.0f;
+        }
+        for (int c = 0; c < 3; c++) {
+            p->dir[3 * i + c] /= (float)sqrt(n2);
+        }
+        p->a_sigma[i] = 2.0f * nerf__rng_uniform(&r) - 1.0f;
+    }
+}
+
+/* The loss whose gradient we check: sum a_rgb . rgb + a_sigma sigma. */
+static double ref_loss(const nerf__network *net, const double *P,
+                       const problem *p)
+{
+    double L = 0.0;
+    for (int i = 0; i < N; i++) {
+        double rgb[3], s;
+        ref_forward(net, P, p->pos + 3 * i, p->dir + 3 * i, rgb, &s);
+        L += p->a_sigma[i] * s;
+        for (int c = 0; c < 3; c++) {
+            L += p->a_rgb[3 * i + c] * rgb[c];
+        }
+    }
+    return L;
+}
+
+static void check_network(const nerf_model_options *o, int network)
+{
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, o));
+    if (m == NULL) {
+        return;
+    }
+    int k = nerf__model_network(m, network);
+    const nerf__network *net = &m->nets[k];
+    problem p;
+    make_problem(&p, 7 + (uint64_t)network);
+
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    float rgb[N * 3], sigma[N];
+    CHECK_OK(nerf__model_forward(m, k, &ws, N, p.pos, p.dir, rgb, sigma));
+    nerf__model_zero_grad(m);
+    nerf__model_backward(m, k, &ws, p.a_rgb, p.a_sigma);
+
+    double *P = malloc(m->n_params * sizeof(double));
+    for (size_t i = 0; i < m->n_params; i++) {
+        P[i] = m->params[i];
+    }
+    for (int i = 0; i < N; i++) {
+        double want[3], s;
+        ref_forward(net, P, p.pos + 3 * i, p.dir + 3 * i, want, &s);
+        CHECK_NEAR(sigma[i], s, 1e-5 * (1.0 + fabs(s)));
+        for (int c = 0; c < 3; c++) {
+            CHECK_NEAR(rgb[3 * i + c], want[c], 1e-5);
+        }
+    }
+
+    /* Every parameter of this network; parameters of the other network
+     * must get no gradient at all. */
+    double gmax = 0.0;
+    for (size_t i = net->offset; i < net->offset + net->count; i++) {
+        gmax = fmax(gmax, fabs(m->grads[i]));
+    }
+    CHECK(gmax > 0.0);
+    int bad = 0;
+    const double h = 1e-6;
+    for (size_t i = 0; i < m->n_params; i++) {
+        bool mine = i >= net->offset && i < net->offset + net->count;
+        if (!mine) {
+            if (m->grads[i] != 0.0f && bad++ < 5) {
+                FAILF("parameter %zu of the other network got a gradient", i);
+            }
+            continue;
+        }
+        double keep = P[i];
+        P[i] = keep + h;
+        double lp = ref_loss(net, P, &p);
+        P[i] = keep - h;
+        double lm = ref_loss(net, P, &p);
+        P[i] = keep;
+        double fd = (lp - lm) / (2.0 * h);
+        double err = fabs(m->grads[i] - fd);
+        if (err > 1e-4 * fabs(fd) + 1e-5 * gmax && bad++ < 5) {
+            FAILF("parameter %zu (offset %zu in network): analytic %.8g, "
+                  "finite difference %.8g", i, i - net->offset,
+                  (double)m->grads[i], fd);
+        }
+    }
+    free(P);
+    nerf__workspace_release(&m->env, &ws);
+    nerf_model_destroy(m);
+}
+
+static void small_options(nerf_model_options *o)
+{
+    NERF_MODEL_OPTIONS_INIT(o);
+    o->depth = 4;
+    o->width = 9;
+    o->skip_layer = 2;
+    o->view_width = 5;
+    o->pos_frequencies = 3;
+    o->dir_frequencies = 2;
+    o->seed = 42;
+}
+
+TEST(gradients_reference_form)
+{
+    nerf_model_options o;
+    small_options(&o);
+    check_network(&o, NERF_NETWORK_COARSE);
+    check_network(&o, NERF_NETWORK_FINE);
+}
+
+TEST(gradients_without_viewdirs)
+{
+    nerf_model_options o;
+    small_options(&o);
+    o.use_viewdirs = 0;
+    o.skip_layer = 1;
+    check_network(&o, NERF_NETWORK_COARSE);
+}
+
+TEST(gradients_paper_form_no_skip)
+{
+    nerf_model_options o;
+    small_options(&o);
+    o.encoding_flags = NERF_ENCODING_SCALE_PI;
+    o.skip_layer = 0;
+    o.use_fine = 0;
+    check_network(&o, NERF_NETWORK_COARSE);
+}
+
+TEST(gradients_no_positional_encoding)
+{
+    nerf_model_options o;
+    small_options(&o);
+    o.pos_frequencies = 0;
+    o.dir_frequencies = 0;
+    o.depth = 3;
+    o.skip_layer = 2;
+    check_network(&o, NERF_NETWORK_COARSE);
+}
+
+/* Counts allocations so that the test can see the training path reuse
+ * its buffers. */
+static size_t n_allocs;
+
+static void *counting_alloc(size_t size, void *user)
+{
+    (void)user;
+    n_allocs++;
+    return malloc(size);
+}
+
+static void counting_free(void *ptr, void *user)
+{
+    (void)user;
+    free(ptr);
+}
+
+TEST(buffers_are_reused)
+{
+    nerf_hooks hooks;
+    NERF_HOOKS_INIT(&hooks);
+    hooks.alloc = counting_alloc;
+    hooks.free = counting_free;
+    nerf_model_options o;
+    small_options(&o);
+    o.hooks = &hooks;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m == NULL) {
+        return;
+    }
+    problem p;
+    make_problem(&p, 3);
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    size_t after_first = 0;
+    for (int step = 0; step < 4; step++) {
+        size_t n = step == 0 ? N : N - (size_t)step; /* smaller batches fit */
+        CHECK_OK(nerf__model_forward(m, 0, &ws, n, p.pos, p.dir, NULL, NULL));
+        nerf__model_zero_grad(m);
+        nerf__model_backward(m, 0, &ws, p.a_rgb, p.a_sigma);
+        nerf__model_adam_step(m);
+        if (step == 0) {
+            after_first = n_allocs;
+        }
+    }
+    CHECK_EQ_INT(n_allocs, after_first);
+    nerf__workspace_release(&m->env, &ws);
+    nerf_model_destroy(m);
+}
+
+int main(void)
+{
+    RUN(gradients_reference_form);
+    RUN(gradients_without_viewdirs);
+    RUN(gradients_paper_form_no_skip);
+    RUN(gradients_no_positional_encoding);
+    RUN(buffers_are_reused);
+    HARNESS_EXIT();
+}
