@@ -1,0 +1,79 @@
+# shellcheck shell=bash
+#
+# Shared set-up for scripts/test.sh and scripts/demo.sh.  Source it, do not
+# run it.  It holds the one list of Debian packages libnerf needs and the
+# meson options of the release build, so the two scripts cannot drift apart.
+
+# Everything needed to build, test and run the examples, as Debian packages.
+# README.md lists the same packages for people who install them by hand.
+NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
+                   meson ninja-build pkg-config python3-numpy)
+
+# Options of build/release, shared by both scripts so that running one after
+# the other reuses the build instead of reconfiguring it back and forth.
+# shellcheck disable=SC2034 # used by the scripts that source this file
+NERF_RELEASE_OPTIONS=(--werror -Dbuildtype=release)
+
+# Print the packages of NERF_DEB_PACKAGES that dpkg does not report as
+# installed, separated by spaces (nothing when all are present).
+nerf_missing_packages() {
+  local pkg status missing=""
+  for pkg in "${NERF_DEB_PACKAGES[@]}"; do
+    status=$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null) || status=""
+    case "$status" in
+      *" ok installed") ;;
+      *) missing="$missing $pkg" ;;
+    esac
+  done
+  printf '%s' "${missing# }"
+}
+
+# Make sure the packages are installed.  As root, install what is missing
+# with apt-get; otherwise print the command to run and return 1.  On a system
+# without dpkg, warn and carry on: meson will name anything it cannot find.
+nerf_ensure_packages() {
+  if ! command -v dpkg-query >/dev/null 2>&1; then
+    echo "deps: dpkg-query not found; not a Debian system, so not checking" \
+         "packages (libnerf needs the equivalents of:" \
+         "${NERF_DEB_PACKAGES[*]})" >&2
+    return 0
+  fi
+  local missing
+  missing=$(nerf_missing_packages)
+  if [ -z "$missing" ]; then
+    return 0
+  fi
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "deps: missing Debian packages: $missing" >&2
+    echo "deps: install them with:" >&2
+    echo "sudo apt-get install -y $missing"
+    return 1
+  fi
+  echo "deps: installing missing Debian packages: $missing" >&2
+  # stdin is closed so that nothing can wait for an answer (CI has none).
+  # shellcheck disable=SC2086 # the list is meant to split into words
+  if ! apt-get update </dev/null ||
+     ! DEBIAN_FRONTEND=noninteractive apt-get install -y $missing </dev/null
+  then
+    echo "deps: apt-get failed; install these packages and retry: $missing" >&2
+    return 1
+  fi
+  missing=$(nerf_missing_packages)
+  if [ -n "$missing" ]; then
+    echo "deps: still missing after apt-get: $missing" >&2
+    return 1
+  fi
+  return 0
+}
+
+# nerf_configure DIR OPTION...: configure a meson build directory, or
+# reconfigure it with these options when it was configured before.
+nerf_configure() {
+  local dir=$1
+  shift
+  if [ -f "$dir/meson-private/coredata.dat" ]; then
+    meson setup --reconfigure "$dir" "$@"
+  else
+    meson setup "$dir" "$@"
+  fi
+}

@@ -1,0 +1,136 @@
+#!/usr/bin/env bash
+#
+# libnerf's test command: ./scripts/test.sh [meson test arguments...]
+#
+# Installs missing Debian packages (as root; otherwise prints the apt-get
+# line), builds build/release and runs the test suite there, then builds
+# build/sanitize (AddressSanitizer + UndefinedBehaviorSanitizer) and runs the
+# suite again.  Extra arguments go to both `meson test` runs, for example
+# `./scripts/test.sh --suite abi`.
+#
+# The last line of output is always "N passed, N failed, N skipped", summed
+# over both runs; the exit status is non-zero if a build or a test failed.
+# .ci/run relies on both.
+
+set -eu
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+# shellcheck source=scripts/deps.sh
+. scripts/deps.sh
+
+passed=0
+failed=0
+skipped=0
+
+summary() {
+  echo "$passed passed, $failed failed, $skipped skipped"
+}
+
+# count_results LOG: add the results in meson's testlog.json to the totals.
+# Each line of the log is one JSON object with a "result" field.
+count_results() {
+  local log=$1 counts
+  if [ ! -s "$log" ]; then
+    return 0
+  fi
+  # Debian's own interpreter: the python3 first on PATH may be another one.
+  if [ -x /usr/bin/python3 ]; then
+    counts=$(/usr/bin/python3 - "$log" <<'PY'
+import json, sys
+ok = bad = skip = 0
+with open(sys.argv[1], encoding="utf-8") as f:
+    for line in f:
+        if not line.strip():
+            continue
+        result = json.loads(line).get("result")
+        if result in ("OK", "EXPECTEDFAIL"):
+            ok += 1
+        elif result == "SKIP":
+            skip += 1
+        else:
+            bad += 1
+print(ok, bad, skip)
+PY
+    ) || counts=""
+  fi
+  if [ -z "${counts:-}" ]; then
+    # Quotes inside JSON strings are escaped, so a bare "result": "X" can
+    # only be the field itself.
+    counts=$(grep -o '"result": *"[A-Z]*"' "$log" | awk '
+      /"(OK|EXPECTEDFAIL)"$/ { ok++; next }
+      /"SKIP"$/              { skip++; next }
+                             { bad++ }
+      END { print ok + 0, bad + 0, skip + 0 }')
+  fi
+  local ok bad skip
+  read -r ok bad skip <<<"$counts"
+  passed=$((passed + ok))
+  failed=$((failed + bad))
+  skipped=$((skipped + skip))
+}
+
+# run_suite NAME DIR -- SETUP-OPTIONS... -- ENV-ASSIGNMENTS...
+# Configure, build and test one build directory.  Never exits: failures are
+# counted so that the summary line still prints.
+run_suite() {
+  local name=$1 dir=$2
+  shift 3
+  local setup=()
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do
+    setup+=("$1")
+    shift
+  done
+  shift
+  local envs=("$@")   # may be empty
+
+  echo "== $name: configure $dir"
+  if ! nerf_configure "$dir" "${setup[@]}"; then
+    echo "== $name: meson setup failed (see $dir/meson-logs/meson-log.txt)"
+    failed=$((failed + 1))
+    return 0
+  fi
+  echo "== $name: build"
+  if ! meson compile -C "$dir"; then
+    echo "== $name: build failed"
+    failed=$((failed + 1))
+    return 0
+  fi
+  echo "== $name: test"
+  local log="$dir/meson-logs/testlog.json" rc=0 before=$failed
+  rm -f "$log"
+  env ${envs[@]+"${envs[@]}"} meson test -C "$dir" --print-errorlogs \
+    ${test_args[@]+"${test_args[@]}"} || rc=$?
+  count_results "$log"
+  if [ "$rc" -ne 0 ] && [ "$failed" -eq "$before" ]; then
+    # meson test itself failed (bad argument, rebuild error, ...) without
+    # recording a failing test; count it so the run cannot look green.
+    echo "== $name: meson test exited with status $rc"
+    failed=$((failed + 1))
+  fi
+  return 0
+}
+
+test_args=("$@")
+
+if ! nerf_ensure_packages; then
+  failed=1
+  summary
+  exit 1
+fi
+
+run_suite release build/release -- "${NERF_RELEASE_OPTIONS[@]}" --
+
+# Sanitized code runs slower, hence the longer timeouts.  Leak checking is on
+# so a missing free fails the test that leaked.
+test_args=(--timeout-multiplier 3 ${test_args[@]+"${test_args[@]}"})
+run_suite sanitize build/sanitize -- \
+  -Db_sanitize=address,undefined -Db_lundef=false \
+  -Dbuildtype=debugoptimized --werror -- \
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+if [ $((passed + failed + skipped)) -eq 0 ]; then
+  echo "warning: no tests ran (check the arguments given to meson test)" >&2
+fi
+summary
+[ "$failed" -eq 0 ]
