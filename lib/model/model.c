@@ -116,6 +116,13 @@ static void setup_network(nerf__network *net, const nerf_model_options *o,
     nerf__network_layout(net, offset);
 }
 
+size_t nerf__model_options_param_count(const nerf_model_options *o)
+{
+    nerf__network net;
+    setup_network(&net, o, 0);
+    return net.count * (o->use_fine ? 2u : 1u);
+}
+
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
                       const nerf__env *env)
 {

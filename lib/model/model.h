@@ -31,6 +31,12 @@ struct nerf_model {
 int nerf__model_check_options(const nerf_model_options *o);
 
 /*
+ * Parameters a model of these (validated) options has, computed without
+ * allocating, so a loader can check a file's claims before trusting them.
+ */
+size_t nerf__model_options_param_count(const nerf_model_options *o);
+
+/*
  * Allocate a model for opts with zeroed parameters and optimiser state
  * (no initialisation): the loaders fill it.  env is copied.
  */

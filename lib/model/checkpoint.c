@@ -1,0 +1,556 @@
+/*
+ * nerf_model_save() and nerf_model_load(): libnerf's own checkpoint format.
+ * docs/formats.md is the specification; this file follows it.  In short: a
+ * 48-byte little-endian header with its own CRC, then a zlib stream whose
+ * content is a list of tagged sections (u32 tag, u64 length, bytes).
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <zlib.h>
+
+#include "byteorder.h"
+#include "file_io.h"
+#include "model.h"
+
+#define MAGIC "NERFCKPT"
+#define MAGIC_LEN 8
+#define FORMAT_VERSION 1u
+#define HEADER_SIZE 48u
+/* The frame every version keeps: magic, version, header size and a final
+ * CRC, so that any version's header can at least be verified. */
+#define HEADER_FRAME 20u
+#define HEADER_SIZE_MAX 4096u
+
+/* Bit 31 of a tag: a reader that does not know the section must refuse the
+ * file; without it, unknown sections are skipped. */
+#define TAG_REQUIRED 0x80000000u
+#define TAG_OPTIONS (TAG_REQUIRED | 1u)
+#define TAG_TRAINING (TAG_REQUIRED | 2u)
+#define TAG_PARAMS (TAG_REQUIRED | 3u)
+#define TAG_ADAM_M (TAG_REQUIRED | 4u)
+#define TAG_ADAM_V (TAG_REQUIRED | 5u)
+#define N_SECTIONS 5
+#define SECTION_HEAD 12u /* u32 tag, u64 length */
+#define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
+#define TRAINING_SIZE 64u /* 6 f64 hyperparameters, u64 step, u64 count */
+#define N_OPTION_U32 11
+
+/* Refuse files beyond 64 GiB before reading them. */
+#define MAX_FILE ((uint64_t)1 << 36)
+/* zlib cannot expand data more than about 1032 times; a header claiming
+ * more is corrupt, and believing it would allocate without bound. */
+#define MAX_INFLATE_RATIO 1032u
+
+/* The fields of a header, decoded. */
+typedef struct ckpt_header {
+    uint32_t version, size, flags;
+    uint64_t payload_size, packed_size;
+    uint32_t packed_crc, payload_crc;
+} ckpt_header;
+
+/* ---- saving ------------------------------------------------------------- */
+
+static unsigned char *put_section(unsigned char *p, uint32_t tag, uint64_t len)
+{
+    nerf__store_le32(p, tag);
+    nerf__store_le64(p + 4, len);
+    return p + SECTION_HEAD;
+}
+
+/* The options in the order of nerf_model_options, hooks excluded. */
+static void option_fields(const nerf_model_options *o,
+                          uint32_t f[N_OPTION_U32])
+{
+    f[0] = o->encoding;
+    f[1] = o->pos_frequencies;
+    f[2] = o->dir_frequencies;
+    f[3] = o->encoding_flags;
+    f[4] = o->depth;
+    f[5] = o->width;
+    f[6] = o->skip_layer;
+    f[7] = o->view_width;
+    f[8] = o->use_viewdirs;
+    f[9] = o->use_fine;
+    f[10] = o->reserved0;
+}
+
+static unsigned char *put_options(unsigned char *p, const nerf_model_options *o)
+{
+    uint32_t f[N_OPTION_U32];
+    option_fields(o, f);
+    p = put_section(p, TAG_OPTIONS, OPTIONS_SIZE);
+    for (int i = 0; i < N_OPTION_U32; i++) {
+        nerf__store_le32(p + 4 * i, f[i]);
+    }
+    nerf__store_le64(p + 4 * N_OPTION_U32, o->seed);
+    return p + OPTIONS_SIZE;
+}
+
+static unsigned char *put_training(unsigned char *p, const nerf_model *m)
+{
+    const nerf__adam *a = &m->adam;
+    const double hp[6] = {a->lr, a->lr_final, a->decay_steps,
+                          a->beta1, a->beta2, a->eps};
+    p = put_section(p, TAG_TRAINING, TRAINING_SIZE);
+    for (int i = 0; i < 6; i++) {
+        nerf__store_lef64(p + 8 * i, hp[i]);
+    }
+    nerf__store_le64(p + 48, m->step);
+    nerf__store_le64(p + 56, m->n_params);
+    return p + TRAINING_SIZE;
+}
+
+static unsigned char *put_floats(unsigned char *p, uint32_t tag,
+                                 const float *x, size_t n)
+{
+    p = put_section(p, tag, (uint64_t)n * 4);
+    for (size_t i = 0; i < n; i++) {
+        nerf__store_lef32(p + 4 * i, x[i]);
+    }
+    return p + 4 * n;
+}
+
+static size_t payload_size(size_t n_params)
+{
+    return N_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + TRAINING_SIZE +
+           3 * 4 * n_params;
+}
+
+static void build_payload(const nerf_model *m, unsigned char *p)
+{
+    p = put_options(p, &m->opts);
+    p = put_training(p, m);
+    p = put_floats(p, TAG_PARAMS, m->params, m->n_params);
+    p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
+    put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
+}
+
+static void put_header(unsigned char *h, const ckpt_header *hd)
+{
+    memcpy(h, MAGIC, MAGIC_LEN);
+    nerf__store_le32(h + 8, hd->version);
+    nerf__store_le32(h + 12, hd->size);
+    nerf__store_le64(h + 16, hd->payload_size);
+    nerf__store_le64(h + 24, hd->packed_size);
+    nerf__store_le32(h + 32, hd->packed_crc);
+    nerf__store_le32(h + 36, hd->payload_crc);
+    nerf__store_le32(h + 40, hd->flags);
+    nerf__store_le32(h + 44, (uint32_t)crc32_z(0L, h, HEADER_SIZE - 4));
+}
+
+/*
+ * Compress payload into a new buffer.  Level 1: weights and moments are
+ * noisy floats that higher levels barely shrink, at several times the cost.
+ */
+static int pack(const nerf__env *env, const char *path,
+                const unsigned char *payload, size_t size,
+                unsigned char **packed_out, size_t *packed_size)
+{
+    uLong src_len = (uLong)size;
+    uLong bound = compressBound(src_len);
+    if (src_len != size || bound < src_len) {
+        return nerf__error(NERF_ENOMEM, "%s: checkpoint of %zu bytes is too "
+                           "large for zlib on this platform", path, size);
+    }
+    unsigned char *packed = nerf__alloc(env, bound);
+    if (packed == NULL) {
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    uLongf len = bound;
+    int zr = compress2(packed, &len, payload, src_len, 1);
+    if (zr != Z_OK) {
+        nerf__free(env, packed);
+        return nerf__error(zr == Z_MEM_ERROR ? NERF_ENOMEM : NERF_ERROR,
+                           "%s: zlib could not compress the checkpoint "
+                           "(error %d)", path, zr);
+    }
+    *packed_out = packed;
+    *packed_size = len;
+    return NERF_OK;
+}
+
+static int write_checkpoint(const nerf_model *m, const char *path,
+                            const unsigned char *payload, size_t size)
+{
+    unsigned char *packed = NULL;
+    size_t packed_size = 0;
+    int rc = pack(&m->env, path, payload, size, &packed, &packed_size);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    ckpt_header hd = {FORMAT_VERSION, HEADER_SIZE, 0, size, packed_size,
+                      (uint32_t)crc32_z(0L, packed, packed_size),
+                      (uint32_t)crc32_z(0L, payload, size)};
+    unsigned char header[HEADER_SIZE];
+    put_header(header, &hd);
+    const nerf__span parts[2] = {{header, sizeof header},
+                                 {packed, packed_size}};
+    rc = nerf__file_write_atomic(&m->env, path, parts, 2);
+    nerf__free(&m->env, packed);
+    if (rc == NERF_OK) {
+        nerf__log(&m->env, NERF_LOG_DEBUG, "%s: saved checkpoint (format %u): "
+                  "%zu parameters, step %llu, %zu bytes", path, FORMAT_VERSION,
+                  m->n_params, (unsigned long long)m->step,
+                  HEADER_SIZE + packed_size);
+    }
+    return rc;
+}
+
+NERF_API int nerf_model_save(const nerf_model *model, const char *path)
+{
+    if (model == NULL || path == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_save: NULL %s",
+                           model ? "path" : "model");
+    }
+    size_t size = payload_size(model->n_params);
+    unsigned char *payload = nerf__alloc(&model->env, size);
+    if (payload == NULL) {
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    build_payload(model, payload);
+    int rc = write_checkpoint(model, path, payload, size);
+    nerf__free(&model->env, payload);
+    return rc;
+}
+
+/* ---- loading: the header ------------------------------------------------ */
+
+static int truncated(const char *path, size_t size, uint64_t need)
+{
+    return nerf__error(NERF_EFORMAT, "%s: truncated checkpoint (%zu bytes, "
+                       "expected %llu)", path, size, (unsigned long long)need);
+}
+
+/* Magic, header size and header CRC: the frame common to all versions. */
+static int check_frame(const char *path, const unsigned char *b, size_t size)
+{
+    size_t cmp = size < MAGIC_LEN ? size : MAGIC_LEN;
+    if (memcmp(b, MAGIC, cmp) != 0) {
+        return nerf__error(NERF_EFORMAT, "%s: not a libnerf checkpoint", path);
+    }
+    if (size < HEADER_FRAME) {
+        return truncated(path, size, HEADER_SIZE);
+    }
+    uint32_t hsize = nerf__load_le32(b + 12);
+    if (hsize < HEADER_FRAME || hsize > HEADER_SIZE_MAX || hsize % 4 != 0) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint header "
+                           "(header size %lu)", path, (unsigned long)hsize);
+    }
+    if (size < hsize) {
+        return truncated(path, size, hsize);
+    }
+    uint32_t stored = nerf__load_le32(b + hsize - 4);
+    if ((uint32_t)crc32_z(0L, b, hsize - 4) != stored) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (header "
+                           "CRC mismatch)", path);
+    }
+    return NERF_OK;
+}
+
+static int read_header(const char *path, const unsigned char *b, size_t size,
+                       ckpt_header *hd)
+{
+    int rc = check_frame(path, b, size);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    hd->version = nerf__load_le32(b + 8);
+    hd->size = nerf__load_le32(b + 12);
+    if (hd->version > FORMAT_VERSION) {
+        return nerf__error(NERF_EVERSION, "%s: checkpoint format version %lu "
+                           "is newer than this libnerf supports (version %u)",
+                           path, (unsigned long)hd->version, FORMAT_VERSION);
+    }
+    if (hd->version == 0 || hd->size != HEADER_SIZE) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint header "
+                           "(format version %lu, header size %lu)", path,
+                           (unsigned long)hd->version, (unsigned long)hd->size);
+    }
+    hd->payload_size = nerf__load_le64(b + 16);
+    hd->packed_size = nerf__load_le64(b + 24);
+    hd->packed_crc = nerf__load_le32(b + 32);
+    hd->payload_crc = nerf__load_le32(b + 36);
+    hd->flags = nerf__load_le32(b + 40);
+    if (hd->flags != 0) {
+        return nerf__error(NERF_EVERSION, "%s: checkpoint uses features this "
+                           "libnerf does not know (flags 0x%lx)", path,
+                           (unsigned long)hd->flags);
+    }
+    uint64_t body = size - HEADER_SIZE;
+    if (body < hd->packed_size) {
+        return truncated(path, size, HEADER_SIZE + hd->packed_size);
+    }
+    if (body > hd->packed_size) {
+        return nerf__error(NERF_EFORMAT, "%s: %llu unexpected bytes after the "
+                           "checkpoint payload", path,
+                           (unsigned long long)(body - hd->packed_size));
+    }
+    return NERF_OK;
+}
+
+/* ---- loading: the payload ----------------------------------------------- */
+
+static int unpack(const nerf__env *env, const char *path,
+                  const unsigned char *packed, const ckpt_header *hd,
+                  unsigned char **out)
+{
+    size_t n_in = (size_t)hd->packed_size;
+    if ((uint32_t)crc32_z(0L, packed, n_in) != hd->packed_crc) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (payload "
+                           "CRC mismatch)", path);
+    }
+    uint64_t n_out = hd->payload_size;
+    uLong src_len = (uLong)n_in;
+    uLongf dst_len = (uLongf)n_out;
+    if (n_out / MAX_INFLATE_RATIO > n_in || n_out >= SIZE_MAX ||
+        src_len != n_in || dst_len != n_out) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint header "
+                           "(%llu bytes cannot decompress to %llu)", path,
+                           (unsigned long long)n_in,
+                           (unsigned long long)n_out);
+    }
+    unsigned char *payload = nerf__alloc(env, n_out ? (size_t)n_out : 1);
+    if (payload == NULL) {
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    int zr = uncompress2(payload, &dst_len, packed, &src_len);
+    int rc = NERF_OK;
+    if (zr == Z_MEM_ERROR) {
+        rc = nerf__error(NERF_ENOMEM, "%s: zlib ran out of memory", path);
+    } else if (zr != Z_OK || dst_len != n_out || src_len != n_in) {
+        rc = nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (payload "
+                         "does not decompress to its recorded size)", path);
+    } else if ((uint32_t)crc32_z(0L, payload, n_out) != hd->payload_crc) {
+        rc = nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                         "(decompressed payload CRC mismatch)", path);
+    }
+    if (rc != NERF_OK) {
+        nerf__free(env, payload);
+        return rc;
+    }
+    *out = payload;
+    return NERF_OK;
+}
+
+/* The known sections of a payload, in the order of their tags. */
+typedef struct sections {
+    const unsigned char *body[N_SECTIONS];
+    uint64_t len[N_SECTIONS];
+} sections;
+
+static const char *const section_names[N_SECTIONS] = {
+    "options", "training state", "parameters", "Adam first moments",
+    "Adam second moments"};
+
+static int take_section(const nerf__env *env, const char *path, sections *s,
+                        uint32_t tag, const unsigned char *body, uint64_t len)
+{
+    uint32_t index = (tag & ~TAG_REQUIRED) - 1;
+    if ((tag & TAG_REQUIRED) && index < N_SECTIONS) {
+        if (s->body[index] != NULL) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
+                               "%s sections)", path, section_names[index]);
+        }
+        s->body[index] = body;
+        s->len[index] = len;
+        return NERF_OK;
+    }
+    if (tag & TAG_REQUIRED) {
+        return nerf__error(NERF_EVERSION, "%s: checkpoint has a required "
+                           "section 0x%08lx unknown to this libnerf (format "
+                           "version %u)", path, (unsigned long)tag,
+                           FORMAT_VERSION);
+    }
+    nerf__log(env, NERF_LOG_DEBUG, "%s: skipping checkpoint section 0x%08lx "
+              "(%llu bytes)", path, (unsigned long)tag,
+              (unsigned long long)len);
+    return NERF_OK;
+}
+
+static int split_sections(const nerf__env *env, const char *path,
+                          const unsigned char *p, size_t n, sections *s)
+{
+    memset(s, 0, sizeof *s);
+    size_t at = 0;
+    while (at < n) {
+        if (n - at < SECTION_HEAD) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                               "(section header cut at payload byte %zu)",
+                               path, at);
+        }
+        uint32_t tag = nerf__load_le32(p + at);
+        uint64_t len = nerf__load_le64(p + at + 4);
+        at += SECTION_HEAD;
+        if (len > n - at) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                               "(section 0x%08lx runs past the payload)",
+                               path, (unsigned long)tag);
+        }
+        int rc = take_section(env, path, s, tag, p + at, len);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        at += (size_t)len;
+    }
+    for (int i = 0; i < N_SECTIONS; i++) {
+        if (s->body[i] == NULL) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (no "
+                               "%s section)", path, section_names[i]);
+        }
+    }
+    return NERF_OK;
+}
+
+static void get_options(const unsigned char *p, nerf_model_options *o)
+{
+    nerf_model_options_init(o, sizeof *o);
+    uint32_t f[N_OPTION_U32];
+    for (int i = 0; i < N_OPTION_U32; i++) {
+        f[i] = nerf__load_le32(p + 4 * i);
+    }
+    o->encoding = f[0];
+    o->pos_frequencies = f[1];
+    o->dir_frequencies = f[2];
+    o->encoding_flags = f[3];
+    o->depth = f[4];
+    o->width = f[5];
+    o->skip_layer = f[6];
+    o->view_width = f[7];
+    o->use_viewdirs = f[8];
+    o->use_fine = f[9];
+    o->reserved0 = f[10];
+    o->seed = nerf__load_le64(p + 4 * N_OPTION_U32);
+    o->hooks = NULL;
+}
+
+/* Options and sizes: everything that can be checked before allocating. */
+static int check_shapes(const char *path, const sections *s,
+                        nerf_model_options *o, uint64_t *n_params)
+{
+    if (s->len[0] != OPTIONS_SIZE || s->len[1] != TRAINING_SIZE) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
+                           "section has the wrong size)", path,
+                           section_names[s->len[0] != OPTIONS_SIZE ? 0 : 1]);
+    }
+    get_options(s->body[0], o);
+    if (nerf__model_check_options(o) != NERF_OK) {
+        char why[512];
+        snprintf(why, sizeof why, "%s", nerf_last_error());
+        return nerf__error(NERF_EFORMAT, "%s: checkpoint holds invalid model "
+                           "options (%s)", path, why);
+    }
+    uint64_t n = nerf__load_le64(s->body[1] + 56);
+    uint64_t need = nerf__model_options_param_count(o);
+    if (n != need) {
+        return nerf__error(NERF_EFORMAT, "%s: checkpoint holds %llu "
+                           "parameters but its options need %llu", path,
+                           (unsigned long long)n, (unsigned long long)need);
+    }
+    for (int i = 2; i < N_SECTIONS; i++) {
+        if (s->len[i] / 4 != n || s->len[i] % 4 != 0) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
+                               "section holds %llu bytes, expected %llu)",
+                               path, section_names[i],
+                               (unsigned long long)s->len[i],
+                               (unsigned long long)(4 * n));
+        }
+    }
+    *n_params = n;
+    return NERF_OK;
+}
+
+/* Hyperparameters go through the public setter, which checks their range. */
+static int set_training(const char *path, nerf_model *m, const unsigned char *p)
+{
+    static const int keys[6] = {
+        NERF_PARAM_LEARNING_RATE, NERF_PARAM_LEARNING_RATE_FINAL,
+        NERF_PARAM_DECAY_STEPS, NERF_PARAM_ADAM_BETA1, NERF_PARAM_ADAM_BETA2,
+        NERF_PARAM_ADAM_EPS};
+    for (int i = 0; i < 6; i++) {
+        if (nerf_model_set_param(m, keys[i], nerf__load_lef64(p + 8 * i)) !=
+            NERF_OK) {
+            char why[512];
+            snprintf(why, sizeof why, "%s", nerf_last_error());
+            return nerf__error(NERF_EFORMAT, "%s: checkpoint holds an invalid "
+                               "hyperparameter (%s)", path, why);
+        }
+    }
+    m->step = nerf__load_le64(p + 48);
+    return NERF_OK;
+}
+
+static void get_floats(const unsigned char *p, float *x, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        x[i] = nerf__load_lef32(p + 4 * i);
+    }
+}
+
+static int build_model(const nerf__env *env, const char *path,
+                       const unsigned char *payload, size_t size,
+                       nerf_model **out)
+{
+    sections s;
+    nerf_model_options o;
+    uint64_t n = 0;
+    int rc = split_sections(env, path, payload, size, &s);
+    if (rc == NERF_OK) {
+        rc = check_shapes(path, &s, &o, &n);
+    }
+    nerf_model *m = NULL;
+    if (rc == NERF_OK) {
+        rc = nerf__model_alloc(&m, &o, env);
+        if (rc != NERF_OK) {
+            return nerf__error_prefix(rc, path);
+        }
+        rc = set_training(path, m, s.body[1]);
+    }
+    if (rc != NERF_OK) {
+        nerf_model_destroy(m);
+        return rc;
+    }
+    get_floats(s.body[2], m->params, m->n_params);
+    get_floats(s.body[3], m->adam_m, m->n_params);
+    get_floats(s.body[4], m->adam_v, m->n_params);
+    *out = m;
+    return NERF_OK;
+}
+
+NERF_API int nerf_model_load(nerf_model **out, const char *path,
+                             const nerf_hooks *hooks)
+{
+    if (out == NULL || path == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_load: NULL %s",
+                           out ? "path" : "out");
+    }
+    *out = NULL;
+    nerf__env env;
+    int rc = nerf__env_from_hooks(&env, hooks);
+    unsigned char *file = NULL, *payload = NULL;
+    size_t size = 0;
+    if (rc == NERF_OK) {
+        rc = nerf__file_read(&env, path, MAX_FILE, &file, &size);
+    }
+    ckpt_header hd;
+    memset(&hd, 0, sizeof hd);
+    if (rc == NERF_OK) {
+        rc = read_header(path, file, size, &hd);
+    }
+    if (rc == NERF_OK) {
+        rc = unpack(&env, path, file + HEADER_SIZE, &hd, &payload);
+    }
+    nerf__free(&env, file);
+    if (rc == NERF_OK) {
+        rc = build_model(&env, path, payload, (size_t)hd.payload_size, out);
+    }
+    nerf__free(&env, payload);
+    if (rc == NERF_OK) {
+        nerf__log(&env, NERF_LOG_DEBUG, "%s: loaded checkpoint (format %lu): "
+                  "%zu parameters, step %llu", path,
+                  (unsigned long)hd.version, (*out)->n_params,
+                  (unsigned long long)(*out)->step);
+    }
+    return rc;
+}

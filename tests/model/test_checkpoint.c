@@ -1,0 +1,265 @@
+/*
+ * Checkpoints: bit-exact round trips, truncated and corrupted files, and
+ * the atomic replacement of an existing checkpoint.
+ */
+#include <signal.h>
+#include <sys/resource.h>
+
+#include "../harness.h"
+#include "ckpt_fixture.h"
+
+/* ---- round trips -------------------------------------------------------- */
+
+static void round_trip(bool full)
+{
+    char path[128];
+    path_in(path, sizeof path, full ? "full.ckpt" : "small.ckpt");
+    nerf_model *m = trained_model(full);
+    CHECK_OK(nerf_model_save(m, path));
+    nerf_hooks h = counting_hooks();
+    last_log[0] = '\0';
+    live_blocks = 0;
+    nerf_model *back = NULL;
+    CHECK_OK(nerf_model_load(&back, path, &h));
+    CHECK(strstr(last_log, "loaded checkpoint") != NULL);
+    if (m && back) {
+        check_same_model(m, back);
+        CHECK_EQ_INT(back->step, 3);
+        /* The loaded model trains on exactly as the original would. */
+        nerf__model_zero_grad(m);
+        nerf__model_zero_grad(back);
+        for (size_t i = 0; i < m->n_params; i++) {
+            m->grads[i] = back->grads[i] = (float)cos(0.1 * (double)i);
+        }
+        nerf__model_adam_step(m);
+        nerf__model_adam_step(back);
+        check_same_model(m, back);
+    }
+    nerf_model_destroy(back);
+    CHECK_EQ_INT(live_blocks, 0);
+    nerf_model_destroy(m);
+    CHECK_EQ_INT(count_temp_files(tmpdir), 0);
+}
+
+TEST(round_trip_tiny_preset)
+{
+    round_trip(true);
+}
+
+TEST(round_trip_without_fine_or_viewdirs)
+{
+    round_trip(false);
+}
+
+TEST(arguments)
+{
+    nerf_model *m = trained_model(false);
+    nerf_model *out = NULL;
+    CHECK_EQ_INT(nerf_model_save(NULL, "x"), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_save(m, NULL), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_load(NULL, "x", NULL), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_load(&out, NULL, NULL), NERF_EINVAL);
+    CHECK(out == NULL);
+    nerf_model_destroy(m);
+}
+
+/* ---- damaged files ------------------------------------------------------ */
+TEST(truncated_files)
+{
+    size_t size = 0;
+    unsigned char *good = good_file(&size);
+    char path[128];
+    path_in(path, sizeof path, "cut.ckpt");
+    size_t lengths[128];
+    int n = 0;
+    for (size_t len = 0; len <= 64; len++) {
+        lengths[n++] = len;
+    }
+    for (int k = 1; k <= 40; k++) {
+        lengths[n++] = 64 + (size - 65) * (size_t)k / 40;
+    }
+    lengths[n++] = size - 1;
+    for (int i = 0; i < n; i++) {
+        spit(path, good, lengths[i]);
+        char what[64];
+        snprintf(what, sizeof what, "cut to %zu of %zu bytes", lengths[i],
+                 size);
+        expect_load_fails(path, NERF_EFORMAT, what);
+    }
+    free(good);
+}
+
+TEST(bit_flips)
+{
+    size_t size = 0;
+    unsigned char *good = good_file(&size);
+    char path[128];
+    path_in(path, sizeof path, "flip.ckpt");
+    /* Every bit of the header, then bytes spread over the payload. */
+    size_t positions[HEADER * 8 + 300][2];
+    int n = 0;
+    for (size_t bit = 0; bit < HEADER * 8; bit++) {
+        positions[n][0] = bit / 8;
+        positions[n++][1] = bit % 8;
+    }
+    for (size_t k = 0; k < 300; k++) {
+        positions[n][0] = HEADER + (size - HEADER - 1) * k / 299;
+        positions[n++][1] = k % 8;
+    }
+    for (int i = 0; i < n; i++) {
+        size_t at = positions[i][0];
+        good[at] ^= (unsigned char)(1u << positions[i][1]);
+        spit(path, good, size);
+        good[at] ^= (unsigned char)(1u << positions[i][1]);
+        char what[64];
+        snprintf(what, sizeof what, "bit %zu of byte %zu flipped",
+                 positions[i][1], at);
+        expect_load_fails(path, NERF_EFORMAT, what);
+    }
+    /* An extra byte at the end is damage too. */
+    unsigned char *longer = malloc(size + 1);
+    memcpy(longer, good, size);
+    longer[size] = 0;
+    spit(path, longer, size + 1);
+    expect_load_fails(path, NERF_EFORMAT, "trailing byte");
+    free(longer);
+    free(good);
+}
+
+TEST(wrong_magic_and_future_version)
+{
+    size_t size = 0;
+    unsigned char *b = good_file(&size);
+    char path[128];
+    path_in(path, sizeof path, "other.ckpt");
+    memcpy(b, "NERFCKPX", 8);
+    spit(path, b, size);
+    expect_load_fails(path, NERF_EFORMAT, "wrong magic");
+    CHECK(strstr(nerf_last_error(), "not a libnerf checkpoint") != NULL);
+    spit(path, "PK\3\4 something else entirely", 28);
+    expect_load_fails(path, NERF_EFORMAT, "a zip file");
+    CHECK(strstr(nerf_last_error(), "not a libnerf checkpoint") != NULL);
+
+    memcpy(b, "NERFCKPT", 8);
+    put32(b + 8, 2);
+    fix_header_crc(b);
+    spit(path, b, size);
+    expect_load_fails(path, NERF_EVERSION, "format version 2");
+    CHECK(strstr(nerf_last_error(), "version 2") != NULL);
+    CHECK(strstr(nerf_last_error(), "version 1") != NULL);
+    /* A future header may be longer; its CRC still sits at its end. */
+    unsigned char *big = calloc(1, size + 16);
+    memcpy(big, b, 44);
+    put32(big + 12, HEADER + 16);
+    put32(big + HEADER + 12, (uint32_t)crc32(0L, big, HEADER + 12));
+    spit(path, big, size + 16);
+    expect_load_fails(path, NERF_EVERSION, "version 2, longer header");
+    free(big);
+    /* Unknown header flags mean features this reader lacks. */
+    put32(b + 8, 1);
+    put32(b + 40, 1);
+    fix_header_crc(b);
+    spit(path, b, size);
+    expect_load_fails(path, NERF_EVERSION, "header flags");
+    free(b);
+}
+
+TEST(missing_and_unreadable_paths)
+{
+    char path[128];
+    path_in(path, sizeof path, "does-not-exist.ckpt");
+    expect_load_fails(path, NERF_EIO, "missing file");
+    CHECK(strstr(nerf_last_error(), "cannot open") != NULL);
+    expect_load_fails(tmpdir, NERF_EIO, "a directory");
+}
+
+/* ---- atomic replacement ------------------------------------------------- */
+
+TEST(save_into_missing_directory)
+{
+    char path[160];
+    path_in(path, sizeof path, "no-such-dir/model.ckpt");
+    nerf_model *m = trained_model(false);
+    CHECK_EQ_INT(nerf_model_save(m, path), NERF_EIO);
+    CHECK(strstr(nerf_last_error(), path) == nerf_last_error());
+    CHECK_EQ_INT(count_temp_files(tmpdir), 0);
+    nerf_model_destroy(m);
+}
+
+TEST(failed_save_keeps_the_old_checkpoint)
+{
+    char path[128];
+    path_in(path, sizeof path, "keep.ckpt");
+    nerf_model *old = trained_model(false), *other = trained_model(true);
+    CHECK_OK(nerf_model_save(old, path));
+    size_t size = 0;
+    unsigned char *before = slurp(path, &size);
+
+    /* A full disk, simulated with a file size limit (this works as root,
+     * where a read-only directory would not stop the write). */
+    struct rlimit saved, small;
+    getrlimit(RLIMIT_FSIZE, &saved);
+    small = saved;
+    small.rlim_cur = 4096;
+    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
+    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    int rc = nerf_model_save(other, path);
+    setrlimit(RLIMIT_FSIZE, &saved);
+    signal(SIGXFSZ, prev);
+    CHECK_EQ_INT(rc, NERF_EIO);
+    CHECK(strstr(nerf_last_error(), path) == nerf_last_error());
+
+    size_t after_size = 0;
+    unsigned char *after = slurp(path, &after_size);
+    CHECK(after && after_size == size && memcmp(before, after, size) == 0);
+    CHECK_EQ_INT(count_temp_files(tmpdir), 0);
+    free(after);
+
+    /* The rename fails when the target is a directory. */
+    char dir[128], inner[160];
+    path_in(dir, sizeof dir, "a-directory");
+    mkdir(dir, 0755);
+    snprintf(inner, sizeof inner, "%s/file", dir);
+    spit(inner, "x", 1);
+    CHECK_EQ_INT(nerf_model_save(other, dir), NERF_EIO);
+    CHECK(strstr(nerf_last_error(), dir) == nerf_last_error());
+    CHECK_EQ_INT(count_temp_files(tmpdir), 0);
+
+    if (geteuid() != 0) {
+        chmod(tmpdir, 0555);
+        CHECK_EQ_INT(nerf_model_save(other, path), NERF_EIO);
+        chmod(tmpdir, 0755);
+        after = slurp(path, &after_size);
+        CHECK(after && after_size == size && memcmp(before, after, size) == 0);
+        free(after);
+    }
+
+    /* A successful save replaces the old file completely. */
+    CHECK_OK(nerf_model_save(other, path));
+    nerf_model *back = NULL;
+    CHECK_OK(nerf_model_load(&back, path, NULL));
+    if (back && other) {
+        check_same_model(back, other);
+    }
+    CHECK_EQ_INT(count_temp_files(tmpdir), 0);
+    nerf_model_destroy(back);
+    free(before);
+    nerf_model_destroy(old);
+    nerf_model_destroy(other);
+}
+
+int main(void)
+{
+    make_tmpdir();
+    RUN(round_trip_tiny_preset);
+    RUN(round_trip_without_fine_or_viewdirs);
+    RUN(arguments);
+    RUN(truncated_files);
+    RUN(bit_flips);
+    RUN(wrong_magic_and_future_version);
+    RUN(missing_and_unreadable_paths);
+    RUN(save_into_missing_directory);
+    RUN(failed_save_keeps_the_old_checkpoint);
+    remove_tree(tmpdir);
+    HARNESS_EXIT();
+}

@@ -1,0 +1,258 @@
+/*
+ * Checkpoints forged with valid CRCs: the payload is decoded, edited and
+ * re-encoded from the layout in docs/formats.md (so these tests also check
+ * that document), and the loader must judge the content itself: section
+ * framing, required and optional tags, sizes, options and parameters.
+ */
+#include "../harness.h"
+#include "ckpt_fixture.h"
+
+/* ---- forged payloads with valid CRCs ------------------------------------ */
+
+typedef struct section {
+    uint32_t tag;
+    size_t len;
+    unsigned char *data;
+} section;
+
+typedef struct payload {
+    section s[16];
+    int n;
+} payload;
+
+static void split_payload(const unsigned char *file, size_t size, payload *p)
+{
+    uLongf n = (uLongf)le64(file + 16);
+    unsigned char *raw = malloc(n);
+    CHECK(uncompress(raw, &n, file + HEADER, size - HEADER) == Z_OK);
+    p->n = 0;
+    for (size_t at = 0; at + 12 <= n && p->n < 16; p->n++) {
+        section *s = &p->s[p->n];
+        s->tag = le32(raw + at);
+        s->len = (size_t)le64(raw + at + 4);
+        s->data = malloc(s->len + 1);
+        memcpy(s->data, raw + at + 12, s->len);
+        at += 12 + s->len;
+    }
+    free(raw);
+}
+
+/* Write p as a checkpoint with correct sizes and CRCs. */
+static void write_payload(const char *path, const payload *p,
+                          const char *raw_tail, size_t tail_len)
+{
+    size_t n = tail_len;
+    for (int i = 0; i < p->n; i++) {
+        n += 12 + p->s[i].len;
+    }
+    unsigned char *raw = malloc(n), *at = raw;
+    for (int i = 0; i < p->n; i++) {
+        put32(at, p->s[i].tag);
+        put64(at + 4, p->s[i].len);
+        memcpy(at + 12, p->s[i].data, p->s[i].len);
+        at += 12 + p->s[i].len;
+    }
+    if (tail_len > 0) {
+        memcpy(at, raw_tail, tail_len);
+    }
+    uLongf packed_len = compressBound(n);
+    unsigned char *file = malloc(HEADER + packed_len);
+    CHECK(compress(file + HEADER, &packed_len, raw, n) == Z_OK);
+    memcpy(file, "NERFCKPT", 8);
+    put32(file + 8, 1);
+    put32(file + 12, HEADER);
+    put64(file + 16, n);
+    put64(file + 24, packed_len);
+    put32(file + 32, (uint32_t)crc32(0L, file + HEADER, packed_len));
+    put32(file + 36, (uint32_t)crc32(0L, raw, n));
+    put32(file + 40, 0);
+    fix_header_crc(file);
+    spit(path, file, HEADER + packed_len);
+    free(file);
+    free(raw);
+}
+
+static void free_payload(payload *p)
+{
+    for (int i = 0; i < p->n; i++) {
+        free(p->s[i].data);
+    }
+    p->n = 0;
+}
+
+static void add_section(payload *p, uint32_t tag, const void *data, size_t len)
+{
+    section *s = &p->s[p->n++];
+    s->tag = tag;
+    s->len = len;
+    s->data = malloc(len + 1);
+    memcpy(s->data, data, len);
+}
+
+TEST(payload_layout_is_as_documented)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    CHECK_EQ_INT(p.n, 5);
+    const uint32_t tags[5] = {0x80000001u, 0x80000002u, 0x80000003u,
+                              0x80000004u, 0x80000005u};
+    for (int i = 0; i < 5 && i < p.n; i++) {
+        CHECK_EQ_INT(p.s[i].tag, tags[i]);
+    }
+    if (p.n == 5) {
+        CHECK_EQ_INT(p.s[0].len, 52);
+        CHECK_EQ_INT(le32(p.s[0].data + 4 * 4), 4);   /* depth */
+        CHECK_EQ_INT(le32(p.s[0].data + 5 * 4), 64);  /* width */
+        CHECK_EQ_INT(le64(p.s[0].data + 44), 4242);   /* seed */
+        CHECK_EQ_INT(p.s[1].len, 64);
+        double lr;
+        uint64_t bits = le64(p.s[1].data);
+        memcpy(&lr, &bits, sizeof lr);
+        CHECK(lr == 1.25e-3);
+        CHECK_EQ_INT(le64(p.s[1].data + 48), 3);      /* step */
+        uint64_t n = le64(p.s[1].data + 56);
+        CHECK_EQ_INT(p.s[2].len, 4 * n);
+        CHECK_EQ_INT(p.s[4].len, 4 * n);
+    }
+    free_payload(&p);
+    free(file);
+}
+
+/* Each forgery: what it does to the sections, and the status it earns. */
+static void forge(const char *name, void (*edit)(payload *), int want)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    edit(&p);
+    char path[128];
+    path_in(path, sizeof path, "forged.ckpt");
+    write_payload(path, &p, NULL, 0);
+    if (want == NERF_OK) {
+        nerf_model *m = NULL, *ref = trained_model(true);
+        CHECK_OK(nerf_model_load(&m, path, NULL));
+        if (m && ref) {
+            check_same_model(m, ref);
+        }
+        nerf_model_destroy(m);
+        nerf_model_destroy(ref);
+    } else {
+        expect_load_fails(path, want, name);
+    }
+    free_payload(&p);
+    free(file);
+}
+
+static void edit_width(payload *p)
+{
+    put32(p->s[0].data + 5 * 4, 65);
+}
+
+static void edit_depth_zero(payload *p)
+{
+    put32(p->s[0].data + 4 * 4, 0);
+}
+
+static void edit_beta1(payload *p)
+{
+    double v = 2.0;
+    uint64_t bits;
+    memcpy(&bits, &v, sizeof bits);
+    put64(p->s[1].data + 3 * 8, bits);
+}
+
+static void edit_params_count(payload *p)
+{
+    put64(p->s[1].data + 56, le64(p->s[1].data + 56) + 1);
+}
+
+static void edit_add_optional(payload *p)
+{
+    add_section(p, 0x00000100u, "trainer", 7);
+}
+
+static void edit_add_optional_first(payload *p)
+{
+    memmove(&p->s[1], &p->s[0], (size_t)p->n * sizeof p->s[0]);
+    p->n++;
+    p->s[0].tag = 0x00000123u;
+    p->s[0].len = 0;
+    p->s[0].data = malloc(1);
+}
+
+static void edit_add_required(payload *p)
+{
+    add_section(p, 0x80000100u, "needed", 6);
+}
+
+static void edit_duplicate(payload *p)
+{
+    add_section(p, p->s[0].tag, p->s[0].data, p->s[0].len);
+}
+
+static void edit_drop_last(payload *p)
+{
+    free(p->s[--p->n].data);
+}
+
+static void edit_short_array(payload *p)
+{
+    p->s[3].len -= 4;
+}
+
+static void edit_shuffle(payload *p)
+{
+    section t = p->s[0];
+    p->s[0] = p->s[4];
+    p->s[4] = t;
+}
+
+TEST(forged_payloads)
+{
+    forge("width changed", edit_width, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "parameters") != NULL);
+    forge("depth 0", edit_depth_zero, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "depth") != NULL);
+    forge("beta1 2.0", edit_beta1, NERF_EFORMAT);
+    forge("n_params + 1", edit_params_count, NERF_EFORMAT);
+    forge("unknown required section", edit_add_required, NERF_EVERSION);
+    forge("duplicate options", edit_duplicate, NERF_EFORMAT);
+    forge("no adam_v", edit_drop_last, NERF_EFORMAT);
+    forge("short adam_m", edit_short_array, NERF_EFORMAT);
+    forge("unknown optional section", edit_add_optional, NERF_OK);
+    forge("unknown optional section first", edit_add_optional_first, NERF_OK);
+    forge("sections reordered", edit_shuffle, NERF_OK);
+}
+
+TEST(forged_section_framing)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    char path[128];
+    path_in(path, sizeof path, "framing.ckpt");
+    /* A section header cut short, then a length running past the end. */
+    write_payload(path, &p, "\1\0\0\0\7", 5);
+    expect_load_fails(path, NERF_EFORMAT, "cut section header");
+    unsigned char tail[12];
+    put32(tail, 0x00000100u);
+    put64(tail + 4, UINT64_MAX - 3);
+    write_payload(path, &p, (const char *)tail, sizeof tail);
+    expect_load_fails(path, NERF_EFORMAT, "section past the end");
+    free_payload(&p);
+    free(file);
+}
+
+int main(void)
+{
+    make_tmpdir();
+    RUN(payload_layout_is_as_documented);
+    RUN(forged_payloads);
+    RUN(forged_section_framing);
+    remove_tree(tmpdir);
+    HARNESS_EXIT();
+}
