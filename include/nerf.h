@@ -360,6 +360,821 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
 NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                    const nerf_model_options *opts);
 
+/* ------------------------------------------------------------------------ */
+/* Built-in scene                                                           */
+/* ------------------------------------------------------------------------ */
+
+/** What nerf_scene_write() produces. */
+typedef struct nerf_scene_options {
+    uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
+    uint32_t width;       /**< Image width in pixels, 8..4096; default 100. */
+    uint32_t height;      /**< Image height in pixels, 8..4096; default 100. */
+    uint32_t n_train;     /**< Training views, 1..10000; default 100. */
+    uint32_t n_val;       /**< Validation views, 0..10000; default 8. */
+    uint32_t n_test;      /**< Test views (a circle at 30 degrees),
+                               0..10000; default 16. */
+    uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
+    uint32_t reserved0;   /**< Must be 0. */
+    uint64_t seed;        /**< Placement of the validation views; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_scene_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
+                                     size_t struct_size);
+#define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
+
+/**
+ * Write the built-in scene to the folder @p dir (created if missing) as a
+ * Blender-format dataset: transforms_{train,val,test}.json and RGBA PNGs
+ * under train/, val/ and test/.  The scene is a few coloured solids with
+ * smooth density edges inside a sphere of radius 1.6 about the origin,
+ * rendered by numerically exact volume rendering from cameras at distance
+ * 4 (use near 2, far 6, as for the Blender scenes).  Same options, same
+ * bytes.
+ * @return NERF_OK; NERF_EINVAL (bad options); NERF_EIO (cannot create or
+ * write a file, named in the message); NERF_ENOMEM.
+ */
+NERF_API int nerf_scene_write(const char *dir,
+                              const nerf_scene_options *opts);
+
+/* ------------------------------------------------------------------------ */
+/* Cameras, sampling and rendering                                          */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Flags for nerf_camera.flags.
+ *
+ * By default the ray of pixel (column i, row j) passes through the pixel's
+ * centre, (i + 0.5, j + 0.5).  NERF_CAMERA_PIXEL_CORNER uses (i, j), as the
+ * reference implementation does; set it to reproduce its rays exactly.
+ */
+#define NERF_CAMERA_PIXEL_CORNER 0x1u
+
+/**
+ * A pinhole camera in the OpenGL/Blender convention: in camera space x
+ * points right, y up, and the camera looks down -z.
+ *
+ * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
+ * c2w[.][3] (the camera centre) and the unnormalised direction
+ * R ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), R being the left 3x3
+ * of c2w: its camera-space z component is -1, so t along the ray is depth
+ * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
+ * set.
+ *
+ * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
+ * the fields.  The defaults (identity pose, all intrinsics 0) are not a
+ * usable camera: width, height, fx and fy must be set.
+ */
+typedef struct nerf_camera {
+    uint32_t struct_size; /**< Set by nerf_camera_init(). */
+    uint32_t flags;       /**< NERF_CAMERA_*; default 0. */
+    uint32_t width;       /**< Image width in pixels, 1..65536. */
+    uint32_t height;      /**< Image height in pixels, 1..65536. */
+    float c2w[12];        /**< Camera-to-world 3x4, row-major: columns are
+                               the camera's right, up and back axes and its
+                               centre, in world units.  Default [I | 0]. */
+    float fx, fy;         /**< Focal lengths in pixels, > 0.  For a
+                               horizontal field of view a:
+                               fx = 0.5 width / tan(0.5 a). */
+    float cx, cy;         /**< Principal point in pixels from the top-left
+                               image corner; usually width/2, height/2. */
+} nerf_camera;
+
+/**
+ * Fill @p camera with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
+#define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
+
+/**
+ * Compute the rays of pixels first .. first + n - 1 of @p camera, pixels
+ * being numbered row by row (index = row * width + column).
+ *
+ * @param origins_out    n x 3 floats, world units.
+ * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
+ *                       their length scales distances when compositing.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
+ * (sizes, non-positive or non-finite focal, non-finite pose) or a pixel
+ * range beyond width x height; NERF_EVERSION for a camera struct from a
+ * newer header with non-zero unknown fields.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
+                              size_t n, float *origins_out,
+                              float *directions_out);
+
+/**
+ * Set the pose of @p camera (its c2w; nothing else) to look from @p eye
+ * at @p target, with @p up (world space) pointing up in the image: the
+ * camera's -z axis points at the target, its x axis is up x z normalised.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an uninitialised
+ * struct, eye equal to target, or up parallel to the viewing direction.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
+                                 const float target[3], const float up[3]);
+
+/**
+ * Settings of a sampler, fixed at creation.  The defaults are the
+ * reference configuration for Blender scenes: 64 + 128 samples for t in
+ * [2, 6], linear in depth, jittered in training.
+ *
+ * Forward-facing (LLFF) scenes: set ndc = 1, t_near = 0 and t_far = 1.
+ * Rays are then warped to normalised device coordinates with the near plane
+ * at world depth 1 (the frustum given by ndc_focal, ndc_width, ndc_height),
+ * and t_near and t_far are NDC depths in [0, 1]: 0 is the near plane, 1
+ * infinity.
+ */
+typedef struct nerf_sampler_options {
+    uint32_t struct_size; /**< Set by nerf_sampler_options_init(). */
+    uint32_t n_coarse;    /**< Stratified samples per ray, 2..4096;
+                               default 64. */
+    uint32_t n_fine;      /**< Hierarchical samples per ray, 0..4096
+                               (0: coarse pass only; needs n_coarse >= 3
+                               otherwise); default 128. */
+    uint32_t perturb;     /**< 1: jitter the stratified samples and draw
+                               the hierarchical ones at random in training
+                               (evaluation is never random); default 1. */
+    uint32_t lindisp;     /**< 1: sample linearly in disparity (1/depth)
+                               instead of depth; needs t_near > 0;
+                               default 0. */
+    uint32_t paper_bins;  /**< 1: stratified samples as the paper's eq. 2
+                               (one uniform draw in each of n_coarse equal
+                               bins; bin centres in evaluation) instead of
+                               the reference implementation's evenly spaced
+                               values with both ends included; default 0. */
+    uint32_t ndc;         /**< 1: warp rays to NDC first; default 0. */
+    uint32_t reserved0;   /**< Must be 0. */
+    float t_near;         /**< Start of the sampled range of t; default 2. */
+    float t_far;          /**< End of the sampled range, > t_near; default 6. */
+    float ndc_focal;      /**< NDC frustum: focal length in pixels of the
+                               training images; one focal serves both axes,
+                               as in the reference.  0 (the default) takes
+                               the rendered camera's fx, width and height
+                               instead; then only image rendering works. */
+    uint32_t ndc_width;   /**< NDC frustum: image width in pixels. */
+    uint32_t ndc_height;  /**< NDC frustum: image height in pixels. */
+    uint32_t reserved1;   /**< Must be 0. */
+    uint64_t seed;        /**< Key of the random streams; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_sampler_options;
+
+/**
+ * Fill @p opts with the reference sampler settings and record
+ * @p struct_size (or use NERF_SAMPLER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
+                                       size_t struct_size);
+#define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
+
+/**
+ * Set the sample counts of a nerf_preset in an initialised @p opts; other
+ * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
+ * NERF_PRESET_TINY: 32 + 64.
+ * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
+ * NERF_EVERSION as nerf_sampler_create().
+ */
+NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
+                                         int preset);
+
+/**
+ * Create a sampler.  @p opts is copied; NULL means the defaults.
+ * @return NERF_OK; NERF_EINVAL for out-of-range options (counts, t_near >=
+ * t_far, non-finite or negative t, lindisp with t_near = 0, NDC depths
+ * beyond 1, a partly set NDC frustum, non-zero reserved fields);
+ * NERF_EVERSION for a struct from a newer header with non-zero unknown
+ * fields; NERF_ENOMEM.
+ *
+ * A sampler is immutable: any number of threads and renderers may use one
+ * sampler at the same time.
+ */
+NERF_API int nerf_sampler_create(nerf_sampler **out,
+                                 const nerf_sampler_options *opts);
+
+/** Release a sampler.  NULL is a no-op.  No renderer may still use it. */
+NERF_API void nerf_sampler_destroy(nerf_sampler *sampler);
+
+/** Flags of the sampling and rendering calls. */
+#define NERF_SAMPLE_TRAINING 0x1u /**< Random placement as in training (if
+                                       the sampler's perturb is set). */
+
+/**
+ * Stratified (coarse) sample depths for @p n_rays rays.  They do not
+ * depend on the rays themselves: values of t in the sampler's
+ * [t_near, t_far] (NDC depths with ndc set).
+ *
+ * @param flags     0 for evaluation (deterministic), or
+ *                  NERF_SAMPLE_TRAINING.
+ * @param first_ray index of the first ray in the random streams: ray k
+ *                  draws from the stream (seed, first_ray + k), so a batch
+ *                  split in parts gives the same values.
+ * @param u         NULL, or n_rays x n_coarse uniforms in [0, 1) to use
+ *                  instead of the library's generator when training (to
+ *                  compare with another implementation on identical
+ *                  draws).
+ * @param t_out     n_rays x n_coarse floats, increasing along each ray.
+ * @return NERF_OK or NERF_EINVAL (NULL sampler or t_out).  Reentrant.
+ */
+NERF_API int nerf_sampler_sample_coarse(const nerf_sampler *sampler,
+                                        size_t n_rays, uint32_t flags,
+                                        uint64_t first_ray, const float *u,
+                                        float *t_out);
+
+/**
+ * Hierarchical (fine) samples: n_fine depths drawn by inverse transform
+ * from the piecewise-constant density the coarse weights define over the
+ * intervals between midpoints of @p t_coarse (weights without the first
+ * and last, plus 1e-5), merged with the coarse depths.
+ *
+ * @param t_coarse  n_rays x n_coarse increasing depths.
+ * @param weights   n_rays x n_coarse compositing weights of those samples.
+ * @param flags     0: evenly spaced u (evaluation); NERF_SAMPLE_TRAINING:
+ *                  uniform random u when the sampler's perturb is set.
+ * @param first_ray first ray's stream index, as for the coarse call.
+ * @param u         NULL, or n_rays x n_fine uniforms in [0, 1] replacing
+ *                  the generator's when training.
+ * @param t_out     n_rays x (n_coarse + n_fine) floats: the sorted union of
+ *                  coarse and fine depths.
+ * @return NERF_OK; NERF_EINVAL (NULL arguments, or a sampler with
+ * n_fine = 0).  Reentrant.
+ */
+NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
+                                      size_t n_rays, uint32_t flags,
+                                      uint64_t first_ray,
+                                      const float *t_coarse,
+                                      const float *weights, const float *u,
+                                      float *t_out);
+
+/** What a nerf_progress report is about. */
+typedef enum nerf_progress_kind {
+    NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
+    NERF_PROGRESS_TRAIN = 2   /**< done and total count steps; loss and
+                                   psnr are those of the last step. */
+} nerf_progress_kind;
+
+/**
+ * A progress report, passed by pointer to a nerf_progress_cb.  Versioned:
+ * read a field only if struct_size covers it (fields are only appended).
+ */
+typedef struct nerf_progress {
+    uint32_t struct_size; /**< sizeof the library's struct. */
+    uint32_t kind;        /**< nerf_progress_kind. */
+    uint64_t done;        /**< Units of work finished so far. */
+    uint64_t total;       /**< Units of work of the whole call. */
+    double elapsed;       /**< Seconds since the call started. */
+    double loss;          /**< NERF_PROGRESS_TRAIN: loss of the last step;
+                               otherwise 0. */
+    double psnr;          /**< NERF_PROGRESS_TRAIN: PSNR (dB) of the last
+                               step's fine colours; otherwise 0. */
+} nerf_progress;
+
+/**
+ * Progress callback.  It runs on the thread that made the call, never on a
+ * worker thread, and must not call back into the handle that reports.
+ * Return 0 to continue, nonzero to cancel: the call then returns
+ * NERF_ECANCELLED.  @p p is valid only during the callback.
+ */
+typedef int (*nerf_progress_cb)(const nerf_progress *p, void *user);
+
+/** Sentinel for nerf_renderer_options.raw_noise_std. */
+#define NERF_NOISE_AUTO (-1.0f)
+
+/** Settings of a renderer, fixed at creation. */
+typedef struct nerf_renderer_options {
+    uint32_t struct_size;      /**< Set by nerf_renderer_options_init(). */
+    uint32_t white_background; /**< 1: composite onto white (Blender
+                                    scenes): rgb += 1 - opacity; default 0
+                                    (black). */
+    float raw_noise_std;       /**< Standard deviation of the Gaussian
+                                    noise added to raw density before the
+                                    ReLU, in training only.  Default
+                                    NERF_NOISE_AUTO: 1 when the sampler
+                                    uses NDC (forward-facing scenes, as the
+                                    reference), else 0. */
+    uint32_t chunk_rays;       /**< Rays per unit of work handed to a
+                                    thread; progress is reported after each
+                                    chunk.  Rounded up to a multiple of 64;
+                                    1..2^20; default 512.  Neither memory
+                                    use nor results depend on it. */
+    uint32_t threads;          /**< Worker threads for image and ray
+                                    rendering, 0..1024.  0 (the default):
+                                    the online cores divided by OpenBLAS's
+                                    own thread count (each worker's matrix
+                                    products already use that many; more
+                                    workers would oversubscribe the cores),
+                                    at least 1; all cores with another
+                                    BLAS.  Results do not depend on it. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
+                                    defaults. */
+} nerf_renderer_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size (or use
+ * NERF_RENDERER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
+                                        size_t struct_size);
+#define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
+
+/**
+ * Create a renderer that draws @p model with the samples of @p sampler.
+ * @p opts is copied; NULL means the defaults.
+ *
+ * The renderer references @p model and @p sampler without owning them:
+ * both must outlive it.  It reads the model's current weights at every
+ * call, so training between renders is seen.  One model and one sampler may
+ * serve several renderers.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL model or sampler, out-of-range
+ * options); NERF_EVERSION for an options struct from a newer header with
+ * non-zero unknown fields; NERF_ENOMEM.
+ */
+NERF_API int nerf_renderer_create(nerf_renderer **out,
+                                  const nerf_model *model,
+                                  const nerf_sampler *sampler,
+                                  const nerf_renderer_options *opts);
+
+/** Release a renderer (not its model or sampler).  NULL is a no-op. */
+NERF_API void nerf_renderer_destroy(nerf_renderer *renderer);
+
+/**
+ * Set (or with NULL clear) the progress callback of later render calls.
+ * It is called on the calling thread after every chunk of rays.
+ * @return NERF_OK, or NERF_EINVAL for a NULL renderer.
+ */
+NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
+                                        nerf_progress_cb cb, void *user);
+
+/**
+ * Ask the render call running on @p renderer to stop; it returns
+ * NERF_ECANCELLED once its threads finish the batch of 64 rays they are
+ * on.  Thread-safe: this is the one
+ * function that may be called while another thread is inside a call on the
+ * same renderer (including from its progress callback).  Each render call
+ * clears the request when it starts, so a cancel that arrives when no call
+ * is running has no effect.  NULL is a no-op.
+ */
+NERF_API void nerf_renderer_cancel(nerf_renderer *renderer);
+
+/**
+ * Render every pixel of @p camera (evaluation: no randomness) into the
+ * caller's buffers, row by row from the top-left pixel.
+ *
+ * Work is split into chunks of rays spread over the renderer's threads;
+ * memory use is bounded by the thread count, not the image size.
+ * The output is bitwise identical for every chunk size and thread count.
+ *
+ * @param rgb_out        height x width x 3 floats; colours, 0..1 for a
+ *                       trained model.  May be NULL.
+ * @param depth_out      height x width floats: the expected depth
+ *                       sum(w t), in units of t along the unnormalised
+ *                       ray (depth along the optical axis for
+ *                       nerf_camera rays; NDC depth in NDC), not divided
+ *                       by opacity.  May be NULL.
+ * @param opacity_out    height x width floats, sum(w) in [0, 1].  May be
+ *                       NULL.
+ * @param pixel_capacity pixels each non-NULL buffer can hold; at least
+ *                       width x height.
+ * @return NERF_OK; NERF_EINVAL (NULL renderer or camera, invalid camera,
+ * all outputs NULL, capacity too small); NERF_EVERSION for a camera
+ * struct from a newer header with non-zero unknown fields; NERF_ENOMEM;
+ * NERF_ECANCELLED (nerf_renderer_cancel() or the progress callback; the
+ * buffers then hold a partial image).
+ *
+ * Not reentrant for one renderer: use one renderer per calling thread.
+ */
+NERF_API int nerf_renderer_render_image(nerf_renderer *renderer,
+                                        const nerf_camera *camera,
+                                        float *rgb_out, float *depth_out,
+                                        float *opacity_out,
+                                        size_t pixel_capacity);
+
+/**
+ * As nerf_renderer_render_image(), with the colours converted to 8 bits:
+ * round(255 clamp(c, 0, 1)).
+ * @param rgb_out height x width x 3 bytes (RGB).  Must not be NULL.
+ * @return as nerf_renderer_render_image().
+ */
+NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
+                                           const nerf_camera *camera,
+                                           uint8_t *rgb_out,
+                                           float *depth_out,
+                                           float *opacity_out,
+                                           size_t pixel_capacity);
+
+/**
+ * Render a caller's batch of rays (evaluation: no randomness), chunked and
+ * threaded as images are.
+ *
+ * @param origins     n_rays x 3 floats, world units.
+ * @param directions  n_rays x 3 floats, unnormalised: samples lie at
+ *                    o + t d and distances are scaled by |d|, which must
+ *                    be > 0.
+ * @param rgb_out     n_rays x 3 floats, or NULL.
+ * @param depth_out   n_rays floats, sum(w t), or NULL.
+ * @param opacity_out n_rays floats, or NULL.
+ * @return NERF_OK; NERF_EINVAL (NULL inputs, all outputs NULL, NDC sampler
+ * without ndc_focal/ndc_width/ndc_height); NERF_ENOMEM; NERF_ECANCELLED.
+ */
+NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
+                                       size_t n_rays, const float *origins,
+                                       const float *directions,
+                                       float *rgb_out, float *depth_out,
+                                       float *opacity_out);
+
+/* ------------------------------------------------------------------------ */
+/* Images and metrics                                                       */
+/* ------------------------------------------------------------------------ */
+
+/** Largest width or height, in pixels, that the PNG functions accept. */
+#define NERF_IMAGE_MAX_SIDE 16384
+
+/**
+ * Read a PNG file of any colour type (gray, gray+alpha, RGB, RGBA,
+ * palette) and bit depth (1 to 16) into RGBA floats in [0, 1].
+ *
+ * @param rgba_out receives width x height x 4 floats, row-major from the
+ *        top-left pixel, channels interleaved, straight (not premultiplied)
+ *        alpha; opaque files get alpha 1.  Allocated by libnerf with the
+ *        default allocator: release it with nerf_free().  Set to NULL on
+ *        failure.
+ *
+ * 8-bit samples are returned as stored (v / 255).  16-bit samples go
+ * through libpng's linear format: v / 65535 when the file has no gAMA or
+ * sRGB chunk (the usual case), converted to linear light when it has one;
+ * libpng premultiplies those by alpha, so the colour of a fully
+ * transparent 16-bit pixel reads as 0.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_EIO (the file cannot
+ * be opened or read); NERF_EFORMAT (not a PNG, truncated, corrupted, or a
+ * side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages start with
+ * the path.  Reentrant.
+ */
+NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
+                                 uint32_t *height_out, float **rgba_out);
+
+/**
+ * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
+ * and rounded to the nearest of 256 levels (NaN gives 0).  Use channels 1
+ * for depth or opacity maps (scale them into [0, 1] first).
+ *
+ * @param channels 1 (gray), 3 (RGB) or 4 (RGBA).
+ * @param pixels   width x height x channels floats, row-major from the
+ *                 top-left pixel, channels interleaved.
+ *
+ * The file is written to a temporary name beside @p path, flushed and
+ * renamed, so an existing file at @p path is only ever replaced by a
+ * complete image.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, zero size or a side above
+ * NERF_IMAGE_MAX_SIDE, bad channel count); NERF_EIO; NERF_ENOMEM.
+ * Reentrant.
+ */
+NERF_API int nerf_image_write_png(const char *path, uint32_t width,
+                                  uint32_t height, uint32_t channels,
+                                  const float *pixels);
+
+/**
+ * As nerf_image_write_png(), from 8-bit samples written as they are.
+ * @param pixels width x height x channels bytes, row-major, interleaved.
+ * @return as nerf_image_write_png().
+ */
+NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
+                                   uint32_t height, uint32_t channels,
+                                   const uint8_t *pixels);
+
+/**
+ * Release a buffer that a libnerf function allocated for the caller (such
+ * as the pixels of nerf_image_read_png()).  NULL is a no-op.  Never pass
+ * it memory from anywhere else, nor buffers owned by a handle.
+ */
+NERF_API void nerf_free(void *ptr);
+
+/**
+ * Peak signal-to-noise ratio of two images with values in [0, 1]:
+ * -10 log10(MSE), the mean taken over all @p count samples (every channel
+ * of every pixel).  Identical images give +infinity (IEEE HUGE_VAL), not a
+ * cap.
+ * @param a, b  @p count floats each, in any layout (the same for both).
+ * @param out   receives the PSNR in decibels.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, count 0, NaN or infinite
+ * values).  Reentrant.
+ */
+NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
+                       double *out);
+
+/**
+ * Structural similarity (Wang et al. 2004) as the reference NeRF
+ * evaluation computes it: an 11 x 11 Gaussian window with sigma 1.5,
+ * K1 = 0.01, K2 = 0.03, data range 1; local means, variances and
+ * covariance by separable filtering over 'valid' positions only (no
+ * padding: (width - 10) x (height - 10) windows), population (not sample)
+ * variances; the SSIM map is averaged over those positions and over the
+ * channels, each channel computed on its own.  Computed in double
+ * precision; memory used is O(width), whatever the height.
+ *
+ * @param a, b      width x height x channels floats in [0, 1], row-major,
+ *                  channels interleaved.
+ * @param channels  1..4 (3 for RGB).
+ * @param out       receives the mean SSIM, 1 for identical images.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, width or height below 11,
+ * bad channel count, NaN or infinite values); NERF_ENOMEM.  Reentrant.
+ */
+NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
+                       uint32_t height, uint32_t channels, double *out);
+
+/* ------------------------------------------------------------------------ */
+/* Datasets                                                                 */
+/* ------------------------------------------------------------------------ */
+
+/** Which part of a scene to load. */
+typedef enum nerf_split {
+    NERF_SPLIT_TRAIN = 0,
+    NERF_SPLIT_VAL = 1,
+    NERF_SPLIT_TEST = 2
+} nerf_split;
+
+/** The layout a dataset was loaded from, as nerf_dataset_get_format() says. */
+typedef enum nerf_dataset_format {
+    NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or transforms.json. */
+    NERF_DATASET_LLFF = 2     /**< poses_bounds.npy and images folders. */
+} nerf_dataset_format;
+
+/** How nerf_dataset_load() reads a scene. */
+typedef struct nerf_dataset_options {
+    uint32_t struct_size;      /**< Set by nerf_dataset_options_init(). */
+    uint32_t split;            /**< nerf_split; default TRAIN. */
+    uint32_t downscale;        /**< Integer factor K, 1..256; default 1.
+                                    Blender: each K x K block of the
+                                    composited image is averaged and the
+                                    intrinsics are divided by K.  LLFF:
+                                    reads images_K/ if present, else
+                                    images_M/ (images/ for M = 1) for the
+                                    largest M dividing K, averaged in
+                                    blocks of K / M.  Sizes are rounded
+                                    down (a last partial block is
+                                    dropped): 378 / 8 gives 47. */
+    uint32_t skip;             /**< Keep every skip-th frame of the split,
+                                    starting with the first; default 1. */
+    uint32_t white_background; /**< 1 (default): composite images with
+                                    alpha onto white, rgb a + (1 - a); 0:
+                                    onto black, rgb a. */
+    uint32_t skip_missing;     /**< Blender: 1 drops frames whose image file
+                                    does not exist (with a warning); 0
+                                    (default) fails naming the file. */
+    uint32_t llff_holdout;     /**< LLFF: images whose index is a multiple
+                                    of this form the test split (and the
+                                    val split, as in the reference); the
+                                    others are train.  Default 8; 0 = none
+                                    held out. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
+} nerf_dataset_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
+                                       size_t struct_size);
+#define NERF_DATASET_OPTIONS_INIT(o) \
+    nerf_dataset_options_init((o), sizeof *(o))
+
+/**
+ * Load one split of the scene in the folder @p dir.  The layout is
+ * detected from the files present, in this order:
+ *
+ *  - transforms_<split>.json, or a single transforms.json (which holds
+ *    every frame, whatever the split): Blender.  Fields: camera_angle_x
+ *    (focal = 0.5 W / tan(0.5 camera_angle_x)) or instant-ngp's fl_x, fl_y,
+ *    cx, cy, w, h, at top level or per frame (per frame wins; fy defaults
+ *    to fx, the principal point to the centre); frames[].transform_matrix,
+ *    a 4 x 4 camera-to-world matrix as a list of rows; frames[].file_path
+ *    relative to @p dir, ".png" added when it has no extension.  Images
+ *    are PNGs of one size.  Ray bounds: near 2, far 6.
+ *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
+ *    array must be '<f8', C order, N x 17; images are the N PNG files of
+ *    the image folder sorted by name.  Rotations are reordered from
+ *    [down, right, back] to [right, up, back], positions and bounds are
+ *    scaled so that the smallest bound is 1/0.75, and poses are recentred
+ *    on their average pose.  Focal = the file's focal x image width / the
+ *    file's width, for both axes; principal point at the centre.  Rays are
+ *    meant for NDC (nerf_dataset_is_ndc() is 1; bounds are 0 and 1).
+ *
+ * Images are stored as float RGB in [0, 1], composited as the options say.
+ * The loader logs (level INFO, through the hooks) the format, image count
+ * and size, focal length, bounds and scene scale.
+ *
+ * @param opts NULL for the defaults.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
+ * larger than the images, an LLFF split left empty by llff_holdout);
+ * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
+ * (malformed JSON, missing field, matrix of the wrong shape, NaN or
+ * infinite values, zero or negative focal, near >= far, npy of the wrong
+ * dtype, order or shape, corrupt PNG, images of different sizes, image
+ * count not matching the poses, no frames left); NERF_ENOMEM.  Messages name the file and
+ * the problem.  On failure *out is NULL.
+ * Reentrant: separate loads may run on separate threads.
+ */
+NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
+                               const nerf_dataset_options *opts);
+
+/** Release a dataset and its images.  NULL is a no-op. */
+NERF_API void nerf_dataset_destroy(nerf_dataset *ds);
+
+/** Number of images; 0 for NULL. */
+NERF_API uint32_t nerf_dataset_count(const nerf_dataset *ds);
+
+/** The nerf_dataset_format the dataset came from; 0 for NULL. */
+NERF_API int nerf_dataset_get_format(const nerf_dataset *ds);
+
+/**
+ * Size in pixels of every image of the dataset (after downscaling).
+ * @return NERF_OK or NERF_EINVAL (NULL pointer).
+ */
+NERF_API int nerf_dataset_image_size(const nerf_dataset *ds,
+                                     uint32_t *width_out,
+                                     uint32_t *height_out);
+
+/**
+ * Borrow image @p index: width x height x 3 floats (RGB in [0, 1]),
+ * row-major from the top-left pixel.  The pointer stays valid until the
+ * dataset is destroyed; do not free it.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range).
+ */
+NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
+                                const float **rgb_out);
+
+/**
+ * The camera of image @p index: pose (OpenGL axes, world units of the
+ * dataset, i.e. after the LLFF rescaling and recentring), intrinsics in
+ * pixels of the stored images, size, flags 0 (rays through pixel centres;
+ * set NERF_CAMERA_PIXEL_CORNER to reproduce the reference's rays).
+ * @param out initialised with nerf_camera_init(); as many bytes as its
+ *            struct_size are written.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
+ * uninitialised struct).
+ */
+NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,
+                                 nerf_camera *out);
+
+/**
+ * The interval of t to sample along the dataset's rays: 2 and 6 for
+ * Blender scenes, 0 and 1 (NDC depth) for LLFF scenes.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer).
+ */
+NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
+                                 float *far_out);
+
+/**
+ * 1 when the dataset's rays should be warped to normalised device
+ * coordinates (forward-facing LLFF scenes), else 0 (also for NULL).  The
+ * NDC frustum is that of nerf_dataset_camera(): its fx, width and height.
+ */
+NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
+
+/**
+ * Camera @p index of @p n_views along the reference implementation's
+ * spiral render path of an LLFF scene: two turns around the average pose
+ * with radii the 90th percentile of the absolute camera positions, the
+ * depth moving at half the angular rate, always looking at a focus point
+ * placed between the nearest and the farthest bounds (by the reference's
+ * disparity weighting).  The path depends on all the scene's poses, not
+ * just the loaded split.  Intrinsics and size are those of the dataset's
+ * images.  The reference renders 120 views.
+ * @param out initialised with nerf_camera_init().
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, not an LLFF dataset,
+ * n_views 0 or index >= n_views, uninitialised struct).  Reentrant.
+ */
+NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
+                                        uint32_t index, uint32_t n_views,
+                                        nerf_camera *out);
+
+/* ------------------------------------------------------------------------ */
+/* Training                                                                 */
+/* ------------------------------------------------------------------------ */
+
+/** How a trainer draws and weighs its rays, fixed at creation. */
+typedef struct nerf_trainer_options {
+    uint32_t struct_size;     /**< Set by nerf_trainer_options_init(). */
+    uint32_t batch_rays;      /**< Rays per step, drawn at random across all
+                                   training images; default 1024 (the
+                                   reference configuration; the paper used
+                                   4096). */
+    uint32_t precrop_steps;   /**< For this many first steps, draw rays only
+                                   from the central crop of the images;
+                                   default 500 (as the reference on Blender
+                                   scenes); ignored with an NDC sampler. */
+    float precrop_fraction;   /**< Side of that crop as a fraction of the
+                                   image side, (0, 1]; default 0.5. */
+    float raw_noise_std;      /**< Gaussian noise on raw density in
+                                   training; default NERF_NOISE_AUTO (1 with
+                                   an NDC sampler, else 0). */
+    int32_t white_background; /**< 1: composite renders on white, 0: black,
+                                   -1 (default): as the dataset's images
+                                   were (white for Blender scenes loaded
+                                   with white_background). */
+    uint32_t checkpoint_every; /**< nerf_trainer_run() saves the model to
+                                    checkpoint_path every this many steps
+                                    (and when it ends); 0 (default): only
+                                    when it ends, if a path is set. */
+    uint32_t reserved0;       /**< Must be 0. */
+    const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
+    const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
+} nerf_trainer_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
+                                       size_t struct_size);
+#define NERF_TRAINER_OPTIONS_INIT(o) nerf_trainer_options_init((o), sizeof *(o))
+
+/**
+ * Figures of one training step.  Versioned: set struct_size (sizeof) before
+ * passing it; the library writes only the fields it covers.
+ */
+typedef struct nerf_train_stats {
+    uint32_t struct_size;  /**< Set by the caller. */
+    uint32_t reserved0;
+    uint64_t step;         /**< The model's step count after the step. */
+    double loss;           /**< Coarse + fine mean squared error. */
+    double psnr;           /**< PSNR (dB) of the last pass's colours. */
+    double psnr_coarse;    /**< PSNR (dB) of the coarse pass. */
+    double learning_rate;  /**< The rate the step used. */
+} nerf_train_stats;
+
+/**
+ * Create a trainer that optimises @p model on the images of @p dataset
+ * (a training split), placing samples with @p sampler (whose perturb
+ * setting makes training samples random).  The trainer references all
+ * three without owning them: they must outlive it, and nothing else may
+ * use the model while a step runs.
+ *
+ * The whole state of a run is the model: its step count keys every random
+ * choice of a step (rays, sample jitter, noise), so a model saved at step
+ * k, loaded and trained on with the same dataset, sampler and options
+ * continues bit for bit as the uninterrupted run would.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset);
+ * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_ENOMEM.
+ */
+NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
+                                 const nerf_dataset *dataset,
+                                 const nerf_sampler *sampler,
+                                 const nerf_trainer_options *opts);
+
+/** Release a trainer (not its model, dataset or sampler).  NULL: no-op. */
+NERF_API void nerf_trainer_destroy(nerf_trainer *trainer);
+
+/**
+ * Take one optimisation step: draw the step's rays, render them through
+ * both networks, take the squared-error loss of both passes against the
+ * images, back-propagate and update the weights with Adam at the scheduled
+ * learning rate.
+ * @param stats_out NULL, or figures of the step (set its struct_size).
+ * @return NERF_OK; NERF_EINVAL; NERF_ENOMEM (first step only: later steps
+ * reuse their buffers); NERF_ERROR if the loss is not finite (the weights
+ * are then left as they were before the step).
+ */
+NERF_API int nerf_trainer_step(nerf_trainer *trainer,
+                               nerf_train_stats *stats_out);
+
+/**
+ * Take @p n_steps steps, calling the progress callback (kind
+ * NERF_PROGRESS_TRAIN, done and total in steps) after each and saving
+ * checkpoints as the options say.
+ * @param stats_out NULL, or the figures of the last step taken.
+ * @return as nerf_trainer_step(); NERF_ECANCELLED when the callback or
+ * nerf_trainer_cancel() stopped the run (after a whole step); NERF_EIO
+ * when a checkpoint cannot be written.
+ */
+NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
+                              nerf_train_stats *stats_out);
+
+/**
+ * Set (or with NULL clear) the progress callback of nerf_trainer_run().
+ * @return NERF_OK, or NERF_EINVAL for a NULL trainer.
+ */
+NERF_API int nerf_trainer_set_progress(nerf_trainer *trainer,
+                                       nerf_progress_cb cb, void *user);
+
+/**
+ * Ask a running nerf_trainer_run() to stop after its current step.
+ * Thread-safe; each run clears the request when it starts.  NULL: no-op.
+ */
+NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
+
 #ifdef __cplusplus
 }
 #endif

@@ -40,6 +40,97 @@ FROZEN(nerf_model_options, seed, 48);
 FROZEN(nerf_model_options, hooks, 56);
 SIZE(nerf_model_options, 64);
 
+FROZEN(nerf_scene_options, struct_size, 0);
+FROZEN(nerf_scene_options, width, 4);
+FROZEN(nerf_scene_options, height, 8);
+FROZEN(nerf_scene_options, n_train, 12);
+FROZEN(nerf_scene_options, n_val, 16);
+FROZEN(nerf_scene_options, n_test, 20);
+FROZEN(nerf_scene_options, threads, 24);
+FROZEN(nerf_scene_options, reserved0, 28);
+FROZEN(nerf_scene_options, seed, 32);
+FROZEN(nerf_scene_options, hooks, 40);
+SIZE(nerf_scene_options, 48);
+
+FROZEN(nerf_camera, struct_size, 0);
+FROZEN(nerf_camera, flags, 4);
+FROZEN(nerf_camera, width, 8);
+FROZEN(nerf_camera, height, 12);
+FROZEN(nerf_camera, c2w, 16);
+FROZEN(nerf_camera, fx, 64);
+FROZEN(nerf_camera, fy, 68);
+FROZEN(nerf_camera, cx, 72);
+FROZEN(nerf_camera, cy, 76);
+SIZE(nerf_camera, 80);
+
+FROZEN(nerf_sampler_options, struct_size, 0);
+FROZEN(nerf_sampler_options, n_coarse, 4);
+FROZEN(nerf_sampler_options, n_fine, 8);
+FROZEN(nerf_sampler_options, perturb, 12);
+FROZEN(nerf_sampler_options, lindisp, 16);
+FROZEN(nerf_sampler_options, paper_bins, 20);
+FROZEN(nerf_sampler_options, ndc, 24);
+FROZEN(nerf_sampler_options, reserved0, 28);
+FROZEN(nerf_sampler_options, t_near, 32);
+FROZEN(nerf_sampler_options, t_far, 36);
+FROZEN(nerf_sampler_options, ndc_focal, 40);
+FROZEN(nerf_sampler_options, ndc_width, 44);
+FROZEN(nerf_sampler_options, ndc_height, 48);
+FROZEN(nerf_sampler_options, reserved1, 52);
+FROZEN(nerf_sampler_options, seed, 56);
+FROZEN(nerf_sampler_options, hooks, 64);
+SIZE(nerf_sampler_options, 72);
+
+FROZEN(nerf_progress, struct_size, 0);
+FROZEN(nerf_progress, kind, 4);
+FROZEN(nerf_progress, done, 8);
+FROZEN(nerf_progress, total, 16);
+FROZEN(nerf_progress, elapsed, 24);
+FROZEN(nerf_progress, loss, 32);
+FROZEN(nerf_progress, psnr, 40);
+SIZE(nerf_progress, 48);
+
+FROZEN(nerf_renderer_options, struct_size, 0);
+FROZEN(nerf_renderer_options, white_background, 4);
+FROZEN(nerf_renderer_options, raw_noise_std, 8);
+FROZEN(nerf_renderer_options, chunk_rays, 12);
+FROZEN(nerf_renderer_options, threads, 16);
+FROZEN(nerf_renderer_options, reserved0, 20);
+FROZEN(nerf_renderer_options, hooks, 24);
+SIZE(nerf_renderer_options, 32);
+
+FROZEN(nerf_dataset_options, struct_size, 0);
+FROZEN(nerf_dataset_options, split, 4);
+FROZEN(nerf_dataset_options, downscale, 8);
+FROZEN(nerf_dataset_options, skip, 12);
+FROZEN(nerf_dataset_options, white_background, 16);
+FROZEN(nerf_dataset_options, skip_missing, 20);
+FROZEN(nerf_dataset_options, llff_holdout, 24);
+FROZEN(nerf_dataset_options, reserved0, 28);
+FROZEN(nerf_dataset_options, hooks, 32);
+SIZE(nerf_dataset_options, 40);
+
+FROZEN(nerf_trainer_options, struct_size, 0);
+FROZEN(nerf_trainer_options, batch_rays, 4);
+FROZEN(nerf_trainer_options, precrop_steps, 8);
+FROZEN(nerf_trainer_options, precrop_fraction, 12);
+FROZEN(nerf_trainer_options, raw_noise_std, 16);
+FROZEN(nerf_trainer_options, white_background, 20);
+FROZEN(nerf_trainer_options, checkpoint_every, 24);
+FROZEN(nerf_trainer_options, reserved0, 28);
+FROZEN(nerf_trainer_options, checkpoint_path, 32);
+FROZEN(nerf_trainer_options, hooks, 40);
+SIZE(nerf_trainer_options, 48);
+
+FROZEN(nerf_train_stats, struct_size, 0);
+FROZEN(nerf_train_stats, reserved0, 4);
+FROZEN(nerf_train_stats, step, 8);
+FROZEN(nerf_train_stats, loss, 16);
+FROZEN(nerf_train_stats, psnr, 24);
+FROZEN(nerf_train_stats, psnr_coarse, 32);
+FROZEN(nerf_train_stats, learning_rate, 40);
+SIZE(nerf_train_stats, 48);
+
 #endif
 
 /* Status codes and enum values are ABI too. */
@@ -51,6 +142,15 @@ _Static_assert(NERF_PARAM_LEARNING_RATE == 100 && NERF_PARAM_ADAM_EPS == 105,
                "parameter keys renumbered");
 _Static_assert(NERF_PRESET_REFERENCE == 1 && NERF_PRESET_TINY == 2,
                "presets renumbered");
+_Static_assert(NERF_CAMERA_PIXEL_CORNER == 0x1u &&
+               NERF_SAMPLE_TRAINING == 0x1u && NERF_PROGRESS_RENDER == 1,
+               "render flags renumbered");
+
+_Static_assert(NERF_SPLIT_TRAIN == 0 && NERF_SPLIT_VAL == 1 &&
+               NERF_SPLIT_TEST == 2, "splits renumbered");
+_Static_assert(NERF_DATASET_BLENDER == 1 && NERF_DATASET_LLFF == 2,
+               "dataset formats renumbered");
+_Static_assert(NERF_IMAGE_MAX_SIDE == 16384, "image size limit changed");
 
 int main(void)
 {

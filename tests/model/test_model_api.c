@@ -3,6 +3,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "../fail_alloc.h"
 #include "../harness.h"
 #include "nerf.h"
 
@@ -223,42 +224,18 @@ TEST(training_parameters)
     nerf_model_destroy(m);
 }
 
-/* An allocator that fails its k-th call and tracks live blocks. */
-typedef struct fail_alloc {
-    int calls, fail_at, live;
-} fail_alloc;
-
-static void *failing_alloc(size_t size, void *user)
-{
-    fail_alloc *f = user;
-    if (++f->calls == f->fail_at) {
-        return NULL;
-    }
-    f->live++;
-    return malloc(size);
-}
-
-static void failing_free(void *ptr, void *user)
-{
-    fail_alloc *f = user;
-    f->live--;
-    free(ptr);
-}
-
 TEST(allocation_failures)
 {
     nerf_hooks hooks;
-    NERF_HOOKS_INIT(&hooks);
-    hooks.alloc = failing_alloc;
-    hooks.free = failing_free;
+    fail_alloc f;
+    fail_alloc_hooks(&hooks, &f);
     nerf_model_options o;
     NERF_MODEL_OPTIONS_INIT(&o);
     nerf_model_options_preset(&o, NERF_PRESET_TINY);
     o.hooks = &hooks;
     int succeeded_at = 0;
     for (int k = 1; k < 20 && !succeeded_at; k++) {
-        fail_alloc f = {0, k, 0};
-        hooks.alloc_user = &f;
+        f = (fail_alloc){0, k, 0};
         nerf_model *m = NULL;
         int rc = nerf_model_create(&m, &o);
         if (rc == NERF_OK) {

@@ -1,0 +1,9 @@
+#ifndef NERF_COMMON_CPU_H
+#define NERF_COMMON_CPU_H
+
+#include <stdint.h>
+
+/* Processors online, at least 1: the default worker count. */
+uint32_t nerf__cpu_count(void);
+
+#endif

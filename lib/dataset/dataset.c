@@ -1,0 +1,284 @@
+/* The public dataset API: options, format detection and getters. */
+#include "dataset.h"
+
+#include <errno.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "llff_poses.h"
+#include "options.h"
+
+/* Downscale factors beyond this leave nothing of any real image. */
+#define MAX_DOWNSCALE 256u
+
+static void default_options(nerf_dataset_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->split = NERF_SPLIT_TRAIN;
+    o->downscale = 1;
+    o->skip = 1;
+    o->white_background = 1;
+    o->skip_missing = 0;
+    o->llff_holdout = 8;
+}
+
+NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
+                                       size_t struct_size)
+{
+    nerf_dataset_options d;
+    default_options(&d);
+    return nerf__options_init(opts, struct_size, &d, sizeof d,
+                              "nerf_dataset_options");
+}
+
+static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
+{
+    default_options(o);
+    if (in == NULL) {
+        return NERF_OK;
+    }
+    int rc = nerf__options_read(o, sizeof *o, in, "nerf_dataset_options");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const char *what = NULL;
+    if (o->split > NERF_SPLIT_TEST) {
+        what = "split is not a nerf_split";
+    } else if (o->downscale < 1 || o->downscale > MAX_DOWNSCALE) {
+        what = "downscale must be 1..256";
+    } else if (o->skip < 1) {
+        what = "skip must be at least 1";
+    } else if (o->white_background > 1 || o->skip_missing > 1) {
+        what = "white_background and skip_missing must be 0 or 1";
+    } else if (o->reserved0 != 0) {
+        what = "reserved0 must be 0";
+    }
+    if (what) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_options: %s", what);
+    }
+    return NERF_OK;
+}
+
+static bool is_file(const nerf__env *env, const char *dir, const char *name)
+{
+    char *path = nerf__path_join(env, dir, name);
+    struct stat st;
+    bool found = path && stat(path, &st) == 0 && S_ISREG(st.st_mode);
+    nerf__free(env, path);
+    return found;
+}
+
+/* Pick the loader from the files present in dir. */
+static int detect_and_load(nerf_dataset *ds, const char *dir,
+                           const nerf__dataset_config *cfg)
+{
+    static const char *const split_names[] = {"train", "val", "test"};
+    struct stat st;
+    if (stat(dir, &st) != 0) {
+        char text[128];
+        if (strerror_r(errno, text, sizeof text) != 0) {
+            snprintf(text, sizeof text, "error %d", errno);
+        }
+        return nerf__error(NERF_EIO, "%s: cannot open: %s", dir, text);
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        return nerf__error(NERF_EIO, "%s: not a folder", dir);
+    }
+    char name[64];
+    snprintf(name, sizeof name, "transforms_%s.json", split_names[cfg->split]);
+    if (is_file(&ds->env, dir, name)) {
+        return nerf__blender_load(ds, dir, name, cfg);
+    }
+    if (is_file(&ds->env, dir, "transforms.json")) {
+        return nerf__blender_load(ds, dir, "transforms.json", cfg);
+    }
+    if (is_file(&ds->env, dir, "poses_bounds.npy")) {
+        return nerf__llff_load(ds, dir, cfg);
+    }
+    return nerf__error(NERF_EIO, "%s: no %s, transforms.json or "
+                       "poses_bounds.npy: not a known dataset layout", dir,
+                       name);
+}
+
+NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
+                               const nerf_dataset_options *opts)
+{
+    if (out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_load: out is NULL");
+    }
+    *out = NULL;
+    if (dir == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_load: dir is NULL");
+    }
+    nerf_dataset_options o;
+    nerf__env env;
+    int rc = read_options(&o, opts);
+    if (rc == NERF_OK) {
+        rc = nerf__env_from_hooks(&env, o.hooks);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf_dataset *ds = nerf__calloc(&env, 1, sizeof *ds);
+    if (ds == NULL) {
+        return NERF_ENOMEM;
+    }
+    ds->env = env;
+    nerf__dataset_config cfg = {o.split, o.downscale, o.skip,
+                                o.white_background, o.skip_missing,
+                                o.llff_holdout};
+    rc = detect_and_load(ds, dir, &cfg);
+    if (rc != NERF_OK) {
+        nerf_dataset_destroy(ds);
+        return rc;
+    }
+    ds->white_background = ds->kind == NERF__DATASET_BLENDER &&
+                           o.white_background;
+    *out = ds;
+    return NERF_OK;
+}
+
+NERF_API void nerf_dataset_destroy(nerf_dataset *ds)
+{
+    if (ds == NULL) {
+        return;
+    }
+    nerf__env env = ds->env;
+    nerf__free(&env, ds->pixels);
+    nerf__free(&env, ds->views);
+    nerf__free(&env, ds);
+}
+
+NERF_API uint32_t nerf_dataset_count(const nerf_dataset *ds)
+{
+    return ds ? ds->count : 0;
+}
+
+NERF_API int nerf_dataset_get_format(const nerf_dataset *ds)
+{
+    return ds ? ds->kind : 0;
+}
+
+NERF_API int nerf_dataset_image_size(const nerf_dataset *ds,
+                                     uint32_t *width_out,
+                                     uint32_t *height_out)
+{
+    if (ds == NULL || width_out == NULL || height_out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_image_size: NULL "
+                           "argument");
+    }
+    *width_out = ds->width;
+    *height_out = ds->height;
+    return NERF_OK;
+}
+
+static int check_index(const nerf_dataset *ds, uint32_t index,
+                       const void *out, const char *fn)
+{
+    if (ds == NULL || out == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: NULL argument", fn);
+    }
+    if (index >= ds->count) {
+        return nerf__error(NERF_EINVAL, "%s: index %u is out of range (the "
+                           "dataset has %u images)", fn, (unsigned)index,
+                           (unsigned)ds->count);
+    }
+    return NERF_OK;
+}
+
+NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
+                                const float **rgb_out)
+{
+    int rc = check_index(ds, index, rgb_out, "nerf_dataset_image");
+    if (rc == NERF_OK) {
+        *rgb_out = ds->pixels + (size_t)index * ds->width * ds->height * 3;
+    }
+    return rc;
+}
+
+/*
+ * Write a full camera into the caller's struct, as many bytes as its
+ * struct_size says, so that callers built against an older, smaller
+ * nerf_camera keep working.
+ */
+static int write_camera(const nerf_dataset *ds, const double *c2w,
+                        double fx, double fy, double cx, double cy,
+                        nerf_camera *out, const char *fn)
+{
+    uint32_t size = out->struct_size;
+    if (size < offsetof(nerf_camera, cy) + sizeof out->cy || size > 65536) {
+        return nerf__error(NERF_EINVAL, "%s: camera struct_size %u is "
+                           "invalid (initialise it with nerf_camera_init)",
+                           fn, (unsigned)size);
+    }
+    nerf_camera cam;
+    nerf_camera_init(&cam, sizeof cam);
+    cam.width = ds->width;
+    cam.height = ds->height;
+    for (int i = 0; i < 12; i++) {
+        cam.c2w[i] = (float)c2w[i];
+    }
+    cam.fx = (float)fx;
+    cam.fy = (float)fy;
+    cam.cx = (float)cx;
+    cam.cy = (float)cy;
+    size_t n = size < sizeof cam ? size : sizeof cam;
+    memcpy((char *)out + sizeof cam.struct_size,
+           (const char *)&cam + sizeof cam.struct_size,
+           n - sizeof cam.struct_size);
+    return NERF_OK;
+}
+
+NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,
+                                 nerf_camera *out)
+{
+    int rc = check_index(ds, index, out, "nerf_dataset_camera");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const nerf__view *v = &ds->views[index];
+    return write_camera(ds, v->c2w, v->fx, v->fy, v->cx, v->cy, out,
+                        "nerf_dataset_camera");
+}
+
+NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
+                                 float *far_out)
+{
+    if (ds == NULL || near_out == NULL || far_out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_bounds: NULL argument");
+    }
+    *near_out = ds->near_bound;
+    *far_out = ds->far_bound;
+    return NERF_OK;
+}
+
+NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds)
+{
+    return ds ? ds->ndc : 0;
+}
+
+NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
+                                        uint32_t index, uint32_t n_views,
+                                        nerf_camera *out)
+{
+    const char *fn = "nerf_dataset_spiral_camera";
+    if (ds == NULL || out == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: NULL argument", fn);
+    }
+    if (!ds->has_spiral) {
+        return nerf__error(NERF_EINVAL, "%s: only forward-facing (LLFF) "
+                           "scenes have a spiral path", fn);
+    }
+    if (n_views == 0 || index >= n_views) {
+        return nerf__error(NERF_EINVAL, "%s: view %u of %u is out of range",
+                           fn, (unsigned)index, (unsigned)n_views);
+    }
+    double c2w[12];
+    nerf__llff_spiral_pose(&ds->spiral, index, n_views, c2w);
+    const nerf__view *v = &ds->views[0];
+    return write_camera(ds, c2w, v->fx, v->fy, v->cx, v->cy, out, fn);
+}

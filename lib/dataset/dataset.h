@@ -1,0 +1,87 @@
+/*
+ * The dataset handle: images and cameras of one split of a scene, as the
+ * Blender and LLFF loaders leave them.  Loaders fill a nerf_dataset through
+ * the helpers below; the public getters in dataset.c only read it.
+ */
+#ifndef NERF_DATASET_DATASET_H
+#define NERF_DATASET_DATASET_H
+
+#include <stdint.h>
+
+#include "env.h"
+
+typedef enum nerf__dataset_kind {
+    NERF__DATASET_BLENDER = 1,
+    NERF__DATASET_LLFF = 2
+} nerf__dataset_kind;
+
+/* The camera of one image, in the units of the stored (downscaled) image. */
+typedef struct nerf__view {
+    double c2w[12]; /* 3x4 camera-to-world, row-major, OpenGL axes */
+    double fx, fy, cx, cy;
+} nerf__view;
+
+/*
+ * What the reference's spiral render path needs, computed once at load
+ * time from all poses of an LLFF scene (not just the loaded split).
+ */
+typedef struct nerf__spiral {
+    double c2w[12]; /* average pose of the recentred cameras */
+    double up[3];   /* normalised mean up vector */
+    double radii[3]; /* 90th percentile of |position| per axis */
+    double focus;   /* depth of the point the path looks at */
+} nerf__spiral;
+
+/* Loader settings after the public options struct has been read. */
+typedef struct nerf__dataset_config {
+    uint32_t split;      /* nerf_split */
+    uint32_t downscale;
+    uint32_t skip;
+    uint32_t white_background;
+    uint32_t skip_missing;
+    uint32_t llff_holdout;
+} nerf__dataset_config;
+
+struct nerf_dataset {
+    nerf__env env;
+    int kind;              /* nerf__dataset_kind */
+    uint32_t count;        /* images in this split */
+    uint32_t width, height; /* of the stored images */
+    uint32_t src_width, src_height; /* of the files, before downscaling */
+    float *pixels;         /* count x height x width x 3, RGB in [0, 1] */
+    nerf__view *views;     /* count */
+    float near_bound, far_bound; /* ray interval: NDC [0, 1] for LLFF */
+    int ndc;
+    double scene_scale;    /* LLFF: factor applied to positions and bounds */
+    double scene_radius;   /* Blender: largest camera distance from the
+                              origin; 0 when unknown */
+    int white_background;  /* images with alpha were composited on white,
+                              so renders of this scene should be too */
+    int has_spiral;
+    nerf__spiral spiral;
+};
+
+/* Allocate room for count images and views (pixels come with the first
+ * image, once its size is known). */
+int nerf__dataset_reserve(nerf_dataset *ds, uint32_t count);
+
+/*
+ * Read the PNG at path and store it as image index: composited onto white
+ * (or black) by its alpha, then box-filtered by factor x factor.  The first
+ * image fixes the size; a later one of another size is an error naming it.
+ */
+int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
+                             const char *path, uint32_t factor,
+                             uint32_t white_background);
+
+/* "dir/name" in a buffer from ds->env (free with nerf__free). */
+char *nerf__path_join(const nerf__env *env, const char *dir,
+                      const char *name);
+
+/* Loaders.  dir is the scene folder; name is the file that was found. */
+int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
+                       const nerf__dataset_config *cfg);
+int nerf__llff_load(nerf_dataset *ds, const char *dir,
+                    const nerf__dataset_config *cfg);
+
+#endif

@@ -1,0 +1,117 @@
+/* Image storage shared by the loaders: compositing and area downscaling. */
+#include <stdbool.h>
+#include <string.h>
+
+#include "dataset.h"
+#include "png_io.h"
+
+char *nerf__path_join(const nerf__env *env, const char *dir,
+                      const char *name)
+{
+    size_t nd = strlen(dir), nn = strlen(name);
+    bool slash = nd > 0 && dir[nd - 1] != '/';
+    char *out = nerf__alloc(env, nd + nn + 2);
+    if (out == NULL) {
+        return NULL;
+    }
+    memcpy(out, dir, nd);
+    if (slash) {
+        out[nd++] = '/';
+    }
+    memcpy(out + nd, name, nn + 1);
+    return out;
+}
+
+int nerf__dataset_reserve(nerf_dataset *ds, uint32_t count)
+{
+    ds->views = nerf__calloc(&ds->env, count, sizeof *ds->views);
+    if (ds->views == NULL) {
+        return NERF_ENOMEM;
+    }
+    ds->count = count;
+    return NERF_OK;
+}
+
+/*
+ * Composite each source pixel onto the background first and average
+ * afterwards: the mean of what a camera would see over the block.  (The
+ * reference resizes straight RGBA and composites afterwards, which gives a
+ * slightly different colour at silhouette edges.)  Rows and columns beyond
+ * a whole number of blocks are dropped.
+ */
+static void composite_box(const float *rgba, uint32_t src_w, uint32_t factor,
+                          uint32_t w, uint32_t h, float bg, float *dst)
+{
+    double inv = 1.0 / ((double)factor * factor);
+    for (uint32_t oy = 0; oy < h; oy++) {
+        for (uint32_t ox = 0; ox < w; ox++) {
+            double acc[3] = {0.0, 0.0, 0.0};
+            for (uint32_t dy = 0; dy < factor; dy++) {
+                const float *p = rgba + ((size_t)(oy * factor + dy) * src_w +
+                                         (size_t)ox * factor) * 4;
+                for (uint32_t dx = 0; dx < factor; dx++, p += 4) {
+                    double a = p[3];
+                    for (int c = 0; c < 3; c++) {
+                        acc[c] += p[c] * a + bg * (1.0 - a);
+                    }
+                }
+            }
+            float *d = dst + ((size_t)oy * w + ox) * 3;
+            for (int c = 0; c < 3; c++) {
+                d[c] = (float)(acc[c] * inv);
+            }
+        }
+    }
+}
+
+/* The first image fixes the size of all: allocate the pixel store. */
+static int first_image(nerf_dataset *ds, const char *path, uint32_t w,
+                       uint32_t h, uint32_t factor)
+{
+    if (w < factor || h < factor) {
+        return nerf__error(NERF_EINVAL, "%s: a %ux%u image cannot be "
+                           "downscaled by %u", path, (unsigned)w,
+                           (unsigned)h, (unsigned)factor);
+    }
+    ds->src_width = w;
+    ds->src_height = h;
+    ds->width = w / factor;
+    ds->height = h / factor;
+    size_t n;
+    if (nerf__mul_size((size_t)ds->width * ds->height, 3, &n) != 0 ||
+        nerf__mul_size(n, ds->count, &n) != 0) {
+        return nerf__error(NERF_ENOMEM, "%s: %u images of %ux%u do not fit "
+                           "in memory", path, (unsigned)ds->count,
+                           (unsigned)ds->width, (unsigned)ds->height);
+    }
+    ds->pixels = nerf__calloc(&ds->env, n, sizeof *ds->pixels);
+    return ds->pixels ? NERF_OK : nerf__error_prefix(NERF_ENOMEM, path);
+}
+
+int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
+                             const char *path, uint32_t factor,
+                             uint32_t white_background)
+{
+    uint32_t w, h;
+    float *rgba;
+    int rc = nerf__png_read_rgba(&ds->env, path, &w, &h, &rgba);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (ds->pixels == NULL) {
+        rc = first_image(ds, path, w, h, factor);
+    } else if (w != ds->src_width || h != ds->src_height) {
+        rc = nerf__error(NERF_EFORMAT, "%s: image is %ux%u but the images "
+                         "before it are %ux%u", path, (unsigned)w,
+                         (unsigned)h, (unsigned)ds->src_width,
+                         (unsigned)ds->src_height);
+    }
+    if (rc == NERF_OK) {
+        size_t per_image = (size_t)ds->width * ds->height * 3;
+        composite_box(rgba, w, factor, ds->width, ds->height,
+                      white_background ? 1.0f : 0.0f,
+                      ds->pixels + per_image * index);
+    }
+    nerf__free(&ds->env, rgba);
+    return rc;
+}

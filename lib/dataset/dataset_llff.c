@@ -1,0 +1,377 @@
+/* LLFF / "Real Forward-Facing" scenes: poses_bounds.npy and an image folder. */
+#include <dirent.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "dataset.h"
+#include "file_io.h"
+#include "llff_poses.h"
+#include "npy.h"
+
+#define NPY_MAX_BYTES (64u << 20)
+/* More rows than any capture; stops a bogus shape from driving allocation. */
+#define MAX_VIEWS 100000u
+
+typedef struct llff_ctx {
+    nerf_dataset *ds;
+    const char *dir;
+    char *npy_path;
+    size_t n;
+    double *rows;    /* n x 17, as stored */
+    double *poses;   /* n x 12, NeRF axes, then normalised */
+    double *bounds;  /* n x 2 */
+    char *image_dir;
+    uint32_t image_factor; /* the folder's downscale: images_<factor> */
+    char **names;    /* n image file names, sorted */
+    size_t n_names;
+} llff_ctx;
+
+static int read_rows(llff_ctx *c)
+{
+    nerf__env *env = &c->ds->env;
+    unsigned char *buf;
+    size_t size;
+    int rc = nerf__file_read(env, c->npy_path, NPY_MAX_BYTES, &buf, &size);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__npy a;
+    rc = nerf__npy_parse(buf, size, &a);
+    if (rc != NERF_OK) {
+        rc = nerf__error_prefix(rc, c->npy_path);
+    } else if (a.dtype != NERF__NPY_F8) {
+        rc = nerf__error(NERF_EFORMAT, "%s: dtype is '%s' (expected '<f8')",
+                         c->npy_path, nerf__npy_dtype_name(a.dtype));
+    } else if (a.fortran_order) {
+        rc = nerf__error(NERF_EFORMAT, "%s: data is in Fortran order "
+                         "(expected C order)", c->npy_path);
+    } else if (a.ndim != 2 || a.shape[1] != NERF__LLFF_ROW ||
+               a.shape[0] == 0 || a.shape[0] > MAX_VIEWS) {
+        char shape[64];
+        nerf__npy_format_shape(a.shape, a.ndim, shape, sizeof shape);
+        rc = nerf__error(NERF_EFORMAT, "%s: shape is %s (expected (N, 17) "
+                         "with 1 <= N <= %u)", c->npy_path, shape, MAX_VIEWS);
+    } else {
+        c->n = a.shape[0];
+        c->rows = nerf__calloc(env, a.count, sizeof *c->rows);
+        if (c->rows == NULL) {
+            rc = NERF_ENOMEM;
+        } else {
+            nerf__npy_to_double(&a, c->rows, a.count);
+        }
+    }
+    nerf__free(env, buf);
+    return rc;
+}
+
+static double det3_stride5(const double *m)
+{
+    return m[0] * (m[6] * m[12] - m[7] * m[11]) -
+           m[1] * (m[5] * m[12] - m[7] * m[10]) +
+           m[2] * (m[5] * m[11] - m[6] * m[10]);
+}
+
+static int check_rows(const llff_ctx *c)
+{
+    for (size_t i = 0; i < c->n; i++) {
+        const double *r = c->rows + NERF__LLFF_ROW * i;
+        for (int k = 0; k < NERF__LLFF_ROW; k++) {
+            if (!isfinite(r[k])) {
+                return nerf__error(NERF_EFORMAT, "%s: row %zu holds a "
+                                   "non-finite value (column %d)",
+                                   c->npy_path, i, k);
+            }
+        }
+        if (!(r[4] > 0.0 && r[9] > 0.0 && r[14] > 0.0)) {
+            return nerf__error(NERF_EFORMAT, "%s: row %zu: height %g, width "
+                               "%g and focal %g must be positive",
+                               c->npy_path, i, r[4], r[9], r[14]);
+        }
+        if (!(r[15] > 0.0 && r[16] > r[15])) {
+            return nerf__error(NERF_EFORMAT, "%s: row %zu: bounds near %g, "
+                               "far %g (need 0 < near < far)", c->npy_path,
+                               i, r[15], r[16]);
+        }
+        if (fabs(det3_stride5(r)) < 1e-9) {
+            return nerf__error(NERF_EFORMAT, "%s: row %zu: degenerate "
+                               "rotation", c->npy_path, i);
+        }
+    }
+    return NERF_OK;
+}
+
+static bool is_dir(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/*
+ * The folder to read: images_K for downscale K, else images_M for the
+ * largest M dividing K (images/ being M = 1), filtered further by K / M.
+ */
+static int find_image_dir(llff_ctx *c, uint32_t factor)
+{
+    for (uint32_t m = factor; m >= 1; m--) {
+        if (factor % m != 0) {
+            continue;
+        }
+        char name[32];
+        if (m == 1) {
+            snprintf(name, sizeof name, "images");
+        } else {
+            snprintf(name, sizeof name, "images_%u", (unsigned)m);
+        }
+        char *path = nerf__path_join(&c->ds->env, c->dir, name);
+        if (path == NULL) {
+            return NERF_ENOMEM;
+        }
+        if (is_dir(path)) {
+            c->image_dir = path;
+            c->image_factor = m;
+            return NERF_OK;
+        }
+        nerf__free(&c->ds->env, path);
+    }
+    return nerf__error(NERF_EIO, "%s: no image folder for downscale %u "
+                       "(looked for images_%u/, images_M/ with M dividing "
+                       "%u, and images/)", c->dir, (unsigned)factor,
+                       (unsigned)factor, (unsigned)factor);
+}
+
+/* Case-insensitive suffix test on ASCII names. */
+static bool has_suffix(const char *name, const char *suffix)
+{
+    size_t n = strlen(name), s = strlen(suffix);
+    if (n <= s) {
+        return false;
+    }
+    for (size_t i = 0; i < s; i++) {
+        char ch = name[n - s + i];
+        if (ch >= 'A' && ch <= 'Z') {
+            ch = (char)(ch - 'A' + 'a');
+        }
+        if (ch != suffix[i]) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static int compare_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Image files of the folder, sorted by name as the reference does. */
+static int list_images(llff_ctx *c)
+{
+    DIR *d = opendir(c->image_dir);
+    if (d == NULL) {
+        return nerf__error(NERF_EIO, "%s: cannot open the folder",
+                           c->image_dir);
+    }
+    int rc = NERF_OK;
+    size_t cap = 0;
+    for (struct dirent *e = readdir(d); e != NULL && rc == NERF_OK;
+         e = readdir(d)) {
+        const char *nm = e->d_name;
+        if (nm[0] == '.' || !(has_suffix(nm, ".png") ||
+                              has_suffix(nm, ".jpg") ||
+                              has_suffix(nm, ".jpeg"))) {
+            continue;
+        }
+        if (c->n_names == cap) {
+            size_t new_cap = cap ? 2 * cap : 64;
+            char **grown = nerf__calloc(&c->ds->env, new_cap, sizeof *grown);
+            if (grown == NULL) {
+                rc = NERF_ENOMEM;
+                break;
+            }
+            if (c->names) {
+                memcpy(grown, c->names, cap * sizeof *grown);
+            }
+            nerf__free(&c->ds->env, c->names);
+            c->names = grown;
+            cap = new_cap;
+        }
+        c->names[c->n_names] = nerf__alloc(&c->ds->env, strlen(nm) + 1);
+        if (c->names[c->n_names] == NULL) {
+            rc = NERF_ENOMEM;
+        } else {
+            strcpy(c->names[c->n_names++], nm);
+        }
+    }
+    closedir(d);
+    if (rc == NERF_OK && c->n_names != c->n) {
+        rc = nerf__error(NERF_EFORMAT, "%s: %zu image files, but %s has %zu "
+                         "rows", c->image_dir, c->n_names, c->npy_path, c->n);
+    }
+    if (rc == NERF_OK) {
+        qsort(c->names, c->n_names, sizeof *c->names, compare_names);
+    }
+    return rc;
+}
+
+/* Indices of the split's images: every holdout-th image is test (and val). */
+static uint32_t select_split(size_t n, const nerf__dataset_config *cfg,
+                             uint32_t *out)
+{
+    uint32_t count = 0, seen = 0;
+    for (size_t i = 0; i < n; i++) {
+        bool held = cfg->llff_holdout > 0 && i % cfg->llff_holdout == 0;
+        bool want = cfg->split == NERF_SPLIT_TRAIN ? !held : held;
+        if (want && seen++ % cfg->skip == 0) {
+            out[count++] = (uint32_t)i;
+        }
+    }
+    return count;
+}
+
+static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
+                       const uint32_t *sel, uint32_t count)
+{
+    nerf_dataset *ds = c->ds;
+    uint32_t extra = cfg->downscale / c->image_factor;
+    int rc = nerf__dataset_reserve(ds, count);
+    for (uint32_t i = 0; i < count && rc == NERF_OK; i++) {
+        char *path = nerf__path_join(&ds->env, c->image_dir,
+                                     c->names[sel[i]]);
+        if (path == NULL) {
+            return NERF_ENOMEM;
+        }
+        if (!has_suffix(path, ".png")) {
+            rc = nerf__error(NERF_EFORMAT, "%s: only PNG images can be read",
+                             path);
+        } else {
+            rc = nerf__dataset_load_image(ds, i, path, extra,
+                                          cfg->white_background);
+        }
+        nerf__free(&ds->env, path);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    /*
+     * One focal for both axes (NDC needs it), from the file's hwf scaled by
+     * the actual width; the height must agree with the same scale.
+     */
+    const double *hwf = c->rows;
+    double ratio = ds->src_width / hwf[9];
+    if (fabs(hwf[4] * ratio - ds->src_height) > 1.0 + 0.01 * ds->src_height) {
+        return nerf__error(NERF_EFORMAT, "%s: images are %ux%u, which does "
+                           "not match the %gx%g of %s scaled by %g",
+                           c->image_dir, (unsigned)ds->src_width,
+                           (unsigned)ds->src_height, hwf[9], hwf[4],
+                           c->npy_path, ratio);
+    }
+    double focal = hwf[14] * ratio / extra;
+    for (uint32_t i = 0; i < count; i++) {
+        nerf__view *v = &ds->views[i];
+        memcpy(v->c2w, c->poses + 12 * (size_t)sel[i], sizeof v->c2w);
+        v->fx = v->fy = focal;
+        v->cx = 0.5 * ds->width;
+        v->cy = 0.5 * ds->height;
+    }
+    return NERF_OK;
+}
+
+static int prepare_poses(llff_ctx *c)
+{
+    nerf__env *env = &c->ds->env;
+    c->poses = nerf__calloc(env, c->n, 12 * sizeof *c->poses);
+    c->bounds = nerf__calloc(env, c->n, 2 * sizeof *c->bounds);
+    double *scratch = nerf__calloc(env, c->n, sizeof *scratch);
+    if (c->poses && c->bounds && scratch) {
+        for (size_t i = 0; i < c->n; i++) {
+            const double *r = c->rows + NERF__LLFF_ROW * i;
+            nerf__llff_row_pose(r, c->poses + 12 * i);
+            c->bounds[2 * i] = r[15];
+            c->bounds[2 * i + 1] = r[16];
+        }
+        c->ds->scene_scale = nerf__llff_normalize(c->poses, c->bounds, c->n);
+        nerf__llff_spiral_setup(c->poses, c->bounds, c->n, scratch,
+                                &c->ds->spiral);
+        c->ds->has_spiral = 1;
+    }
+    nerf__free(env, scratch);
+    return c->poses && c->bounds && scratch ? NERF_OK : NERF_ENOMEM;
+}
+
+static int load(llff_ctx *c, const nerf__dataset_config *cfg)
+{
+    int rc = read_rows(c);
+    if (rc == NERF_OK) {
+        rc = check_rows(c);
+    }
+    if (rc == NERF_OK) {
+        rc = find_image_dir(c, cfg->downscale);
+    }
+    if (rc == NERF_OK) {
+        rc = list_images(c);
+    }
+    if (rc == NERF_OK) {
+        rc = prepare_poses(c);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    uint32_t *sel = nerf__calloc(&c->ds->env, c->n, sizeof *sel);
+    if (sel == NULL) {
+        return NERF_ENOMEM;
+    }
+    uint32_t count = select_split(c->n, cfg, sel);
+    if (count == 0) {
+        rc = nerf__error(NERF_EINVAL, "%s: the requested split has no images "
+                         "(%zu views, holdout %u)", c->dir, c->n,
+                         (unsigned)cfg->llff_holdout);
+    } else {
+        rc = load_images(c, cfg, sel, count);
+    }
+    nerf__free(&c->ds->env, sel);
+    return rc;
+}
+
+int nerf__llff_load(nerf_dataset *ds, const char *dir,
+                    const nerf__dataset_config *cfg)
+{
+    llff_ctx c;
+    memset(&c, 0, sizeof c);
+    c.ds = ds;
+    c.dir = dir;
+    c.npy_path = nerf__path_join(&ds->env, dir, "poses_bounds.npy");
+    int rc = c.npy_path ? load(&c, cfg) : NERF_ENOMEM;
+    if (rc == NERF_OK) {
+        double lo = c.bounds[0], hi = c.bounds[1];
+        for (size_t i = 0; i < c.n; i++) {
+            lo = c.bounds[2 * i] < lo ? c.bounds[2 * i] : lo;
+            hi = c.bounds[2 * i + 1] > hi ? c.bounds[2 * i + 1] : hi;
+        }
+        ds->kind = NERF__DATASET_LLFF;
+        ds->ndc = 1;
+        ds->near_bound = 0.0f;
+        ds->far_bound = 1.0f;
+        nerf__log(&ds->env, NERF_LOG_INFO,
+                  "%s: LLFF scene, %u of %zu images, %ux%u (from %s, %ux%u, "
+                  "downscale %u), focal %.3f, scene scale %.6g, bounds "
+                  "[%.4g, %.4g] after scaling, NDC rays in [0, 1]",
+                  dir, (unsigned)ds->count, c.n, (unsigned)ds->width,
+                  (unsigned)ds->height, c.image_dir, (unsigned)ds->src_width,
+                  (unsigned)ds->src_height, (unsigned)cfg->downscale,
+                  ds->views[0].fx, ds->scene_scale, lo, hi);
+    }
+    for (size_t i = 0; i < c.n_names; i++) {
+        nerf__free(&ds->env, c.names[i]);
+    }
+    nerf__free(&ds->env, c.names);
+    nerf__free(&ds->env, c.image_dir);
+    nerf__free(&ds->env, c.rows);
+    nerf__free(&ds->env, c.poses);
+    nerf__free(&ds->env, c.bounds);
+    nerf__free(&ds->env, c.npy_path);
+    return rc;
+}

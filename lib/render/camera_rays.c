@@ -1,0 +1,100 @@
+/* Pinhole cameras in the OpenGL convention and their rays. */
+#include <math.h>
+#include <stdbool.h>
+#include <string.h>
+
+#include "camera.h"
+#include "error.h"
+#include "options.h"
+
+#define MAX_SIDE 65536u
+
+static void default_camera(nerf_camera *c)
+{
+    memset(c, 0, sizeof *c);
+    c->struct_size = sizeof *c;
+    c->c2w[0] = c->c2w[5] = c->c2w[10] = 1.0f;
+}
+
+NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size)
+{
+    nerf_camera d;
+    default_camera(&d);
+    return nerf__options_init(camera, struct_size, &d, sizeof d,
+                              "nerf_camera");
+}
+
+int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn)
+{
+    if (in == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: camera is NULL", fn);
+    }
+    default_camera(out);
+    int rc = nerf__options_read(out, sizeof *out, in, "nerf_camera");
+    if (rc != NERF_OK) {
+        return nerf__error_prefix(rc, fn);
+    }
+    const char *what = NULL;
+    bool pose_finite = true;
+    for (int k = 0; k < 12; k++) {
+        pose_finite = pose_finite && isfinite(out->c2w[k]);
+    }
+    if (out->flags & ~NERF_CAMERA_PIXEL_CORNER) {
+        what = "unknown flags";
+    } else if (out->width < 1 || out->width > MAX_SIDE || out->height < 1 ||
+               out->height > MAX_SIDE) {
+        what = "width and height must be 1..65536";
+    } else if (!(isfinite(out->fx) && out->fx > 0.0f && isfinite(out->fy) &&
+                 out->fy > 0.0f)) {
+        what = "fx and fy must be positive and finite";
+    } else if (!isfinite(out->cx) || !isfinite(out->cy)) {
+        what = "cx and cy must be finite";
+    } else if (!pose_finite) {
+        what = "c2w has a NaN or infinite entry";
+    }
+    if (what) {
+        return nerf__error(NERF_EINVAL, "%s: invalid camera: %s", fn, what);
+    }
+    return NERF_OK;
+}
+
+void nerf__camera_rays(const nerf_camera *cam, size_t first, size_t n,
+                       float *origins, float *directions)
+{
+    const float *m = cam->c2w;
+    const float off = (cam->flags & NERF_CAMERA_PIXEL_CORNER) ? 0.0f : 0.5f;
+    for (size_t k = 0; k < n; k++) {
+        size_t p = first + k;
+        float i = (float)(p % cam->width) + off;
+        float j = (float)(p / cam->width) + off;
+        float d[3] = {(i - cam->cx) / cam->fx, -(j - cam->cy) / cam->fy, -1.0f};
+        for (int r = 0; r < 3; r++) {
+            /* Summed in the reference's order, so rays match it bitwise. */
+            directions[3 * k + r] = d[0] * m[4 * r] + d[1] * m[4 * r + 1] +
+                                    d[2] * m[4 * r + 2];
+            origins[3 * k + r] = m[4 * r + 3];
+        }
+    }
+}
+
+NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
+                              size_t n, float *origins_out,
+                              float *directions_out)
+{
+    nerf_camera cam;
+    int rc = nerf__camera_read(&cam, camera, "nerf_camera_rays");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    size_t pixels = (size_t)cam.width * cam.height;
+    if (first > pixels || n > pixels - first) {
+        return nerf__error(NERF_EINVAL, "nerf_camera_rays: pixels %zu + %zu "
+                           "are beyond the %ux%u image", first, n, cam.width,
+                           cam.height);
+    }
+    if (n > 0 && (origins_out == NULL || directions_out == NULL)) {
+        return nerf__error(NERF_EINVAL, "nerf_camera_rays: NULL output");
+    }
+    nerf__camera_rays(&cam, first, n, origins_out, directions_out);
+    return NERF_OK;
+}

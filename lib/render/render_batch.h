@@ -1,0 +1,114 @@
+/*
+ * One batch of rays through the whole method: sampling, the coarse
+ * network, compositing, hierarchical sampling, the fine network and
+ * compositing again.  The image renderer calls it on blocks of pixels; the
+ * trainer calls it on its batch of random rays with `keep` set, then calls
+ * nerf__render_batch_backward() with the loss gradients of its outputs.
+ */
+#ifndef NERF_RENDER_BATCH_H
+#define NERF_RENDER_BATCH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "model.h"
+#include "sampler.h"
+
+/* Pass 0 is the coarse pass, pass 1 the fine one (absent when n_fine = 0). */
+#define NERF__PASSES 2
+
+typedef struct nerf__render_setup {
+    const nerf_model *model;
+    const nerf_sampler *sampler;
+    /* Training: jittered and random samples (when the sampler's perturb is
+     * set) and Gaussian noise of std noise_std on raw density.  Otherwise
+     * everything is deterministic. */
+    bool training;
+    float noise_std;
+    bool white_background;
+    /* The NDC frustum, used when the sampler has ndc set. */
+    float ndc_focal, ndc_width, ndc_height;
+    /* Ray k draws from the streams of ray first_ray + k. */
+    uint64_t first_ray;
+    /* Draws supplied by the caller instead of the generator's (each may be
+     * NULL): uniforms for the stratified jitter [n_rays, n_coarse] and the
+     * hierarchical samples [n_rays, n_fine], and the values added to raw
+     * density [n_rays, samples of the pass] (already scaled, used even if
+     * noise_std is 0). */
+    const float *u_coarse;
+    const float *u_fine;
+    const float *noise[NERF__PASSES];
+    /* Keep activations, samples and weights for the backward pass. */
+    bool keep;
+} nerf__render_setup;
+
+/* Outputs of one pass; any pointer may be NULL. */
+typedef struct nerf__pass_out {
+    float *rgb;       /* [n_rays, 3] */
+    float *depth;     /* [n_rays] */
+    float *disparity; /* [n_rays] */
+    float *opacity;   /* [n_rays] */
+} nerf__pass_out;
+
+/*
+ * Scratch and state of one batch.  Buffers grow on demand and are reused,
+ * so a caller that keeps one batch per worker allocates only on its first
+ * call.  After nerf__render_batch() the fields below describe the batch
+ * (t and weights stay valid until the next call).
+ */
+typedef struct nerf__batch {
+    nerf__env env;
+    size_t n_rays;
+    uint32_t n_pass;
+    uint32_t n_samples[NERF__PASSES];
+    int net[NERF__PASSES];          /* network index of each pass */
+    float *t[NERF__PASSES];         /* [n_rays, n_samples] */
+    float *weights[NERF__PASSES];   /* [n_rays, n_samples] */
+    float *rgb[NERF__PASSES];       /* [n_rays * n_samples, 3] */
+    float *sigma[NERF__PASSES];     /* [n_rays * n_samples], noise added */
+    float *dir_norm;                /* [n_rays], |d| of the sampled rays */
+    /* private */
+    const nerf_model *model;
+    bool white, kept;
+    size_t cap_rays;
+    uint32_t cap_c, cap_f;
+    bool cap_keep;
+    void *block;
+    float *ray_o, *ray_d, *viewdir, *points, *dirs, *scratch;
+    float *d_rgb, *d_sigma;
+    nerf__env ws_env;
+    nerf__workspace ws[NERF__PASSES];
+} nerf__batch;
+
+void nerf__batch_init(nerf__batch *b, const nerf__env *env);
+void nerf__batch_release(nerf__batch *b);
+
+/*
+ * Render n_rays rays (origins, directions: [n_rays, 3], world space,
+ * directions unnormalised) into out[0] (coarse) and out[1] (fine; ignored
+ * without a fine pass).  The fine pass runs the model's fine network, or
+ * its coarse one if it has none (as the reference does).  Each pass is one
+ * network call over all its samples, so the caller chooses the batch size
+ * that bounds memory; the results of a ray depend only on the rays of its
+ * batch through the matrix products.
+ */
+int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
+                       size_t n_rays, const float *origins,
+                       const float *directions,
+                       const nerf__pass_out out[NERF__PASSES]);
+
+/*
+ * Backward of the last nerf__render_batch(), which must have had keep set:
+ * given dL/d(rgb) [n_rays, 3], dL/d(depth) and dL/d(opacity) [n_rays] of
+ * each pass (any may be NULL for zero), accumulate the gradients of both
+ * networks into m->grads via nerf__model_backward().  m must be the model
+ * the forward used.  Sampling is not differentiated (the samples are
+ * constants, as in the reference).
+ */
+int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
+                                const float *const d_rgb[NERF__PASSES],
+                                const float *const d_depth[NERF__PASSES],
+                                const float *const d_opacity[NERF__PASSES]);
+
+#endif

@@ -1,0 +1,261 @@
+/* The nerf_renderer handle, its options, and rendering of caller's rays. */
+#include "renderer.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "cpu.h"
+#include "options.h"
+
+#define MAX_CHUNK (1u << 20)
+
+/*
+ * OpenBLAS's own thread count, when the BLAS is OpenBLAS.  The reference
+ * is weak so that other providers link without it; it is only read, never
+ * changed (the BLAS's threading belongs to the application).
+ */
+#if defined(__GNUC__)
+extern int openblas_get_num_threads(void) __attribute__((weak));
+#endif
+
+/*
+ * Workers when the caller leaves the choice to us.  Each worker's sgemm
+ * already runs on the BLAS's threads, so one worker per core on top of an
+ * OpenBLAS threaded over every core oversubscribes them.  bench_render on
+ * 2 cores, 100x100: with OpenBLAS on 2 threads, 1 worker gave 6930 rays/s
+ * (tiny) and 296 (reference), 2 workers 5815 and 278; with
+ * OPENBLAS_NUM_THREADS=1, 1 worker 4914 and 188, 2 workers 9353 and 367.
+ * So: cores divided by the BLAS's threads, at least 1.
+ */
+static uint32_t auto_threads(void)
+{
+    uint32_t cores = nerf__cpu_count();
+    int blas = 1;
+#if defined(__GNUC__)
+    if (openblas_get_num_threads) {
+        blas = openblas_get_num_threads();
+    }
+#endif
+    uint32_t t = blas > 1 ? cores / (uint32_t)blas : cores;
+    return t ? t : 1;
+}
+
+static void default_options(nerf_renderer_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->raw_noise_std = NERF_NOISE_AUTO;
+    o->chunk_rays = 512;
+}
+
+NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
+                                        size_t struct_size)
+{
+    nerf_renderer_options d;
+    default_options(&d);
+    return nerf__options_init(opts, struct_size, &d, sizeof d,
+                              "nerf_renderer_options");
+}
+
+static int check_options(const nerf_renderer_options *o)
+{
+    const char *what = NULL;
+    if (o->white_background > 1) {
+        what = "white_background must be 0 or 1";
+    } else if (!(o->raw_noise_std == NERF_NOISE_AUTO ||
+                 (isfinite(o->raw_noise_std) && o->raw_noise_std >= 0.0f))) {
+        what = "raw_noise_std must be finite and >= 0, or NERF_NOISE_AUTO";
+    } else if (o->chunk_rays < 1 || o->chunk_rays > MAX_CHUNK) {
+        what = "chunk_rays must be 1..2^20";
+    } else if (o->threads > NERF__MAX_THREADS) {
+        what = "threads must be 0..1024";
+    } else if (o->reserved0 != 0) {
+        what = "reserved0 must be 0";
+    }
+    if (what) {
+        return nerf__error(NERF_EINVAL, "nerf_renderer_options: %s", what);
+    }
+    return NERF_OK;
+}
+
+NERF_API int nerf_renderer_create(nerf_renderer **out,
+                                  const nerf_model *model,
+                                  const nerf_sampler *sampler,
+                                  const nerf_renderer_options *opts)
+{
+    if (out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_renderer_create: out is NULL");
+    }
+    *out = NULL;
+    if (model == NULL || sampler == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_renderer_create: model and "
+                           "sampler must not be NULL");
+    }
+    nerf_renderer_options o;
+    default_options(&o);
+    int rc = NERF_OK;
+    if (opts) {
+        rc = nerf__options_read(&o, sizeof o, opts, "nerf_renderer_options");
+    }
+    if (rc == NERF_OK) {
+        rc = check_options(&o);
+    }
+    nerf__env env;
+    if (rc == NERF_OK) {
+        rc = nerf__env_from_hooks(&env, o.hooks);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf_renderer *r = nerf__calloc(&env, 1, sizeof *r);
+    if (r == NULL) {
+        return NERF_ENOMEM;
+    }
+    r->env = env;
+    r->opts = o;
+    r->opts.hooks = NULL;
+    r->model = model;
+    r->sampler = sampler;
+    if (o.raw_noise_std == NERF_NOISE_AUTO) {
+        /* The reference trains forward-facing scenes with noise std 1 and
+         * Blender scenes without. */
+        r->noise_std = sampler->opts.ndc ? 1.0f : 0.0f;
+    } else {
+        r->noise_std = o.raw_noise_std;
+    }
+    r->threads = o.threads ? o.threads : auto_threads();
+    r->chunk = ((size_t)o.chunk_rays + NERF__RENDER_BLOCK - 1) /
+               NERF__RENDER_BLOCK * NERF__RENDER_BLOCK;
+    atomic_init(&r->cancel, 0);
+    nerf__log(&r->env, NERF_LOG_DEBUG, "renderer: %u thread(s), chunks of "
+              "%zu rays, %u + %u samples", r->threads, r->chunk,
+              sampler->opts.n_coarse, sampler->opts.n_fine);
+    *out = r;
+    return NERF_OK;
+}
+
+NERF_API void nerf_renderer_destroy(nerf_renderer *renderer)
+{
+    if (renderer == NULL) {
+        return; /* support free on NULL */
+    }
+    nerf__env env = renderer->env;
+    for (uint32_t i = 0; i < renderer->n_workers; i++) {
+        nerf__batch_release(&renderer->workers[i]->batch);
+        nerf__free(&env, renderer->workers[i]);
+    }
+    nerf__free(&env, renderer->workers);
+    nerf__free(&env, renderer);
+}
+
+NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
+                                        nerf_progress_cb cb, void *user)
+{
+    if (renderer == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_renderer_set_progress: "
+                           "renderer is NULL");
+    }
+    renderer->progress = cb;
+    renderer->progress_user = cb ? user : NULL;
+    return NERF_OK;
+}
+
+NERF_API void nerf_renderer_cancel(nerf_renderer *renderer)
+{
+    if (renderer) {
+        atomic_store(&renderer->cancel, 1);
+    }
+}
+
+void nerf__renderer_eval_setup(const nerf_renderer *r, nerf__render_setup *s)
+{
+    memset(s, 0, sizeof *s);
+    s->model = r->model;
+    s->sampler = r->sampler;
+    s->noise_std = r->noise_std;
+    s->white_background = r->opts.white_background != 0;
+    s->ndc_focal = r->sampler->opts.ndc_focal;
+    s->ndc_width = (float)r->sampler->opts.ndc_width;
+    s->ndc_height = (float)r->sampler->opts.ndc_height;
+}
+
+typedef struct rays_job {
+    const nerf_renderer *r;
+    nerf__render_setup setup;
+    const float *origins, *directions;
+    float *rgb, *depth, *opacity;
+} rays_job;
+
+static int rays_chunk(void *p, nerf__worker *w, size_t first, size_t count)
+{
+    rays_job *job = p;
+    for (size_t at = first; at < first + count; at += NERF__RENDER_BLOCK) {
+        if (nerf__renderer_cancelled(job->r)) {
+            return nerf__error(NERF_ECANCELLED, "render cancelled");
+        }
+        size_t k = first + count - at;
+        k = k < NERF__RENDER_BLOCK ? k : NERF__RENDER_BLOCK;
+        const float *o = job->origins + 3 * at, *d = job->directions + 3 * at;
+        for (size_t i = 0; i < 3 * k; i++) {
+            if (!isfinite(o[i]) || !isfinite(d[i])) {
+                return nerf__error(NERF_EINVAL, "nerf_renderer_render_rays: "
+                                   "ray %zu is not finite", at + i / 3);
+            }
+        }
+        for (size_t i = 0; i < k; i++) {
+            const float *di = d + 3 * i;
+            if (di[0] == 0.0f && di[1] == 0.0f && di[2] == 0.0f) {
+                return nerf__error(NERF_EINVAL, "nerf_renderer_render_rays: "
+                                   "ray %zu has a zero direction", at + i);
+            }
+        }
+        nerf__render_setup s = job->setup;
+        s.first_ray = at;
+        nerf__pass_out out[NERF__PASSES];
+        memset(out, 0, sizeof out);
+        nerf__pass_out *last = &out[s.sampler->opts.n_fine > 0 ? 1 : 0];
+        last->rgb = job->rgb ? job->rgb + 3 * at : NULL;
+        last->depth = job->depth ? job->depth + at : NULL;
+        last->opacity = job->opacity ? job->opacity + at : NULL;
+        int rc = nerf__render_batch(&w->batch, &s, k, o, d, out);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    return NERF_OK;
+}
+
+NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
+                                       size_t n_rays, const float *origins,
+                                       const float *directions,
+                                       float *rgb_out, float *depth_out,
+                                       float *opacity_out)
+{
+    static const char fn[] = "nerf_renderer_render_rays";
+    if (renderer == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: renderer is NULL", fn);
+    }
+    if (n_rays > 0 && (origins == NULL || directions == NULL)) {
+        return nerf__error(NERF_EINVAL, "%s: NULL origins or directions", fn);
+    }
+    if (rgb_out == NULL && depth_out == NULL && opacity_out == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: every output is NULL", fn);
+    }
+    if (n_rays > SIZE_MAX / (3 * sizeof(float))) {
+        return nerf__error(NERF_EINVAL, "%s: %zu rays is too many", fn, n_rays);
+    }
+    rays_job job;
+    nerf__renderer_eval_setup(renderer, &job.setup);
+    if (renderer->sampler->opts.ndc && job.setup.ndc_focal == 0.0f) {
+        return nerf__error(NERF_EINVAL, "%s: the sampler uses NDC but its "
+                           "ndc_focal, ndc_width and ndc_height are not set",
+                           fn);
+    }
+    job.r = renderer;
+    job.origins = origins;
+    job.directions = directions;
+    job.rgb = rgb_out;
+    job.depth = depth_out;
+    job.opacity = opacity_out;
+    return nerf__renderer_run(renderer, n_rays, rays_chunk, &job);
+}

@@ -1,0 +1,281 @@
+/*
+ * nerf_scene_write(): render the built-in scene into a Blender-format
+ * dataset (transforms_{train,val,test}.json and RGBA PNGs), so that the
+ * demo and the tests need no download.
+ */
+#include <cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "camera.h"
+#include "cpu.h"
+#include "env.h"
+#include "file_io.h"
+#include "field.h"
+#include "options.h"
+#include "png_io.h"
+#include "rng.h"
+
+/* The lego scene's field of view, so the built-in scene frames alike. */
+#define CAMERA_ANGLE_X 0.6911112070083618
+#define CAMERA_RADIUS 4.0
+#define NEAR 2.0f
+#define FAR 6.0f
+#define PI 3.14159265358979323846
+
+static void defaults(nerf_scene_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->width = 100;
+    o->height = 100;
+    o->n_train = 100;
+    o->n_val = 8;
+    o->n_test = 16;
+    o->threads = 0;
+}
+
+NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
+                                     size_t struct_size)
+{
+    nerf_scene_options d;
+    defaults(&d);
+    return nerf__options_init(opts, struct_size, &d, sizeof d,
+                              "nerf_scene_options");
+}
+
+static void position(double azimuth, double elevation, double p[3])
+{
+    p[0] = CAMERA_RADIUS * cos(elevation) * cos(azimuth);
+    p[1] = CAMERA_RADIUS * cos(elevation) * sin(azimuth);
+    p[2] = CAMERA_RADIUS * sin(elevation);
+}
+
+/*
+ * Train views cover the upper hemisphere evenly (a Fibonacci spiral in
+ * sin(elevation)); validation views are random there; test views circle
+ * at a fixed elevation, as the lego test split does.
+ */
+static void place_camera(int split, uint32_t i, uint32_t n, uint64_t seed,
+                         nerf_camera *cam)
+{
+    double p[3];
+    if (split == 0) {
+        double s = 0.1 + 0.85 * (i + 0.5) / n;
+        double az = i * PI * (3.0 - sqrt(5.0));
+        position(az, asin(s), p);
+    } else if (split == 1) {
+        nerf__rng r = nerf__rng_make(seed, 77 + i);
+        double s = 0.1 + 0.85 * nerf__rng_uniform_d(&r);
+        position(2.0 * PI * nerf__rng_uniform_d(&r), asin(s), p);
+    } else {
+        position(2.0 * PI * i / n, 30.0 * PI / 180.0, p);
+    }
+    const float eye[3] = {(float)p[0], (float)p[1], (float)p[2]};
+    const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    /* Cannot fail: eye is 4 units from the target and never straight
+     * above it (elevation stays below 90 degrees). */
+    nerf_camera_look_at(cam, eye, target, up);
+}
+
+typedef struct view_job {
+    const nerf_camera *cam;
+    uint8_t *rgba;
+    uint32_t row_begin, row_end;
+} view_job;
+
+static uint8_t to8(float v)
+{
+    return (uint8_t)lrintf((v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v) * 255.0f);
+}
+
+static void *render_rows(void *arg)
+{
+    enum { BLOCK = 256 };
+    view_job *job = arg;
+    const uint32_t w = job->cam->width;
+    size_t first = (size_t)job->row_begin * w, last = (size_t)job->row_end * w;
+    float o[BLOCK * 3], d[BLOCK * 3];
+    for (size_t at = first; at < last; at += BLOCK) {
+        size_t n = last - at < BLOCK ? last - at : BLOCK;
+        nerf__camera_rays(job->cam, at, n, o, d);
+        for (size_t k = 0; k < n; k++) {
+            float rgb[3], depth;
+            float a = nerf__scene_render_ray(o + 3 * k, d + 3 * k, NEAR, FAR,
+                                             rgb, &depth);
+            uint8_t *px = job->rgba + 4 * (at + k);
+            /* Store straight (not premultiplied) colour with alpha, as
+             * Blender does: compositing rgb*a + (1-a) gives back the
+             * rendered colour on white. */
+            for (int c = 0; c < 3; c++) {
+                px[c] = to8(a > 1e-6f ? rgb[c] / a : 0.0f);
+            }
+            px[3] = to8(a);
+        }
+    }
+    return NULL;
+}
+
+/* Render one view with up to `threads` threads splitting its rows. */
+static void render_view(const nerf_camera *cam, uint32_t threads,
+                        uint8_t *rgba)
+{
+    enum { MAX_THREADS = 64 };
+    pthread_t tid[MAX_THREADS];
+    view_job jobs[MAX_THREADS];
+    bool started[MAX_THREADS] = {false};
+    uint32_t t = threads < MAX_THREADS ? threads : MAX_THREADS;
+    for (uint32_t k = 0; k < t; k++) {
+        uint32_t h = cam->height;
+        jobs[k] = (view_job){cam, rgba, h * k / t, h * (k + 1) / t};
+    }
+    for (uint32_t k = 1; k < t; k++) {
+        started[k] = pthread_create(&tid[k], NULL, render_rows, &jobs[k]) == 0;
+        if (!started[k]) {
+            render_rows(&jobs[k]); /* no thread to be had: do it here */
+        }
+    }
+    render_rows(&jobs[0]);
+    for (uint32_t k = 1; k < t; k++) {
+        if (started[k]) {
+            pthread_join(tid[k], NULL);
+        }
+    }
+}
+
+/* mkdir -p: the folder and any missing parents. */
+static int make_dir(const char *path)
+{
+    char buf[4096];
+    size_t n = strlen(path);
+    if (n == 0 || n >= sizeof buf) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_write: bad folder path");
+    }
+    memcpy(buf, path, n + 1);
+    for (size_t i = 1; i <= n; i++) {
+        if (buf[i] != '/' && buf[i] != '\0') {
+            continue;
+        }
+        char keep = buf[i];
+        buf[i] = '\0';
+        if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
+            return nerf__error(NERF_EIO, "%s: cannot create directory: %s",
+                               buf, strerror(errno));
+        }
+        buf[i] = keep;
+    }
+    return NERF_OK;
+}
+
+static cJSON *matrix_json(const float c2w[12])
+{
+    cJSON *rows = cJSON_CreateArray();
+    for (int r = 0; r < 4; r++) {
+        double v[4] = {0, 0, 0, 1};
+        for (int c = 0; r < 3 && c < 4; c++) {
+            v[c] = c2w[4 * r + c];
+        }
+        cJSON_AddItemToArray(rows, cJSON_CreateDoubleArray(v, 4));
+    }
+    return rows;
+}
+
+static int write_split(const char *dir, int split, uint32_t n,
+                       const nerf_scene_options *o, const nerf__env *env,
+                       uint8_t *rgba)
+{
+    static const char *const names[] = {"train", "val", "test"};
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, names[split]);
+    int rc = make_dir(path);
+    cJSON *root = cJSON_CreateObject();
+    cJSON *frames = cJSON_CreateArray();
+    if (root == NULL || frames == NULL) {
+        cJSON_Delete(root);
+        cJSON_Delete(frames);
+        return nerf__error(NERF_ENOMEM, "%s: out of memory building JSON", dir);
+    }
+    cJSON_AddNumberToObject(root, "camera_angle_x", CAMERA_ANGLE_X);
+    cJSON_AddItemToObject(root, "frames", frames);
+    for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        cam.width = o->width;
+        cam.height = o->height;
+        cam.fx = cam.fy = (float)(0.5 * o->width / tan(0.5 * CAMERA_ANGLE_X));
+        cam.cx = 0.5f * (float)o->width;
+        cam.cy = 0.5f * (float)o->height;
+        place_camera(split, i, n, o->seed, &cam);
+        render_view(&cam, o->threads, rgba);
+        snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
+        rc = nerf__png_write8(env, path, o->width, o->height, 4, rgba);
+        cJSON *frame = cJSON_CreateObject();
+        char file[64];
+        snprintf(file, sizeof file, "./%s/r_%u", names[split], i);
+        cJSON_AddStringToObject(frame, "file_path", file);
+        cJSON_AddItemToObject(frame, "transform_matrix", matrix_json(cam.c2w));
+        cJSON_AddItemToArray(frames, frame);
+    }
+    if (rc == NERF_OK) {
+        char *text = cJSON_Print(root);
+        snprintf(path, sizeof path, "%s/transforms_%s.json", dir, names[split]);
+        nerf__span part = {text, text ? strlen(text) : 0};
+        rc = text ? nerf__file_write_atomic(env, path, &part, 1)
+                  : nerf__error(NERF_ENOMEM, "%s: out of memory", path);
+        cJSON_free(text);
+    }
+    cJSON_Delete(root);
+    nerf__log(env, NERF_LOG_INFO, "scene: wrote %u %s views of %ux%u to %s", n,
+              names[split], o->width, o->height, dir);
+    return rc;
+}
+
+NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
+{
+    nerf_scene_options o;
+    defaults(&o);
+    if (dir == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_write: dir is NULL");
+    }
+    int rc = nerf__options_read(&o, sizeof o, opts, "nerf_scene_options");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (o.width < 8 || o.height < 8 || o.width > 4096 || o.height > 4096) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: image size "
+                           "%ux%u is outside 8..4096", o.width, o.height);
+    }
+    if (o.n_train < 1 || o.n_train > 10000 || o.n_val > 10000 || o.n_test > 10000) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: view counts must "
+                           "be 1..10000 (train) and 0..10000 (val, test)");
+    }
+    if (o.reserved0 != 0) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
+    }
+    if (o.threads == 0) {
+        o.threads = nerf__cpu_count();
+    }
+    nerf__env env;
+    rc = nerf__env_from_hooks(&env, o.hooks);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    rc = make_dir(dir);
+    uint8_t *rgba = rc == NERF_OK
+                        ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
+                        : NULL;
+    if (rc == NERF_OK && rgba == NULL) {
+        rc = NERF_ENOMEM;
+    }
+    const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
+    for (int split = 0; split < 3 && rc == NERF_OK; split++) {
+        rc = write_split(dir, split, counts[split], &o, &env, rgba);
+    }
+    nerf__free(&env, rgba);
+    return rc;
+}

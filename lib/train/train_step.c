@@ -1,0 +1,174 @@
+/* One optimisation step, and the loop that runs many with progress,
+ * cancellation and periodic checkpoints. */
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include "trainer.h"
+
+/*
+ * Mean squared error of one pass over the batch, and its gradient with
+ * respect to the pass's colours.  The loss is the sum of the passes' MSEs,
+ * as the reference (img_loss + img_loss0).
+ */
+static double pass_loss(size_t n, const float *rgb, const float *target,
+                        float *grad)
+{
+    double sum = 0.0;
+    const float scale = 2.0f / (float)n;
+    for (size_t i = 0; i < n; i++) {
+        float e = rgb[i] - target[i];
+        sum += (double)e * e;
+        grad[i] = scale * e;
+    }
+    return sum / (double)n;
+}
+
+static double psnr_of(double mse)
+{
+    return mse > 0.0 ? -10.0 * log10(mse) : INFINITY;
+}
+
+static void fill_stats(nerf_train_stats *out, const nerf_train_stats *s)
+{
+    if (out == NULL) {
+        return;
+    }
+    uint32_t size = out->struct_size;
+    size_t n = size < sizeof *s ? size : sizeof *s;
+    if (n > sizeof(uint32_t)) {
+        memcpy((char *)out + sizeof(uint32_t), (const char *)s + sizeof(uint32_t),
+               n - sizeof(uint32_t));
+    }
+}
+
+static int step(nerf_trainer *t, nerf_train_stats *stats)
+{
+    nerf_model *m = t->model;
+    const uint64_t k = m->step;
+    const size_t B = t->opts.batch_rays;
+    nerf__trainer_pick_rays(t, k);
+    t->setup.first_ray = k * B;
+    nerf__pass_out out[NERF__PASSES];
+    memset(out, 0, sizeof out);
+    out[0].rgb = t->rgb[0];
+    out[1].rgb = t->rgb[1];
+    int rc = nerf__render_batch(&t->batch, &t->setup, B, t->origins,
+                                t->directions, out);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const uint32_t passes = t->batch.n_pass;
+    double mse[NERF__PASSES] = {0.0, 0.0};
+    for (uint32_t p = 0; p < passes; p++) {
+        mse[p] = pass_loss(3 * B, t->rgb[p], t->targets, t->d_rgb[p]);
+    }
+    double loss = mse[0] + mse[1];
+    if (!isfinite(loss)) {
+        return nerf__error(NERF_ERROR, "training diverged: the loss is %g at "
+                           "step %llu (try a lower learning rate)", loss,
+                           (unsigned long long)k);
+    }
+    nerf__model_zero_grad(m);
+    const float *d_rgb[NERF__PASSES] = {t->d_rgb[0], passes > 1 ? t->d_rgb[1] : NULL};
+    const float *none[NERF__PASSES] = {NULL, NULL};
+    rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none, none);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    double lr = nerf__adam_rate(&m->adam, m->step);
+    nerf__model_adam_step(m);
+    stats->struct_size = sizeof *stats;
+    stats->step = m->step;
+    stats->loss = loss;
+    stats->psnr = psnr_of(mse[passes - 1]);
+    stats->psnr_coarse = psnr_of(mse[0]);
+    stats->learning_rate = lr;
+    return NERF_OK;
+}
+
+NERF_API int nerf_trainer_step(nerf_trainer *t, nerf_train_stats *stats_out)
+{
+    if (t == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_step: trainer is NULL");
+    }
+    if (stats_out && (stats_out->struct_size < sizeof(uint32_t) ||
+                      stats_out->struct_size > 65536)) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_step: stats struct_size "
+                           "%u is invalid", (unsigned)stats_out->struct_size);
+    }
+    nerf_train_stats s;
+    memset(&s, 0, sizeof s);
+    int rc = step(t, &s);
+    if (rc == NERF_OK) {
+        fill_stats(stats_out, &s);
+    }
+    return rc;
+}
+
+static double seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int save_checkpoint(nerf_trainer *t)
+{
+    int rc = nerf_model_save(t->model, t->checkpoint_path);
+    if (rc == NERF_OK) {
+        nerf__log(&t->env, NERF_LOG_INFO, "trainer: saved %s at step %llu",
+                  t->checkpoint_path, (unsigned long long)t->model->step);
+    }
+    return rc;
+}
+
+NERF_API int nerf_trainer_run(nerf_trainer *t, uint64_t n_steps,
+                              nerf_train_stats *stats_out)
+{
+    if (t == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_run: trainer is NULL");
+    }
+    atomic_store(&t->cancel, 0);
+    const double start = seconds();
+    nerf_train_stats s;
+    memset(&s, 0, sizeof s);
+    int rc = NERF_OK;
+    for (uint64_t i = 0; i < n_steps && rc == NERF_OK; i++) {
+        rc = step(t, &s);
+        if (rc != NERF_OK) {
+            break;
+        }
+        fill_stats(stats_out, &s);
+        uint32_t every = t->opts.checkpoint_every;
+        if (every > 0 && s.step % every == 0) {
+            rc = save_checkpoint(t);
+        }
+        if (rc == NERF_OK && t->progress) {
+            nerf_progress p;
+            memset(&p, 0, sizeof p);
+            p.struct_size = sizeof p;
+            p.kind = NERF_PROGRESS_TRAIN;
+            p.done = i + 1;
+            p.total = n_steps;
+            p.elapsed = seconds() - start;
+            p.loss = s.loss;
+            p.psnr = s.psnr;
+            if (t->progress(&p, t->progress_user) != 0) {
+                atomic_store(&t->cancel, 1);
+            }
+        }
+        if (rc == NERF_OK && atomic_load(&t->cancel)) {
+            rc = nerf__error(NERF_ECANCELLED, "nerf_trainer_run: cancelled "
+                             "at step %llu", (unsigned long long)s.step);
+        }
+    }
+    /* A checkpoint at the end too, cancelled or not, so that no finished
+     * step is lost. */
+    if (t->checkpoint_path && s.step > 0 &&
+        (t->opts.checkpoint_every == 0 || s.step % t->opts.checkpoint_every)) {
+        int save_rc = save_checkpoint(t);
+        rc = rc == NERF_OK ? save_rc : rc;
+    }
+    return rc;
+}

@@ -1,0 +1,227 @@
+#include "trainer.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "camera.h"
+#include "dataset.h"
+#include "options.h"
+
+static void defaults(nerf_trainer_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->batch_rays = 1024;
+    o->precrop_steps = 500;
+    o->precrop_fraction = 0.5f;
+    o->raw_noise_std = NERF_NOISE_AUTO;
+    o->white_background = -1;
+}
+
+NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
+                                       size_t struct_size)
+{
+    nerf_trainer_options d;
+    defaults(&d);
+    return nerf__options_init(opts, struct_size, &d, sizeof d,
+                              "nerf_trainer_options");
+}
+
+static int check_options(const nerf_trainer_options *o)
+{
+    const char *what = NULL;
+    if (o->batch_rays < 1 || o->batch_rays > (1u << 20)) {
+        what = "batch_rays must be 1..1048576";
+    } else if (!(o->precrop_fraction > 0.0f && o->precrop_fraction <= 1.0f)) {
+        what = "precrop_fraction must be in (0, 1]";
+    } else if (!(o->raw_noise_std == NERF_NOISE_AUTO ||
+                 (o->raw_noise_std >= 0.0f && o->raw_noise_std < 1e6f))) {
+        what = "raw_noise_std must be >= 0 or NERF_NOISE_AUTO";
+    } else if (o->white_background < -1 || o->white_background > 1) {
+        what = "white_background must be -1 (auto), 0 or 1";
+    } else if (o->checkpoint_every > 0 && o->checkpoint_path == NULL) {
+        what = "checkpoint_every needs a checkpoint_path";
+    } else if (o->reserved0 != 0) {
+        what = "reserved0 must be 0";
+    }
+    if (what) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);
+    }
+    return NERF_OK;
+}
+
+static int load_cameras(nerf_trainer *t)
+{
+    t->cameras = nerf__calloc(&t->env, t->n_images, sizeof *t->cameras);
+    if (t->cameras == NULL) {
+        return NERF_ENOMEM;
+    }
+    for (uint32_t i = 0; i < t->n_images; i++) {
+        nerf_camera c;
+        NERF_CAMERA_INIT(&c);
+        int rc = nerf_dataset_camera(t->dataset, i, &c);
+        if (rc == NERF_OK) {
+            rc = nerf__camera_read(&t->cameras[i], &c, "nerf_trainer_create");
+        }
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    return NERF_OK;
+}
+
+static int alloc_buffers(nerf_trainer *t)
+{
+    const size_t n = (size_t)t->opts.batch_rays * 3;
+    float **bufs[] = {&t->origins, &t->directions, &t->targets, &t->rgb[0],
+                      &t->rgb[1], &t->d_rgb[0], &t->d_rgb[1]};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) {
+        *bufs[i] = nerf__calloc(&t->env, n, sizeof(float));
+        if (*bufs[i] == NULL) {
+            return NERF_ENOMEM;
+        }
+    }
+    return NERF_OK;
+}
+
+static char *copy_string(const nerf__env *env, const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *c = nerf__alloc(env, n);
+    if (c) {
+        memcpy(c, s, n);
+    }
+    return c;
+}
+
+static void setup_render(nerf_trainer *t)
+{
+    nerf__render_setup *s = &t->setup;
+    memset(s, 0, sizeof *s);
+    s->model = t->model;
+    s->sampler = t->sampler;
+    s->training = true;
+    s->keep = true;
+    s->white_background = t->white;
+    s->noise_std = t->noise_std;
+    if (t->sampler->opts.ndc) {
+        /* The NDC frustum of a forward-facing scene is that of its
+         * training images unless the sampler fixes one. */
+        bool own = t->sampler->opts.ndc_focal > 0.0f;
+        s->ndc_focal = own ? t->sampler->opts.ndc_focal : t->cameras[0].fx;
+        s->ndc_width = own ? (float)t->sampler->opts.ndc_width
+                           : (float)t->cameras[0].width;
+        s->ndc_height = own ? (float)t->sampler->opts.ndc_height
+                            : (float)t->cameras[0].height;
+    }
+}
+
+NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
+                                 const nerf_dataset *dataset,
+                                 const nerf_sampler *sampler,
+                                 const nerf_trainer_options *opts)
+{
+    if (out == NULL || model == NULL || dataset == NULL || sampler == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_create: NULL argument");
+    }
+    *out = NULL;
+    nerf_trainer_options o;
+    defaults(&o);
+    int rc = opts ? nerf__options_read(&o, sizeof o, opts,
+                                       "nerf_trainer_options")
+                  : NERF_OK;
+    if (rc == NERF_OK) {
+        rc = check_options(&o);
+    }
+    nerf__env env;
+    if (rc == NERF_OK) {
+        rc = nerf__env_from_hooks(&env, o.hooks);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (dataset->count == 0) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_create: the dataset "
+                           "has no images");
+    }
+    nerf_trainer *t = nerf__calloc(&env, 1, sizeof *t);
+    if (t == NULL) {
+        return NERF_ENOMEM;
+    }
+    t->env = env;
+    t->opts = o;
+    t->opts.hooks = NULL;
+    t->opts.checkpoint_path = NULL;
+    t->model = model;
+    t->dataset = dataset;
+    t->sampler = sampler;
+    t->n_images = dataset->count;
+    t->width = dataset->width;
+    t->height = dataset->height;
+    t->white = o.white_background == -1 ? dataset->white_background != 0
+                                         : o.white_background == 1;
+    t->noise_std = o.raw_noise_std == NERF_NOISE_AUTO
+                       ? (sampler->opts.ndc ? 1.0f : 0.0f)
+                       : o.raw_noise_std;
+    if (sampler->opts.ndc) {
+        t->opts.precrop_steps = 0; /* forward-facing: the reference has none */
+    }
+    nerf__batch_init(&t->batch, &env);
+    atomic_init(&t->cancel, 0);
+    rc = load_cameras(t);
+    if (rc == NERF_OK) {
+        rc = alloc_buffers(t);
+    }
+    if (rc == NERF_OK && o.checkpoint_path) {
+        t->checkpoint_path = copy_string(&env, o.checkpoint_path);
+        rc = t->checkpoint_path ? NERF_OK : NERF_ENOMEM;
+    }
+    if (rc != NERF_OK) {
+        nerf_trainer_destroy(t);
+        return rc;
+    }
+    setup_render(t);
+    nerf__log(&env, NERF_LOG_INFO, "trainer: %u images of %ux%u, %u rays per "
+              "step, %s background, density noise %g, precrop %u steps",
+              t->n_images, t->width, t->height, o.batch_rays,
+              t->white ? "white" : "black", (double)t->noise_std,
+              t->opts.precrop_steps);
+    *out = t;
+    return NERF_OK;
+}
+
+NERF_API void nerf_trainer_destroy(nerf_trainer *t)
+{
+    if (t == NULL) {
+        return;
+    }
+    nerf__env env = t->env;
+    nerf__batch_release(&t->batch);
+    float *bufs[] = {t->origins, t->directions, t->targets, t->rgb[0],
+                     t->rgb[1], t->d_rgb[0], t->d_rgb[1]};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) {
+        nerf__free(&env, bufs[i]);
+    }
+    nerf__free(&env, t->cameras);
+    nerf__free(&env, t->checkpoint_path);
+    nerf__free(&env, t);
+}
+
+NERF_API int nerf_trainer_set_progress(nerf_trainer *t, nerf_progress_cb cb,
+                                       void *user)
+{
+    if (t == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_set_progress: trainer "
+                           "is NULL");
+    }
+    t->progress = cb;
+    t->progress_user = user;
+    return NERF_OK;
+}
+
+NERF_API void nerf_trainer_cancel(nerf_trainer *t)
+{
+    if (t) {
+        atomic_store(&t->cancel, 1);
+    }
+}

@@ -1,0 +1,94 @@
+#!/bin/sh
+# Build against an installed libnerf the way users do, through pkg-config.
+#
+#   pkgconfig.sh BUILD_DIR VERSION CXX_EXAMPLE SANITIZE
+#
+# The build is installed with --destdir into BUILD_DIR/abi-pkgconfig; then
+# a C99 program (-pedantic -Werror) is compiled and linked with the flags
+# `pkg-config --cflags --libs nerf` gives, and must print VERSION when run
+# against the staged library; the C++17 example CXX_EXAMPLE must compile
+# and link the same way.  SANITIZE is meson's b_sanitize: a sanitized
+# libnerf needs its runtime in the programs too.  Skipped (77) without
+# pkg-config, meson or a C or C++ compiler.
+set -eu
+build=$1 version=$2 cxx_example=$3 sanitize=$4
+cc=${CC:-cc}
+cxx=${CXX:-c++}
+meson=${MESON:-meson}
+
+for tool in pkg-config "$meson" "$cc" "$cxx"; do
+  if ! command -v "$tool" >/dev/null 2>&1; then
+    echo "$tool not found: skipping"
+    exit 77
+  fi
+done
+
+scratch=$build/abi-pkgconfig
+stage=$scratch/stage
+rm -rf "$scratch"
+mkdir -p "$scratch/pc"
+
+# meson test builds only what the tests it runs depend on, so a fresh
+# build may lack targets that install wants; only then let install build
+# them (a build while other tests run could relink programs under them).
+if ! "$meson" install -C "$build" --destdir "$stage" --no-rebuild \
+     >"$scratch/install.log" 2>&1; then
+  echo "install --no-rebuild failed; installing with a rebuild"
+  if ! "$meson" install -C "$build" --destdir "$stage" \
+       >"$scratch/install.log" 2>&1; then
+    cat "$scratch/install.log"
+    exit 1
+  fi
+fi
+
+pc=$(find "$stage" -path '*/pkgconfig/nerf.pc' | head -n 1)
+if [ -z "$pc" ]; then
+  echo "no pkgconfig/nerf.pc under $stage"
+  exit 1
+fi
+# The .pc file names the configured prefix (say /usr/local), where nothing
+# was installed: point every absolute path it defines into the stage.
+# (PKG_CONFIG_SYSROOT_DIR would also move the system paths of the
+# libraries nerf.pc requires, and --define-prefix guesses the prefix from
+# the file's depth, which a multiarch libdir defeats.)
+sed "s|^\([A-Za-z_][A-Za-z0-9_]*\)=/|\1=$stage/|" "$pc" >"$scratch/pc/nerf.pc"
+PKG_CONFIG_PATH=$scratch/pc
+export PKG_CONFIG_PATH
+cflags=$(pkg-config --cflags nerf)
+libs=$(pkg-config --libs nerf)
+libdir=$(pkg-config --variable=libdir nerf)
+echo "pkg-config --cflags --libs nerf: $cflags $libs"
+
+san=""
+if [ "$sanitize" != none ] && [ -n "$sanitize" ]; then
+  san="-fsanitize=$sanitize"
+fi
+
+cat >"$scratch/version.c" <<'C'
+#include <nerf.h>
+#include <stdio.h>
+int main(void) { puts(nerf_version_string()); return nerf_version_number() != NERF_VERSION_NUMBER; }
+C
+# shellcheck disable=SC2086 # flag lists are meant to split into words
+"$cc" -std=c99 -pedantic -Wall -Wextra -Werror $san $cflags \
+  "$scratch/version.c" -o "$scratch/version" $libs
+
+# Only the staged copy may be found: not the build's, not an installed one.
+printed=$(LD_LIBRARY_PATH=$libdir "$scratch/version")
+if [ "$printed" != "$version" ]; then
+  echo "the C program printed '$printed', expected '$version'"
+  exit 1
+fi
+if command -v ldd >/dev/null 2>&1; then
+  loaded=$(LD_LIBRARY_PATH=$libdir ldd "$scratch/version" | grep libnerf)
+  case $loaded in
+    *"$libdir"/*) ;;
+    *) echo "libnerf not loaded from the stage: $loaded"; exit 1 ;;
+  esac
+fi
+echo "ok   C99 -pedantic program built with pkg-config prints $printed"
+
+# shellcheck disable=SC2086
+"$cxx" -std=c++17 -pedantic -Wall -Wextra -Werror $san $cflags \
+  "$cxx_example" -o "$scratch/nerf_orbit" $libs
+echo "ok   C++17 example $(basename "$cxx_example") built with pkg-config"

@@ -1,0 +1,257 @@
+/*
+ * Compositing along one ray: closed-form cases (slab, step, empty space)
+ * and the backward pass against central differences of an independent
+ * double-precision forward.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "../harness.h"
+#include "composite.h"
+#include "rng.h"
+#include "sampler.h"
+
+#define N_MAX 512
+
+/* t[i] = a + i (b - a) / (n - 1). */
+static void grid(uint32_t n, float a, float b, float *t)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        t[i] = a + (b - a) * (float)i / (float)(n - 1);
+    }
+}
+
+TEST(slab_opacity)
+{
+    /* Density s on [z0, z0 + L): with samples on the slab's faces the
+     * discrete product is exactly exp(-s L), up to the 1e-10 terms. */
+    static const float s_list[] = {0.1f, 0.7f, 2.5f};
+    static const float L_list[] = {0.2f, 1.0f, 1.5f};
+    float t[N_MAX], rgb[3 * N_MAX], sigma[N_MAX], w[N_MAX];
+    const uint32_t n = 401;
+    grid(n, 2.0f, 6.0f, t); /* spacing 0.01 */
+    for (int a = 0; a < 3; a++) {
+        for (int b = 0; b < 3; b++) {
+            float s = s_list[a], L = L_list[b], z0 = 3.0f;
+            /* Direction of length 2: t spans half the world distance, so
+             * the slab is L / 2 long in t. */
+            for (uint32_t i = 0; i < n; i++) {
+                bool inside = t[i] >= z0 - 1e-4f && t[i] < z0 + L / 2 - 1e-4f;
+                sigma[i] = inside ? s : -1.0f; /* negative: ReLU to 0 */
+                rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.5f;
+            }
+            nerf__ray_out out;
+            nerf__composite_ray(n, t, 2.0f, rgb, sigma, false, w, &out);
+            double expect = 1.0 - exp(-(double)s * L);
+            CHECK_NEAR(out.opacity, expect, 2e-5);
+            CHECK_NEAR(out.rgb[0], 0.5 * expect, 2e-5);
+            /* White background: the rest of the ray sees white. */
+            nerf__composite_ray(n, t, 2.0f, rgb, sigma, true, w, &out);
+            CHECK_NEAR(out.rgb[1], 0.5 * expect + (1.0 - expect), 2e-5);
+        }
+    }
+}
+
+TEST(opaque_step_depth)
+{
+    /* An opaque wall at depth z: coarse depth lands within one sample
+     * spacing after z.  The hierarchical pass fills the interval between
+     * the midpoints around the first sample behind the wall, so the fine
+     * depth is within half a spacing, and never worse than the coarse. */
+    const uint32_t n_c = 64, n_f = 128;
+    float t[N_MAX], tf[N_MAX], rgb[3 * N_MAX], sigma[N_MAX], w[N_MAX];
+    float scratch[N_MAX * 3];
+    static const float walls[] = {2.3f, 3.71f, 4.5f, 5.93f, 4.04f, 3.33f};
+    for (int k = 0; k < 6; k++) {
+        float z = walls[k];
+        grid(n_c, 2.0f, 6.0f, t);
+        for (uint32_t i = 0; i < n_c; i++) {
+            sigma[i] = t[i] >= z ? 1e3f : 0.0f;
+            rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 1.0f;
+        }
+        nerf__ray_out out;
+        nerf__composite_ray(n_c, t, 1.0f, rgb, sigma, false, w, &out);
+        float spacing = 4.0f / (n_c - 1);
+        CHECK(fabsf(out.depth - z) <= spacing);
+        CHECK_NEAR(out.opacity, 1.0, 1e-5);
+        nerf__sample_fine_ray(n_c, n_f, t, w, false, NULL, NULL, scratch, tf);
+        for (uint32_t i = 0; i < n_c + n_f; i++) {
+            sigma[i] = tf[i] >= z ? 1e3f : 0.0f;
+            rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 1.0f;
+        }
+        nerf__ray_out fine;
+        nerf__composite_ray(n_c + n_f, tf, 1.0f, rgb, sigma, false, w, &fine);
+        CHECK(fabsf(fine.depth - z) <= 0.5f * spacing + 1e-3f);
+        CHECK(fabsf(fine.depth - z) <= fabsf(out.depth - z));
+    }
+}
+
+TEST(empty_space_background)
+{
+    float t[64], rgb[3 * 64], sigma[64], w[64];
+    grid(64, 2.0f, 6.0f, t);
+    nerf__rng rng = nerf__rng_make(7, 0);
+    for (int i = 0; i < 64; i++) {
+        sigma[i] = -nerf__rng_uniform(&rng) * 5.0f; /* raw <= 0: empty */
+        for (int c = 0; c < 3; c++) {
+            rgb[3 * i + c] = nerf__rng_uniform(&rng);
+        }
+    }
+    nerf__ray_out out;
+    nerf__composite_ray(64, t, 1.3f, rgb, sigma, false, w, &out);
+    for (int c = 0; c < 3; c++) {
+        CHECK(out.rgb[c] == 0.0f);
+    }
+    CHECK(out.opacity == 0.0f && out.depth == 0.0f);
+    CHECK(out.disparity == 1e10f);
+    nerf__composite_ray(64, t, 1.3f, rgb, sigma, true, w, &out);
+    for (int c = 0; c < 3; c++) {
+        CHECK(out.rgb[c] == 1.0f);
+    }
+    for (int i = 0; i < 64; i++) {
+        CHECK(w[i] == 0.0f);
+    }
+}
+
+TEST(disparity_and_weights)
+{
+    float t[32], rgb[3 * 32], sigma[32], w[32];
+    grid(32, 2.0f, 6.0f, t);
+    for (int i = 0; i < 32; i++) {
+        sigma[i] = 0.3f + 0.05f * (float)i;
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.2f;
+    }
+    nerf__ray_out out;
+    nerf__composite_ray(32, t, 1.0f, rgb, sigma, false, w, &out);
+    double sum = 0.0, depth = 0.0;
+    for (int i = 0; i < 32; i++) {
+        CHECK(w[i] >= 0.0f);
+        sum += w[i];
+        depth += (double)w[i] * t[i];
+    }
+    CHECK_NEAR(out.opacity, sum, 1e-6);
+    CHECK_NEAR(out.depth, depth, 1e-5);
+    CHECK_NEAR(out.disparity, sum / depth, 1e-6);
+}
+
+/* ---- gradients ------------------------------------------------------- */
+
+/* The loss L = g_rgb . rgb + g_d depth + g_o opacity of the double forward. */
+static double loss_d(uint32_t n, const double *t, double dnorm,
+                     const double *rgb, const double *sigma, bool white,
+                     const double *g)
+{
+    double trans = 1.0, c[3] = {0, 0, 0}, depth = 0.0, acc = 0.0;
+    for (uint32_t i = 0; i < n; i++) {
+        double dt = i + 1 < n ? t[i + 1] - t[i] : 1e10;
+        double s = sigma[i] > 0.0 ? sigma[i] : 0.0;
+        double alpha = 1.0 - exp(-s * dt * dnorm);
+        double w = alpha * trans;
+        trans *= 1.0 - alpha + 1e-10;
+        for (int k = 0; k < 3; k++) {
+            c[k] += w * rgb[3 * i + k];
+        }
+        depth += w * t[i];
+        acc += w;
+    }
+    if (white) {
+        for (int k = 0; k < 3; k++) {
+            c[k] += 1.0 - acc;
+        }
+    }
+    return g[0] * c[0] + g[1] * c[1] + g[2] * c[2] + g[3] * depth + g[4] * acc;
+}
+
+static void check_grad(uint32_t n, bool white, uint64_t seed, double *worst)
+{
+    float t[64], rgb[3 * 64], sigma[64], d_rgb[3 * 64], d_sigma[64];
+    double td[64], rgbd[3 * 64], sd[64];
+    nerf__rng rng = nerf__rng_make(seed, 1);
+    float acc_t = 2.0f;
+    for (uint32_t i = 0; i < n; i++) {
+        acc_t += 0.02f + 0.1f * nerf__rng_uniform(&rng);
+        t[i] = acc_t;
+        /* Keep raw density away from the ReLU's kink at 0. */
+        float s = 0.2f + 2.0f * nerf__rng_uniform(&rng);
+        sigma[i] = nerf__rng_uniform(&rng) < 0.2f ? -s : s;
+        for (int c = 0; c < 3; c++) {
+            rgb[3 * i + c] = nerf__rng_uniform(&rng);
+        }
+    }
+    const float dnorm = 1.7f;
+    const float g[5] = {0.3f, -1.1f, 0.7f, 0.05f, -0.4f};
+    nerf__composite_ray_backward(n, t, dnorm, rgb, sigma, white, g, g[3],
+                                 g[4], d_rgb, d_sigma);
+    double gd[5];
+    for (int k = 0; k < 5; k++) {
+        gd[k] = g[k];
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        td[i] = t[i];
+        sd[i] = sigma[i];
+        for (int c = 0; c < 3; c++) {
+            rgbd[3 * i + c] = rgb[3 * i + c];
+        }
+    }
+    const double h = 1e-6;
+    for (uint32_t i = 0; i < 4 * n; i++) {
+        double *x = i < n ? &sd[i] : &rgbd[i - n];
+        float analytic = i < n ? d_sigma[i] : d_rgb[i - n];
+        double x0 = *x;
+        *x = x0 + h;
+        double lp = loss_d(n, td, dnorm, rgbd, sd, white, gd);
+        *x = x0 - h;
+        double lm = loss_d(n, td, dnorm, rgbd, sd, white, gd);
+        *x = x0;
+        double fd = (lp - lm) / (2 * h);
+        double err = fabs(analytic - fd) / (fabs(fd) + 1e-3);
+        if (err > *worst) {
+            *worst = err;
+        }
+        if (err > 1e-3) {
+            FAILF("%s %u: analytic %.8g, finite difference %.8g",
+                  i < n ? "sigma" : "rgb", i < n ? i : i - n, analytic, fd);
+        }
+    }
+}
+
+TEST(backward_matches_finite_differences)
+{
+    double worst = 0.0;
+    for (uint64_t seed = 0; seed < 6; seed++) {
+        check_grad(seed % 2 ? 24 : 7, seed % 3 == 0, seed, &worst);
+    }
+    printf("  worst relative error %.2e\n", worst);
+}
+
+TEST(backward_opaque_sample)
+{
+    /* Behind a fully opaque sample T underflows; the gradients must stay
+     * finite and those of hidden samples vanish. */
+    float t[8], rgb[24], sigma[8], d_rgb[24], d_sigma[8];
+    grid(8, 2.0f, 3.0f, t);
+    for (int i = 0; i < 8; i++) {
+        sigma[i] = i == 2 ? 1e6f : 0.5f;
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.5f;
+    }
+    const float g[3] = {1.0f, 1.0f, 1.0f};
+    nerf__composite_ray_backward(8, t, 1.0f, rgb, sigma, true, g, 1.0f, 1.0f,
+                                 d_rgb, d_sigma);
+    for (int i = 0; i < 8; i++) {
+        CHECK(isfinite(d_sigma[i]) && isfinite(d_rgb[3 * i]));
+        if (i > 2) {
+            CHECK(fabsf(d_rgb[3 * i]) < 1e-8f && fabsf(d_sigma[i]) < 1e-8f);
+        }
+    }
+}
+
+int main(void)
+{
+    RUN(slab_opacity);
+    RUN(opaque_step_depth);
+    RUN(empty_space_background);
+    RUN(disparity_and_weights);
+    RUN(backward_matches_finite_differences);
+    RUN(backward_opaque_sample);
+    HARNESS_EXIT();
+}

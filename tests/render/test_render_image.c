@@ -1,0 +1,414 @@
+/*
+ * Whole-image and ray-batch rendering with a tiny model: bitwise identical
+ * results for every chunk size and thread count, agreement with the
+ * public building blocks (sampler, model query, compositing), progress and
+ * cancellation, and argument checks.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "../harness.h"
+#include "composite.h"
+#include "nerf.h"
+
+#define W 24
+#define H 16
+#define NPIX (W * H)
+
+static nerf_model *tiny_model(void)
+{
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_options_preset(&mo, NERF_PRESET_TINY);
+    mo.seed = 3;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &mo));
+    return m;
+}
+
+static nerf_sampler *tiny_sampler(uint32_t ndc)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_sampler_options_preset(&so, NERF_PRESET_TINY);
+    if (ndc) {
+        so.ndc = 1;
+        so.t_near = 0.0f;
+        so.t_far = 1.0f;
+    }
+    nerf_sampler *s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &so));
+    return s;
+}
+
+static nerf_renderer *renderer(nerf_model *m, nerf_sampler *s,
+                               uint32_t chunk, uint32_t threads,
+                               uint32_t white)
+{
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    ro.chunk_rays = chunk;
+    ro.threads = threads;
+    ro.white_background = white;
+    nerf_renderer *r = NULL;
+    CHECK_OK(nerf_renderer_create(&r, m, s, &ro));
+    return r;
+}
+
+/* A camera 4 units from the origin on +z, looking at it. */
+static void test_camera(nerf_camera *c)
+{
+    NERF_CAMERA_INIT(c);
+    c->width = W;
+    c->height = H;
+    c->fx = c->fy = 0.5f * W / tanf(0.35f);
+    c->cx = 0.5f * W;
+    c->cy = 0.5f * H;
+    c->c2w[3] = 0.1f;
+    c->c2w[7] = -0.2f;
+    c->c2w[11] = 4.0f;
+}
+
+typedef struct image {
+    float rgb[3 * NPIX], depth[NPIX], opacity[NPIX];
+} image;
+
+TEST(chunks_and_threads_bitwise)
+{
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(0);
+    nerf_camera cam;
+    test_camera(&cam);
+    static image ref, img;
+    nerf_renderer *r = renderer(m, s, 64, 1, 1);
+    CHECK_OK(nerf_renderer_render_image(r, &cam, ref.rgb, ref.depth,
+                                        ref.opacity, NPIX));
+    nerf_renderer_destroy(r);
+    double mean = 0.0;
+    for (int i = 0; i < NPIX; i++) {
+        CHECK(isfinite(ref.rgb[3 * i]) && ref.opacity[i] >= 0.0f &&
+              ref.opacity[i] <= 1.0f + 1e-6f);
+        mean += ref.opacity[i] / NPIX;
+    }
+    /* A random model is neither empty nor opaque everywhere. */
+    CHECK(mean > 0.01 && mean < 0.999);
+    static const uint32_t cases[][2] = {
+        {1, 1}, {64, 2}, {100, 3}, {128, 2}, {200, 4}, {4096, 0}, {65, 7},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        memset(&img, 0xff, sizeof img);
+        r = renderer(m, s, cases[k][0], cases[k][1], 1);
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, img.depth,
+                                            img.opacity, NPIX));
+        if (memcmp(&img, &ref, sizeof img) != 0) {
+            FAILF("chunk %u, threads %u: image differs", cases[k][0],
+                  cases[k][1]);
+        }
+        /* Again with the same handle: reused scratch, same bits. */
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, img.depth,
+                                            img.opacity, NPIX));
+        CHECK(memcmp(&img, &ref, sizeof img) == 0);
+        nerf_renderer_destroy(r);
+    }
+
+    /* 8 bits: the float image rounded. */
+    static uint8_t rgb8[3 * NPIX];
+    r = renderer(m, s, 96, 2, 1);
+    CHECK_OK(nerf_renderer_render_image_u8(r, &cam, rgb8, NULL, NULL, NPIX));
+    for (int i = 0; i < 3 * NPIX; i++) {
+        float c = fminf(fmaxf(ref.rgb[i], 0.0f), 1.0f);
+        CHECK(rgb8[i] == (uint8_t)(c * 255.0f + 0.5f));
+    }
+    /* Only some outputs. */
+    CHECK_OK(nerf_renderer_render_image(r, &cam, NULL, img.depth, NULL, NPIX));
+    CHECK(memcmp(img.depth, ref.depth, sizeof img.depth) == 0);
+
+    /* The same rays through render_rays: same blocks, same bits. */
+    static float o[3 * NPIX], d[3 * NPIX];
+    CHECK_OK(nerf_camera_rays(&cam, 0, NPIX, o, d));
+    memset(&img, 0, sizeof img);
+    CHECK_OK(nerf_renderer_render_rays(r, NPIX, o, d, img.rgb, img.depth,
+                                       img.opacity));
+    CHECK(memcmp(&img, &ref, sizeof img) == 0);
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+TEST(matches_building_blocks)
+{
+    /* Rebuild the render of a few rays from the public pieces: coarse
+     * samples, a model query, compositing, fine samples, a second query. */
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(0);
+    nerf_renderer *r = renderer(m, s, 64, 1, 0);
+    nerf_camera cam;
+    test_camera(&cam);
+    enum { R = 5, NC = 32, NF = 64, NS = NC + NF };
+    const size_t pix[R] = {0, 77, 190, 200, 383};
+    float o[3 * R], d[3 * R], rgb[3 * R], depth[R], opac[R];
+    for (int k = 0; k < R; k++) {
+        CHECK_OK(nerf_camera_rays(&cam, pix[k], 1, o + 3 * k, d + 3 * k));
+    }
+    CHECK_OK(nerf_renderer_render_rays(r, R, o, d, rgb, depth, opac));
+    float tc[NC], tf[NS], w[NS], pts[3 * NS], dirs[3 * NS], c[3 * NS],
+        sig[NS];
+    double worst = 0.0;
+    for (int k = 0; k < R; k++) {
+        const float *ok = o + 3 * k, *dk = d + 3 * k;
+        float len = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
+        CHECK_OK(nerf_sampler_sample_coarse(s, 1, 0, 0, NULL, tc));
+        for (int pass = 0; pass < 2; pass++) {
+            const float *t = pass ? tf : tc;
+            int n = pass ? NS : NC;
+            for (int i = 0; i < n; i++) {
+                for (int a = 0; a < 3; a++) {
+                    pts[3 * i + a] = ok[a] + dk[a] * t[i];
+                    dirs[3 * i + a] = dk[a] / len;
+                }
+            }
+            CHECK_OK(nerf_model_query(m, pass ? NERF_NETWORK_FINE
+                                              : NERF_NETWORK_COARSE,
+                                      n, pts, dirs, c, sig));
+            nerf__ray_out out;
+            nerf__composite_ray(n, t, len, c, sig, false, w, &out);
+            if (pass == 0) {
+                CHECK_OK(nerf_sampler_sample_fine(s, 1, 0, 0, tc, w, NULL,
+                                                  tf));
+                continue;
+            }
+            for (int a = 0; a < 3; a++) {
+                worst = fmax(worst, fabs(out.rgb[a] - rgb[3 * k + a]));
+            }
+            worst = fmax(worst, fabs(out.depth - depth[k]) / 6.0);
+            worst = fmax(worst, fabs(out.opacity - opac[k]));
+        }
+    }
+    printf("  largest difference %.3g\n", worst);
+    CHECK(worst < 1e-4);
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+TEST(ndc_render)
+{
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_renderer *r = renderer(m, s, 64, 2, 0);
+    nerf_camera cam;
+    test_camera(&cam);
+    cam.c2w[11] = 0.0f;
+    static image img;
+    CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, img.depth,
+                                        img.opacity, NPIX));
+    for (int i = 0; i < NPIX; i++) {
+        CHECK(isfinite(img.rgb[3 * i]) && img.depth[i] >= 0.0f &&
+              img.depth[i] <= 1.0f + 1e-5f);
+    }
+    /* Rays need the scene's frustum in the sampler. */
+    static float o[3 * NPIX], d[3 * NPIX], rgb[3 * NPIX];
+    CHECK_OK(nerf_camera_rays(&cam, 0, NPIX, o, d));
+    CHECK_EQ_INT(nerf_renderer_render_rays(r, NPIX, o, d, rgb, NULL, NULL),
+                 NERF_EINVAL);
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_sampler_options_preset(&so, NERF_PRESET_TINY);
+    so.ndc = 1;
+    so.t_near = 0.0f;
+    so.t_far = 1.0f;
+    so.ndc_focal = cam.fx;
+    so.ndc_width = W;
+    so.ndc_height = H;
+    CHECK_OK(nerf_sampler_create(&s, &so));
+    r = renderer(m, s, 64, 2, 0);
+    CHECK_OK(nerf_renderer_render_rays(r, NPIX, o, d, rgb, NULL, NULL));
+    CHECK(memcmp(rgb, img.rgb, sizeof rgb) == 0);
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+typedef struct progress_log {
+    int calls;
+    uint64_t last, total;
+    int monotonic;
+    int cancel_at;
+    nerf_renderer *r;
+    int use_cancel_fn;
+} progress_log;
+
+static int on_progress(const nerf_progress *p, void *user)
+{
+    progress_log *log = user;
+    log->calls++;
+    if (p->struct_size < sizeof *p || p->kind != NERF_PROGRESS_RENDER ||
+        p->done < log->last || p->done > p->total || p->elapsed < 0.0) {
+        log->monotonic = 0;
+    }
+    log->last = p->done;
+    log->total = p->total;
+    if (log->cancel_at && log->calls >= log->cancel_at) {
+        if (log->use_cancel_fn) {
+            nerf_renderer_cancel(log->r); /* from inside: also allowed */
+            return 0;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+TEST(progress_and_cancel)
+{
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(0);
+    nerf_camera cam;
+    test_camera(&cam);
+    static image img;
+    for (uint32_t threads = 1; threads <= 3; threads += 2) {
+        nerf_renderer *r = renderer(m, s, 64, threads, 0);
+        progress_log log = {0, 0, 0, 1, 0, r, 0};
+        CHECK_OK(nerf_renderer_set_progress(r, on_progress, &log));
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                            NPIX));
+        CHECK(log.monotonic && log.last == NPIX && log.total == NPIX);
+        CHECK(log.calls >= 1 && log.calls <= NPIX / 64);
+        if (threads == 1) {
+            CHECK_EQ_INT(log.calls, NPIX / 64);
+        }
+        /* Nonzero from the callback cancels.  With several threads the
+         * other chunks may all be done by then; the call still reports
+         * the cancellation. */
+        log = (progress_log){0, 0, 0, 1, 2, r, 0};
+        CHECK_EQ_INT(nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                                NPIX), NERF_ECANCELLED);
+        CHECK(threads > 1 || log.last == 2 * 64);
+        /* So does nerf_renderer_cancel(), unless every chunk was already
+         * finished when it came. */
+        log = (progress_log){0, 0, 0, 1, 1, r, 1};
+        int rc = nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                            NPIX);
+        CHECK(rc == NERF_ECANCELLED ||
+              (threads > 1 && rc == NERF_OK && log.last == NPIX));
+        /* A cancel between calls does not affect the next call. */
+        nerf_renderer_cancel(r);
+        CHECK_OK(nerf_renderer_set_progress(r, NULL, NULL));
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                            NPIX));
+        nerf_renderer_destroy(r);
+    }
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+typedef struct canceller {
+    nerf_renderer *r;
+    atomic_int stop;
+} canceller;
+
+static void *cancel_loop(void *arg)
+{
+    canceller *c = arg;
+    while (!atomic_load(&c->stop)) {
+        nerf_renderer_cancel(c->r);
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
+    return NULL;
+}
+
+TEST(cancel_from_another_thread)
+{
+    /* One chunk holding the whole image: the flag is also checked between
+     * the 64-ray batches inside a chunk.  The other thread cancels every
+     * millisecond, since each call clears the flag when it starts. */
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(0);
+    for (uint32_t threads = 1; threads <= 2; threads++) {
+        nerf_renderer *r = renderer(m, s, 1u << 20, threads, 0);
+        nerf_camera cam;
+        test_camera(&cam);
+        cam.width = cam.height = 96;
+        float *rgb = malloc(sizeof(float) * 3 * 96 * 96);
+        canceller c = {r, 0};
+        pthread_t tid;
+        CHECK(pthread_create(&tid, NULL, cancel_loop, &c) == 0);
+        int rc = nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
+                                            96 * 96);
+        atomic_store(&c.stop, 1);
+        pthread_join(tid, NULL);
+        CHECK_EQ_INT(rc, NERF_ECANCELLED);
+        free(rgb);
+        nerf_renderer_destroy(r);
+    }
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+TEST(argument_checks)
+{
+    nerf_model *m = tiny_model();
+    nerf_sampler *s = tiny_sampler(0);
+    nerf_renderer *r = NULL;
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    CHECK(ro.chunk_rays == 512 && ro.threads == 0 &&
+          ro.raw_noise_std == NERF_NOISE_AUTO && ro.white_background == 0);
+    CHECK_EQ_INT(nerf_renderer_create(&r, NULL, s, &ro), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_renderer_create(&r, m, NULL, &ro), NERF_EINVAL);
+    ro.chunk_rays = 0;
+    CHECK_EQ_INT(nerf_renderer_create(&r, m, s, &ro), NERF_EINVAL);
+    ro.chunk_rays = 64;
+    ro.raw_noise_std = -0.5f;
+    CHECK_EQ_INT(nerf_renderer_create(&r, m, s, &ro), NERF_EINVAL);
+    ro.raw_noise_std = 0.0f;
+    ro.white_background = 2;
+    CHECK_EQ_INT(nerf_renderer_create(&r, m, s, &ro), NERF_EINVAL);
+    CHECK(r == NULL);
+    CHECK_OK(nerf_renderer_create(&r, m, s, NULL));
+    nerf_camera cam;
+    test_camera(&cam);
+    static image img;
+    CHECK_EQ_INT(nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                            NPIX - 1), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_renderer_render_image(r, &cam, NULL, NULL, NULL, NPIX),
+                 NERF_EINVAL);
+    CHECK_EQ_INT(nerf_renderer_render_image_u8(r, &cam, NULL, img.depth, NULL,
+                                               NPIX), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_renderer_render_image(NULL, &cam, img.rgb, NULL, NULL,
+                                            NPIX), NERF_EINVAL);
+    cam.fy = -1.0f;
+    CHECK_EQ_INT(nerf_renderer_render_image(r, &cam, img.rgb, NULL, NULL,
+                                            NPIX), NERF_EINVAL);
+    float o[6] = {0, 0, 4, 0, 0, 4}, d[6] = {0, 0, -1, 0, 0, 0}, c[6];
+    CHECK_EQ_INT(nerf_renderer_render_rays(r, 2, o, d, c, NULL, NULL),
+                 NERF_EINVAL);
+    d[5] = NAN;
+    CHECK_EQ_INT(nerf_renderer_render_rays(r, 2, o, d, c, NULL, NULL),
+                 NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "ray 1") != NULL);
+    CHECK_OK(nerf_renderer_render_rays(r, 1, o, d, c, NULL, NULL));
+    CHECK_OK(nerf_renderer_render_rays(r, 0, NULL, NULL, c, NULL, NULL));
+    CHECK_EQ_INT(nerf_renderer_set_progress(NULL, NULL, NULL), NERF_EINVAL);
+    nerf_renderer_cancel(NULL);
+    nerf_renderer_destroy(r);
+    nerf_renderer_destroy(NULL);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+int main(void)
+{
+    RUN(chunks_and_threads_bitwise);
+    RUN(matches_building_blocks);
+    RUN(ndc_render);
+    RUN(progress_and_cancel);
+    RUN(cancel_from_another_thread);
+    RUN(argument_checks);
+    HARNESS_EXIT();
+}

@@ -1,0 +1,187 @@
+/* The trainer: determinism, exact resume, checkpoints, cancellation and
+ * allocation failures. */
+#include <string.h>
+
+#include "../fail_alloc.h"
+#include "model.h"
+#include "train_fixture.h"
+
+static fixture fx;
+
+static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
+                                  uint32_t batch, const nerf_hooks *hooks)
+{
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = batch;
+    o.precrop_steps = 2; /* so that both kinds of step run */
+    o.hooks = hooks;
+    nerf_trainer *t = NULL;
+    int rc = nerf_trainer_create(&t, m, fx.train, s, &o);
+    if (rc != NERF_OK && rc != NERF_ENOMEM) {
+        printf("  nerf_trainer_create: %s\n", nerf_last_error());
+    }
+    return t;
+}
+
+static void train(nerf_model *m, nerf_sampler *s, int steps)
+{
+    nerf_trainer *t = make_trainer(m, s, 64, NULL);
+    CHECK(t != NULL);
+    for (int i = 0; t && i < steps; i++) {
+        nerf_train_stats st;
+        st.struct_size = sizeof st;
+        CHECK_OK(nerf_trainer_step(t, &st));
+        CHECK(st.step == nerf_model_step(m));
+        CHECK(st.loss > 0.0 && st.psnr > 0.0);
+    }
+    nerf_trainer_destroy(t);
+}
+
+TEST(same_seed_same_weights)
+{
+    nerf_sampler *s = tiny_sampler(3);
+    nerf_model *a = tiny_model(1), *b = tiny_model(1);
+    train(a, s, 4);
+    train(b, s, 4);
+    CHECK(memcmp(a->params, b->params, a->n_params * sizeof(float)) == 0);
+    CHECK(memcmp(a->adam_v, b->adam_v, a->n_params * sizeof(float)) == 0);
+    nerf_model *c = tiny_model(2);
+    train(c, s, 4);
+    CHECK(memcmp(a->params, c->params, a->n_params * sizeof(float)) != 0);
+    nerf_model_destroy(a);
+    nerf_model_destroy(b);
+    nerf_model_destroy(c);
+    nerf_sampler_destroy(s);
+}
+
+TEST(resume_is_bit_identical)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/resume.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(5);
+    nerf_model *whole = tiny_model(9), *first = tiny_model(9);
+    train(whole, s, 6);
+    train(first, s, 3);
+    CHECK_OK(nerf_model_save(first, path));
+    nerf_model_destroy(first);
+    nerf_model *resumed = NULL;
+    CHECK_OK(nerf_model_load(&resumed, path, NULL));
+    if (resumed) {
+        CHECK_EQ_INT(nerf_model_step(resumed), 3);
+        train(resumed, s, 3);
+        CHECK_EQ_INT(nerf_model_step(resumed), 6);
+        CHECK(memcmp(whole->params, resumed->params,
+                     whole->n_params * sizeof(float)) == 0);
+        CHECK(memcmp(whole->adam_m, resumed->adam_m,
+                     whole->n_params * sizeof(float)) == 0);
+    }
+    nerf_model_destroy(resumed);
+    nerf_model_destroy(whole);
+    nerf_sampler_destroy(s);
+}
+
+static int stop_after_two(const nerf_progress *p, void *user)
+{
+    int *calls = user;
+    ++*calls;
+    if (p->kind != NERF_PROGRESS_TRAIN || p->total != 10 || !(p->loss > 0.0)) {
+        return -100; /* marks a bad report: the test sees calls stop */
+    }
+    return p->done >= 2;
+}
+
+TEST(run_progress_cancel_and_checkpoints)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/run.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(4);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 32;
+    o.checkpoint_every = 1;
+    o.checkpoint_path = path;
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    int calls = 0;
+    CHECK_OK(nerf_trainer_set_progress(t, stop_after_two, &calls));
+    nerf_train_stats st;
+    st.struct_size = sizeof st;
+    CHECK_EQ_INT(nerf_trainer_run(t, 10, &st), NERF_ECANCELLED);
+    CHECK_EQ_INT(calls, 2);
+    CHECK_EQ_INT(st.step, 2);
+    nerf_model *saved = NULL;
+    CHECK_OK(nerf_model_load(&saved, path, NULL));
+    CHECK_EQ_INT(nerf_model_step(saved), 2);
+    nerf_model_destroy(saved);
+    /* A checkpoint path in a missing folder fails the run with EIO. */
+    nerf_trainer_destroy(t);
+    o.checkpoint_path = "/nonexistent-dir-for-nerf/run.nerf";
+    CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    CHECK_EQ_INT(nerf_trainer_run(t, 1, NULL), NERF_EIO);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+TEST(bad_arguments)
+{
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(1);
+    nerf_trainer *t = NULL;
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    CHECK_EQ_INT(nerf_trainer_create(&t, NULL, fx.train, s, &o), NERF_EINVAL);
+    o.batch_rays = 0;
+    CHECK_EQ_INT(nerf_trainer_create(&t, m, fx.train, s, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "batch_rays") != NULL);
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.checkpoint_every = 5;
+    CHECK_EQ_INT(nerf_trainer_create(&t, m, fx.train, s, &o), NERF_EINVAL);
+    CHECK(t == NULL);
+    CHECK_EQ_INT(nerf_trainer_step(NULL, NULL), NERF_EINVAL);
+    nerf_trainer_destroy(NULL);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+TEST(allocation_failures)
+{
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(1);
+    nerf_hooks hooks;
+    fail_alloc f;
+    fail_alloc_hooks(&hooks, &f);
+    int succeeded_at = 0;
+    for (int k = 1; k < 40 && !succeeded_at; k++) {
+        f = (fail_alloc){0, k, 0};
+        nerf_trainer *t = make_trainer(m, s, 16, &hooks);
+        int rc = t ? nerf_trainer_step(t, NULL) : NERF_ENOMEM;
+        if (t && rc == NERF_OK) {
+            succeeded_at = k;
+        } else {
+            CHECK_EQ_INT(rc, NERF_ENOMEM);
+        }
+        nerf_trainer_destroy(t);
+        CHECK_EQ_INT(f.live, 0);
+    }
+    CHECK(succeeded_at > 2);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+int main(void)
+{
+    if (fixture_open(&fx, 24, 6, 0) != NERF_OK) {
+        printf("fixture: %s\n", nerf_last_error());
+        return 1;
+    }
+    RUN(same_seed_same_weights);
+    RUN(resume_is_bit_identical);
+    RUN(run_progress_cancel_and_checkpoints);
+    RUN(bad_arguments);
+    RUN(allocation_failures);
+    fixture_close(&fx);
+    HARNESS_EXIT();
+}

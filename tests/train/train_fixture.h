@@ -1,0 +1,76 @@
+/*
+ * Shared set-up of the training tests: the built-in scene written once to
+ * a temporary folder, loaded, and a tiny model, sampler and trainer.
+ */
+#ifndef NERF_TEST_TRAIN_FIXTURE_H
+#define NERF_TEST_TRAIN_FIXTURE_H
+
+#include "../data/data_fixtures.h"
+#include "../harness.h"
+#include "nerf.h"
+
+typedef struct fixture {
+    char dir[512];
+    nerf_dataset *train;
+    nerf_dataset *test;
+} fixture;
+
+/* Write the built-in scene at width x width and load both splits. */
+static inline int fixture_open(fixture *f, uint32_t width, uint32_t n_train,
+                               uint32_t n_test)
+{
+    memset(f, 0, sizeof *f);
+    snprintf(f->dir, sizeof f->dir, "%s", fx_make_temp_dir());
+    nerf_scene_options so;
+    NERF_SCENE_OPTIONS_INIT(&so);
+    so.width = so.height = width;
+    so.n_train = n_train;
+    so.n_val = 0;
+    so.n_test = n_test;
+    nerf_dataset_options dopt;
+    NERF_DATASET_OPTIONS_INIT(&dopt);
+    int rc = nerf_scene_write(f->dir, &so);
+    if (rc == NERF_OK) {
+        rc = nerf_dataset_load(&f->train, f->dir, &dopt);
+    }
+    dopt.split = NERF_SPLIT_TEST;
+    if (rc == NERF_OK && n_test > 0) {
+        rc = nerf_dataset_load(&f->test, f->dir, &dopt);
+    }
+    return rc;
+}
+
+static inline void fixture_close(fixture *f)
+{
+    nerf_dataset_destroy(f->train);
+    nerf_dataset_destroy(f->test);
+    fx_remove_tree(f->dir);
+}
+
+static inline nerf_model *tiny_model(uint64_t seed)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, NERF_PRESET_TINY);
+    o.seed = seed;
+    nerf_model *m = NULL;
+    if (nerf_model_create(&m, &o) != NERF_OK) {
+        printf("  nerf_model_create: %s\n", nerf_last_error());
+    }
+    return m;
+}
+
+static inline nerf_sampler *tiny_sampler(uint64_t seed)
+{
+    nerf_sampler_options o;
+    NERF_SAMPLER_OPTIONS_INIT(&o);
+    nerf_sampler_options_preset(&o, NERF_PRESET_TINY);
+    o.seed = seed;
+    nerf_sampler *s = NULL;
+    if (nerf_sampler_create(&s, &o) != NERF_OK) {
+        printf("  nerf_sampler_create: %s\n", nerf_last_error());
+    }
+    return s;
+}
+
+#endif
