@@ -1,0 +1,91 @@
+"""Python binding of libnerf: Neural Radiance Fields on the CPU.
+
+A pure ctypes package: nothing is compiled.  Importing it loads the libnerf
+shared library (``NERF_LIBRARY``, then the installed library, then a build
+directory of this source tree; see :mod:`nerf._loader`) and checks that its
+major version is the one this binding speaks.
+
+Quick tour::
+
+    import nerf
+
+    nerf.write_scene("scene", width=64, height=64, n_train=20)
+    train = nerf.Dataset("scene", "train")
+    with nerf.Model(preset="tiny", seed=0) as model:
+        sampler = nerf.Sampler.for_dataset(train, preset="tiny")
+        trainer = nerf.Trainer(model, train, sampler, batch_rays=512)
+        stats = trainer.run(200, progress=lambda p: print(p.done, p.psnr))
+        renderer = nerf.Renderer(model, sampler, white_background=1)
+        image = renderer.render_image(train.camera(0)).rgb
+        nerf.write_png("view.png", image)
+
+Errors raise :class:`NerfError` subclasses carrying the library's message
+and status code.  Handles (:class:`Model`, :class:`Sampler`,
+:class:`Renderer`, :class:`Dataset`, :class:`Trainer`) have an idempotent
+``close()``, work as context managers, and may be closed or collected in
+any order: a handle's C object is destroyed only once no dependent handle
+uses it (see :mod:`nerf._handle`).  Arrays are NumPy arrays when NumPy is
+installed and memoryviews otherwise (see :mod:`nerf._buffers`).
+"""
+
+from ._buffers import HAVE_NUMPY
+from ._loader import EXPECTED_MAJOR
+from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
+                   PARAM_ADAM_BETA1, PARAM_ADAM_BETA2, PARAM_ADAM_EPS,
+                   PARAM_DECAY_STEPS, PARAM_LEARNING_RATE,
+                   PARAM_LEARNING_RATE_FINAL, build_info, clear_error,
+                   last_error, library_path, log_stderr, log_to_stderr,
+                   param_bounds, set_log_handler, status_string, version,
+                   version_number, version_string)
+from .data import (DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE, SPLIT_TEST,
+                   SPLIT_TRAIN, SPLIT_VAL, Dataset, psnr, read_png, ssim,
+                   write_png, write_scene)
+from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
+                     EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
+                     NerfInternalError, NerfInvalidArgument, NerfIOError,
+                     NerfNoMemory, NerfVersionError)
+from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
+                    ENCODING_SCALE_PI, NETWORK_COARSE, NETWORK_FINE,
+                    PRESET_REFERENCE, PRESET_TINY, Model)
+from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
+                     RenderResult, Renderer, Sampler)
+from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
+                      DatasetOptions, Hooks, ModelOptions, Progress,
+                      ProgressStruct, RendererOptions, SamplerOptions,
+                      SceneOptions, TrainerOptions, TrainStats,
+                      TrainStatsStruct)
+from .train import Trainer
+
+#: The version of the loaded library, "major.minor.patch".
+__version__ = version_string()
+
+__all__ = [
+    # Handles and helpers.
+    "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
+    "RenderResult", "Progress", "TrainStats",
+    "write_scene", "read_png", "write_png", "psnr", "ssim",
+    # Option structs.
+    "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
+    "TrainerOptions", "SceneOptions", "Hooks", "ProgressStruct",
+    "TrainStatsStruct",
+    # Errors.
+    "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
+    "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",
+    "OK", "ERROR", "EINVAL", "ENOMEM", "EIO", "EFORMAT", "ECANCELLED",
+    "EVERSION",
+    # Process-wide functions.
+    "version", "version_number", "version_string", "build_info",
+    "library_path", "status_string", "last_error", "clear_error",
+    "param_bounds", "set_log_handler", "log_to_stderr", "log_stderr",
+    # Constants.
+    "HAVE_NUMPY", "EXPECTED_MAJOR", "LOG_ERROR", "LOG_WARN", "LOG_INFO",
+    "LOG_DEBUG", "PARAMS", "PARAM_LEARNING_RATE", "PARAM_LEARNING_RATE_FINAL",
+    "PARAM_DECAY_STEPS", "PARAM_ADAM_BETA1", "PARAM_ADAM_BETA2",
+    "PARAM_ADAM_EPS", "PRESET_REFERENCE", "PRESET_TINY", "NETWORK_COARSE",
+    "NETWORK_FINE", "ENCODING_FREQUENCY", "ENCODING_INCLUDE_INPUT",
+    "ENCODING_SCALE_PI", "SAMPLE_TRAINING", "NOISE_AUTO",
+    "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",
+    "SPLIT_TRAIN", "SPLIT_VAL", "SPLIT_TEST",
+    "DATASET_BLENDER", "DATASET_LLFF", "IMAGE_MAX_SIDE",
+]
+

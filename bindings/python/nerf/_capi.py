@@ -1,0 +1,219 @@
+"""Prototypes of every public libnerf function.
+
+Importing this module loads the library (see :mod:`nerf._loader`), checks
+its major version and gives every function of ``nerf.h`` its ``argtypes``
+and ``restype``.  Functions that return a status get
+:func:`nerf.errors.check_status` as ``errcheck``, so a negative status
+raises :class:`nerf.NerfError` with the library's message.
+
+Handles are typed opaque pointers (``ModelP`` and so on), so passing a
+sampler where a model is expected fails in ctypes rather than in C.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
+                    c_uint, c_uint8, c_uint32, c_uint64, c_void_p)
+
+from . import _loader, errors
+from .structs import (LOG_CB, Camera, DatasetOptions, Hooks, ModelOptions,
+                      ProgressStruct, RendererOptions, SamplerOptions,
+                      SceneOptions, TrainerOptions, TrainStatsStruct)
+
+
+class _Opaque(ctypes.Structure):
+    """Base of the incomplete C handle types."""
+    _fields_ = []
+
+
+class nerf_model(_Opaque):
+    pass
+
+
+class nerf_sampler(_Opaque):
+    pass
+
+
+class nerf_renderer(_Opaque):
+    pass
+
+
+class nerf_dataset(_Opaque):
+    pass
+
+
+class nerf_trainer(_Opaque):
+    pass
+
+
+ModelP = POINTER(nerf_model)
+SamplerP = POINTER(nerf_sampler)
+RendererP = POINTER(nerf_renderer)
+DatasetP = POINTER(nerf_dataset)
+TrainerP = POINTER(nerf_trainer)
+
+PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
+
+_F = POINTER(c_float)
+_D = POINTER(c_double)
+_U32 = POINTER(c_uint32)
+
+# name: (restype, argtypes, returns a status?)
+_PROTOTYPES = {
+    # Errors and versions.
+    "nerf_status_string": (c_char_p, [c_int], False),
+    "nerf_last_error": (c_char_p, [], False),
+    "nerf_clear_error": (None, [], False),
+    "nerf_version_number": (c_uint, [], False),
+    "nerf_version_string": (c_char_p, [], False),
+    "nerf_build_info": (c_char_p, [], False),
+    # Logging and hooks.
+    "nerf_log_set_default": (None, [LOG_CB, c_void_p, c_int], False),
+    "nerf_log_stderr": (None, [c_int, c_char_p, c_void_p], False),
+    "nerf_hooks_init": (c_int, [POINTER(Hooks), c_size_t], True),
+    # Model.
+    "nerf_model_options_init": (c_int, [POINTER(ModelOptions), c_size_t],
+                                True),
+    "nerf_model_options_preset": (c_int, [POINTER(ModelOptions), c_int], True),
+    "nerf_model_create": (c_int, [POINTER(ModelP), POINTER(ModelOptions)],
+                          True),
+    "nerf_model_destroy": (None, [ModelP], False),
+    "nerf_model_get_options": (c_int, [ModelP, POINTER(ModelOptions)], True),
+    "nerf_model_param_count": (c_size_t, [ModelP], False),
+    "nerf_model_step": (c_uint64, [ModelP], False),
+    "nerf_model_query": (c_int, [ModelP, c_int, c_size_t, _F, _F, _F, _F],
+                         True),
+    "nerf_param_bounds": (c_int, [c_int, _D, _D], True),
+    "nerf_model_set_param": (c_int, [ModelP, c_int, c_double], True),
+    "nerf_model_get_param": (c_int, [ModelP, c_int, _D], True),
+    "nerf_model_learning_rate": (c_double, [ModelP], False),
+    "nerf_model_save": (c_int, [ModelP, c_char_p], True),
+    "nerf_model_load": (c_int, [POINTER(ModelP), c_char_p, POINTER(Hooks)],
+                        True),
+    "nerf_model_import_npz": (c_int, [POINTER(ModelP), c_char_p,
+                                      POINTER(ModelOptions)], True),
+    # Built-in scene.
+    "nerf_scene_options_init": (c_int, [POINTER(SceneOptions), c_size_t],
+                                True),
+    "nerf_scene_write": (c_int, [c_char_p, POINTER(SceneOptions)], True),
+    # Cameras.
+    "nerf_camera_init": (c_int, [POINTER(Camera), c_size_t], True),
+    "nerf_camera_rays": (c_int, [POINTER(Camera), c_size_t, c_size_t, _F, _F],
+                         True),
+    "nerf_camera_look_at": (c_int, [POINTER(Camera), _F, _F, _F], True),
+    # Sampler.
+    "nerf_sampler_options_init": (c_int, [POINTER(SamplerOptions), c_size_t],
+                                  True),
+    "nerf_sampler_options_preset": (c_int, [POINTER(SamplerOptions), c_int],
+                                    True),
+    "nerf_sampler_create": (c_int, [POINTER(SamplerP),
+                                    POINTER(SamplerOptions)], True),
+    "nerf_sampler_destroy": (None, [SamplerP], False),
+    "nerf_sampler_sample_coarse": (c_int, [SamplerP, c_size_t, c_uint32,
+                                           c_uint64, _F, _F], True),
+    "nerf_sampler_sample_fine": (c_int, [SamplerP, c_size_t, c_uint32,
+                                         c_uint64, _F, _F, _F, _F], True),
+    # Renderer.
+    "nerf_renderer_options_init": (c_int, [POINTER(RendererOptions),
+                                           c_size_t], True),
+    "nerf_renderer_create": (c_int, [POINTER(RendererP), ModelP, SamplerP,
+                                     POINTER(RendererOptions)], True),
+    "nerf_renderer_destroy": (None, [RendererP], False),
+    "nerf_renderer_set_progress": (c_int, [RendererP, PROGRESS_CB, c_void_p],
+                                   True),
+    "nerf_renderer_cancel": (None, [RendererP], False),
+    "nerf_renderer_render_image": (c_int, [RendererP, POINTER(Camera), _F, _F,
+                                           _F, c_size_t], True),
+    "nerf_renderer_render_image_u8": (c_int, [RendererP, POINTER(Camera),
+                                              POINTER(c_uint8), _F, _F,
+                                              c_size_t], True),
+    "nerf_renderer_render_rays": (c_int, [RendererP, c_size_t, _F, _F, _F, _F,
+                                          _F], True),
+    # Images and metrics.
+    "nerf_image_read_png": (c_int, [c_char_p, _U32, _U32, POINTER(_F)], True),
+    "nerf_image_write_png": (c_int, [c_char_p, c_uint32, c_uint32, c_uint32,
+                                     _F], True),
+    "nerf_image_write_png8": (c_int, [c_char_p, c_uint32, c_uint32, c_uint32,
+                                      POINTER(c_uint8)], True),
+    "nerf_free": (None, [c_void_p], False),
+    "nerf_psnr": (c_int, [_F, _F, c_size_t, _D], True),
+    "nerf_ssim": (c_int, [_F, _F, c_uint32, c_uint32, c_uint32, _D], True),
+    # Datasets.
+    "nerf_dataset_options_init": (c_int, [POINTER(DatasetOptions), c_size_t],
+                                  True),
+    "nerf_dataset_load": (c_int, [POINTER(DatasetP), c_char_p,
+                                  POINTER(DatasetOptions)], True),
+    "nerf_dataset_destroy": (None, [DatasetP], False),
+    "nerf_dataset_count": (c_uint32, [DatasetP], False),
+    "nerf_dataset_get_format": (c_int, [DatasetP], False),
+    "nerf_dataset_image_size": (c_int, [DatasetP, _U32, _U32], True),
+    "nerf_dataset_image": (c_int, [DatasetP, c_uint32, POINTER(_F)], True),
+    "nerf_dataset_camera": (c_int, [DatasetP, c_uint32, POINTER(Camera)],
+                            True),
+    "nerf_dataset_bounds": (c_int, [DatasetP, _F, _F], True),
+    "nerf_dataset_is_ndc": (c_int, [DatasetP], False),
+    "nerf_dataset_spiral_camera": (c_int, [DatasetP, c_uint32, c_uint32,
+                                           POINTER(Camera)], True),
+    # Training.
+    "nerf_trainer_options_init": (c_int, [POINTER(TrainerOptions), c_size_t],
+                                  True),
+    "nerf_trainer_create": (c_int, [POINTER(TrainerP), ModelP, DatasetP,
+                                    SamplerP, POINTER(TrainerOptions)], True),
+    "nerf_trainer_destroy": (None, [TrainerP], False),
+    "nerf_trainer_step": (c_int, [TrainerP, POINTER(TrainStatsStruct)], True),
+    "nerf_trainer_run": (c_int, [TrainerP, c_uint64,
+                                 POINTER(TrainStatsStruct)], True),
+    "nerf_trainer_set_progress": (c_int, [TrainerP, PROGRESS_CB, c_void_p],
+                                  True),
+    "nerf_trainer_cancel": (None, [TrainerP], False),
+}
+
+
+class _Api:
+    """The loaded library's functions, as attributes named as in C."""
+
+    def __init__(self, cdll: ctypes.CDLL, where: str) -> None:
+        self.cdll = cdll
+        self.path = where
+        missing = []
+        for name, (restype, argtypes, checked) in _PROTOTYPES.items():
+            try:
+                fn = getattr(cdll, name)
+            except AttributeError:
+                missing.append(name)
+                continue
+            fn.restype = restype
+            fn.argtypes = argtypes
+            if checked:
+                fn.errcheck = errors.check_status
+            setattr(self, name, fn)
+        if missing:
+            raise ImportError(
+                "libnerf: %s lacks %s; it is older than this binding "
+                "expects. Set NERF_LIBRARY to a matching libnerf."
+                % (where, ", ".join(sorted(missing))))
+
+
+def _load() -> _Api:
+    cdll, where = _loader.find_and_load()
+    try:
+        version = cdll.nerf_version_number
+    except AttributeError:
+        raise ImportError("libnerf: %s has no nerf_version_number(); it is "
+                          "not a libnerf shared library. Set NERF_LIBRARY to "
+                          "libnerf.so.0." % where) from None
+    version.restype = c_uint
+    version.argtypes = []
+    _loader.check_version(version(), where)
+    api = _Api(cdll, where)
+    errors._status_string_fn = api.nerf_status_string
+    errors._last_error_fn = api.nerf_last_error
+    return api
+
+
+#: The library, loaded once on import.
+lib = _load()
+
+#: Every C function this module declares (for the coverage test).
+FUNCTION_NAMES = tuple(_PROTOTYPES)

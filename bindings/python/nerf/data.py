@@ -1,0 +1,271 @@
+"""Datasets, the built-in scene, PNG files and image metrics."""
+
+from __future__ import annotations
+
+import ctypes
+import weakref
+from typing import Any, Callable, List, Optional, Tuple, Union
+
+from . import _buffers, _handle
+from ._capi import DatasetP, lib
+from .structs import Camera, DatasetOptions, SceneOptions
+
+# nerf_split and nerf_dataset_format
+SPLIT_TRAIN = 0
+SPLIT_VAL = 1
+SPLIT_TEST = 2
+SPLITS = {"train": SPLIT_TRAIN, "val": SPLIT_VAL, "test": SPLIT_TEST}
+DATASET_BLENDER = 1
+DATASET_LLFF = 2
+FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff"}
+
+#: Largest width or height the PNG functions accept.
+IMAGE_MAX_SIDE = 16384
+
+LogFn = Optional[Callable[[int, str], Any]]
+
+
+class _Lease:
+    """Keeps a resource's C object alive while borrowed memory is in use."""
+
+    def __init__(self, res: "_handle._Resource") -> None:
+        res.acquire()
+        weakref.finalize(self, res.release)
+
+
+def _split_key(split: Union[str, int]) -> int:
+    if isinstance(split, str):
+        try:
+            return SPLITS[split]
+        except KeyError:
+            raise ValueError("unknown split %r (known: train, val, test)"
+                             % (split,)) from None
+    return int(split)
+
+
+class Dataset(_handle.Handle):
+    """One split of a scene on disk (``nerf_dataset``).
+
+    ``Dataset(path, split="train", downscale=1, ...)`` (the same as
+    :meth:`load`); the layout (Blender or LLFF) is detected from the files.
+    Keyword options are fields of :class:`nerf.DatasetOptions`.
+    """
+
+    _kind = "Dataset"
+
+    def __init__(self, path: Any, split: Union[str, int] = "train", *,
+                 log: LogFn = None, log_level: Optional[int] = None,
+                 **options: Any) -> None:
+        opts = DatasetOptions(**options)
+        opts.split = _split_key(split)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        res = _handle.create("Dataset", DatasetP, lib.nerf_dataset_load,
+                             _handle.destroyer("nerf_dataset_destroy"),
+                             _handle.fspath(path), ctypes.byref(opts),
+                             keep=hooks[1] if hooks else None)
+        super().__init__(res)
+        self.path = path
+
+    @classmethod
+    def load(cls, path: Any, split: Union[str, int] = "train",
+             **kwargs: Any) -> "Dataset":
+        """Load one split of the scene in folder ``path``
+        (``nerf_dataset_load``).  Failures raise NerfIOError or
+        NerfFormatError with a message naming the file and the problem."""
+        return cls(path, split, **kwargs)
+
+    def __len__(self) -> int:
+        with self._using() as ptr:
+            return int(lib.nerf_dataset_count(ptr))
+
+    @property
+    def format(self) -> str:
+        """"blender" or "llff"."""
+        with self._using() as ptr:
+            code = lib.nerf_dataset_get_format(ptr)
+        return FORMATS.get(code, str(code))
+
+    @property
+    def image_size(self) -> Tuple[int, int]:
+        """(width, height) of every image, after downscaling."""
+        w, h = ctypes.c_uint32(), ctypes.c_uint32()
+        with self._using() as ptr:
+            lib.nerf_dataset_image_size(ptr, ctypes.byref(w), ctypes.byref(h))
+        return w.value, h.value
+
+    @property
+    def bounds(self) -> Tuple[float, float]:
+        """(near, far): the range of t to sample (2, 6 for Blender scenes;
+        0, 1 in NDC for LLFF ones)."""
+        near, far = ctypes.c_float(), ctypes.c_float()
+        with self._using() as ptr:
+            lib.nerf_dataset_bounds(ptr, ctypes.byref(near),
+                                    ctypes.byref(far))
+        return near.value, far.value
+
+    @property
+    def is_ndc(self) -> bool:
+        """True when rays should be warped to NDC (forward-facing scenes)."""
+        with self._using() as ptr:
+            return bool(lib.nerf_dataset_is_ndc(ptr))
+
+    def _index(self, index: int) -> int:
+        n = len(self)
+        i = int(index)
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError("image index %d out of range (dataset has %d)"
+                             % (index, n))
+        return i
+
+    def image(self, index: int) -> Any:
+        """Image ``index`` as a read-only height x width x 3 float array
+        (RGB in [0, 1]).
+
+        No copy is made: the array views the dataset's own memory and keeps
+        the dataset's C object alive while it (or a view of it) exists,
+        even after :meth:`close`.  Copy it to modify it.
+        """
+        i = self._index(index)
+        w, h = self.image_size
+        pixels = ctypes.POINTER(ctypes.c_float)()
+        with self._using() as ptr:
+            lib.nerf_dataset_image(ptr, i, ctypes.byref(pixels))
+            lease = _Lease(self._res)
+        address = ctypes.cast(pixels, ctypes.c_void_p).value
+        return _buffers.borrowed_floats(address, (h, w, 3), lease)
+
+    def camera(self, index: int) -> Camera:
+        """The camera of image ``index`` (a new :class:`nerf.Camera`)."""
+        cam = Camera()
+        with self._using() as ptr:
+            lib.nerf_dataset_camera(ptr, self._index(index),
+                                    ctypes.byref(cam))
+        return cam
+
+    def cameras(self) -> List[Camera]:
+        """The cameras of every image."""
+        return [self.camera(i) for i in range(len(self))]
+
+    def spiral_camera(self, index: int, n_views: int = 120) -> Camera:
+        """Camera ``index`` of ``n_views`` on the reference's spiral render
+        path (LLFF scenes only; NerfInvalidArgument otherwise)."""
+        cam = Camera()
+        with self._using() as ptr:
+            lib.nerf_dataset_spiral_camera(ptr, int(index), int(n_views),
+                                           ctypes.byref(cam))
+        return cam
+
+
+def write_scene(path: Any, *, log: LogFn = None,
+                log_level: Optional[int] = None, **options: Any) -> None:
+    """Write the built-in scene to folder ``path`` as a Blender dataset
+    (``nerf_scene_write``).  Keyword options are fields of
+    :class:`nerf.SceneOptions` (width, height, n_train, n_val, n_test,
+    threads, seed)."""
+    opts = SceneOptions(**options)
+    hooks = _handle.make_hooks(log, log_level)
+    if hooks is not None:
+        opts.hooks = ctypes.pointer(hooks[0])
+    lib.nerf_scene_write(_handle.fspath(path), ctypes.byref(opts))
+
+
+class _CBuffer:
+    """Memory from the library, released with nerf_free when collected."""
+
+    def __init__(self, address: int) -> None:
+        weakref.finalize(self, lib.nerf_free, address)
+
+
+def read_png(path: Any) -> Any:
+    """Read a PNG file as a height x width x 4 float array of straight RGBA
+    in [0, 1] (``nerf_image_read_png``).  The array wraps the library's
+    buffer without copying and frees it when collected."""
+    w, h = ctypes.c_uint32(), ctypes.c_uint32()
+    pixels = ctypes.POINTER(ctypes.c_float)()
+    lib.nerf_image_read_png(_handle.fspath(path), ctypes.byref(w),
+                            ctypes.byref(h), ctypes.byref(pixels))
+    address = ctypes.cast(pixels, ctypes.c_void_p).value
+    owner = _CBuffer(address)
+    return _buffers.borrowed_floats(address, (h.value, w.value, 4), owner,
+                                    readonly=False)
+
+
+def _image_geometry(pixels: Any, size: int, width: Optional[int],
+                    height: Optional[int], channels: Optional[int],
+                    name: str) -> Tuple[int, int, int]:
+    """(width, height, channels) from explicit values or the shape."""
+    shape = _buffers.array_shape(pixels)
+    if width is None or height is None:
+        if shape is None or len(shape) not in (2, 3):
+            raise ValueError("%s: give width and height, or an array of "
+                             "shape (height, width[, channels])" % name)
+        height, width = shape[0], shape[1]
+        if channels is None:
+            channels = shape[2] if len(shape) == 3 else 1
+    if channels is None:
+        if width * height == 0 or size % (width * height):
+            raise ValueError("%s: %d values do not fill %d x %d pixels"
+                             % (name, size, width, height))
+        channels = size // (width * height)
+    if size != width * height * channels:
+        raise ValueError("%s: expected %d x %d x %d = %d values, got %d"
+                         % (name, width, height, channels,
+                            width * height * channels, size))
+    return int(width), int(height), int(channels)
+
+
+def write_png(path: Any, pixels: Any, width: Optional[int] = None,
+              height: Optional[int] = None,
+              channels: Optional[int] = None) -> None:
+    """Write an 8-bit PNG (gray, RGB or RGBA).
+
+    Float data (``nerf_image_write_png``) is clamped to [0, 1] and rounded;
+    uint8 arrays and byte buffers (``bytes``, ``bytearray``, memoryviews of
+    format 'B') are written as they are (``nerf_image_write_png8``).  The
+    geometry comes from the array's shape, (height, width) or (height,
+    width, channels), unless given.
+    """
+    if _buffers.is_uint8(pixels):
+        ptr, size, keep = _buffers.as_uint8_input(pixels, "pixels")
+        w, h, c = _image_geometry(pixels, size, width, height, channels,
+                                  "pixels")
+        lib.nerf_image_write_png8(_handle.fspath(path), w, h, c, ptr)
+        del keep
+        return
+    buf = _buffers.as_float_input(pixels, "pixels")
+    w, h, c = _image_geometry(pixels, buf.size, width, height, channels,
+                              "pixels")
+    lib.nerf_image_write_png(_handle.fspath(path), w, h, c, buf.ptr)
+
+
+def psnr(a: Any, b: Any) -> float:
+    """Peak signal-to-noise ratio in dB of two images in [0, 1] of any
+    (equal) layout; ``inf`` for identical images (``nerf_psnr``)."""
+    x = _buffers.as_float_input(a, "a")
+    y = _buffers.as_float_input(b, "b")
+    if x.size != y.size:
+        raise ValueError("psnr: a has %d values, b has %d" % (x.size, y.size))
+    out = ctypes.c_double()
+    lib.nerf_psnr(x.ptr, y.ptr, x.size, ctypes.byref(out))
+    return out.value
+
+
+def ssim(a: Any, b: Any, width: Optional[int] = None,
+         height: Optional[int] = None,
+         channels: Optional[int] = None) -> float:
+    """Structural similarity of two images in [0, 1] as the reference NeRF
+    evaluation computes it (``nerf_ssim``); at least 11 x 11 pixels.  The
+    geometry comes from the shape of ``a``, (height, width[, channels]),
+    unless given."""
+    x = _buffers.as_float_input(a, "a")
+    y = _buffers.as_float_input(b, "b")
+    if x.size != y.size:
+        raise ValueError("ssim: a has %d values, b has %d" % (x.size, y.size))
+    w, h, c = _image_geometry(a, x.size, width, height, channels, "a")
+    out = ctypes.c_double()
+    lib.nerf_ssim(x.ptr, y.ptr, w, h, c, ctypes.byref(out))
+    return out.value

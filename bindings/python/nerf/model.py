@@ -1,0 +1,218 @@
+"""``nerf.Model``: the scene networks and their weights."""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any, Callable, Optional, Tuple, Union
+
+from . import _buffers, _handle
+from ._capi import ModelP, lib
+from .core import param_key
+from .structs import ModelOptions
+
+# nerf_preset
+PRESET_REFERENCE = 1
+PRESET_TINY = 2
+PRESETS = {"reference": PRESET_REFERENCE, "tiny": PRESET_TINY}
+
+# nerf_network
+NETWORK_COARSE = 0
+NETWORK_FINE = 1
+NETWORKS = {"coarse": NETWORK_COARSE, "fine": NETWORK_FINE}
+
+# nerf_encoding_kind and flags
+ENCODING_FREQUENCY = 1
+ENCODING_INCLUDE_INPUT = 0x1
+ENCODING_SCALE_PI = 0x2
+
+LogFn = Optional[Callable[[int, str], Any]]
+
+
+def preset_key(preset: Union[str, int]) -> int:
+    """A preset number from its name (``"tiny"``, ``"reference"``)."""
+    if isinstance(preset, str):
+        try:
+            return PRESETS[preset]
+        except KeyError:
+            raise ValueError("unknown preset %r (known: %s)"
+                             % (preset, ", ".join(PRESETS))) from None
+    return int(preset)
+
+
+def network_key(network: Union[str, int]) -> int:
+    """A network number from its name (``"coarse"``, ``"fine"``)."""
+    if isinstance(network, str):
+        try:
+            return NETWORKS[network]
+        except KeyError:
+            raise ValueError("unknown network %r (known: coarse, fine)"
+                             % (network,)) from None
+    return int(network)
+
+
+def model_options(preset: Union[str, int, None] = None, seed: int = 0,
+                  **fields: Any) -> ModelOptions:
+    """Options from the library's defaults, a preset, then ``fields``."""
+    opts = ModelOptions()
+    if preset is not None:
+        lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
+    opts.seed = int(seed)
+    opts.update(**fields)
+    return opts
+
+
+class Model(_handle.Handle):
+    """A NeRF model (``nerf_model``).
+
+    Create one with ``Model(preset="tiny", seed=0, width=64, ...)`` (the
+    same as :meth:`create`), :meth:`load` or :meth:`import_npz`.  Keyword
+    options are fields of :class:`nerf.ModelOptions`.  ``log`` (a callable
+    ``log(level, message)``) receives this model's log lines; ``log_level``
+    filters them.
+    """
+
+    _kind = "Model"
+
+    def __init__(self, preset: Union[str, int, None] = None, seed: int = 0,
+                 *, log: LogFn = None, log_level: Optional[int] = None,
+                 **options: Any) -> None:
+        opts = model_options(preset, seed, **options)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        res = _handle.create("Model", ModelP, lib.nerf_model_create,
+                             _handle.destroyer("nerf_model_destroy"),
+                             ctypes.byref(opts),
+                             keep=hooks[1] if hooks else None)
+        super().__init__(res)
+
+    @classmethod
+    def create(cls, preset: Union[str, int, None] = None, seed: int = 0,
+               *, log: LogFn = None, log_level: Optional[int] = None,
+               **options: Any) -> "Model":
+        """A model with fresh weights: the library's defaults (the paper's
+        networks), then ``preset`` ("tiny" or "reference"), then
+        ``options`` (fields of :class:`nerf.ModelOptions`)."""
+        return cls(preset, seed, log=log, log_level=log_level, **options)
+
+    @classmethod
+    def _wrap(cls, res: _handle._Resource) -> "Model":
+        model = cls.__new__(cls)
+        _handle.Handle.__init__(model, res)
+        return model
+
+    @classmethod
+    def load(cls, path: Any, *, log: LogFn = None,
+             log_level: Optional[int] = None) -> "Model":
+        """Load a checkpoint written by :meth:`save` (``nerf_model_load``).
+
+        Raises NerfIOError, NerfFormatError or NerfVersionError, with a
+        message naming the file.
+        """
+        hooks = _handle.make_hooks(log, log_level)
+        res = _handle.create("Model", ModelP, lib.nerf_model_load,
+                             _handle.destroyer("nerf_model_destroy"),
+                             _handle.fspath(path),
+                             ctypes.byref(hooks[0]) if hooks else None,
+                             keep=hooks[1] if hooks else None)
+        return cls._wrap(res)
+
+    @classmethod
+    def import_npz(cls, path: Any, preset: Union[str, int, None] = None,
+                   seed: int = 0, *, log: LogFn = None,
+                   log_level: Optional[int] = None,
+                   **options: Any) -> "Model":
+        """A model with the given options whose weights come from a NumPy
+        ``.npz`` state dict of the reference implementation
+        (``nerf_model_import_npz``; see docs/formats.md)."""
+        opts = model_options(preset, seed, **options)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        res = _handle.create("Model", ModelP, lib.nerf_model_import_npz,
+                             _handle.destroyer("nerf_model_destroy"),
+                             _handle.fspath(path), ctypes.byref(opts),
+                             keep=hooks[1] if hooks else None)
+        return cls._wrap(res)
+
+    def save(self, path: Any) -> None:
+        """Write a checkpoint (weights, optimiser state and step),
+        atomically replacing ``path`` (``nerf_model_save``)."""
+        with self._using() as ptr:
+            lib.nerf_model_save(ptr, _handle.fspath(path))
+
+    @property
+    def options(self) -> ModelOptions:
+        """A copy of the model's options (``hooks`` is always NULL)."""
+        opts = ModelOptions()
+        with self._using() as ptr:
+            lib.nerf_model_get_options(ptr, ctypes.byref(opts))
+        return opts
+
+    @property
+    def param_count(self) -> int:
+        """Number of trainable parameters of both networks."""
+        with self._using() as ptr:
+            return int(lib.nerf_model_param_count(ptr))
+
+    @property
+    def step(self) -> int:
+        """Optimisation steps taken so far."""
+        with self._using() as ptr:
+            return int(lib.nerf_model_step(ptr))
+
+    @property
+    def learning_rate(self) -> float:
+        """The learning rate the schedule gives at the current step."""
+        with self._using() as ptr:
+            return float(lib.nerf_model_learning_rate(ptr))
+
+    def set_param(self, param: Union[str, int], value: float) -> None:
+        """Set a training hyperparameter by name ("learning_rate",
+        "learning_rate_final", "decay_steps", "adam_beta1", "adam_beta2",
+        "adam_eps") or number (``nerf.PARAM_*``)."""
+        with self._using() as ptr:
+            lib.nerf_model_set_param(ptr, param_key(param), float(value))
+
+    def get_param(self, param: Union[str, int]) -> float:
+        """Read a training hyperparameter (see :meth:`set_param`)."""
+        value = ctypes.c_double()
+        with self._using() as ptr:
+            lib.nerf_model_get_param(ptr, param_key(param),
+                                     ctypes.byref(value))
+        return value.value
+
+    def query(self, positions: Any, directions: Any = None,
+              network: Union[str, int, None] = None) -> Tuple[Any, Any]:
+        """Evaluate one network at ``n`` points (``nerf_model_query``).
+
+        Args:
+            positions: n x 3 floats (any shape holding a multiple of 3).
+            directions: n x 3 unit view directions, or None when the model
+                does not use view directions.
+            network: "coarse", "fine" or 0 / 1; by default the fine
+                network when the model has one, else the coarse one.
+
+        Returns:
+            ``(rgb, sigma)``: n x 3 colours in [0, 1] and n raw densities.
+        """
+        pos = _buffers.as_float_input(positions, "positions")
+        if pos.size % 3:
+            raise ValueError("positions: expected n x 3 floats, got %d"
+                             % pos.size)
+        n = pos.size // 3
+        dirs = None
+        if directions is not None:
+            dirs = _buffers.as_float_input(directions, "directions")
+            if dirs.size != pos.size:
+                raise ValueError("directions: expected %d floats like "
+                                 "positions, got %d" % (pos.size, dirs.size))
+        if network is None:
+            network = NETWORK_FINE if self.options.use_fine else NETWORK_COARSE
+        rgb = _buffers.FloatOutput((n, 3))
+        sigma = _buffers.FloatOutput((n,))
+        with self._using() as ptr:
+            lib.nerf_model_query(ptr, network_key(network), n, pos.ptr,
+                                 dirs.ptr if dirs else None, rgb.ptr,
+                                 sigma.ptr)
+        return rgb.release(), sigma.release()

@@ -1,0 +1,294 @@
+"""``nerf.Sampler`` and ``nerf.Renderer``."""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any, Callable, NamedTuple, Optional, Union
+
+from . import _buffers, _handle
+from ._capi import RendererP, SamplerP, lib
+from .model import Model, preset_key
+from .structs import Camera, Progress, RendererOptions, SamplerOptions
+
+#: Flag of the sampling calls: random placement as in training.
+SAMPLE_TRAINING = 0x1
+#: Sentinel of ``raw_noise_std``: chosen from the sampler (1 with NDC).
+NOISE_AUTO = -1.0
+#: Flag of ``Camera.flags``: rays through pixel corners, as the reference.
+CAMERA_PIXEL_CORNER = 0x1
+
+LogFn = Optional[Callable[[int, str], Any]]
+ProgressFn = Optional[Callable[[Progress], Any]]
+
+
+class Sampler(_handle.Handle):
+    """Places samples along rays (``nerf_sampler``); immutable once made.
+
+    ``Sampler(preset="tiny", seed=0, t_near=2, t_far=6, ...)``: the
+    library's defaults (the reference setup for Blender scenes), then
+    ``preset``'s sample counts, then the keyword fields of
+    :class:`nerf.SamplerOptions`.  See :meth:`for_dataset` for a sampler
+    matching a dataset's bounds and NDC setting.
+    """
+
+    _kind = "Sampler"
+
+    def __init__(self, preset: Union[str, int, None] = None, seed: int = 0,
+                 *, log: LogFn = None, log_level: Optional[int] = None,
+                 **options: Any) -> None:
+        opts = SamplerOptions()
+        if preset is not None:
+            lib.nerf_sampler_options_preset(ctypes.byref(opts),
+                                            preset_key(preset))
+        opts.seed = int(seed)
+        opts.update(**options)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        res = _handle.create("Sampler", SamplerP, lib.nerf_sampler_create,
+                             _handle.destroyer("nerf_sampler_destroy"),
+                             ctypes.byref(opts),
+                             keep=hooks[1] if hooks else None)
+        super().__init__(res)
+        # The library has no getter for a sampler's options; keep a copy.
+        opts.hooks = None
+        self._options = opts
+
+    @classmethod
+    def for_dataset(cls, dataset: Any, preset: Union[str, int, None] = None,
+                    seed: int = 0, **options: Any) -> "Sampler":
+        """A sampler for rendering or training on ``dataset``: its bounds,
+        its NDC setting and, for NDC scenes, the frustum of its first
+        camera, so renders at other sizes see the same warped scene.
+        ``options`` override any of these."""
+        near, far = dataset.bounds
+        fields = dict(t_near=near, t_far=far, ndc=int(dataset.is_ndc))
+        if dataset.is_ndc:
+            cam = dataset.camera(0)
+            fields.update(ndc_focal=cam.fx, ndc_width=cam.width,
+                          ndc_height=cam.height)
+        fields.update(options)
+        return cls(preset, seed, **fields)
+
+    @property
+    def options(self) -> SamplerOptions:
+        """A copy of the options the sampler was created with."""
+        return self._options.copy()
+
+    @property
+    def n_coarse(self) -> int:
+        """Stratified samples per ray."""
+        return int(self._options.n_coarse)
+
+    @property
+    def n_fine(self) -> int:
+        """Hierarchical samples per ray (0: coarse pass only)."""
+        return int(self._options.n_fine)
+
+    def sample_coarse(self, n_rays: int, training: bool = False,
+                      first_ray: int = 0, u: Any = None) -> Any:
+        """Stratified depths, ``n_rays`` x ``n_coarse`` increasing values
+        of t (``nerf_sampler_sample_coarse``).  ``u``: optional
+        ``n_rays`` x ``n_coarse`` uniforms replacing the generator's when
+        ``training``."""
+        n_rays = int(n_rays)
+        uu = self._uniforms(u, n_rays * self.n_coarse, "u")
+        out = _buffers.FloatOutput((n_rays, self.n_coarse))
+        with self._using() as ptr:
+            lib.nerf_sampler_sample_coarse(
+                ptr, n_rays, SAMPLE_TRAINING if training else 0,
+                int(first_ray), uu.ptr if uu else None, out.ptr)
+        return out.release()
+
+    def sample_fine(self, t_coarse: Any, weights: Any, training: bool = False,
+                    first_ray: int = 0, u: Any = None) -> Any:
+        """Hierarchical depths merged with the coarse ones:
+        ``n_rays`` x (``n_coarse`` + ``n_fine``) sorted values
+        (``nerf_sampler_sample_fine``).
+
+        Args:
+            t_coarse: ``n_rays`` x ``n_coarse`` increasing depths.
+            weights: the compositing weights of those samples, same shape.
+            u: optional ``n_rays`` x ``n_fine`` uniforms for training.
+        """
+        t = _buffers.as_float_input(t_coarse, "t_coarse")
+        w = _buffers.as_float_input(weights, "weights")
+        if t.size % self.n_coarse:
+            raise ValueError("t_coarse: expected n_rays x %d floats, got %d"
+                             % (self.n_coarse, t.size))
+        if w.size != t.size:
+            raise ValueError("weights: expected %d floats like t_coarse, "
+                             "got %d" % (t.size, w.size))
+        n_rays = t.size // self.n_coarse
+        uu = self._uniforms(u, n_rays * self.n_fine, "u")
+        out = _buffers.FloatOutput((n_rays, self.n_coarse + self.n_fine))
+        with self._using() as ptr:
+            lib.nerf_sampler_sample_fine(
+                ptr, n_rays, SAMPLE_TRAINING if training else 0,
+                int(first_ray), t.ptr, w.ptr, uu.ptr if uu else None,
+                out.ptr)
+        return out.release()
+
+    @staticmethod
+    def _uniforms(u: Any, count: int, name: str):
+        if u is None:
+            return None
+        buf = _buffers.as_float_input(u, name)
+        if buf.size != count:
+            raise ValueError("%s: expected %d floats, got %d"
+                             % (name, count, buf.size))
+        return buf
+
+
+class RenderResult(NamedTuple):
+    """What a render returns; outputs not asked for are None."""
+
+    rgb: Any
+    depth: Any
+    opacity: Any
+
+
+def _camera_arg(camera: Any) -> Camera:
+    if not isinstance(camera, Camera):
+        raise TypeError("camera must be a nerf.Camera, not %s"
+                        % type(camera).__name__)
+    return camera
+
+
+class Renderer(_handle.Handle):
+    """Draws a model with a sampler's samples (``nerf_renderer``).
+
+    ``Renderer(model, sampler, white_background=1, threads=0, ...)``; the
+    keyword fields are those of :class:`nerf.RendererOptions`.  The renderer
+    keeps its model and sampler alive, and reads the model's current
+    weights at every call, so training in between is seen.
+
+    ``progress``: a callable ``progress(nerf.Progress)`` called after every
+    chunk of rays; return a true value to cancel (the render then raises
+    :class:`nerf.NerfCancelled`).  If it raises, the render stops and that
+    exception propagates instead.
+    """
+
+    _kind = "Renderer"
+
+    def __init__(self, model: Model, sampler: Sampler, *,
+                 progress: ProgressFn = None, log: LogFn = None,
+                 log_level: Optional[int] = None, **options: Any) -> None:
+        if not isinstance(model, Model):
+            raise TypeError("model must be a nerf.Model")
+        if not isinstance(sampler, Sampler):
+            raise TypeError("sampler must be a nerf.Sampler")
+        opts = RendererOptions(**options)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        self._slot = _handle.ProgressSlot("Renderer")
+        self._slot.callback = progress
+        keep = [self._slot.thunk] + (list(hooks[1]) if hooks else [])
+        with model._using() as mp, sampler._using() as sp:
+            res = _handle.create("Renderer", RendererP,
+                                 lib.nerf_renderer_create,
+                                 _handle.destroyer("nerf_renderer_destroy"),
+                                 mp, sp, ctypes.byref(opts),
+                                 deps=(model._res, sampler._res), keep=keep)
+        super().__init__(res)
+        self.model = model
+        self.sampler = sampler
+        with self._using() as ptr:
+            lib.nerf_renderer_set_progress(ptr, self._slot.thunk, None)
+
+    @property
+    def progress(self) -> ProgressFn:
+        """The progress callback of later renders (None: none)."""
+        return self._slot.callback
+
+    @progress.setter
+    def progress(self, callback: ProgressFn) -> None:
+        if callback is not None and not callable(callback):
+            raise TypeError("progress must be callable or None")
+        self._slot.callback = callback
+
+    def cancel(self) -> None:
+        """Ask a render running on another thread (or in the progress
+        callback) to stop; it raises NerfCancelled.  Thread-safe; a no-op
+        when nothing runs or the renderer is closed."""
+        try:
+            ptr = self._res.acquire()
+        except ValueError:
+            return
+        try:
+            lib.nerf_renderer_cancel(ptr)
+        finally:
+            self._res.release()
+
+    def render_image(self, camera: Camera, *, rgb: bool = True,
+                     depth: bool = True, opacity: bool = True,
+                     progress: ProgressFn = None) -> RenderResult:
+        """Render every pixel of ``camera`` (``nerf_renderer_render_image``).
+
+        Returns:
+            RenderResult: ``rgb`` height x width x 3, ``depth`` and
+            ``opacity`` height x width floats; those not asked for are None.
+        """
+        cam = _camera_arg(camera)
+        if not (rgb or depth or opacity):
+            raise ValueError("render_image: ask for at least one output")
+        h, w = int(cam.height), int(cam.width)
+        outs = [_buffers.FloatOutput((h, w, 3)) if rgb else None,
+                _buffers.FloatOutput((h, w)) if depth else None,
+                _buffers.FloatOutput((h, w)) if opacity else None]
+        ptrs = [o.ptr if o else None for o in outs]
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_renderer_render_image, ptr,
+                           ctypes.byref(cam), *ptrs, h * w,
+                           progress=progress)
+        return RenderResult(*(o.release() if o else None for o in outs))
+
+    def render_image_u8(self, camera: Camera, *, depth: bool = False,
+                        opacity: bool = False,
+                        progress: ProgressFn = None) -> RenderResult:
+        """As :meth:`render_image` with 8-bit colours, round(255 clamp(c)):
+        ``rgb`` is height x width x 3 uint8 (``bytes``-like without NumPy).
+        """
+        cam = _camera_arg(camera)
+        h, w = int(cam.height), int(cam.width)
+        rgb = _buffers.Uint8Output((h, w, 3))
+        outs = [_buffers.FloatOutput((h, w)) if depth else None,
+                _buffers.FloatOutput((h, w)) if opacity else None]
+        ptrs = [o.ptr if o else None for o in outs]
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_renderer_render_image_u8, ptr,
+                           ctypes.byref(cam), rgb.ptr, *ptrs, h * w,
+                           progress=progress)
+        return RenderResult(rgb.release(),
+                            *(o.release() if o else None for o in outs))
+
+    def render_rays(self, origins: Any, directions: Any, *, rgb: bool = True,
+                    depth: bool = True, opacity: bool = True,
+                    progress: ProgressFn = None) -> RenderResult:
+        """Render a batch of rays (``nerf_renderer_render_rays``).
+
+        Args:
+            origins: n x 3 floats, world units.
+            directions: n x 3 unnormalised directions (distances scale
+                with their length), as :meth:`nerf.Camera.rays` gives.
+
+        Returns:
+            RenderResult: ``rgb`` n x 3, ``depth`` and ``opacity`` n floats.
+        """
+        o = _buffers.as_float_input(origins, "origins")
+        d = _buffers.as_float_input(directions, "directions")
+        if o.size % 3 or d.size != o.size:
+            raise ValueError("origins and directions must both hold n x 3 "
+                             "floats (got %d and %d)" % (o.size, d.size))
+        if not (rgb or depth or opacity):
+            raise ValueError("render_rays: ask for at least one output")
+        n = o.size // 3
+        outs = [_buffers.FloatOutput((n, 3)) if rgb else None,
+                _buffers.FloatOutput((n,)) if depth else None,
+                _buffers.FloatOutput((n,)) if opacity else None]
+        ptrs = [x.ptr if x else None for x in outs]
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_renderer_render_rays, ptr, n, o.ptr,
+                           d.ptr, *ptrs, progress=progress)
+        return RenderResult(*(x.release() if x else None for x in outs))

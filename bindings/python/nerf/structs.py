@@ -1,0 +1,457 @@
+"""ctypes mirrors of the public structs of ``nerf.h``.
+
+Each options struct is a :class:`ctypes.Structure` whose constructor calls
+the library's own ``*_init`` function with ``ctypes.sizeof`` of the mirror,
+so defaults always come from the library, never from this file.  Keyword
+arguments then override single fields::
+
+    opts = nerf.SamplerOptions(n_coarse=16, n_fine=0)
+
+The field lists must match the C declarations exactly; the test
+``tests/test_layout.py`` compares every size and offset with a C probe.
+Fields are only ever appended in C, so a mirror that is shorter than the
+library's struct still works (the library uses defaults for the rest).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import os
+from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_int32,
+                    c_size_t, c_uint32, c_uint64, c_void_p)
+from dataclasses import dataclass
+from typing import Any, Dict, Sequence, Tuple
+
+from . import _buffers
+
+# Callback types (nerf_log_cb, nerf_progress_cb and the allocator hooks).
+LOG_CB = ctypes.CFUNCTYPE(None, c_int, c_char_p, c_void_p)
+ALLOC_FN = ctypes.CFUNCTYPE(c_void_p, c_size_t, c_void_p)
+FREE_FN = ctypes.CFUNCTYPE(None, c_void_p, c_void_p)
+
+
+def _capi():
+    # Imported lazily: _capi needs these classes for its prototypes.
+    from . import _capi as capi
+    return capi.lib
+
+
+class _Versioned(ctypes.Structure):
+    """Base of the size-prefixed structs; see the module docstring."""
+
+    #: Name of the C struct (checked by the layout test).
+    _c_name_ = ""
+    #: Name of the C function filling the defaults, or "" if there is none.
+    _c_init_ = ""
+    #: Fields a caller should not set by keyword.
+    _private_ = ("struct_size", "hooks")
+
+    def __init__(self, **fields: Any) -> None:
+        super().__init__()
+        if self._c_init_:
+            init = getattr(_capi(), self._c_init_)
+            init(ctypes.byref(self), ctypes.sizeof(self))
+        else:
+            self.struct_size = ctypes.sizeof(self)
+        self.update(**fields)
+
+    @classmethod
+    def field_names(cls) -> Tuple[str, ...]:
+        """Names of the fields a caller may set."""
+        return tuple(name for name, *_ in cls._fields_
+                     if name not in cls._private_ and
+                     not name.startswith("reserved"))
+
+    def update(self, **fields: Any) -> "_Versioned":
+        """Set fields by name; unknown names raise TypeError."""
+        allowed = self.field_names()
+        for name, value in fields.items():
+            if name not in allowed:
+                raise TypeError("%s has no settable field %r (fields: %s)"
+                                % (type(self).__name__, name,
+                                   ", ".join(allowed)))
+            self._set(name, value)
+        return self
+
+    def _set(self, name: str, value: Any) -> None:
+        setattr(self, name, value)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The settable fields as a dict."""
+        return {name: self._get(name) for name in self.field_names()}
+
+    def _get(self, name: str) -> Any:
+        return getattr(self, name)
+
+    def copy(self):
+        """An independent copy (the struct's bytes, hooks included)."""
+        return type(self).from_buffer_copy(self)
+
+    def __repr__(self) -> str:
+        body = ", ".join("%s=%r" % kv for kv in self.to_dict().items())
+        return "%s(%s)" % (type(self).__name__, body)
+
+
+class Hooks(_Versioned):
+    """``nerf_hooks``: allocation and logging of one handle.
+
+    The binding fills this itself when a handle is created with ``log=``;
+    it is exposed for completeness.  Allocator hooks written in Python are
+    possible but slow, and the library may call them from worker threads.
+    """
+
+    _c_name_ = "nerf_hooks"
+    _c_init_ = "nerf_hooks_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("log_level", c_int32),
+        ("alloc", ALLOC_FN),
+        ("free", FREE_FN),
+        ("alloc_user", c_void_p),
+        ("log_cb", LOG_CB),
+        ("log_user", c_void_p),
+    ]
+
+
+class ModelOptions(_Versioned):
+    """``nerf_model_options``: structural settings of a model."""
+
+    _c_name_ = "nerf_model_options"
+    _c_init_ = "nerf_model_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("encoding", c_uint32),
+        ("pos_frequencies", c_uint32),
+        ("dir_frequencies", c_uint32),
+        ("encoding_flags", c_uint32),
+        ("depth", c_uint32),
+        ("width", c_uint32),
+        ("skip_layer", c_uint32),
+        ("view_width", c_uint32),
+        ("use_viewdirs", c_uint32),
+        ("use_fine", c_uint32),
+        ("reserved0", c_uint32),
+        ("seed", c_uint64),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class SceneOptions(_Versioned):
+    """``nerf_scene_options``: what :func:`nerf.write_scene` produces."""
+
+    _c_name_ = "nerf_scene_options"
+    _c_init_ = "nerf_scene_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("width", c_uint32),
+        ("height", c_uint32),
+        ("n_train", c_uint32),
+        ("n_val", c_uint32),
+        ("n_test", c_uint32),
+        ("threads", c_uint32),
+        ("reserved0", c_uint32),
+        ("seed", c_uint64),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class SamplerOptions(_Versioned):
+    """``nerf_sampler_options``: sample placement along rays."""
+
+    _c_name_ = "nerf_sampler_options"
+    _c_init_ = "nerf_sampler_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("n_coarse", c_uint32),
+        ("n_fine", c_uint32),
+        ("perturb", c_uint32),
+        ("lindisp", c_uint32),
+        ("paper_bins", c_uint32),
+        ("ndc", c_uint32),
+        ("reserved0", c_uint32),
+        ("t_near", c_float),
+        ("t_far", c_float),
+        ("ndc_focal", c_float),
+        ("ndc_width", c_uint32),
+        ("ndc_height", c_uint32),
+        ("reserved1", c_uint32),
+        ("seed", c_uint64),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class RendererOptions(_Versioned):
+    """``nerf_renderer_options``: settings of a renderer."""
+
+    _c_name_ = "nerf_renderer_options"
+    _c_init_ = "nerf_renderer_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("white_background", c_uint32),
+        ("raw_noise_std", c_float),
+        ("chunk_rays", c_uint32),
+        ("threads", c_uint32),
+        ("reserved0", c_uint32),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class DatasetOptions(_Versioned):
+    """``nerf_dataset_options``: how a dataset is read."""
+
+    _c_name_ = "nerf_dataset_options"
+    _c_init_ = "nerf_dataset_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("split", c_uint32),
+        ("downscale", c_uint32),
+        ("skip", c_uint32),
+        ("white_background", c_uint32),
+        ("skip_missing", c_uint32),
+        ("llff_holdout", c_uint32),
+        ("reserved0", c_uint32),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class TrainerOptions(_Versioned):
+    """``nerf_trainer_options``: how a trainer draws and weighs rays.
+
+    ``checkpoint_path`` accepts a str or path; it is stored encoded with
+    :func:`os.fsencode` and kept alive by the struct.
+    """
+
+    _c_name_ = "nerf_trainer_options"
+    _c_init_ = "nerf_trainer_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("batch_rays", c_uint32),
+        ("precrop_steps", c_uint32),
+        ("precrop_fraction", c_float),
+        ("raw_noise_std", c_float),
+        ("white_background", c_int32),
+        ("checkpoint_every", c_uint32),
+        ("reserved0", c_uint32),
+        ("checkpoint_path", c_char_p),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+    def _set(self, name: str, value: Any) -> None:
+        if name == "checkpoint_path" and value is not None:
+            value = os.fsencode(value)
+        setattr(self, name, value)
+
+    def _get(self, name: str) -> Any:
+        value = getattr(self, name)
+        if name == "checkpoint_path" and value is not None:
+            return os.fsdecode(value)
+        return value
+
+
+class ProgressStruct(_Versioned):
+    """``nerf_progress``, as the library passes it to progress callbacks."""
+
+    _c_name_ = "nerf_progress"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("kind", c_uint32),
+        ("done", c_uint64),
+        ("total", c_uint64),
+        ("elapsed", c_double),
+        ("loss", c_double),
+        ("psnr", c_double),
+    ]
+
+
+class TrainStatsStruct(_Versioned):
+    """``nerf_train_stats``: figures of one training step."""
+
+    _c_name_ = "nerf_train_stats"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("reserved0", c_uint32),
+        ("step", c_uint64),
+        ("loss", c_double),
+        ("psnr", c_double),
+        ("psnr_coarse", c_double),
+        ("learning_rate", c_double),
+    ]
+
+
+def read_covered(struct: ctypes.Structure, size: int) -> Dict[str, Any]:
+    """Fields of a library-filled struct that ``size`` bytes cover; fields
+    beyond it (an older library) are left out."""
+    out = {}
+    for name, *_ in struct._fields_:
+        field = getattr(type(struct), name)
+        if field.offset + field.size <= size:
+            out[name] = getattr(struct, name)
+    return out
+
+
+# nerf_progress_kind
+PROGRESS_RENDER = 1
+PROGRESS_TRAIN = 2
+PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train"}
+
+
+@dataclass(frozen=True)
+class Progress:
+    """One progress report, as passed to a Python progress callback.
+
+    ``kind`` is ``"render"`` (``done``/``total`` count rays) or ``"train"``
+    (they count steps; ``loss`` and ``psnr`` are those of the last step).
+    """
+
+    kind: str
+    done: int
+    total: int
+    elapsed: float
+    loss: float = 0.0
+    psnr: float = 0.0
+
+    @property
+    def fraction(self) -> float:
+        """``done / total`` (1.0 when total is 0)."""
+        return self.done / self.total if self.total else 1.0
+
+    @classmethod
+    def from_struct(cls, p: ProgressStruct) -> "Progress":
+        """Read the fields the library's struct_size covers."""
+        v = read_covered(p, p.struct_size)
+        kind = v.get("kind", 0)
+        return cls(kind=PROGRESS_KINDS.get(kind, str(kind)),
+                   done=v.get("done", 0), total=v.get("total", 0),
+                   elapsed=v.get("elapsed", 0.0), loss=v.get("loss", 0.0),
+                   psnr=v.get("psnr", 0.0))
+
+
+@dataclass(frozen=True)
+class TrainStats:
+    """Figures of one training step (``nerf_train_stats``)."""
+
+    step: int
+    loss: float
+    psnr: float
+    psnr_coarse: float
+    learning_rate: float
+
+    @classmethod
+    def from_struct(cls, s: TrainStatsStruct) -> "TrainStats":
+        """Read the fields the library wrote."""
+        return cls(step=s.step, loss=s.loss, psnr=s.psnr,
+                   psnr_coarse=s.psnr_coarse, learning_rate=s.learning_rate)
+
+
+def _vec3(v: Any, name: str) -> Any:
+    buf = _buffers.as_float_input(v, name)
+    if buf.size != 3:
+        raise ValueError("%s: expected 3 numbers, got %d" % (name, buf.size))
+    return buf
+
+
+class Camera(_Versioned):
+    """``nerf_camera``: a pinhole camera (OpenGL axes: x right, y up, the
+    camera looks down -z), plus helpers.
+
+    The defaults from ``nerf_camera_init`` (identity pose, zero intrinsics)
+    are not a usable camera: set width, height, fx, fy (and usually cx, cy),
+    or build one with :meth:`from_fov`.  ``c2w`` is the 3 x 4 row-major
+    camera-to-world matrix as 12 floats; :attr:`pose` reads and writes it
+    as 3 rows of 4.
+    """
+
+    _c_name_ = "nerf_camera"
+    _c_init_ = "nerf_camera_init"
+    _private_ = ("struct_size",)
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("flags", c_uint32),
+        ("width", c_uint32),
+        ("height", c_uint32),
+        ("c2w", c_float * 12),
+        ("fx", c_float),
+        ("fy", c_float),
+        ("cx", c_float),
+        ("cy", c_float),
+    ]
+
+    def _set(self, name: str, value: Any) -> None:
+        if name == "c2w":
+            self.pose = value
+        else:
+            setattr(self, name, value)
+
+    def _get(self, name: str) -> Any:
+        return list(self.c2w) if name == "c2w" else getattr(self, name)
+
+    @property
+    def pose(self) -> list:
+        """The camera-to-world matrix as 3 rows of 4 floats."""
+        v = list(self.c2w)
+        return [v[0:4], v[4:8], v[8:12]]
+
+    @pose.setter
+    def pose(self, value: Any) -> None:
+        buf = _buffers.as_float_input(value, "pose")
+        if buf.size == 16:  # accept a 4 x 4 matrix; its last row is dropped
+            ctypes.memmove(self.c2w, buf.ptr, 12 * 4)
+        elif buf.size == 12:
+            ctypes.memmove(self.c2w, buf.ptr, 12 * 4)
+        else:
+            raise ValueError("pose: expected 3 x 4 or 4 x 4 numbers, got %d"
+                             % buf.size)
+
+    @property
+    def pixel_count(self) -> int:
+        """width x height."""
+        return int(self.width) * int(self.height)
+
+    @classmethod
+    def from_fov(cls, width: int, height: int, fov_x: float,
+                 eye: Sequence[float] = None,
+                 target: Sequence[float] = (0.0, 0.0, 0.0),
+                 up: Sequence[float] = (0.0, 0.0, 1.0),
+                 pixel_corner: bool = False) -> "Camera":
+        """A camera of ``width`` x ``height`` pixels with a horizontal field
+        of view of ``fov_x`` degrees, square pixels and the principal point
+        at the centre, looking from ``eye`` at ``target`` if ``eye`` is
+        given (``up`` defaults to +z, as in Blender scenes)."""
+        if not 0.0 < fov_x < 180.0:
+            raise ValueError("fov_x must be in (0, 180) degrees, not %r"
+                             % (fov_x,))
+        focal = 0.5 * width / math.tan(0.5 * math.radians(fov_x))
+        cam = cls(width=width, height=height, fx=focal, fy=focal,
+                  cx=0.5 * width, cy=0.5 * height,
+                  flags=1 if pixel_corner else 0)
+        if eye is not None:
+            cam.look_at(eye, target, up)
+        return cam
+
+    def look_at(self, eye: Sequence[float],
+                target: Sequence[float] = (0.0, 0.0, 0.0),
+                up: Sequence[float] = (0.0, 0.0, 1.0)) -> "Camera":
+        """Point the camera from ``eye`` at ``target`` with ``up`` upwards
+        in the image (``nerf_camera_look_at``).  Returns the camera."""
+        e, t, u = _vec3(eye, "eye"), _vec3(target, "target"), _vec3(up, "up")
+        _capi().nerf_camera_look_at(ctypes.byref(self), e.ptr, t.ptr, u.ptr)
+        return self
+
+    def rays(self, first: int = 0, count: int = None) -> Tuple[Any, Any]:
+        """Origins and unnormalised directions of pixels ``first`` ..
+        ``first + count - 1`` (row by row; all remaining pixels by default),
+        as two ``count`` x 3 float arrays (``nerf_camera_rays``)."""
+        if count is None:
+            count = max(self.pixel_count - int(first), 0)
+        origins = _buffers.FloatOutput((count, 3))
+        dirs = _buffers.FloatOutput((count, 3))
+        _capi().nerf_camera_rays(ctypes.byref(self), first, count,
+                                 origins.ptr, dirs.ptr)
+        return origins.release(), dirs.release()
+
+
+#: Every struct mirror, for the layout test.
+ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
+               ProgressStruct, RendererOptions, DatasetOptions,
+               TrainerOptions, TrainStatsStruct)

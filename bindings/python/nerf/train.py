@@ -1,0 +1,109 @@
+"""``nerf.Trainer``: the optimisation loop."""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any, Callable, Optional
+
+from . import _handle
+from ._capi import TrainerP, lib
+from .data import Dataset
+from .model import Model
+from .render import Sampler
+from .structs import Progress, TrainerOptions, TrainStats, TrainStatsStruct
+
+LogFn = Optional[Callable[[int, str], Any]]
+ProgressFn = Optional[Callable[[Progress], Any]]
+
+
+class Trainer(_handle.Handle):
+    """Optimises a model on a dataset's images (``nerf_trainer``).
+
+    ``Trainer(model, dataset, sampler, batch_rays=1024, ...)``; keyword
+    options are fields of :class:`nerf.TrainerOptions` (``checkpoint_path``
+    may be a str or path).  The trainer keeps the model, dataset and sampler
+    alive; nothing else may use the model while a step runs.
+
+    ``progress``: the default callback of :meth:`run`, called after every
+    step with a :class:`nerf.Progress`; a true return value cancels.
+    """
+
+    _kind = "Trainer"
+
+    def __init__(self, model: Model, dataset: Dataset, sampler: Sampler, *,
+                 progress: ProgressFn = None, log: LogFn = None,
+                 log_level: Optional[int] = None, **options: Any) -> None:
+        if not isinstance(model, Model):
+            raise TypeError("model must be a nerf.Model")
+        if not isinstance(dataset, Dataset):
+            raise TypeError("dataset must be a nerf.Dataset")
+        if not isinstance(sampler, Sampler):
+            raise TypeError("sampler must be a nerf.Sampler")
+        opts = TrainerOptions(**options)
+        hooks = _handle.make_hooks(log, log_level)
+        if hooks is not None:
+            opts.hooks = ctypes.pointer(hooks[0])
+        self._slot = _handle.ProgressSlot("Trainer")
+        self._slot.callback = progress
+        keep = [self._slot.thunk] + (list(hooks[1]) if hooks else [])
+        with model._using() as mp, dataset._using() as dp, \
+                sampler._using() as sp:
+            res = _handle.create(
+                "Trainer", TrainerP, lib.nerf_trainer_create,
+                _handle.destroyer("nerf_trainer_destroy"), mp, dp, sp,
+                ctypes.byref(opts),
+                deps=(model._res, dataset._res, sampler._res), keep=keep)
+        super().__init__(res)
+        self.model = model
+        self.dataset = dataset
+        self.sampler = sampler
+        with self._using() as ptr:
+            lib.nerf_trainer_set_progress(ptr, self._slot.thunk, None)
+
+    @property
+    def progress(self) -> ProgressFn:
+        """The default progress callback of :meth:`run`."""
+        return self._slot.callback
+
+    @progress.setter
+    def progress(self, callback: ProgressFn) -> None:
+        if callback is not None and not callable(callback):
+            raise TypeError("progress must be callable or None")
+        self._slot.callback = callback
+
+    def step(self) -> TrainStats:
+        """Take one optimisation step and return its figures
+        (``nerf_trainer_step``).  A non-finite loss raises
+        NerfInternalError and leaves the weights as they were."""
+        stats = TrainStatsStruct()
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_trainer_step, ptr, ctypes.byref(stats))
+        return TrainStats.from_struct(stats)
+
+    def run(self, n_steps: int, progress: ProgressFn = None) -> TrainStats:
+        """Take ``n_steps`` steps (``nerf_trainer_run``), calling
+        ``progress`` (or the trainer's default callback) after each, and
+        saving checkpoints as the options say.
+
+        Returns the figures of the last step.  Raises NerfCancelled when the
+        callback returned a true value or :meth:`cancel` was called (after a
+        whole step), and re-raises whatever the callback raised (Ctrl-C
+        included) once the current step is done.
+        """
+        stats = TrainStatsStruct()
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_trainer_run, ptr, int(n_steps),
+                           ctypes.byref(stats), progress=progress)
+        return TrainStats.from_struct(stats)
+
+    def cancel(self) -> None:
+        """Ask a running :meth:`run` to stop after its current step.
+        Thread-safe; a no-op when nothing runs or the trainer is closed."""
+        try:
+            ptr = self._res.acquire()
+        except ValueError:
+            return
+        try:
+            lib.nerf_trainer_cancel(ptr)
+        finally:
+            self._res.release()

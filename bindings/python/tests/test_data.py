@@ -1,0 +1,179 @@
+"""The built-in scene, datasets, PNG files and metrics."""
+
+import array
+import json
+import math
+import os
+import shutil
+
+import _support
+from _support import TestCase, flat, nerf, shape
+
+
+class Scene(TestCase):
+    def test_write(self):
+        d = _support.scene_dir()
+        for name in ("transforms_train.json", "transforms_val.json",
+                     "transforms_test.json"):
+            self.assertTrue(os.path.isfile(os.path.join(d, name)), name)
+        opts = nerf.SceneOptions()
+        self.assertEqual(opts.width, 100)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            nerf.write_scene(os.path.join(_support.tmpdir(), "bad"), width=0)
+        blocker = os.path.join(_support.tmpdir(), "a-file")
+        open(blocker, "w").close()
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "a-file"):
+            nerf.write_scene(os.path.join(blocker, "scene"), width=8,
+                             height=8, n_train=1, n_val=1, n_test=1)
+        logged = []
+        nerf.write_scene(os.path.join(_support.tmpdir(), "logged"), width=8,
+                         height=8, n_train=1, n_val=1, n_test=1,
+                         log=lambda lvl, msg: logged.append(msg))
+
+
+class Datasets(TestCase):
+    def test_train_split(self):
+        with nerf.Dataset.load(_support.scene_dir(), "train") as ds:
+            self.assertEqual(len(ds), 3)
+            self.assertEqual(ds.format, "blender")
+            self.assertEqual(ds.image_size, (16, 16))
+            self.assertEqual(ds.bounds, (2.0, 6.0))
+            self.assertFalse(ds.is_ndc)
+            img = ds.image(0)
+            self.assertEqual(shape(img), (16, 16, 3))
+            self.assertTrue(all(0.0 <= v <= 1.0 for v in flat(img)))
+            self.assertEqual(flat(ds.image(-1)), flat(ds.image(2)))
+            with self.assertRaises(IndexError):
+                ds.image(3)
+            cam = ds.camera(1)
+            self.assertEqual((cam.width, cam.height), (16, 16))
+            self.assertGreater(cam.fx, 0)
+            cams = ds.cameras()
+            self.assertEqual(len(cams), 3)
+            self.assertEqual(cams[1].pose, cam.pose)
+            # The eye lies on the sphere of radius 4 around the scene.
+            eye = [row[3] for row in cam.pose]
+            self.assertAlmostEqual(math.sqrt(sum(v * v for v in eye)), 4.0,
+                                   places=4)
+            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+                ds.spiral_camera(0, 10)   # Blender scenes have no spiral
+
+    def test_image_is_a_readonly_view(self):
+        ds = nerf.Dataset(_support.scene_dir())
+        img = ds.image(0)
+        with self.assertRaises((ValueError, TypeError)):
+            img[0, 0, 0] = 0.5
+        values = flat(img)
+        ds.close()
+        # The view keeps the dataset's memory alive after close().
+        self.assertEqual(flat(img), values)
+        with self.assertRaises(ValueError):
+            len(ds)
+
+    def test_options_and_splits(self):
+        with nerf.Dataset(_support.scene_dir(), nerf.SPLIT_TEST) as test:
+            self.assertEqual(len(test), 2)
+        with nerf.Dataset(_support.scene_dir(), "val", downscale=2,
+                          white_background=0) as val:
+            self.assertEqual(len(val), 1)
+            self.assertEqual(val.image_size, (8, 8))
+        with nerf.Dataset(_support.scene_dir(), "train", skip=2) as ds:
+            self.assertEqual(len(ds), 2)
+        with self.assertRaises(ValueError):
+            nerf.Dataset(_support.scene_dir(), "holdout")
+
+    def test_errors_name_the_file(self):
+        missing = os.path.join(_support.tmpdir(), "no-scene")
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "no-scene"):
+            nerf.Dataset(missing)
+        broken = os.path.join(_support.tmpdir(), "broken")
+        shutil.copytree(_support.scene_dir(), broken)
+        path = os.path.join(broken, "transforms_train.json")
+        with open(path, "w") as f:
+            f.write("{ not json")
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
+                                  "transforms_train.json"):
+            nerf.Dataset(broken)
+        with open(path, "w") as f:
+            json.dump({"camera_angle_x": 0.7}, f)
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
+                                  "frames"):
+            nerf.Dataset(broken)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            nerf.Dataset(_support.scene_dir(), downscale=0)
+
+
+class Png(TestCase):
+    def test_float_round_trip(self):
+        path = os.path.join(_support.tmpdir(), "f.png")
+        pixels = [[[x / 3, y / 2, 0.5] for x in range(4)] for y in range(3)]
+        nerf.write_png(path, pixels)
+        back = nerf.read_png(path)
+        self.assertEqual(shape(back), (3, 4, 4))
+        rgba = flat(back)
+        want = flat(pixels)
+        self.assertAllClose(rgba[0:3], want[0:3], 0.003)
+        self.assertAllClose(rgba[-4:-1], want[-3:], 0.003)
+        self.assertEqual(rgba[3], 1.0)
+
+    def test_uint8_and_gray(self):
+        path = os.path.join(_support.tmpdir(), "u8.png")
+        data = bytes(range(0, 256, 16)) * 3   # 4 x 4 RGB
+        nerf.write_png(path, data, width=4, height=4)
+        back = nerf.read_png(path)
+        self.assertAllClose(flat(back)[0:3], [0, 16 / 255, 32 / 255], 1e-6)
+        gray = os.path.join(_support.tmpdir(), "gray.png")
+        nerf.write_png(gray, array.array("f", [0.25] * 6), width=3, height=2)
+        g = flat(nerf.read_png(gray))
+        self.assertAllClose(g[0:4], [64 / 255] * 3 + [1.0], 1e-6)
+        with self.assertRaises(ValueError):
+            nerf.write_png(gray, array.array("f", [0.25] * 6))
+        with self.assertRaises(ValueError):
+            nerf.write_png(gray, array.array("f", [0.25] * 7), 3, 2)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            nerf.write_png(gray, array.array("f", [0.25] * 12), 3, 2, 2)
+
+    def test_errors(self):
+        missing = os.path.join(_support.tmpdir(), "missing.png")
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, missing):
+            nerf.read_png(missing)
+        junk = os.path.join(_support.tmpdir(), "junk.png")
+        with open(junk, "wb") as f:
+            f.write(b"\x89PNG but not really")
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT, junk):
+            nerf.read_png(junk)
+        bad_dir = os.path.join(_support.tmpdir(), "nowhere", "x.png")
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "nowhere"):
+            nerf.write_png(bad_dir, bytes(3), 1, 1)
+
+    def test_scene_image_matches_dataset(self):
+        png = nerf.read_png(os.path.join(_support.scene_dir(), "train",
+                                         "r_0.png"))
+        self.assertEqual(shape(png), (16, 16, 4))
+
+
+class Metrics(TestCase):
+    def test_psnr(self):
+        a = [0.5] * 12
+        self.assertEqual(nerf.psnr(a, a), math.inf)
+        b = [0.6] * 12
+        self.assertAlmostEqual(nerf.psnr(a, b), 20.0, places=4)
+        with self.assertRaises(ValueError):
+            nerf.psnr(a, b[:6])
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            nerf.psnr([math.nan] * 3, [0.0] * 3)
+
+    def test_ssim(self):
+        with nerf.Dataset(_support.scene_dir()) as ds:
+            a, b = ds.image(0), ds.image(1)
+            self.assertAlmostEqual(nerf.ssim(a, a), 1.0, places=6)
+            s = nerf.ssim(a, b)
+            self.assertLess(s, 1.0)
+            self.assertAlmostEqual(nerf.ssim(flat(a), flat(b), 16, 16, 3), s,
+                                   places=9)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            nerf.ssim([0.0] * 100, [0.0] * 100, 10, 10, 1)
+
+
+if __name__ == "__main__":
+    _support.main()

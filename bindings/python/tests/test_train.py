@@ -1,0 +1,153 @@
+"""nerf.Trainer: steps, runs, callbacks, cancellation and checkpoints."""
+
+import math
+import os
+import signal
+import threading
+
+import _support
+from _support import TestCase, nerf
+
+
+class Boom(Exception):
+    """Raised by test callbacks."""
+
+
+def trainer(model, ds, sampler, **kw):
+    kw.setdefault("batch_rays", 32)
+    kw.setdefault("precrop_steps", 1)
+    return nerf.Trainer(model, ds, sampler, **kw)
+
+
+class Training(TestCase):
+    def test_step_and_run(self):
+        ds, model, sampler = _support.tiny_setup(seed=1)
+        with trainer(model, ds, sampler) as t:
+            stats = t.step()
+            self.assertIsInstance(stats, nerf.TrainStats)
+            self.assertEqual(stats.step, 1)
+            self.assertEqual(model.step, 1)
+            self.assertGreater(stats.loss, 0)
+            self.assertTrue(math.isfinite(stats.psnr))
+            self.assertTrue(math.isfinite(stats.psnr_coarse))
+            self.assertAlmostEqual(stats.learning_rate, 5e-4)
+            seen = []
+            last = t.run(3, progress=seen.append)
+            self.assertEqual(last.step, 4)
+            self.assertEqual([p.done for p in seen], [1, 2, 3])
+            self.assertTrue(all(p.kind == "train" and p.total == 3
+                                for p in seen))
+            self.assertAlmostEqual(seen[-1].loss, last.loss)
+            self.assertAlmostEqual(seen[-1].psnr, last.psnr)
+            t.progress = seen.append
+            t.run(1)
+            self.assertEqual(len(seen), 4)
+            self.assertEqual(t.progress, seen.append)
+        for h in (ds, model, sampler):
+            h.close()
+
+    def test_same_seed_same_run(self):
+        results = []
+        for _ in range(2):
+            ds, model, sampler = _support.tiny_setup(seed=7)
+            with trainer(model, ds, sampler) as t:
+                results.append([t.step().loss for _ in range(2)])
+        self.assertEqual(results[0], results[1])
+
+    def test_bad_options(self):
+        ds, model, sampler = _support.tiny_setup()
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            trainer(model, ds, sampler, batch_rays=0)
+        with self.assertRaises(TypeError):
+            trainer(model, ds, sampler, no_such_option=1)
+        with self.assertRaises(TypeError):
+            nerf.Trainer(model, sampler, ds)
+
+    def test_checkpoint(self):
+        path = os.path.join(_support.tmpdir(), "ckpt.nerf")
+        ds, model, sampler = _support.tiny_setup()
+        opts = nerf.TrainerOptions(checkpoint_path=path)
+        self.assertEqual(opts.to_dict()["checkpoint_path"], path)
+        with trainer(model, ds, sampler, checkpoint_path=path,
+                     checkpoint_every=1) as t:
+            t.run(2)
+        self.assertTrue(os.path.isfile(path))
+        with nerf.Model.load(path) as back:
+            self.assertEqual(back.step, 2)
+        bad = os.path.join(_support.tmpdir(), "missing-dir", "c.nerf")
+        with trainer(model, ds, sampler, checkpoint_path=bad) as t:
+            with self.assertNerfError(nerf.NerfIOError, nerf.EIO,
+                                      "missing-dir"):
+                t.run(1)
+
+
+class Callbacks(TestCase):
+    def setUp(self):
+        self.ds, self.model, self.sampler = _support.tiny_setup()
+        self.t = trainer(self.model, self.ds, self.sampler)
+
+    def tearDown(self):
+        self.t.close()
+
+    def test_cancel_from_callback(self):
+        with self.assertNerfError(nerf.NerfCancelled, nerf.ECANCELLED):
+            self.t.run(5, progress=lambda p: p.done >= 2)
+        self.assertEqual(self.model.step, 2)   # stopped after whole steps
+
+    def test_raising_callback_is_reraised(self):
+        def bad(p):
+            raise Boom("step %d" % p.done)
+
+        with self.assertRaises(Boom) as cm:
+            self.t.run(5, progress=bad)
+        self.assertEqual(str(cm.exception), "step 1")
+        self.assertEqual(self.model.step, 1)
+        # The trainer is usable again, with nothing left pending.
+        self.assertEqual(self.t.run(1).step, 2)
+
+    def test_ctrl_c_stops_after_the_step(self):
+        def press_ctrl_c(p):
+            os.kill(os.getpid(), signal.SIGINT)
+
+        with self.assertRaises(KeyboardInterrupt):
+            self.t.run(5, progress=press_ctrl_c)
+        self.assertEqual(self.model.step, 2)
+        self.assertIs(signal.getsignal(signal.SIGINT),
+                      signal.default_int_handler)
+
+    def test_step_inside_callback_is_refused(self):
+        with self.assertRaises(RuntimeError):
+            self.t.run(3, progress=lambda p: self.t.step())
+        self.assertEqual(self.model.step, 1)
+
+    def test_cancel_from_another_thread(self):
+        started = threading.Event()
+        release = threading.Event()
+
+        def slow(p):
+            started.set()
+            release.wait(10)
+
+        outcome = {}
+
+        def run():
+            try:
+                self.t.run(50, progress=slow)
+                outcome["rc"] = "done"
+            except nerf.NerfCancelled:
+                outcome["rc"] = "cancelled"
+
+        th = threading.Thread(target=run)
+        th.start()
+        self.assertTrue(started.wait(30))
+        self.t.cancel()
+        release.set()
+        th.join(60)
+        self.assertEqual(outcome.get("rc"), "cancelled")
+        self.assertLess(self.model.step, 50)
+        self.t.close()
+        self.t.cancel()   # closed: a no-op
+
+
+if __name__ == "__main__":
+    _support.main()

@@ -1,0 +1,25 @@
+/* Small helpers shared by the example programs' command lines. */
+#ifndef NERF_EXAMPLES_CLI_H
+#define NERF_EXAMPLES_CLI_H
+
+#include <stdint.h>
+
+/* Parse a whole decimal number in [min, max]; 0 on success, -1 if not. */
+int cli_uint(const char *text, uint64_t min, uint64_t max, uint64_t *out);
+
+/* Parse a finite floating-point number; 0 on success, -1 if not. */
+int cli_double(const char *text, double *out);
+
+/* A nerf_split from "train", "val" or "test"; -1 for anything else. */
+int cli_split(const char *text);
+
+/* The value after option argv[*i], advancing *i; NULL if missing. */
+const char *cli_value(int argc, char **argv, int *i);
+
+/* Print "PROGRAM: libnerf error: STATUS: MESSAGE" to stderr. */
+void cli_report(const char *program, int status);
+
+/* A log callback writing info and above to stderr, prefixed. */
+void cli_log(int level, const char *msg, void *user);
+
+#endif

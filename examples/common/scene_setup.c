@@ -1,0 +1,72 @@
+#include "scene_setup.h"
+
+#include <string.h>
+
+int setup_model_preset(const nerf_model *model)
+{
+    nerf_model_options have, want;
+    NERF_MODEL_OPTIONS_INIT(&have);
+    if (nerf_model_get_options(model, &have) != NERF_OK) {
+        return 0;
+    }
+    static const int presets[] = {NERF_PRESET_REFERENCE, NERF_PRESET_TINY};
+    for (size_t i = 0; i < sizeof presets / sizeof presets[0]; i++) {
+        NERF_MODEL_OPTIONS_INIT(&want);
+        nerf_model_options_preset(&want, presets[i]);
+        if (want.depth == have.depth && want.width == have.width &&
+            want.view_width == have.view_width) {
+            return presets[i];
+        }
+    }
+    return 0;
+}
+
+int setup_sampler(nerf_sampler **out, const nerf_model *model,
+                  const nerf_dataset *dataset, uint32_t n_coarse,
+                  uint32_t n_fine, float near, float far, uint64_t seed)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    int preset = setup_model_preset(model);
+    if (preset != 0) {
+        nerf_sampler_options_preset(&so, preset);
+    }
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_get_options(model, &mo);
+    if (!mo.use_fine && n_fine == 0) {
+        /* The paper's "no hierarchical sampling" ablation: 256 coarse. */
+        so.n_coarse = so.n_coarse + so.n_fine;
+        so.n_fine = 0;
+    }
+    so.n_coarse = n_coarse ? n_coarse : so.n_coarse;
+    so.n_fine = n_fine ? n_fine : so.n_fine;
+    so.seed = seed;
+    if (dataset) {
+        int rc = nerf_dataset_bounds(dataset, &so.t_near, &so.t_far);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        so.ndc = (uint32_t)nerf_dataset_is_ndc(dataset);
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        if (so.ndc && nerf_dataset_camera(dataset, 0, &cam) == NERF_OK) {
+            /* One NDC frustum for every view, that of the training images,
+             * so renders at other sizes see the same warped scene. */
+            so.ndc_focal = cam.fx;
+            so.ndc_width = cam.width;
+            so.ndc_height = cam.height;
+        }
+    }
+    if (far > near) {
+        so.t_near = near;
+        so.t_far = far;
+    }
+    return nerf_sampler_create(out, &so);
+}
+
+int setup_white_background(const nerf_dataset *dataset)
+{
+    return dataset == NULL ||
+           nerf_dataset_get_format(dataset) == NERF_DATASET_BLENDER;
+}

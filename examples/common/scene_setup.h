@@ -1,0 +1,28 @@
+/*
+ * What the example programs share beyond argument parsing: the sampler
+ * that suits a model and a scene, and a renderer for them.
+ */
+#ifndef NERF_EXAMPLES_SCENE_SETUP_H
+#define NERF_EXAMPLES_SCENE_SETUP_H
+
+#include <nerf.h>
+
+/* The nerf_preset whose network shape the model has, or 0 if none. */
+int setup_model_preset(const nerf_model *model);
+
+/*
+ * A sampler for rendering or training model on dataset (which may be NULL:
+ * then a Blender-like scene with near 2, far 6 is assumed).  The sample
+ * counts follow the model's preset (the reference ones otherwise);
+ * n_coarse/n_fine override them when non-zero.  Bounds and NDC follow the
+ * dataset; near/far override the bounds when far > near.
+ */
+int setup_sampler(nerf_sampler **out, const nerf_model *model,
+                  const nerf_dataset *dataset, uint32_t n_coarse,
+                  uint32_t n_fine, float near, float far, uint64_t seed);
+
+/* Renders of a dataset's scene are composited as its images were: on white
+ * for Blender scenes (and when there is no dataset), on black for LLFF. */
+int setup_white_background(const nerf_dataset *dataset);
+
+#endif

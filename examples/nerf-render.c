@@ -1,0 +1,252 @@
+/* nerf-render: render views of a trained model to PNG files. */
+#include <nerf.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "common/cli.h"
+#include "common/progress.h"
+#include "common/scene_setup.h"
+
+static const char usage[] =
+    "usage: nerf-render --model MODEL --out DIR\n"
+    "                   (--data DIR [--split train|val|test] [--downscale K]\n"
+    "                    | --path orbit|spiral --frames N [--width W]\n"
+    "                      [--height H] [--data DIR])\n"
+    "                   [--depth] [--near T --far T]\n"
+    "Render views of MODEL and write them to DIR as r_NNN.png (and\n"
+    "depth_NNN.png, opacity_NNN.png with --depth).\n"
+    "  --data DIR    the scene's cameras (and bounds): render every view of\n"
+    "                its split (default test)\n"
+    "  --path orbit  a circle at 30 degrees elevation, radius 4, around the\n"
+    "                origin, as for Blender scenes (default 100x100 pixels)\n"
+    "  --path spiral the reference's spiral path of an LLFF scene (needs\n"
+    "                --data)\n";
+
+typedef struct args {
+    const char *model, *out, *data, *path;
+    uint64_t split, downscale, frames, width, height;
+    double near, far;
+    int depth;
+} args;
+
+static int parse(int argc, char **argv, args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->split = NERF_SPLIT_TEST;
+    a->downscale = 1;
+    a->frames = 40;
+    a->width = a->height = 100;
+    for (int i = 1; i < argc; i++) {
+        const char *k = argv[i];
+        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
+            fputs(usage, stdout);
+            exit(0);
+        }
+        if (strcmp(k, "--depth") == 0) {
+            a->depth = 1;
+            continue;
+        }
+        const char *v = cli_value(argc, argv, &i);
+        int bad = v == NULL;
+        if (bad) {
+            fprintf(stderr, "nerf-render: %s needs a value\n", k);
+        } else if (strcmp(k, "--model") == 0) {
+            a->model = v;
+        } else if (strcmp(k, "--out") == 0) {
+            a->out = v;
+        } else if (strcmp(k, "--data") == 0) {
+            a->data = v;
+        } else if (strcmp(k, "--path") == 0) {
+            a->path = v;
+            bad = strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0;
+        } else if (strcmp(k, "--split") == 0) {
+            int split = cli_split(v);
+            a->split = (uint64_t)split;
+            bad = split < 0;
+        } else if (strcmp(k, "--downscale") == 0) {
+            bad = cli_uint(v, 1, 256, &a->downscale);
+        } else if (strcmp(k, "--frames") == 0) {
+            bad = cli_uint(v, 1, 100000, &a->frames);
+        } else if (strcmp(k, "--width") == 0) {
+            bad = cli_uint(v, 1, 16384, &a->width);
+        } else if (strcmp(k, "--height") == 0) {
+            bad = cli_uint(v, 1, 16384, &a->height);
+        } else if (strcmp(k, "--near") == 0) {
+            bad = cli_double(v, &a->near);
+        } else if (strcmp(k, "--far") == 0) {
+            bad = cli_double(v, &a->far);
+        } else {
+            fprintf(stderr, "nerf-render: unknown argument '%s'\n", k);
+            bad = 1;
+        }
+        if (bad) {
+            if (v) {
+                fprintf(stderr, "nerf-render: bad value '%s' for %s\n", v, k);
+            }
+            return -1;
+        }
+    }
+    if (a->model == NULL || a->out == NULL || (a->data == NULL && a->path == NULL)) {
+        fprintf(stderr, "nerf-render: --model, --out and --data or --path "
+                        "are required\n");
+        return -1;
+    }
+    if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
+        fprintf(stderr, "nerf-render: --path spiral needs --data\n");
+        return -1;
+    }
+    return 0;
+}
+
+/* Camera `i` of the requested views. */
+static int view_camera(const args *a, const nerf_dataset *ds, uint32_t i,
+                       uint32_t n, nerf_camera *cam)
+{
+    NERF_CAMERA_INIT(cam);
+    if (a->path == NULL) {
+        return nerf_dataset_camera(ds, i, cam);
+    }
+    if (strcmp(a->path, "spiral") == 0) {
+        return nerf_dataset_spiral_camera(ds, i, n, cam);
+    }
+    /* The lego scene's field of view, circling at 30 degrees. */
+    const double fov = 0.6911112070083618, elev = 30.0 * 3.14159265358979 / 180;
+    double az = 2.0 * 3.14159265358979 * i / n;
+    float eye[3] = {(float)(4.0 * cos(elev) * cos(az)),
+                    (float)(4.0 * cos(elev) * sin(az)), (float)(4.0 * sin(elev))};
+    const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    cam->width = (uint32_t)a->width;
+    cam->height = (uint32_t)a->height;
+    cam->fx = cam->fy = (float)(0.5 * a->width / tan(0.5 * fov));
+    cam->cx = 0.5f * cam->width;
+    cam->cy = 0.5f * cam->height;
+    return nerf_camera_look_at(cam, eye, target, up);
+}
+
+/* Depth as a grey image: near white, far black, scaled to [near, far]. */
+static void depth_to_grey(float *depth, const float *opacity, size_t n,
+                          float near, float far)
+{
+    for (size_t k = 0; k < n; k++) {
+        float d = opacity[k] > 1e-3f ? depth[k] / opacity[k] : far;
+        depth[k] = 1.0f - (d - near) / (far - near);
+    }
+}
+
+static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
+                      float near, float far)
+{
+    uint32_t n = a->path ? (uint32_t)a->frames : nerf_dataset_count(ds);
+    progress bar;
+    progress_begin(&bar, "nerf-render", n);
+    int rc = NERF_OK;
+    float *rgb = NULL, *depth = NULL, *opacity = NULL;
+    size_t cap = 0;
+    for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        nerf_camera cam;
+        rc = view_camera(a, ds, i, n, &cam);
+        size_t pixels = (size_t)cam.width * cam.height;
+        if (rc == NERF_OK && pixels > cap) {
+            free(rgb);
+            free(depth);
+            free(opacity);
+            cap = pixels;
+            rgb = malloc(cap * 3 * sizeof(float));
+            depth = malloc(cap * sizeof(float));
+            opacity = malloc(cap * sizeof(float));
+            if (!rgb || !depth || !opacity) {
+                fprintf(stderr, "nerf-render: out of memory\n");
+                rc = NERF_ENOMEM;
+            }
+        }
+        if (rc == NERF_OK) {
+            rc = nerf_renderer_render_image(r, &cam, rgb, depth, opacity, cap);
+        }
+        char path[4200];
+        if (rc == NERF_OK) {
+            snprintf(path, sizeof path, "%s/r_%03u.png", a->out, i);
+            rc = nerf_image_write_png(path, cam.width, cam.height, 3, rgb);
+        }
+        if (rc == NERF_OK && a->depth) {
+            snprintf(path, sizeof path, "%s/opacity_%03u.png", a->out, i);
+            rc = nerf_image_write_png(path, cam.width, cam.height, 1, opacity);
+            depth_to_grey(depth, opacity, pixels, near, far);
+            snprintf(path, sizeof path, "%s/depth_%03u.png", a->out, i);
+            if (rc == NERF_OK) {
+                rc = nerf_image_write_png(path, cam.width, cam.height, 1, depth);
+            }
+        }
+        progress_update(&bar, i + 1, NULL);
+    }
+    free(rgb);
+    free(depth);
+    free(opacity);
+    if (rc == NERF_OK) {
+        progress_end(&bar, a->out);
+    }
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    args a;
+    if (parse(argc, argv, &a) != 0) {
+        fputs(usage, stderr);
+        return 2;
+    }
+    nerf_hooks hooks;
+    NERF_HOOKS_INIT(&hooks);
+    hooks.log_cb = cli_log;
+    hooks.log_user = "nerf-render";
+    if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
+        fprintf(stderr, "nerf-render: %s: %s\n", a.out, strerror(errno));
+        return 1;
+    }
+    nerf_model *m = NULL;
+    nerf_dataset *ds = NULL;
+    nerf_sampler *s = NULL;
+    nerf_renderer *r = NULL;
+    int rc = nerf_model_load(&m, a.model, &hooks);
+    if (rc == NERF_OK && a.data) {
+        nerf_dataset_options dopt;
+        NERF_DATASET_OPTIONS_INIT(&dopt);
+        dopt.split = (uint32_t)a.split;
+        dopt.downscale = (uint32_t)a.downscale;
+        dopt.hooks = &hooks;
+        rc = nerf_dataset_load(&ds, a.data, &dopt);
+    }
+    if (rc == NERF_OK) {
+        rc = setup_sampler(&s, m, ds, 0, 0, (float)a.near, (float)a.far, 0);
+    }
+    float near = 2.0f, far = 6.0f;
+    if (rc == NERF_OK && ds) {
+        nerf_dataset_bounds(ds, &near, &far);
+    }
+    if (a.far > a.near) {
+        near = (float)a.near;
+        far = (float)a.far;
+    }
+    if (rc == NERF_OK) {
+        nerf_renderer_options ro;
+        NERF_RENDERER_OPTIONS_INIT(&ro);
+        ro.white_background = (uint32_t)setup_white_background(ds);
+        ro.hooks = &hooks;
+        rc = nerf_renderer_create(&r, m, s, &ro);
+    }
+    if (rc == NERF_OK) {
+        rc = render_all(&a, r, ds, near, far);
+    }
+    if (rc != NERF_OK) {
+        cli_report("nerf-render", rc);
+    }
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_dataset_destroy(ds);
+    nerf_model_destroy(m);
+    return rc == NERF_OK ? 0 : 1;
+}

@@ -1,0 +1,205 @@
+/* nerf-viewer: look at a trained model interactively, or render one view. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <nerf.h>
+
+#include "../common/cli.h"
+#include "../common/scene_setup.h"
+#include "viewer.h"
+
+static const char usage[] =
+    "usage: nerf-viewer --model MODEL [--data DIR [--downscale K]]\n"
+    "                   [--width W] [--height H] [--view rgb|depth|opacity]\n"
+    "                   [--screenshot FILE] [--quit-after SECONDS]\n"
+    "Show MODEL in a window, rendered from a camera you move with the mouse.\n"
+    "  --data DIR      the scene MODEL was trained on: its cameras choose\n"
+    "                  the start view, its bounds the samples (Blender-like\n"
+    "                  scenes circle the origin; LLFF scenes start at the\n"
+    "                  first camera).  Without it: a Blender-like scene.\n"
+    "  --width W, --height H  image size (default 256 wide, the data's\n"
+    "                  aspect ratio); rendering on the CPU is slow, keep it\n"
+    "                  small\n"
+    "  --view MODE     what to show first (default rgb)\n"
+    "  --screenshot FILE  render the start view to FILE (PNG) and exit,\n"
+    "                  without opening a window\n"
+    "  --quit-after S  close the window after S seconds and print what was\n"
+    "                  rendered (for tests)\n"
+    "Mouse: left drag orbits, right drag or shift + left drag pans, the\n"
+    "wheel zooms.  Keys: 1 colour, 2 depth, 3 opacity, r reset the view,\n"
+    "q or Esc quit.  While the view moves it is drawn at a reduced\n"
+    "resolution, then refined when it stops.\n";
+
+/* Default image width when none is given. */
+#define DEFAULT_WIDTH 256
+
+typedef struct args {
+    const char *model, *data, *screenshot;
+    uint64_t width, height, downscale;
+    int mode;
+    double quit_after;
+} args;
+
+static int parse(int argc, char **argv, args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->downscale = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *k = argv[i];
+        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
+            fputs(usage, stdout);
+            exit(0);
+        }
+        const char *v = cli_value(argc, argv, &i);
+        int bad = v == NULL;
+        if (bad) {
+            fprintf(stderr, "nerf-viewer: %s needs a value\n", k);
+        } else if (strcmp(k, "--model") == 0) {
+            a->model = v;
+        } else if (strcmp(k, "--data") == 0) {
+            a->data = v;
+        } else if (strcmp(k, "--screenshot") == 0) {
+            a->screenshot = v;
+        } else if (strcmp(k, "--downscale") == 0) {
+            bad = cli_uint(v, 1, 256, &a->downscale);
+        } else if (strcmp(k, "--width") == 0) {
+            bad = cli_uint(v, 1, 16384, &a->width);
+        } else if (strcmp(k, "--height") == 0) {
+            bad = cli_uint(v, 1, 16384, &a->height);
+        } else if (strcmp(k, "--view") == 0) {
+            a->mode = view_mode_parse(v);
+            bad = a->mode < 0;
+        } else if (strcmp(k, "--quit-after") == 0) {
+            bad = cli_double(v, &a->quit_after) || !(a->quit_after > 0.0);
+        } else {
+            fprintf(stderr, "nerf-viewer: unknown argument '%s'\n", k);
+            bad = 1;
+        }
+        if (bad) {
+            if (v) {
+                fprintf(stderr, "nerf-viewer: bad value '%s' for %s\n", v, k);
+            }
+            return -1;
+        }
+    }
+    if (a->model == NULL) {
+        fprintf(stderr, "nerf-viewer: --model is required\n");
+        return -1;
+    }
+    return 0;
+}
+
+/* The image size: as asked, else DEFAULT_WIDTH wide with the aspect ratio
+ * of the data's images (square without data). */
+static void choose_size(const args *a, viewer *v)
+{
+    uint32_t dw = 1, dh = 1;
+    if (v->dataset) {
+        nerf_dataset_image_size(v->dataset, &dw, &dh);
+    }
+    uint64_t w = a->width, h = a->height;
+    if (w == 0 && h == 0) {
+        w = DEFAULT_WIDTH;
+    }
+    if (w == 0) {
+        w = (h * dw + dh / 2) / dh;
+    } else if (h == 0) {
+        h = (w * dh + dw / 2) / dw;
+    }
+    v->width = (uint32_t)(w > 0 ? (w < 16384 ? w : 16384) : 1);
+    v->height = (uint32_t)(h > 0 ? (h < 16384 ? h : 16384) : 1);
+}
+
+static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
+{
+    int rc = nerf_model_load(&v->model, a->model, hooks);
+    if (rc == NERF_OK && a->data) {
+        nerf_dataset_options dopt;
+        NERF_DATASET_OPTIONS_INIT(&dopt);
+        dopt.downscale = (uint32_t)a->downscale;
+        /* Every LLFF image, so that camera 0 is the scene's first one
+         * (the held-out test views include it). */
+        dopt.llff_holdout = 0;
+        dopt.hooks = hooks;
+        rc = nerf_dataset_load(&v->dataset, a->data, &dopt);
+    }
+    if (rc == NERF_OK) {
+        rc = setup_sampler(&v->sampler, v->model, v->dataset, 0, 0, 0.0f,
+                           0.0f, 0);
+    }
+    if (rc == NERF_OK) {
+        nerf_renderer_options ro;
+        NERF_RENDERER_OPTIONS_INIT(&ro);
+        ro.white_background = (uint32_t)setup_white_background(v->dataset);
+        /* The window checks for input after every chunk: small chunks keep
+         * it responsive even with the slow reference networks. */
+        ro.chunk_rays = a->screenshot ? ro.chunk_rays : 64;
+        ro.hooks = hooks;
+        rc = nerf_renderer_create(&v->renderer, v->model, v->sampler, &ro);
+    }
+    if (rc == NERF_OK) {
+        rc = viewer_home(v);
+    }
+    return rc;
+}
+
+static int screenshot(viewer *v, const char *path)
+{
+    frame f;
+    memset(&f, 0, sizeof f);
+    nerf_camera cam;
+    int rc = viewer_camera(v, v->width, v->height, &cam);
+    if (rc == NERF_OK) {
+        rc = frame_render(&f, v->renderer, &cam);
+    }
+    if (rc == NERF_OK) {
+        uint32_t channels;
+        const float *pixels = frame_view(&f, v->mode, v->near, v->far,
+                                         &channels);
+        rc = nerf_image_write_png(path, f.width, f.height, channels, pixels);
+    }
+    if (rc == NERF_OK) {
+        fprintf(stderr, "nerf-viewer: wrote %s (%ux%u %s, %.2f s)\n", path,
+                f.width, f.height, view_mode_name(v->mode), f.seconds);
+    }
+    frame_free(&f);
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    args a;
+    if (parse(argc, argv, &a) != 0) {
+        fputs(usage, stderr);
+        return 2;
+    }
+    nerf_hooks hooks;
+    NERF_HOOKS_INIT(&hooks);
+    hooks.log_cb = cli_log;
+    hooks.log_user = "nerf-viewer";
+
+    viewer v;
+    memset(&v, 0, sizeof v);
+    v.mode = (view_mode)a.mode;
+    v.quit_after = a.quit_after;
+    int status = 0;
+    int rc = open_scene(&a, &hooks, &v);
+    if (rc == NERF_OK) {
+        choose_size(&a, &v);
+        if (a.screenshot) {
+            rc = screenshot(&v, a.screenshot);
+        } else {
+            status = viewer_run_window(&v);
+        }
+    }
+    if (rc != NERF_OK) {
+        cli_report("nerf-viewer", rc);
+        status = 1;
+    }
+    nerf_renderer_destroy(v.renderer);
+    nerf_sampler_destroy(v.sampler);
+    nerf_dataset_destroy(v.dataset);
+    nerf_model_destroy(v.model);
+    return status;
+}
