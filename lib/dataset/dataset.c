@@ -63,13 +63,22 @@ static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
     return NERF_OK;
 }
 
-static bool is_file(const nerf__env *env, const char *dir, const char *name)
+/*
+ * Whether dir/name is a regular file, in *found.  Fails only when the path
+ * cannot be allocated: reading that as "absent" would send the detection on
+ * to another layout and report a missing file instead of NERF_ENOMEM.
+ */
+static int is_file(const nerf__env *env, const char *dir, const char *name,
+                   bool *found)
 {
     char *path = nerf__path_join(env, dir, name);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
     struct stat st;
-    bool found = path && stat(path, &st) == 0 && S_ISREG(st.st_mode);
+    *found = stat(path, &st) == 0 && S_ISREG(st.st_mode);
     nerf__free(env, path);
-    return found;
+    return NERF_OK;
 }
 
 /* Pick the loader from the files present in dir. */
@@ -90,13 +99,24 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
     }
     char name[64];
     snprintf(name, sizeof name, "transforms_%s.json", split_names[cfg->split]);
-    if (is_file(&ds->env, dir, name)) {
+    bool split_json = false, all_json = false, llff = false;
+    int rc = is_file(&ds->env, dir, name, &split_json);
+    if (rc == NERF_OK && !split_json) {
+        rc = is_file(&ds->env, dir, "transforms.json", &all_json);
+    }
+    if (rc == NERF_OK && !split_json && !all_json) {
+        rc = is_file(&ds->env, dir, "poses_bounds.npy", &llff);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (split_json) {
         return nerf__blender_load(ds, dir, name, cfg);
     }
-    if (is_file(&ds->env, dir, "transforms.json")) {
+    if (all_json) {
         return nerf__blender_load(ds, dir, "transforms.json", cfg);
     }
-    if (is_file(&ds->env, dir, "poses_bounds.npy")) {
+    if (llff) {
         return nerf__llff_load(ds, dir, cfg);
     }
     return nerf__error(NERF_EIO, "%s: no %s, transforms.json or "

@@ -518,6 +518,31 @@ static int build_model(const nerf__env *env, const char *path,
     return NERF_OK;
 }
 
+int nerf__checkpoint_parse(const nerf__env *env, const char *path,
+                           const unsigned char *data, size_t size,
+                           nerf_model **out)
+{
+    *out = NULL;
+    ckpt_header hd;
+    memset(&hd, 0, sizeof hd);
+    unsigned char *payload = NULL;
+    int rc = read_header(path, data, size, &hd);
+    if (rc == NERF_OK) {
+        rc = unpack(env, path, data + HEADER_SIZE, &hd, &payload);
+    }
+    if (rc == NERF_OK) {
+        rc = build_model(env, path, payload, (size_t)hd.payload_size, out);
+    }
+    nerf__free(env, payload);
+    if (rc == NERF_OK) {
+        nerf__log(env, NERF_LOG_DEBUG, "%s: loaded checkpoint (format %lu): "
+                  "%zu parameters, step %llu", path,
+                  (unsigned long)hd.version, (*out)->n_params,
+                  (unsigned long long)(*out)->step);
+    }
+    return rc;
+}
+
 NERF_API int nerf_model_load(nerf_model **out, const char *path,
                              const nerf_hooks *hooks)
 {
@@ -528,29 +553,14 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
     *out = NULL;
     nerf__env env;
     int rc = nerf__env_from_hooks(&env, hooks);
-    unsigned char *file = NULL, *payload = NULL;
+    unsigned char *file = NULL;
     size_t size = 0;
     if (rc == NERF_OK) {
         rc = nerf__file_read(&env, path, MAX_FILE, &file, &size);
     }
-    ckpt_header hd;
-    memset(&hd, 0, sizeof hd);
     if (rc == NERF_OK) {
-        rc = read_header(path, file, size, &hd);
-    }
-    if (rc == NERF_OK) {
-        rc = unpack(&env, path, file + HEADER_SIZE, &hd, &payload);
+        rc = nerf__checkpoint_parse(&env, path, file, size, out);
     }
     nerf__free(&env, file);
-    if (rc == NERF_OK) {
-        rc = build_model(&env, path, payload, (size_t)hd.payload_size, out);
-    }
-    nerf__free(&env, payload);
-    if (rc == NERF_OK) {
-        nerf__log(&env, NERF_LOG_DEBUG, "%s: loaded checkpoint (format %lu): "
-                  "%zu parameters, step %llu", path,
-                  (unsigned long)hd.version, (*out)->n_params,
-                  (unsigned long long)(*out)->step);
-    }
     return rc;
 }

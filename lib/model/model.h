@@ -43,6 +43,16 @@ size_t nerf__model_options_param_count(const nerf_model_options *o);
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
                       const nerf__env *env);
 
+/*
+ * Build a model from the checkpoint image data[0, size), as
+ * nerf_model_load() does after reading the file; path only names the
+ * source in messages.  Kept separate so that the parser can be exercised
+ * from memory (the fuzz targets do).
+ */
+int nerf__checkpoint_parse(const nerf__env *env, const char *path,
+                           const unsigned char *data, size_t size,
+                           nerf_model **out);
+
 /* Network index for a public nerf_network value; -1 if absent. */
 int nerf__model_network(const nerf_model *m, int network);
 

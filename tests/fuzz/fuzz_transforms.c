@@ -1,0 +1,88 @@
+/*
+ * libFuzzer target for the Blender / instant-ngp transforms loader.  The
+ * input becomes transforms_train.json in a scratch scene folder that holds
+ * two tiny images, r_0.png (4x4 RGBA) and r_1.png (2x2 grey, a different
+ * size on purpose), and nerf_dataset_load reads the folder twice: with the
+ * default options and with skip_missing, downscale 2 and skip 2, which
+ * take other paths through the frame list.
+ */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <nerf.h>
+
+#include "../data/data_fixtures.h"
+
+int LLVMFuzzerInitialize(int *argc, char ***argv);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static char scene[512];
+static char json_path[1024];
+
+static void remove_scene(void)
+{
+    fx_remove_tree(scene);
+}
+
+int LLVMFuzzerInitialize(int *argc, char ***argv)
+{
+    (void)argc;
+    (void)argv;
+    snprintf(scene, sizeof scene, "%s", fx_make_temp_dir());
+    atexit(remove_scene);
+    uint16_t px[4 * 4 * 4];
+    for (int i = 0; i < 4 * 4 * 4; i++) {
+        px[i] = (uint16_t)(i * 37 % 256);
+    }
+    char p[1024];
+    fx_path(p, sizeof p, scene, "r_0.png");
+    fx_write_png(p, 4, 4, 6, 8, px, NULL, 0, NULL, 0);
+    fx_path(p, sizeof p, scene, "r_1.png");
+    fx_write_png(p, 2, 2, 0, 8, px, NULL, 0, NULL, 0);
+    fx_path(json_path, sizeof json_path, scene, "transforms_train.json");
+    return 0;
+}
+
+static void load(uint32_t skip_missing, uint32_t downscale, uint32_t skip)
+{
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.skip_missing = skip_missing;
+    o.downscale = downscale;
+    o.skip = skip;
+    nerf_dataset *ds = NULL;
+    int rc = nerf_dataset_load(&ds, scene, &o);
+    if ((rc == NERF_OK) != (ds != NULL)) {
+        abort();
+    }
+    if (ds != NULL) {
+        /* Touch every camera, as a trainer would. */
+        for (uint32_t i = 0; i < nerf_dataset_count(ds); i++) {
+            nerf_camera cam;
+            NERF_CAMERA_INIT(&cam);
+            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK) {
+                abort();
+            }
+        }
+    }
+    nerf_dataset_destroy(ds);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    /* Paths are joined to the scene folder; "..", though, would let the
+     * fuzzer open any file on the machine (a FIFO or /dev/stdin would
+     * hang it), so keep it inside the folder.  "\u" escapes could spell
+     * ".." too. */
+    for (size_t i = 0; i + 1 < size; i++) {
+        if ((data[i] == '.' && data[i + 1] == '.') ||
+            (data[i] == '\\' && data[i + 1] == 'u')) {
+            return 0;
+        }
+    }
+    fx_write_bytes(json_path, data, size);
+    load(0, 1, 1);
+    load(1, 2, 2);
+    return 0;
+}
