@@ -4,7 +4,12 @@
  * peak resident memory of an 800x800 render.  Prints figures; asserts
  * nothing.
  *
- *   bench_render [--quick] [--ref-rss-seconds S]
+ *   bench_render [--quick] [--ref-rss-seconds S] [--no-rss]
+ *                [--preset tiny|reference] [--side 100|400]
+ *
+ * --quick skips the reference preset at 400x400 (about 10 minutes per
+ * thread count on 2 cores) and cancels the reference memory run after
+ * 10 s; --preset and --side restrict the throughput table.
  *
  * Sample counts: reference 64 + 128 (the paper's); tiny 32 + 64 (the tiny
  * sampler preset: half of each, enough for the small scenes tests and
@@ -190,15 +195,25 @@ static double throughput(const setup *st, uint32_t side, uint32_t threads)
 
 int main(int argc, char **argv)
 {
-    int quick = 0;
+    int quick = 0, no_rss = 0, only_preset = 0;
+    uint32_t only_side = 0;
     double ref_seconds = 60.0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--quick") == 0) {
             quick = 1;
+        } else if (strcmp(argv[i], "--no-rss") == 0) {
+            no_rss = 1;
         } else if (strcmp(argv[i], "--ref-rss-seconds") == 0 && i + 1 < argc) {
             ref_seconds = atof(argv[++i]);
+        } else if (strcmp(argv[i], "--preset") == 0 && i + 1 < argc) {
+            i++;
+            only_preset = strcmp(argv[i], "tiny") == 0 ? NERF_PRESET_TINY
+                                                       : NERF_PRESET_REFERENCE;
+        } else if (strcmp(argv[i], "--side") == 0 && i + 1 < argc) {
+            only_side = (uint32_t)atoi(argv[++i]);
         } else {
-            fprintf(stderr, "usage: %s [--quick] [--ref-rss-seconds S]\n",
+            fprintf(stderr, "usage: %s [--quick] [--ref-rss-seconds S] "
+                    "[--no-rss] [--preset tiny|reference] [--side N]\n",
                     argv[0]);
             return 2;
         }
@@ -221,22 +236,28 @@ int main(int argc, char **argv)
     }
     printf("\n\n");
 
-    printf("peak resident memory (one child process each):\n");
-    rss(NERF_PRESET_TINY, "tiny", 1e9);
-    rss(NERF_PRESET_REFERENCE, "reference", quick ? 10.0 : ref_seconds);
+    if (!no_rss) {
+        printf("peak resident memory (one child process each):\n");
+        rss(NERF_PRESET_TINY, "tiny", 1e9);
+        rss(NERF_PRESET_REFERENCE, "reference", quick ? 10.0 : ref_seconds);
+    }
 
     printf("\n%-9s %8s %8s %11s %9s\n", "preset", "image", "threads",
            "rays/s", "GFLOP/s");
     static const int presets[2] = {NERF_PRESET_TINY, NERF_PRESET_REFERENCE};
     static const uint32_t sides[2] = {100, 400};
     for (int p = 0; p < 2; p++) {
+        if (only_preset && presets[p] != only_preset) {
+            continue;
+        }
         setup st;
         if (make(&st, presets[p])) {
             return 1;
         }
         const char *name = p == 0 ? "tiny" : "reference";
         for (int s = 0; s < 2; s++) {
-            if (quick && p == 1 && s == 1) {
+            if ((quick && p == 1 && s == 1) ||
+                (only_side && sides[s] != only_side)) {
                 continue;
             }
             uint32_t counts[2] = {1, cores};

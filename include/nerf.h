@@ -739,7 +739,8 @@ NERF_API void nerf_renderer_cancel(nerf_renderer *renderer);
  *                       ray (depth along the optical axis for
  *                       nerf_camera rays; NDC depth in NDC), not divided
  *                       by opacity.  May be NULL.
- * @param opacity_out    height x width floats, sum(w) in [0, 1].  May be
+ * @param opacity_out    height x width floats, sum(w) in [0, 1] up to
+ *                       float rounding (1 + 1e-7 can occur).  May be
  *                       NULL.
  * @param pixel_capacity pixels each non-NULL buffer can hold; at least
  *                       width x height.

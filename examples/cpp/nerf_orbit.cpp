@@ -24,16 +24,19 @@ namespace nerfxx {
 
 // A failed libnerf call: the status and the library's message.
 class error : public std::runtime_error {
-public:
+  public:
     error(int status, const std::string &call)
         : std::runtime_error(call + ": " + nerf_status_string(status) + ": " +
                              nerf_last_error()),
           status_(status)
     {
     }
-    int status() const noexcept { return status_; }
+    int status() const noexcept
+    {
+        return status_;
+    }
 
-private:
+  private:
     int status_;
 };
 
@@ -46,13 +49,15 @@ inline void check(int status, const char *call)
     }
 }
 
-template <typename T, void (*Destroy)(T *)>
-struct destroyer {
-    void operator()(T *p) const noexcept { Destroy(p); }
+template <typename T, void (*Destroy)(T *)> struct destroyer {
+    void operator()(T *p) const noexcept
+    {
+        Destroy(p);
+    }
 };
 
-using model = std::unique_ptr<nerf_model,
-                              destroyer<nerf_model, nerf_model_destroy>>;
+using model =
+    std::unique_ptr<nerf_model, destroyer<nerf_model, nerf_model_destroy>>;
 using sampler = std::unique_ptr<nerf_sampler,
                                 destroyer<nerf_sampler, nerf_sampler_destroy>>;
 using renderer =
@@ -109,11 +114,12 @@ inline renderer create_renderer(const model &m, const sampler &s,
 // A folder under the system's temporary directory, removed with its
 // contents when the object goes out of scope.
 class scratch_dir {
-public:
+  public:
     scratch_dir()
     {
-        auto pattern = (std::filesystem::temp_directory_path() /
-                        "nerf_orbit.XXXXXX").string();
+        auto pattern =
+            (std::filesystem::temp_directory_path() / "nerf_orbit.XXXXXX")
+                .string();
         std::vector<char> buf(pattern.begin(), pattern.end());
         buf.push_back('\0');
         if (mkdtemp(buf.data()) == nullptr) {
@@ -128,9 +134,12 @@ public:
     }
     scratch_dir(const scratch_dir &) = delete;
     scratch_dir &operator=(const scratch_dir &) = delete;
-    const std::filesystem::path &path() const noexcept { return path_; }
+    const std::filesystem::path &path() const noexcept
+    {
+        return path_;
+    }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
@@ -164,9 +173,10 @@ nerf_camera orbit_camera(double az_deg, uint32_t width, uint32_t height,
     cam.fx = cam.fy = focal;
     cam.cx = 0.5f * static_cast<float>(width);
     cam.cy = 0.5f * static_cast<float>(height);
-    const float eye[3] = {static_cast<float>(4.0 * std::cos(elev) * std::cos(az)),
-                          static_cast<float>(4.0 * std::cos(elev) * std::sin(az)),
-                          static_cast<float>(4.0 * std::sin(elev))};
+    const float eye[3] = {
+        static_cast<float>(4.0 * std::cos(elev) * std::cos(az)),
+        static_cast<float>(4.0 * std::cos(elev) * std::sin(az)),
+        static_cast<float>(4.0 * std::sin(elev))};
     const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
     nerfxx::check(nerf_camera_look_at(&cam, eye, target, up),
                   "nerf_camera_look_at");
@@ -197,9 +207,9 @@ void run(const std::string &out, uint64_t steps, double azimuth)
                   "nerf_model_options_preset");
     const nerfxx::model model = nerfxx::create_model(mo);
     // The small network learns faster with a higher rate than the paper's.
-    nerfxx::check(nerf_model_set_param(model.get(), NERF_PARAM_LEARNING_RATE,
-                                       5e-3),
-                  "nerf_model_set_param");
+    nerfxx::check(
+        nerf_model_set_param(model.get(), NERF_PARAM_LEARNING_RATE, 5e-3),
+        "nerf_model_set_param");
 
     nerf_sampler_options sopt;
     nerfxx::check(NERF_SAMPLER_OPTIONS_INIT(&sopt),
@@ -217,8 +227,7 @@ void run(const std::string &out, uint64_t steps, double azimuth)
     {
         const nerfxx::trainer trainer =
             nerfxx::create_trainer(model, train, sampler, topt);
-        nerfxx::check(nerf_trainer_set_progress(trainer.get(), report,
-                                                nullptr),
+        nerfxx::check(nerf_trainer_set_progress(trainer.get(), report, nullptr),
                       "nerf_trainer_set_progress");
         nerfxx::check(nerf_trainer_run(trainer.get(), steps, nullptr),
                       "nerf_trainer_run");
@@ -237,20 +246,19 @@ void run(const std::string &out, uint64_t steps, double azimuth)
                   "nerf_dataset_camera");
     const uint32_t size = 64;
     // The training cameras' field of view, at the size of this image.
-    const float focal = cam0.fx * static_cast<float>(size) /
-                        static_cast<float>(cam0.width);
+    const float focal =
+        cam0.fx * static_cast<float>(size) / static_cast<float>(cam0.width);
     const nerf_camera cam = orbit_camera(azimuth, size, size, focal);
     std::vector<uint8_t> rgb(static_cast<size_t>(size) * size * 3);
     nerfxx::check(nerf_renderer_render_image_u8(renderer.get(), &cam,
                                                 rgb.data(), nullptr, nullptr,
                                                 size * size),
                   "nerf_renderer_render_image_u8");
-    nerfxx::check(nerf_image_write_png8(out.c_str(), size, size, 3,
-                                        rgb.data()),
+    nerfxx::check(nerf_image_write_png8(out.c_str(), size, size, 3, rgb.data()),
                   "nerf_image_write_png8");
     std::printf("wrote %s (%ux%u, model at step %llu)\n", out.c_str(), size,
-                size, static_cast<unsigned long long>(
-                          nerf_model_step(model.get())));
+                size,
+                static_cast<unsigned long long>(nerf_model_step(model.get())));
 }
 
 } // namespace

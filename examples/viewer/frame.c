@@ -17,12 +17,9 @@ int view_mode_parse(const char *name)
 const char *view_mode_name(view_mode mode)
 {
     switch (mode) {
-    case VIEW_DEPTH:
-        return "depth";
-    case VIEW_OPACITY:
-        return "opacity";
-    default:
-        return "rgb";
+    case VIEW_DEPTH: return "depth";
+    case VIEW_OPACITY: return "opacity";
+    default: return "rgb";
     }
 }
 
@@ -68,9 +65,7 @@ const float *frame_view(frame *f, view_mode mode, float near, float far,
 {
     size_t n = (size_t)f->width * f->height;
     switch (mode) {
-    case VIEW_OPACITY:
-        *channels_out = 1;
-        return f->opacity;
+    case VIEW_OPACITY: *channels_out = 1; return f->opacity;
     case VIEW_DEPTH:
         /* Expected depth is sum(w t), not divided by opacity: divide here
          * so half-transparent edges show the depth of what they hit. */
@@ -81,9 +76,7 @@ const float *frame_view(frame *f, view_mode mode, float near, float far,
         }
         *channels_out = 1;
         return f->grey;
-    default:
-        *channels_out = 3;
-        return f->rgb;
+    default: *channels_out = 3; return f->rgb;
     }
 }
 

@@ -28,8 +28,7 @@ static double dot3d(const double a[3], const double b[3])
  * spiral path aims every view at one focus point, so two of its views
  * pin that point down.  Returns 0 when the axes are (nearly) parallel.
  */
-static int axes_meet(const nerf_camera *a, const nerf_camera *b,
-                     double out[3])
+static int axes_meet(const nerf_camera *a, const nerf_camera *b, double out[3])
 {
     double p1[3], p2[3], d1[3], d2[3], w[3];
     for (int k = 0; k < 3; k++) {
@@ -70,7 +69,7 @@ static double llff_focus(const nerf_dataset *ds, const nerf_camera *cam0)
         along -= (f[k] - cam0->c2w[4 * k + 3]) * cam0->c2w[4 * k + 2];
     }
     return isfinite(along) && along > 1e-2 && along < 1e4 ? along
-                                                            : DEFAULT_FOCUS;
+                                                          : DEFAULT_FOCUS;
 }
 
 /* The mean of the cameras' up axes: Blender-style captures circle their
@@ -91,7 +90,8 @@ static void mean_up(const nerf_dataset *ds, float up[3])
     double norm = sqrt(dot3d(sum, sum));
     for (int k = 0; k < 3; k++) {
         /* Fall back to Blender's z-up when the cameras disagree. */
-        up[k] = norm > 1e-3 * n ? (float)(sum[k] / norm) : (k == 2);
+        float fallback = k == 2 ? 1.0f : 0.0f;
+        up[k] = norm > 1e-3 * n ? (float)(sum[k] / norm) : fallback;
     }
 }
 
@@ -102,9 +102,9 @@ int viewer_home(viewer *v)
     v->near = 2.0f;
     v->far = 6.0f;
     if (v->dataset == NULL) {
-        const float eye[3] = {
-            (float)(DEFAULT_RADIUS * cos(DEFAULT_ELEVATION)), 0.0f,
-            (float)(DEFAULT_RADIUS * sin(DEFAULT_ELEVATION))};
+        const float eye[3] = {(float)(DEFAULT_RADIUS * cos(DEFAULT_ELEVATION)),
+                              0.0f,
+                              (float)(DEFAULT_RADIUS * sin(DEFAULT_ELEVATION))};
         v->focal_ratio = 0.5 / tan(0.5 * DEFAULT_FOV_X);
         orbit_init(&v->home, origin, up, ax, eye);
         v->view = v->home;

@@ -125,8 +125,8 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         rc = nerf_dataset_load(&v->dataset, a->data, &dopt);
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&v->sampler, v->model, v->dataset, 0, 0, 0.0f,
-                           0.0f, 0);
+        rc = setup_sampler(&v->sampler, v->model, v->dataset, 0, 0, 0.0f, 0.0f,
+                           0);
     }
     if (rc == NERF_OK) {
         nerf_renderer_options ro;
@@ -155,8 +155,8 @@ static int screenshot(viewer *v, const char *path)
     }
     if (rc == NERF_OK) {
         uint32_t channels;
-        const float *pixels = frame_view(&f, v->mode, v->near, v->far,
-                                         &channels);
+        const float *pixels =
+            frame_view(&f, v->mode, v->near, v->far, &channels);
         rc = nerf_image_write_png(path, f.width, f.height, channels, pixels);
     }
     if (rc == NERF_OK) {

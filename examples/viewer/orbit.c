@@ -98,7 +98,7 @@ void orbit_pan(orbit *o, double right, double up)
     /* c2w is row-major 3x4: column 0 is the camera's right axis, column 1
      * its up axis. */
     for (int k = 0; k < 3; k++) {
-        o->target[k] += (float)(right * cam.c2w[4 * k + 0] +
-                                up * cam.c2w[4 * k + 1]);
+        o->target[k] +=
+            (float)(right * cam.c2w[4 * k + 0] + up * cam.c2w[4 * k + 1]);
     }
 }

@@ -9,13 +9,13 @@
 #include <nerf.h>
 
 typedef struct orbit {
-    float target[3];  /* the point looked at and circled around */
-    float up[3];      /* world direction that stays up on screen */
-    float ax[3];      /* horizontal direction of yaw 0 */
-    float ay[3];      /* horizontal direction of yaw +90 degrees */
-    double yaw;       /* radians about up, from ax towards ay */
-    double pitch;     /* radians above the horizontal plane */
-    double distance;  /* from target to eye, world units */
+    float target[3]; /* the point looked at and circled around */
+    float up[3];     /* world direction that stays up on screen */
+    float ax[3];     /* horizontal direction of yaw 0 */
+    float ay[3];     /* horizontal direction of yaw +90 degrees */
+    double yaw;      /* radians about up, from ax towards ay */
+    double pitch;    /* radians above the horizontal plane */
+    double distance; /* from target to eye, world units */
 } orbit;
 
 /* An orbit around target with the given up axis and horizontal axis ax

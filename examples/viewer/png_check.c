@@ -23,8 +23,8 @@ int main(int argc, char **argv)
     }
     int status = 0;
     if (w != strtoul(argv[2], NULL, 10) || h != strtoul(argv[3], NULL, 10)) {
-        fprintf(stderr, "png_check: %s is %ux%u, expected %sx%s\n", argv[1],
-                w, h, argv[2], argv[3]);
+        fprintf(stderr, "png_check: %s is %ux%u, expected %sx%s\n", argv[1], w,
+                h, argv[2], argv[3]);
         status = 1;
     }
     size_t n = (size_t)w * h, differ = 0;

@@ -14,16 +14,16 @@
 
 typedef struct viewer {
     nerf_model *model;
-    nerf_dataset *dataset;   /* NULL without --data */
+    nerf_dataset *dataset; /* NULL without --data */
     nerf_sampler *sampler;
     nerf_renderer *renderer;
-    orbit home;              /* the view 'r' returns to */
-    orbit view;              /* the current view */
-    double focal_ratio;      /* focal length / image width */
-    float near, far;         /* depth range shown by the depth view */
-    uint32_t width, height;  /* full-resolution image size */
+    orbit home;             /* the view 'r' returns to */
+    orbit view;             /* the current view */
+    double focal_ratio;     /* focal length / image width */
+    float near, far;        /* depth range shown by the depth view */
+    uint32_t width, height; /* full-resolution image size */
     view_mode mode;
-    double quit_after;       /* seconds; 0: run until asked to quit */
+    double quit_after; /* seconds; 0: run until asked to quit */
 } viewer;
 
 /*

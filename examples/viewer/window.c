@@ -27,6 +27,8 @@
 /* Progress bar height in pixels, and its redraw interval in seconds. */
 #define BAR_HEIGHT 3
 #define BAR_INTERVAL 0.1
+/* Queued events of one type looked at between two chunks of rays. */
+#define PEEK_MAX 256
 
 typedef struct window {
     viewer *v;
@@ -34,17 +36,17 @@ typedef struct window {
     SDL_Renderer *ren;
     SDL_Texture *tex;
     uint32_t tex_w, tex_h;
-    uint8_t *pixels;          /* 8-bit copy of the shown frame */
+    uint8_t *pixels; /* 8-bit copy of the shown frame */
     size_t pixels_cap;
     frame preview, full;
-    frame *shown;             /* NULL before the first render */
-    double rays_per_second;   /* 0 until something was rendered */
-    double deadline;          /* 0: none */
-    double last_change;       /* when the view last moved */
+    frame *shown;           /* NULL before the first render */
+    double rays_per_second; /* 0 until something was rendered */
+    double deadline;        /* 0: none */
+    double last_change;     /* when the view last moved */
     double last_bar;
-    int moved;                /* the view changed: render a preview */
-    int need_full;            /* the shown frame is a preview */
-    int refining;             /* inside the full render */
+    int moved;     /* the view changed: render a preview */
+    int need_full; /* the shown frame is a preview */
+    int refining;  /* inside the full render */
     int quit;
     unsigned n_previews, n_full, n_cancelled;
 } window;
@@ -98,10 +100,12 @@ static int show(window *w)
         }
     }
     if (w->tex == NULL || w->tex_w != f->width || w->tex_h != f->height) {
-        SDL_DestroyTexture(w->tex);
+        if (w->tex) {
+            SDL_DestroyTexture(w->tex);
+        }
         w->tex = SDL_CreateTexture(w->ren, SDL_PIXELFORMAT_RGB24,
-                                   SDL_TEXTUREACCESS_STREAMING,
-                                   (int)f->width, (int)f->height);
+                                   SDL_TEXTUREACCESS_STREAMING, (int)f->width,
+                                   (int)f->height);
         if (w->tex == NULL) {
             fprintf(stderr, "nerf-viewer: SDL: %s\n", SDL_GetError());
             return -1;
@@ -120,40 +124,52 @@ static int event_matters(const SDL_Event *ev)
 {
     switch (ev->type) {
     case SDL_QUIT:
-    case SDL_MOUSEWHEEL:
-        return 1;
-    case SDL_MOUSEMOTION:
-        return ev->motion.state != 0;
+    case SDL_MOUSEWHEEL: return 1;
+    case SDL_MOUSEMOTION: return ev->motion.state != 0;
     case SDL_WINDOWEVENT:
         return ev->window.event == SDL_WINDOWEVENT_SIZE_CHANGED;
     case SDL_KEYDOWN:
         switch (ev->key.keysym.sym) {
-        case SDLK_1: case SDLK_2: case SDLK_3:
-        case SDLK_KP_1: case SDLK_KP_2: case SDLK_KP_3:
-        case SDLK_r: case SDLK_q: case SDLK_ESCAPE:
-            return 1;
-        default:
-            return 0;
+        case SDLK_1:
+        case SDLK_2:
+        case SDLK_3:
+        case SDLK_KP_1:
+        case SDLK_KP_2:
+        case SDLK_KP_3:
+        case SDLK_r:
+        case SDLK_q:
+        case SDLK_ESCAPE: return 1;
+        default: return 0;
         }
-    default:
-        return 0;
+    default: return 0;
     }
 }
 
-static int input_pending(void)
+/* Whether queued events of one type would change what is shown; also 1
+ * when there are too many to look at, to let the main loop sort them out. */
+static int queued_matter(Uint32 type)
 {
-    SDL_PumpEvents();
-    SDL_Event evs[64];
-    int n = SDL_PeepEvents(evs, 64, SDL_PEEKEVENT, SDL_FIRSTEVENT,
-                           SDL_LASTEVENT);
+    SDL_Event evs[PEEK_MAX];
+    int n = SDL_PeepEvents(evs, PEEK_MAX, SDL_PEEKEVENT, type, type);
     for (int i = 0; i < n; i++) {
         if (event_matters(&evs[i])) {
             return 1;
         }
     }
+    return n == PEEK_MAX;
+}
+
+static int input_pending(void)
+{
+    SDL_PumpEvents();
+    /* Type by type, so that a flood of one kind cannot hide another. */
+    if (queued_matter(SDL_QUIT) || queued_matter(SDL_MOUSEWHEEL) ||
+        queued_matter(SDL_KEYDOWN) || queued_matter(SDL_WINDOWEVENT) ||
+        queued_matter(SDL_MOUSEMOTION)) {
+        return 1;
+    }
     /* None of the queued moves had a button down: drop them, or a mouse
-     * merely passing over the window would fill the queue and hide the
-     * next click from this check. */
+     * merely passing over the window would fill the queue. */
     SDL_FlushEvent(SDL_MOUSEMOTION);
     return 0;
 }
@@ -183,29 +199,22 @@ static void handle_event(window *w, const SDL_Event *ev)
 {
     viewer *v = w->v;
     switch (ev->type) {
-    case SDL_QUIT:
-        w->quit = 1;
-        break;
+    case SDL_QUIT: w->quit = 1; break;
     case SDL_KEYDOWN:
         switch (ev->key.keysym.sym) {
-        case SDLK_1: case SDLK_KP_1:
-            v->mode = VIEW_RGB;
-            break;
-        case SDLK_2: case SDLK_KP_2:
-            v->mode = VIEW_DEPTH;
-            break;
-        case SDLK_3: case SDLK_KP_3:
-            v->mode = VIEW_OPACITY;
-            break;
+        case SDLK_1:
+        case SDLK_KP_1: v->mode = VIEW_RGB; break;
+        case SDLK_2:
+        case SDLK_KP_2: v->mode = VIEW_DEPTH; break;
+        case SDLK_3:
+        case SDLK_KP_3: v->mode = VIEW_OPACITY; break;
         case SDLK_r:
             v->view = v->home;
             w->moved = 1;
             break;
-        case SDLK_q: case SDLK_ESCAPE:
-            w->quit = 1;
-            break;
-        default:
-            break;
+        case SDLK_q:
+        case SDLK_ESCAPE: w->quit = 1; break;
+        default: break;
         }
         break;
     case SDL_MOUSEMOTION: {
@@ -245,8 +254,7 @@ static void handle_event(window *w, const SDL_Event *ev)
             w->moved = 1;
         }
         break;
-    default:
-        break;
+    default: break;
     }
 }
 
@@ -362,8 +370,8 @@ static int run(window *w)
         }
         if (rc != NERF_OK && rc != NERF_ECANCELLED) {
             if (rc != NERF_ERROR) {
-                fprintf(stderr, "nerf-viewer: %s: %s\n",
-                        nerf_status_string(rc), nerf_last_error());
+                fprintf(stderr, "nerf-viewer: %s: %s\n", nerf_status_string(rc),
+                        nerf_last_error());
             }
             return 1;
         }
@@ -402,10 +410,10 @@ int viewer_run_window(viewer *v)
     status = run(&w);
     nerf_renderer_set_progress(v->renderer, NULL, NULL);
     if (v->quit_after > 0.0) {
-        fprintf(stderr, "nerf-viewer: %.1f s: %u previews, %u full frames, "
-                        "%u refinements interrupted\n",
-                progress_now() - start, w.n_previews, w.n_full,
-                w.n_cancelled);
+        fprintf(stderr,
+                "nerf-viewer: %.1f s: %u previews, %u full frames, "
+                "%u refinements interrupted\n",
+                progress_now() - start, w.n_previews, w.n_full, w.n_cancelled);
     }
 done:
     frame_free(&w.preview);

@@ -67,7 +67,11 @@ fi
 cat >"$scratch/version.c" <<'C'
 #include <nerf.h>
 #include <stdio.h>
-int main(void) { puts(nerf_version_string()); return nerf_version_number() != NERF_VERSION_NUMBER; }
+int main(void)
+{
+    puts(nerf_version_string());
+    return nerf_version_number() != NERF_VERSION_NUMBER;
+}
 C
 # shellcheck disable=SC2086 # flag lists are meant to split into words
 "$cc" -std=c99 -pedantic -Wall -Wextra -Werror $san $cflags \
