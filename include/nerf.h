@@ -716,9 +716,9 @@ NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
 /**
  * Ask the render call running on @p renderer to stop; it returns
  * NERF_ECANCELLED once its threads finish the batch of 64 rays they are
- * on.  Thread-safe: this is the one
- * function that may be called while another thread is inside a call on the
- * same renderer (including from its progress callback).  Each render call
+ * on.  Thread-safe: this is the one function that may be called while
+ * another thread is inside a call on the same renderer (including from its
+ * progress callback).  Each render call
  * clears the request when it starts, so a cancel that arrives when no call
  * is running has no effect.  NULL is a no-op.
  */
