@@ -316,3 +316,21 @@ def destroyer(name: str) -> Callable[[Any], None]:
     """The library's destroy function ``name``, bound now so that it is
     still reachable when finalisers run at interpreter exit."""
     return getattr(lib, name)
+
+
+class ProgressHandle(Handle):
+    """A handle whose long calls report progress through a ProgressSlot
+    (``self._slot``, set by the subclass): renderers and trainers."""
+
+    _slot: "ProgressSlot"
+
+    @property
+    def progress(self) -> Optional[Callable[..., Any]]:
+        """The progress callback of later long calls (None: none)."""
+        return self._slot.callback
+
+    @progress.setter
+    def progress(self, callback: Optional[Callable[..., Any]]) -> None:
+        if callback is not None and not callable(callback):
+            raise TypeError("progress must be callable or None")
+        self._slot.callback = callback

@@ -155,7 +155,7 @@ def _camera_arg(camera: Any) -> Camera:
     return camera
 
 
-class Renderer(_handle.Handle):
+class Renderer(_handle.ProgressHandle):
     """Draws a model with a sampler's samples (``nerf_renderer``).
 
     ``Renderer(model, sampler, white_background=1, threads=0, ...)``; the
@@ -196,17 +196,6 @@ class Renderer(_handle.Handle):
         self.sampler = sampler
         with self._using() as ptr:
             lib.nerf_renderer_set_progress(ptr, self._slot.thunk, None)
-
-    @property
-    def progress(self) -> ProgressFn:
-        """The progress callback of later renders (None: none)."""
-        return self._slot.callback
-
-    @progress.setter
-    def progress(self, callback: ProgressFn) -> None:
-        if callback is not None and not callable(callback):
-            raise TypeError("progress must be callable or None")
-        self._slot.callback = callback
 
     def cancel(self) -> None:
         """Ask a render running on another thread (or in the progress

@@ -16,7 +16,7 @@ LogFn = Optional[Callable[[int, str], Any]]
 ProgressFn = Optional[Callable[[Progress], Any]]
 
 
-class Trainer(_handle.Handle):
+class Trainer(_handle.ProgressHandle):
     """Optimises a model on a dataset's images (``nerf_trainer``).
 
     ``Trainer(model, dataset, sampler, batch_rays=1024, ...)``; keyword
@@ -59,17 +59,6 @@ class Trainer(_handle.Handle):
         self.sampler = sampler
         with self._using() as ptr:
             lib.nerf_trainer_set_progress(ptr, self._slot.thunk, None)
-
-    @property
-    def progress(self) -> ProgressFn:
-        """The default progress callback of :meth:`run`."""
-        return self._slot.callback
-
-    @progress.setter
-    def progress(self, callback: ProgressFn) -> None:
-        if callback is not None and not callable(callback):
-            raise TypeError("progress must be callable or None")
-        self._slot.callback = callback
 
     def step(self) -> TrainStats:
         """Take one optimisation step and return its figures
