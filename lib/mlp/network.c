@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "fused.h"
+#include "parallel.h"
 #include "rng.h"
 
 static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
@@ -169,11 +170,76 @@ static float sigmoid(float z)
     return 1.0f / (1.0f + expf(-z));
 }
 
+/*
+ * The loops between products, over the thread pool in ranges of samples.
+ * One job type serves them all: each range function reads what it needs.
+ */
+typedef struct rows_job {
+    const nerf__network *net;
+    const float *params;
+    nerf__workspace *ws;
+    const nerf__encoding *enc;
+    const float *in;
+    float *out;
+    size_t out_stride;
+    float *rgb_out, *sigma_out;
+    const float *d_rgb, *d_sigma;
+    float *dz;
+    size_t ld;
+} rows_job;
+
+static void encode_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    nerf__encoding_forward(j->enc, end - begin, j->in + 3 * begin, 3,
+                           j->out + begin * j->out_stride, j->out_stride);
+}
+
+static void encode(const nerf__encoding *enc, size_t n, const float *in,
+                   float *out, size_t out_stride)
+{
+    rows_job j = {.enc = enc, .in = in, .out = out, .out_stride = out_stride};
+    nerf__parallel_for(n, 4 * out_stride, encode_rows, &j);
+}
+
 static float *trunk_buffer(const nerf__network *net, nerf__workspace *ws,
                            uint32_t layer)
 {
     size_t slot = ws->keep ? layer : layer % 2;
     return ws->trunk + slot * ws->n * net->width;
+}
+
+/* The sigmoid on rgb, and the outputs copied out of the workspace. */
+static void output_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    const nerf__network *net = j->net;
+    nerf__workspace *ws = j->ws;
+    const uint32_t HW = nerf__network_head_width(net);
+    if (net->use_viewdirs) {
+        const float *b = j->params + net->rgb.b;
+        for (size_t i = begin; i < end; i++) {
+            for (int c = 0; c < 3; c++) {
+                ws->rgb[3 * i + c] = sigmoid(ws->rgb[3 * i + c] + b[c]);
+            }
+        }
+    } else {
+        for (size_t i = begin; i < end; i++) {
+            for (int c = 0; c < 3; c++) {
+                ws->rgb[3 * i + c] = sigmoid(ws->head[4 * i + c]);
+            }
+        }
+    }
+    if (j->rgb_out) {
+        memcpy(j->rgb_out + 3 * begin, ws->rgb + 3 * begin,
+               (end - begin) * 3 * sizeof(float));
+    }
+    if (j->sigma_out) {
+        const float *s = ws->head + (net->use_viewdirs ? net->width : 3);
+        for (size_t i = begin; i < end; i++) {
+            j->sigma_out[i] = s[i * HW];
+        }
+    }
 }
 
 void nerf__network_forward(const nerf__network *net, const float *params,
@@ -183,7 +249,7 @@ void nerf__network_forward(const nerf__network *net, const float *params,
 {
     const uint32_t W = net->width, Ep = net->pos_width;
     ws->n = n;
-    nerf__encoding_forward(&net->pos_enc, n, positions, 3, ws->enc_pos, Ep);
+    encode(&net->pos_enc, n, positions, ws->enc_pos, Ep);
 
     const float *x = ws->enc_pos;
     size_t ldx = Ep;
@@ -210,47 +276,53 @@ void nerf__network_forward(const nerf__network *net, const float *params,
     if (net->use_viewdirs) {
         const nerf__linear *v = &net->view, *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
-        nerf__encoding_forward(&net->dir_enc, n, directions, 3, ws->enc_dir, Ed);
+        encode(&net->dir_enc, n, directions, ws->enc_dir, Ed);
         gemm_forward(n, V, W, ws->head, HW, params + v->w, v->in, 0.0f,
                      ws->view, V);
         gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v->w + W, v->in, 1.0f,
                      ws->view, V);
         nerf__bias_relu(n, V, ws->view, V, params + v->b);
         gemm_forward(n, 3, V, ws->view, V, params + r->w, V, 0.0f, ws->rgb, 3);
-        for (size_t i = 0; i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                ws->rgb[3 * i + c] = sigmoid(ws->rgb[3 * i + c] + params[r->b + c]);
-            }
-        }
-    } else {
-        for (size_t i = 0; i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                ws->rgb[3 * i + c] = sigmoid(ws->head[4 * i + c]);
-            }
-        }
     }
-    if (rgb_out) {
-        memcpy(rgb_out, ws->rgb, n * 3 * sizeof(float));
-    }
-    if (sigma_out) {
-        const float *s = ws->head + (net->use_viewdirs ? W : 3);
-        for (size_t i = 0; i < n; i++) {
-            sigma_out[i] = s[i * HW];
+    rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
+                  .sigma_out = sigma_out};
+    nerf__parallel_for(n, 60, output_rows, &j);
+}
+
+/* dz = d_rgb * rgb (1 - rgb): the sigmoid's backward, into rows of ld. */
+static void sigmoid_backward_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    const float *rgb = j->ws->rgb;
+    for (size_t i = begin; i < end; i++) {
+        for (int c = 0; c < 3; c++) {
+            float y = rgb[3 * i + c];
+            float g = j->d_rgb ? j->d_rgb[3 * i + c] : 0.0f;
+            j->dz[i * j->ld + c] = g * y * (1.0f - y);
         }
     }
 }
 
-/* dz = d_rgb * rgb (1 - rgb): the sigmoid's backward, into rows of ld. */
-static void sigmoid_backward(size_t n, const float *rgb, const float *d_rgb,
+static void sigmoid_backward(nerf__workspace *ws, const float *d_rgb,
                              float *dz, size_t ld)
 {
-    for (size_t i = 0; i < n; i++) {
-        for (int c = 0; c < 3; c++) {
-            float y = rgb[3 * i + c];
-            float g = d_rgb ? d_rgb[3 * i + c] : 0.0f;
-            dz[i * ld + c] = g * y * (1.0f - y);
-        }
+    rows_job j = {.ws = ws, .d_rgb = d_rgb, .dz = dz, .ld = ld};
+    nerf__parallel_for(ws->n, 12, sigmoid_backward_rows, &j);
+}
+
+/* Column `col` of rows of ld: the raw density's gradient. */
+static void sigma_grad_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    for (size_t i = begin; i < end; i++) {
+        j->dz[i * j->ld] = j->d_sigma ? j->d_sigma[i] : 0.0f;
     }
+}
+
+static void sigma_grad(size_t n, const float *d_sigma, float *dz, size_t ld)
+{
+    rows_job j = {.d_sigma = d_sigma, .dz = dz, .ld = ld};
+    nerf__parallel_for(n, 2, sigma_grad_rows, &j);
 }
 
 void nerf__network_backward(const nerf__network *net, const float *params,
@@ -266,7 +338,7 @@ void nerf__network_backward(const nerf__network *net, const float *params,
         const nerf__linear *v = &net->view, *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
         float *dz = ws->grad_b; /* [n, 3] */
-        sigmoid_backward(n, ws->rgb, d_rgb, dz, 3);
+        sigmoid_backward(ws, d_rgb, dz, 3);
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
         gemm_weight_grad(n, 3, V, dz, 3, ws->view, V, grads + r->w, V);
         float *d_view = ws->grad_a; /* [n, V] */
@@ -278,14 +350,10 @@ void nerf__network_backward(const nerf__network *net, const float *params,
         /* d_view lives in grad_a, so the head gradient goes to grad_b. */
         d_head = ws->grad_b;
         gemm_input_grad(n, V, W, d_view, V, params + v->w, v->in, d_head, HW);
-        for (size_t i = 0; i < n; i++) {
-            d_head[i * HW + W] = d_sigma ? d_sigma[i] : 0.0f;
-        }
+        sigma_grad(n, d_sigma, d_head + W, HW);
     } else {
-        sigmoid_backward(n, ws->rgb, d_rgb, d_head, 4);
-        for (size_t i = 0; i < n; i++) {
-            d_head[i * 4 + 3] = d_sigma ? d_sigma[i] : 0.0f;
-        }
+        sigmoid_backward(ws, d_rgb, d_head, 4);
+        sigma_grad(n, d_sigma, d_head + 3, 4);
     }
 
     const float *h_last = trunk_buffer(net, ws, net->depth - 1);

@@ -6,6 +6,7 @@
 
 #include "composite.h"
 #include "ndc.h"
+#include "parallel.h"
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env)
 {
@@ -53,7 +54,7 @@ static int reserve(nerf__batch *b, size_t n, uint32_t n_c, uint32_t n_f,
         3 * n, 3 * n, 3 * n, n,
         n * s0, n * s1, n * s0, n * s1,
         3 * n * s0, 3 * n * s1, n * s0, n * s1,
-        3 * n * s1, 3 * n * s1, nerf__sample_fine_scratch(n_c, n_f),
+        3 * n * s1, 3 * n * s1, n * nerf__sample_fine_scratch(n_c, n_f),
         keep ? 3 * n * s1 : 0, keep ? n * s1 : 0,
     };
     const size_t count = sizeof sizes / sizeof sizes[0];
@@ -78,37 +79,94 @@ static int reserve(nerf__batch *b, size_t n, uint32_t n_c, uint32_t n_f,
     return NERF_OK;
 }
 
+/*
+ * Every loop below works ray by ray, each ray writing only its own rows, so
+ * they run over the thread pool in ranges of rays; a job carries the batch,
+ * the setup and the pass.
+ */
+typedef struct batch_job {
+    nerf__batch *b;
+    const nerf__render_setup *s;
+    const float *o, *d; /* the caller's rays */
+    int pass;
+    bool random, with_dirs;
+    const nerf__pass_out *out;
+    const float *d_rgb, *d_depth, *d_opacity;
+} batch_job;
+
 /* View directions (unit, before any warp), the rays actually sampled, and
  * their lengths. */
-static void prepare_rays(nerf__batch *b, const nerf__render_setup *s,
-                         size_t n, const float *o, const float *d)
+static void prepare_rays(void *ctx, size_t begin, size_t end)
 {
-    for (size_t k = 0; k < n; k++) {
-        const float *dk = d + 3 * k;
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const nerf__render_setup *s = j->s;
+    for (size_t k = begin; k < end; k++) {
+        const float *dk = j->d + 3 * k;
         float len = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
         for (int c = 0; c < 3; c++) {
             b->viewdir[3 * k + c] = dk[c] / len;
         }
     }
+    const size_t n = end - begin;
     if (s->sampler->opts.ndc) {
         /* The reference puts the NDC near plane at world depth 1. */
-        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f, n, o,
-                       d, b->ray_o, b->ray_d);
+        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f, n,
+                       j->o + 3 * begin, j->d + 3 * begin,
+                       b->ray_o + 3 * begin, b->ray_d + 3 * begin);
     } else {
-        memcpy(b->ray_o, o, 3 * n * sizeof(float));
-        memcpy(b->ray_d, d, 3 * n * sizeof(float));
+        memcpy(b->ray_o + 3 * begin, j->o + 3 * begin, 3 * n * sizeof(float));
+        memcpy(b->ray_d + 3 * begin, j->d + 3 * begin, 3 * n * sizeof(float));
     }
-    for (size_t k = 0; k < n; k++) {
+    for (size_t k = begin; k < end; k++) {
         const float *dk = b->ray_d + 3 * k;
         b->dir_norm[k] = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
     }
 }
 
-/* Network inputs of one pass: o + d t and the ray's view direction. */
-static void fill_points(nerf__batch *b, size_t n, uint32_t m, const float *t,
-                        bool with_dirs)
+static void sample_coarse(void *ctx, size_t begin, size_t end)
 {
-    for (size_t k = 0; k < n; k++) {
+    const batch_job *j = ctx;
+    const nerf__render_setup *s = j->s;
+    const nerf_sampler_options *so = &s->sampler->opts;
+    const uint32_t n_c = so->n_coarse;
+    for (size_t k = begin; k < end; k++) {
+        nerf__rng rng = nerf__ray_rng(so->seed, NERF__STREAM_STRATIFIED,
+                                      s->first_ray + k);
+        nerf__sample_stratified(so, j->random,
+                                s->u_coarse ? s->u_coarse + k * n_c : NULL,
+                                &rng, j->b->t[0] + k * n_c);
+    }
+}
+
+static void sample_fine(void *ctx, size_t begin, size_t end)
+{
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const nerf__render_setup *s = j->s;
+    const nerf_sampler_options *so = &s->sampler->opts;
+    const uint32_t n_c = so->n_coarse, n_f = so->n_fine;
+    const size_t scratch = nerf__sample_fine_scratch(n_c, n_f);
+    for (size_t k = begin; k < end; k++) {
+        nerf__rng rng = nerf__ray_rng(so->seed, NERF__STREAM_HIERARCHICAL,
+                                      s->first_ray + k);
+        nerf__sample_fine_ray(n_c, n_f, b->t[0] + k * n_c,
+                              b->weights[0] + k * n_c, j->random,
+                              s->u_fine ? s->u_fine + k * n_f : NULL, &rng,
+                              b->scratch + k * scratch,
+                              b->t[1] + k * (n_c + n_f));
+    }
+}
+
+/* Network inputs of one pass: o + d t and the ray's view direction. */
+static void fill_points(void *ctx, size_t begin, size_t end)
+{
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const uint32_t m = b->n_samples[j->pass];
+    const float *t = b->t[j->pass];
+    const bool with_dirs = j->with_dirs;
+    for (size_t k = begin; k < end; k++) {
         const float *o = b->ray_o + 3 * k, *d = b->ray_d + 3 * k;
         for (uint32_t i = 0; i < m; i++) {
             size_t at = k * m + i;
@@ -147,23 +205,28 @@ static int run_network(nerf__batch *b, const nerf__render_setup *s, int pass,
     return NERF_OK;
 }
 
-static void add_noise(nerf__batch *b, const nerf__render_setup *s, int pass,
-                      size_t n)
+static bool has_noise(const nerf__render_setup *s, int pass)
 {
+    return s->noise[pass] || (s->training && s->noise_std > 0.0f);
+}
+
+static void add_noise(void *ctx, size_t begin, size_t end)
+{
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const nerf__render_setup *s = j->s;
+    const int pass = j->pass;
     const uint32_t m = b->n_samples[pass];
     float *sigma = b->sigma[pass];
     if (s->noise[pass]) {
-        for (size_t i = 0; i < n * m; i++) {
+        for (size_t i = begin * m; i < end * m; i++) {
             sigma[i] += s->noise[pass][i];
         }
         return;
     }
-    if (!s->training || !(s->noise_std > 0.0f)) {
-        return;
-    }
     const uint32_t purpose = pass == 0 ? NERF__STREAM_NOISE_COARSE
                                        : NERF__STREAM_NOISE_FINE;
-    for (size_t k = 0; k < n; k++) {
+    for (size_t k = begin; k < end; k++) {
         nerf__rng rng = nerf__ray_rng(s->sampler->opts.seed, purpose,
                                       s->first_ray + k);
         for (uint32_t i = 0; i < m; i++) {
@@ -172,11 +235,14 @@ static void add_noise(nerf__batch *b, const nerf__render_setup *s, int pass,
     }
 }
 
-static void composite_pass(nerf__batch *b, int pass, size_t n,
-                           const nerf__pass_out *out)
+static void composite_pass(void *ctx, size_t begin, size_t end)
 {
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const int pass = j->pass;
+    const nerf__pass_out *out = j->out;
     const uint32_t m = b->n_samples[pass];
-    for (size_t k = 0; k < n; k++) {
+    for (size_t k = begin; k < end; k++) {
         nerf__ray_out r;
         size_t at = k * m;
         nerf__composite_ray(m, b->t[pass] + at, b->dir_norm[k],
@@ -234,40 +300,49 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     if (n_rays == 0) {
         return NERF_OK;
     }
-    const bool random = s->training && so->perturb;
-    const bool with_dirs = m->nets[0].use_viewdirs;
-
-    prepare_rays(b, s, n_rays, origins, directions);
-    for (size_t k = 0; k < n_rays; k++) {
-        nerf__rng rng = nerf__ray_rng(so->seed, NERF__STREAM_STRATIFIED,
-                                      s->first_ray + k);
-        nerf__sample_stratified(so, random,
-                                s->u_coarse ? s->u_coarse + k * n_c : NULL,
-                                &rng, b->t[0] + k * n_c);
-    }
+    batch_job j = {.b = b, .s = s, .o = origins, .d = directions,
+                   .random = s->training && so->perturb,
+                   .with_dirs = m->nets[0].use_viewdirs};
+    /* Rough operations per ray of each loop, to decide whether it is worth
+     * waking the pool. */
+    nerf__parallel_for(n_rays, 32, prepare_rays, &j);
+    nerf__parallel_for(n_rays, 8 * n_c, sample_coarse, &j);
     for (uint32_t pass = 0; pass < b->n_pass; pass++) {
+        const uint32_t samples = b->n_samples[pass];
+        j.pass = (int)pass;
+        j.out = out ? &out[pass] : NULL;
         if (pass == 1) {
-            for (size_t k = 0; k < n_rays; k++) {
-                nerf__rng rng = nerf__ray_rng(so->seed,
-                                              NERF__STREAM_HIERARCHICAL,
-                                              s->first_ray + k);
-                nerf__sample_fine_ray(n_c, n_f, b->t[0] + k * n_c,
-                                      b->weights[0] + k * n_c, random,
-                                      s->u_fine ? s->u_fine + k * n_f : NULL,
-                                      &rng, b->scratch,
-                                      b->t[1] + k * (n_c + n_f));
-            }
+            nerf__parallel_for(n_rays, 16 * (n_c + n_f), sample_fine, &j);
         }
-        fill_points(b, n_rays, b->n_samples[pass], b->t[pass], with_dirs);
-        rc = run_network(b, s, (int)pass, n_rays * b->n_samples[pass]);
+        nerf__parallel_for(n_rays, 6 * samples, fill_points, &j);
+        rc = run_network(b, s, (int)pass, n_rays * samples);
         if (rc != NERF_OK) {
             return rc;
         }
-        add_noise(b, s, (int)pass, n_rays);
-        composite_pass(b, (int)pass, n_rays, out ? &out[pass] : NULL);
+        if (has_noise(s, (int)pass)) {
+            nerf__parallel_for(n_rays, 40 * samples, add_noise, &j);
+        }
+        nerf__parallel_for(n_rays, 40 * samples, composite_pass, &j);
     }
     b->kept = s->keep;
     return NERF_OK;
+}
+
+static void composite_backward(void *ctx, size_t begin, size_t end)
+{
+    const batch_job *j = ctx;
+    nerf__batch *b = j->b;
+    const int pass = j->pass;
+    const uint32_t s = b->n_samples[pass];
+    for (size_t k = begin; k < end; k++) {
+        size_t at = k * s;
+        nerf__composite_ray_backward(
+            s, b->t[pass] + at, b->dir_norm[k], b->rgb[pass] + 3 * at,
+            b->sigma[pass] + at, b->white, j->d_rgb ? j->d_rgb + 3 * k : NULL,
+            j->d_depth ? j->d_depth[k] : 0.0f,
+            j->d_opacity ? j->d_opacity[k] : 0.0f, b->d_rgb + 3 * at,
+            b->d_sigma + at);
+    }
 }
 
 int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
@@ -286,15 +361,10 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
         if (gr == NULL && gd == NULL && go == NULL) {
             continue;
         }
-        const uint32_t s = b->n_samples[pass];
-        for (size_t k = 0; k < b->n_rays; k++) {
-            size_t at = k * s;
-            nerf__composite_ray_backward(
-                s, b->t[pass] + at, b->dir_norm[k], b->rgb[pass] + 3 * at,
-                b->sigma[pass] + at, b->white, gr ? gr + 3 * k : NULL,
-                gd ? gd[k] : 0.0f, go ? go[k] : 0.0f, b->d_rgb + 3 * at,
-                b->d_sigma + at);
-        }
+        batch_job j = {.b = b, .pass = (int)pass, .d_rgb = gr, .d_depth = gd,
+                       .d_opacity = go};
+        nerf__parallel_for(b->n_rays, 60 * b->n_samples[pass],
+                           composite_backward, &j);
         nerf__model_backward(m, b->net[pass], &b->ws[pass], b->d_rgb,
                              b->d_sigma);
     }

@@ -1,0 +1,189 @@
+/*
+ * The thread pool behind the element-wise passes: every item is visited
+ * exactly once, concurrent and nested callers fall back to their own
+ * thread, a forked child still works, and the fused gradient passes give
+ * bit-identical results to a plain serial loop.
+ */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "fused.h"
+#include "../harness.h"
+#include "parallel.h"
+
+#define N 100000
+
+typedef struct visit_job {
+    atomic_int *count;
+    atomic_int ranges;
+    int nested;
+} visit_job;
+
+static void visit(void *ctx, size_t begin, size_t end)
+{
+    visit_job *j = ctx;
+    atomic_fetch_add(&j->ranges, 1);
+    for (size_t i = begin; i < end; i++) {
+        atomic_fetch_add(&j->count[i], 1);
+    }
+}
+
+static void visit_nested(void *ctx, size_t begin, size_t end)
+{
+    visit_job *j = ctx;
+    /* A call from inside a range: must run inline, not deadlock. */
+    visit_job inner = {.count = j->count + begin};
+    atomic_init(&inner.ranges, 0);
+    nerf__parallel_for(end - begin, 1000, visit, &inner);
+    atomic_fetch_add(&j->ranges, 1);
+}
+
+static int count_ok(atomic_int *count, size_t n, int expect)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (atomic_load(&count[i]) != expect) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static atomic_int counts[4][N];
+
+TEST(every_item_once)
+{
+    const size_t sizes[] = {0, 1, 2, 3, 17, 1000, N};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        memset(counts[0], 0, sizeof counts[0]);
+        visit_job j = {.count = counts[0]};
+        atomic_init(&j.ranges, 0);
+        nerf__parallel_for(sizes[s], 1000, visit, &j);
+        CHECK(count_ok(counts[0], sizes[s], 1));
+        CHECK(count_ok(counts[0] + sizes[s], N - sizes[s], 0));
+        if (sizes[s] == N) {
+            /* Enough work to split: as many ranges as threads. */
+            CHECK_EQ_INT(atomic_load(&j.ranges), nerf__parallel_threads());
+        }
+    }
+    memset(counts[0], 0, sizeof counts[0]);
+    visit_job small = {.count = counts[0]};
+    atomic_init(&small.ranges, 0);
+    /* 10^5 single operations are not worth a wake-up: one range. */
+    nerf__parallel_for(N, 0, visit, &small);
+    CHECK(count_ok(counts[0], N, 1));
+    CHECK_EQ_INT(atomic_load(&small.ranges), 1);
+}
+
+TEST(nested_calls_run_inline)
+{
+    memset(counts[0], 0, sizeof counts[0]);
+    visit_job j = {.count = counts[0]};
+    atomic_init(&j.ranges, 0);
+    nerf__parallel_for(N, 1000, visit_nested, &j);
+    CHECK(count_ok(counts[0], N, 1));
+}
+
+static void *caller(void *arg)
+{
+    atomic_int *count = arg;
+    for (int rep = 0; rep < 50; rep++) {
+        visit_job j = {.count = count};
+        atomic_init(&j.ranges, 0);
+        nerf__parallel_for(N, 1000, visit, &j);
+    }
+    return NULL;
+}
+
+TEST(concurrent_callers)
+{
+    memset(counts, 0, sizeof counts);
+    pthread_t t[4];
+    for (int i = 0; i < 4; i++) {
+        CHECK_EQ_INT(pthread_create(&t[i], NULL, caller, counts[i]), 0);
+    }
+    for (int i = 0; i < 4; i++) {
+        pthread_join(t[i], NULL);
+        CHECK(count_ok(counts[i], N, 50));
+    }
+}
+
+TEST(forked_child)
+{
+    /* The parent's pool has started (the tests above): the child has its
+     * state but none of its threads, and must still finish. */
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        memset(counts[0], 0, sizeof counts[0]);
+        visit_job j = {.count = counts[0]};
+        atomic_init(&j.ranges, 0);
+        nerf__parallel_for(N, 1000, visit, &j);
+        _exit(count_ok(counts[0], N, 1) ? 0 : 1);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+/* The bias gradients sum rows in order whatever the split. */
+TEST(gradient_passes_match_serial)
+{
+    const size_t n = 3000, cols = 257, ld = 260;
+    float *y = malloc(n * ld * sizeof(float));
+    float *dy = malloc(n * ld * sizeof(float));
+    float *dy_ref = malloc(n * ld * sizeof(float));
+    float db[257], db_ref[257], db2[257], db2_ref[257];
+    CHECK(y && dy && dy_ref);
+    if (!(y && dy && dy_ref)) {
+        return;
+    }
+    uint32_t state = 12345;
+    for (size_t i = 0; i < n * ld; i++) {
+        state = state * 1664525u + 1013904223u;
+        y[i] = (float)((int)(state >> 8) % 2001 - 1000) / 1000.0f;
+        state = state * 1664525u + 1013904223u;
+        dy[i] = dy_ref[i] = (float)(state >> 8) / 16777216.0f - 0.5f;
+    }
+    for (size_t c = 0; c < cols; c++) {
+        db[c] = db_ref[c] = 0.25f;
+        db2[c] = db2_ref[c] = -0.5f;
+    }
+    nerf__bias_backward(n, cols, dy, ld, db2);
+    nerf__relu_backward_bias(n, cols, y, ld, dy, ld, db);
+    for (size_t i = 0; i < n; i++) {
+        for (size_t c = 0; c < cols; c++) {
+            db2_ref[c] += dy_ref[i * ld + c];
+        }
+    }
+    for (size_t i = 0; i < n; i++) {
+        for (size_t c = 0; c < cols; c++) {
+            float g = y[i * ld + c] > 0.0f ? dy_ref[i * ld + c] : 0.0f;
+            dy_ref[i * ld + c] = g;
+            db_ref[c] += g;
+        }
+    }
+    CHECK(memcmp(db, db_ref, sizeof db) == 0);
+    CHECK(memcmp(db2, db2_ref, sizeof db2) == 0);
+    int same = 1;
+    for (size_t i = 0; i < n; i++) {
+        same &= memcmp(dy + i * ld, dy_ref + i * ld, cols * sizeof(float)) == 0;
+    }
+    CHECK(same);
+    free(y);
+    free(dy);
+    free(dy_ref);
+}
+
+int main(void)
+{
+    RUN(every_item_once);
+    RUN(nested_calls_run_inline);
+    RUN(concurrent_callers);
+    RUN(forked_child);
+    RUN(gradient_passes_match_serial);
+    HARNESS_EXIT();
+}
