@@ -16,7 +16,9 @@ static const char usage[] =
     "usage: nerf-render --model MODEL --out DIR\n"
     "                   (--data DIR [--split train|val|test] [--downscale K]\n"
     "                    | --path orbit|spiral --frames N [--width W]\n"
-    "                      [--height H] [--data DIR])\n"
+    "                      [--height H] [--data DIR]\n"
+    "                    | --poses FILE [--width W --height H]\n"
+    "                      [--focal F | --fov DEG] [--data DIR])\n"
     "                   [--depth] [--near T --far T]\n"
     "Render views of MODEL and write them to DIR as r_NNN.png (and\n"
     "depth_NNN.png, opacity_NNN.png with --depth).\n"
@@ -25,14 +27,27 @@ static const char usage[] =
     "  --path orbit  a circle at 30 degrees elevation, radius 4, around the\n"
     "                origin, as for Blender scenes (default 100x100 pixels)\n"
     "  --path spiral the reference's spiral path of an LLFF scene (needs\n"
-    "                --data)\n";
+    "                --data)\n"
+    "  --poses FILE  a camera path: a .npy of N camera-to-world matrices,\n"
+    "                shape (N,3,4), (N,4,4), (N,12) or (N,16), float32 or\n"
+    "                float64, OpenGL axes; or a transforms.json-style file\n"
+    "                (camera_angle_x or fl_x, optional w and h,\n"
+    "                frames[].transform_matrix).  Size: --width/--height,\n"
+    "                else the file's w and h, else 100x100.  Intrinsics:\n"
+    "                --focal (pixels) or --fov (horizontal, degrees), else\n"
+    "                the file's, else --fov 39.6 (as --path orbit).  With\n"
+    "                --data, the scene gives bounds, background and NDC.\n";
 
 typedef struct args {
-    const char *model, *out, *data, *path;
+    const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
-    double near, far;
-    int depth;
+    double near, far, focal, fov;
+    int depth, size_given;
 } args;
+
+/* The lego scene's horizontal field of view, in radians: --path orbit's,
+ * and the default of --poses files that carry no intrinsics. */
+#define ORBIT_FOV 0.6911112070083618
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -64,6 +79,12 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--path") == 0) {
             a->path = v;
             bad = strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0;
+        } else if (strcmp(k, "--poses") == 0) {
+            a->poses = v;
+        } else if (strcmp(k, "--focal") == 0) {
+            bad = cli_double(v, &a->focal) || !(a->focal > 0.0);
+        } else if (strcmp(k, "--fov") == 0) {
+            bad = cli_double(v, &a->fov) || !(a->fov > 0.0 && a->fov < 180.0);
         } else if (strcmp(k, "--split") == 0) {
             int split = cli_split(v);
             a->split = (uint64_t)split;
@@ -74,8 +95,10 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 1, 100000, &a->frames);
         } else if (strcmp(k, "--width") == 0) {
             bad = cli_uint(v, 1, 16384, &a->width);
+            a->size_given |= 1;
         } else if (strcmp(k, "--height") == 0) {
             bad = cli_uint(v, 1, 16384, &a->height);
+            a->size_given |= 2;
         } else if (strcmp(k, "--near") == 0) {
             bad = cli_double(v, &a->near);
         } else if (strcmp(k, "--far") == 0) {
@@ -91,9 +114,29 @@ static int parse(int argc, char **argv, args *a)
             return -1;
         }
     }
-    if (a->model == NULL || a->out == NULL || (a->data == NULL && a->path == NULL)) {
-        fprintf(stderr, "nerf-render: --model, --out and --data or --path "
-                        "are required\n");
+    if (a->model == NULL || a->out == NULL ||
+        (a->data == NULL && a->path == NULL && a->poses == NULL)) {
+        fprintf(stderr, "nerf-render: --model, --out and --data, --path or "
+                        "--poses are required\n");
+        return -1;
+    }
+    if (a->path && a->poses) {
+        fprintf(stderr, "nerf-render: --path and --poses exclude each "
+                        "other\n");
+        return -1;
+    }
+    if ((a->focal > 0.0 || a->fov > 0.0) && a->poses == NULL) {
+        fprintf(stderr, "nerf-render: --focal and --fov go with --poses\n");
+        return -1;
+    }
+    if (a->focal > 0.0 && a->fov > 0.0) {
+        fprintf(stderr, "nerf-render: give --focal or --fov, not both\n");
+        return -1;
+    }
+    /* A file's w and h keep their aspect ratio only as a pair. */
+    if (a->poses && a->size_given && a->size_given != 3) {
+        fprintf(stderr, "nerf-render: with --poses, give --width and "
+                        "--height together\n");
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
@@ -103,11 +146,40 @@ static int parse(int argc, char **argv, args *a)
     return 0;
 }
 
+/*
+ * The --poses file's cameras.  Options given on the command line win over
+ * the file; where neither gives a size or intrinsics, --path orbit's
+ * defaults serve.
+ */
+static int load_poses(const args *a, const nerf_hooks *hooks,
+                      nerf_camera_path **out)
+{
+    nerf_camera_path_options o;
+    NERF_CAMERA_PATH_OPTIONS_INIT(&o);
+    o.width = (uint32_t)a->width;
+    o.height = (uint32_t)a->height;
+    if (!a->size_given) {
+        o.flags |= NERF_CAMERA_PATH_FILE_SIZE;
+    }
+    o.focal = (float)a->focal;
+    o.fov_x = (float)a->fov;
+    if (a->focal <= 0.0 && a->fov <= 0.0) {
+        o.fov_x = (float)(ORBIT_FOV * 180.0 / 3.14159265358979);
+        o.flags |= NERF_CAMERA_PATH_FILE_INTRINSICS;
+    }
+    o.hooks = hooks;
+    return nerf_camera_path_load(out, a->poses, &o);
+}
+
 /* Camera `i` of the requested views. */
-static int view_camera(const args *a, const nerf_dataset *ds, uint32_t i,
-                       uint32_t n, nerf_camera *cam)
+static int view_camera(const args *a, const nerf_dataset *ds,
+                       const nerf_camera_path *cp, uint32_t i, uint32_t n,
+                       nerf_camera *cam)
 {
     NERF_CAMERA_INIT(cam);
+    if (cp != NULL) {
+        return nerf_camera_path_camera(cp, i, cam);
+    }
     if (a->path == NULL) {
         return nerf_dataset_camera(ds, i, cam);
     }
@@ -115,7 +187,7 @@ static int view_camera(const args *a, const nerf_dataset *ds, uint32_t i,
         return nerf_dataset_spiral_camera(ds, i, n, cam);
     }
     /* The lego scene's field of view, circling at 30 degrees. */
-    const double fov = 0.6911112070083618, elev = 30.0 * 3.14159265358979 / 180;
+    const double fov = ORBIT_FOV, elev = 30.0 * 3.14159265358979 / 180;
     double az = 2.0 * 3.14159265358979 * i / n;
     float eye[3] = {(float)(4.0 * cos(elev) * cos(az)),
                     (float)(4.0 * cos(elev) * sin(az)), (float)(4.0 * sin(elev))};
@@ -139,9 +211,11 @@ static void depth_to_grey(float *depth, const float *opacity, size_t n,
 }
 
 static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
-                      float near, float far)
+                      const nerf_camera_path *cp, float near, float far)
 {
-    uint32_t n = a->path ? (uint32_t)a->frames : nerf_dataset_count(ds);
+    uint32_t n = cp        ? nerf_camera_path_count(cp)
+                 : a->path ? (uint32_t)a->frames
+                           : nerf_dataset_count(ds);
     progress bar;
     progress_begin(&bar, "nerf-render", n);
     int rc = NERF_OK;
@@ -149,7 +223,7 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     size_t cap = 0;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
-        rc = view_camera(a, ds, i, n, &cam);
+        rc = view_camera(a, ds, cp, i, n, &cam);
         size_t pixels = (size_t)cam.width * cam.height;
         if (rc == NERF_OK && pixels > cap) {
             free(rgb);
@@ -211,7 +285,11 @@ int main(int argc, char **argv)
     nerf_dataset *ds = NULL;
     nerf_sampler *s = NULL;
     nerf_renderer *r = NULL;
+    nerf_camera_path *cp = NULL;
     int rc = nerf_model_load(&m, a.model, &hooks);
+    if (rc == NERF_OK && a.poses) {
+        rc = load_poses(&a, &hooks, &cp);
+    }
     if (rc == NERF_OK && a.data) {
         nerf_dataset_options dopt;
         NERF_DATASET_OPTIONS_INIT(&dopt);
@@ -239,7 +317,7 @@ int main(int argc, char **argv)
         rc = nerf_renderer_create(&r, m, s, &ro);
     }
     if (rc == NERF_OK) {
-        rc = render_all(&a, r, ds, near, far);
+        rc = render_all(&a, r, ds, cp, near, far);
     }
     if (rc != NERF_OK) {
         cli_report("nerf-render", rc);
@@ -247,6 +325,7 @@ int main(int argc, char **argv)
     nerf_renderer_destroy(r);
     nerf_sampler_destroy(s);
     nerf_dataset_destroy(ds);
+    nerf_camera_path_destroy(cp);
     nerf_model_destroy(m);
     return rc == NERF_OK ? 0 : 1;
 }

@@ -179,6 +179,7 @@ typedef struct nerf_sampler nerf_sampler;   /**< Sample placement along rays. */
 typedef struct nerf_renderer nerf_renderer; /**< Compositing and images. */
 typedef struct nerf_dataset nerf_dataset;   /**< Images and cameras. */
 typedef struct nerf_trainer nerf_trainer;   /**< Optimisation loop state. */
+typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 
 /* ------------------------------------------------------------------------ */
 /* Model                                                                    */
@@ -478,6 +479,116 @@ NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
  */
 NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
                                  const float target[3], const float up[3]);
+
+/**
+ * Flags for nerf_camera_path_options.flags.  Without them the options'
+ * size and intrinsics, when set, win over the file's; with them the file's
+ * win where it has any, and the options serve as the fallback.
+ */
+#define NERF_CAMERA_PATH_FILE_SIZE 0x1u /**< A frame whose file gives w and
+                                             h keeps that size; width and
+                                             height serve only frames
+                                             without one. */
+#define NERF_CAMERA_PATH_FILE_INTRINSICS 0x2u /**< A frame whose file gives
+                                                   fl_x or camera_angle_x
+                                                   keeps the file's
+                                                   intrinsics; focal or
+                                                   fov_x serve only frames
+                                                   without them (and every
+                                                   .npy pose). */
+
+/**
+ * How nerf_camera_path_load() turns a file of poses into cameras.  The
+ * defaults take everything from the file, which works for a
+ * transforms-style JSON that gives its image size (w, h); a .npy file
+ * carries poses only and needs width, height and focal or fov_x.
+ */
+typedef struct nerf_camera_path_options {
+    uint32_t struct_size; /**< Set by nerf_camera_path_options_init(). */
+    uint32_t width;       /**< Image width in pixels, 1..65536, or 0 (the
+                               default) for the file's w.  Set width and
+                               height together or leave both 0.  When the
+                               file gives w and h, its intrinsics are
+                               scaled by width / w and height / h (the
+                               field of view is kept). */
+    uint32_t height;      /**< Image height in pixels, 1..65536, or 0 for
+                               the file's h. */
+    uint32_t flags;       /**< NERF_CAMERA_PATH_*; default 0. */
+    float focal;          /**< > 0: fx = fy = focal, in pixels of the
+                               rendered image, principal point at the
+                               centre, replacing the file's intrinsics
+                               (see NERF_CAMERA_PATH_FILE_INTRINSICS);
+                               default 0 (none). */
+    float fov_x;          /**< Horizontal field of view in degrees, in
+                               (0, 180): as focal with focal =
+                               0.5 width / tan(0.5 fov_x); default 0
+                               (none).  At most one of focal and fov_x may
+                               be set. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_camera_path_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
+                                           size_t struct_size);
+#define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
+    nerf_camera_path_options_init((o), sizeof *(o))
+
+/**
+ * Load a camera path (a sequence of poses to render) from the file
+ * @p path, in one of two forms (docs/formats.md has the details):
+ *
+ *  - A NumPy .npy file (recognised by its magic bytes, or by a ".npy"
+ *    name): camera-to-world matrices in the nerf_camera convention, of
+ *    shape (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16) (the last two being
+ *    the same matrices flattened row by row), dtype '<f4' or '<f8', C
+ *    order.  The bottom row of 4 x 4 matrices must be [0, 0, 0, 1].  The
+ *    file holds no intrinsics: the options must give width, height and
+ *    focal or fov_x.
+ *  - Anything else is read as a transforms-style JSON file, as Blender and
+ *    instant-ngp write them and nerf_dataset_load() reads them:
+ *    frames[].transform_matrix, and camera_angle_x or fl_x (fl_y,
+ *    camera_angle_y, cx, cy, w, h optional), at top level or per frame.
+ *    frames[].file_path is ignored: no image is read.
+ *
+ * Every matrix must be finite, representable as float, and have an
+ * invertible rotation part.  Files hold at most 100000 poses.  The
+ * cameras have flags 0 (rays through pixel centres).
+ *
+ * @param out  receives the path; release it with nerf_camera_path_destroy().
+ *             NULL on failure.
+ * @param opts NULL for the defaults.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
+ * for a file that gives none, no focal or fov_x for a .npy file);
+ * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
+ * or malformed file, npy dtype, order or shape not listed above, no
+ * frames or more than 100000, missing field, NaN or infinite values,
+ * bottom row not [0, 0, 0, 1], degenerate rotation, focal not positive,
+ * w or h not a positive whole number); NERF_ENOMEM.  Messages name the
+ * file and the problem.
+ * Reentrant: separate loads may run on separate threads.
+ */
+NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
+                                   const nerf_camera_path_options *opts);
+
+/** Release a camera path.  NULL is a no-op. */
+NERF_API void nerf_camera_path_destroy(nerf_camera_path *camera_path);
+
+/** Number of cameras (at least 1); 0 for NULL. */
+NERF_API uint32_t nerf_camera_path_count(const nerf_camera_path *camera_path);
+
+/**
+ * Camera @p index of the path, in file order.
+ * @param out initialised with nerf_camera_init(); as many bytes as its
+ *            struct_size are written.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
+ * uninitialised struct).  Reentrant.
+ */
+NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
+                                     uint32_t index, nerf_camera *out);
 
 /**
  * Settings of a sampler, fixed at creation.  The defaults are the

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "camera.h"
 #include "llff_poses.h"
 #include "options.h"
 
@@ -220,21 +221,11 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
     return rc;
 }
 
-/*
- * Write a full camera into the caller's struct, as many bytes as its
- * struct_size says, so that callers built against an older, smaller
- * nerf_camera keep working.
- */
+/* Write a camera of the dataset's image size into the caller's struct. */
 static int write_camera(const nerf_dataset *ds, const double *c2w,
                         double fx, double fy, double cx, double cy,
                         nerf_camera *out, const char *fn)
 {
-    uint32_t size = out->struct_size;
-    if (size < offsetof(nerf_camera, cy) + sizeof out->cy || size > 65536) {
-        return nerf__error(NERF_EINVAL, "%s: camera struct_size %u is "
-                           "invalid (initialise it with nerf_camera_init)",
-                           fn, (unsigned)size);
-    }
     nerf_camera cam;
     nerf_camera_init(&cam, sizeof cam);
     cam.width = ds->width;
@@ -246,11 +237,7 @@ static int write_camera(const nerf_dataset *ds, const double *c2w,
     cam.fy = (float)fy;
     cam.cx = (float)cx;
     cam.cy = (float)cy;
-    size_t n = size < sizeof cam ? size : sizeof cam;
-    memcpy((char *)out + sizeof cam.struct_size,
-           (const char *)&cam + sizeof cam.struct_size,
-           n - sizeof cam.struct_size);
-    return NERF_OK;
+    return nerf__camera_write(out, &cam, fn);
 }
 
 NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,

@@ -12,22 +12,13 @@
 #include <sys/stat.h>
 
 #include "dataset.h"
-#include "file_io.h"
-
-/* Generous: a transforms file lists one small object per frame. */
-#define JSON_MAX_BYTES (64u << 20)
-#define PI_D 3.14159265358979323846
-
-/* Intrinsics fields, at top level or per frame; NAN when absent. */
-typedef struct intrinsics {
-    double angle_x, angle_y, fl_x, fl_y, cx, cy, w, h;
-} intrinsics;
+#include "transforms.h"
 
 typedef struct frame {
     uint32_t index;  /* position in the file's frames list */
     char *path;
     double c2w[12];
-    intrinsics in;
+    nerf__intrinsics in;
 } frame;
 
 /* Everything one load needs, so that the helpers take one pointer. */
@@ -38,96 +29,6 @@ typedef struct blender_ctx {
     frame *frames;
     uint32_t n_frames;
 } blender_ctx;
-
-/* Read key as a finite number into *out when present. */
-static int get_number(const blender_ctx *b, const cJSON *obj, const char *key,
-                      const char *where, double *out)
-{
-    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (item == NULL) {
-        return NERF_OK;
-    }
-    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble)) {
-        return nerf__error(NERF_EFORMAT, "%s: %sfield '%s' is not a finite "
-                           "number", b->json_path, where, key);
-    }
-    *out = item->valuedouble;
-    return NERF_OK;
-}
-
-static int read_intrinsics(const blender_ctx *b, const cJSON *obj,
-                           const char *where, intrinsics *in)
-{
-    static const char *const keys[] = {"camera_angle_x", "camera_angle_y",
-                                       "fl_x", "fl_y", "cx", "cy", "w", "h"};
-    double *fields[] = {&in->angle_x, &in->angle_y, &in->fl_x, &in->fl_y,
-                        &in->cx, &in->cy, &in->w, &in->h};
-    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
-        int rc = get_number(b, obj, keys[i], where, fields[i]);
-        if (rc != NERF_OK) {
-            return rc;
-        }
-    }
-    return NERF_OK;
-}
-
-static double det3(const double *m, size_t stride)
-{
-    const double *r0 = m, *r1 = m + stride, *r2 = m + 2 * stride;
-    return r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) -
-           r0[1] * (r1[0] * r2[2] - r1[2] * r2[0]) +
-           r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]);
-}
-
-/* transform_matrix: 4 rows (or the top 3) of 4 finite numbers. */
-static int read_matrix(const blender_ctx *b, const cJSON *fr, uint32_t idx,
-                       double *c2w)
-{
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(fr, "transform_matrix");
-    if (m == NULL) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
-                           "'transform_matrix'", b->json_path, (unsigned)idx);
-    }
-    int rows = cJSON_IsArray(m) ? cJSON_GetArraySize(m) : -1;
-    if (rows != 3 && rows != 4) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
-                           "must be a list of 4 rows of 4 numbers",
-                           b->json_path, (unsigned)idx);
-    }
-    double last[4] = {0.0, 0.0, 0.0, 1.0};
-    for (int r = 0; r < rows; r++) {
-        const cJSON *row = cJSON_GetArrayItem(m, r);
-        if (!cJSON_IsArray(row) || cJSON_GetArraySize(row) != 4) {
-            return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
-                               "row %d is not a list of 4 numbers",
-                               b->json_path, (unsigned)idx, r);
-        }
-        for (int c = 0; c < 4; c++) {
-            const cJSON *v = cJSON_GetArrayItem(row, c);
-            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) {
-                return nerf__error(NERF_EFORMAT, "%s: frame %u: "
-                                   "transform_matrix[%d][%d] is not a finite "
-                                   "number", b->json_path, (unsigned)idx, r, c);
-            }
-            double *dst = r < 3 ? &c2w[r * 4 + c] : &last[c];
-            *dst = v->valuedouble;
-        }
-    }
-    static const double homogeneous[4] = {0.0, 0.0, 0.0, 1.0};
-    for (int c = 0; c < 4; c++) {
-        if (fabs(last[c] - homogeneous[c]) > 1e-4) {
-            return nerf__error(NERF_EFORMAT, "%s: frame %u: the last row of "
-                               "transform_matrix must be [0, 0, 0, 1]",
-                               b->json_path, (unsigned)idx);
-        }
-    }
-    if (fabs(det3(c2w, 4)) < 1e-9) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix has "
-                           "a degenerate rotation", b->json_path,
-                           (unsigned)idx);
-    }
-    return NERF_OK;
-}
 
 /* The image path of a frame: relative to the json, ".png" when bare. */
 static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
@@ -163,17 +64,9 @@ static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
 static int parse_frames(blender_ctx *b, const cJSON *root,
                         const nerf__dataset_config *cfg)
 {
-    if (!cJSON_IsObject(root)) {
-        return nerf__error(NERF_EFORMAT, "%s: the top level is not a JSON "
-                           "object", b->json_path);
-    }
-    intrinsics top = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
-    int rc = read_intrinsics(b, root, "", &top);
-    const cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
-    if (rc == NERF_OK && !cJSON_IsArray(frames)) {
-        rc = nerf__error(NERF_EFORMAT, "%s: %s 'frames'", b->json_path,
-                         frames ? "not a list:" : "missing field");
-    }
+    nerf__intrinsics top;
+    const cJSON *frames = NULL;
+    int rc = nerf__transforms_top(b->json_path, root, &top, &frames);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -197,10 +90,11 @@ static int parse_frames(blender_ctx *b, const cJSON *root,
              : nerf__error(NERF_EFORMAT, "%s: %snot a JSON object",
                            b->json_path, where);
         if (rc == NERF_OK) {
-            rc = read_intrinsics(b, fr, where, &f->in);
+            rc = nerf__transforms_read_intrinsics(b->json_path, fr, where,
+                                                  &f->in);
         }
         if (rc == NERF_OK) {
-            rc = read_matrix(b, fr, idx, f->c2w);
+            rc = nerf__transforms_read_matrix(b->json_path, fr, idx, f->c2w);
         }
         if (rc == NERF_OK) {
             rc = frame_path(b, fr, idx, &f->path);
@@ -217,43 +111,21 @@ static int parse_frames(blender_ctx *b, const cJSON *root,
 static int resolve_intrinsics(const blender_ctx *b, const frame *f,
                               uint32_t w, uint32_t h, nerf__view *v)
 {
-    const intrinsics *in = &f->in;
+    const nerf__intrinsics *in = &f->in;
     if ((!isnan(in->w) && in->w != w) || (!isnan(in->h) && in->h != h)) {
         return nerf__error(NERF_EFORMAT, "%s: frame %u: w x h is %gx%g but "
                            "%s is %ux%u", b->json_path, (unsigned)f->index,
                            in->w, in->h, f->path, (unsigned)w, (unsigned)h);
     }
-    double angles[2] = {in->angle_x, in->angle_y};
-    for (int i = 0; i < 2; i++) {
-        if (!isnan(angles[i]) && !(angles[i] > 0.0 && angles[i] < PI_D)) {
-            return nerf__error(NERF_EFORMAT, "%s: frame %u: camera_angle_%c "
-                               "%g is not in (0, pi)", b->json_path,
-                               (unsigned)f->index, i ? 'y' : 'x', angles[i]);
-        }
+    double k[4];
+    int rc = nerf__transforms_focal(b->json_path, f->index, in, w, h, k);
+    if (rc != NERF_OK) {
+        return rc;
     }
-    if (!isnan(in->fl_x)) {
-        v->fx = in->fl_x;
-    } else if (!isnan(in->angle_x)) {
-        v->fx = 0.5 * w / tan(0.5 * in->angle_x);
-    } else {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
-                           "'camera_angle_x' (or 'fl_x')", b->json_path,
-                           (unsigned)f->index);
-    }
-    if (!isnan(in->fl_y)) {
-        v->fy = in->fl_y;
-    } else if (!isnan(in->angle_y)) {
-        v->fy = 0.5 * h / tan(0.5 * in->angle_y);
-    } else {
-        v->fy = v->fx;
-    }
-    v->cx = isnan(in->cx) ? 0.5 * w : in->cx;
-    v->cy = isnan(in->cy) ? 0.5 * h : in->cy;
-    if (!(v->fx > 0.0) || !(v->fy > 0.0)) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: focal length must be "
-                           "positive (fx %g, fy %g)", b->json_path,
-                           (unsigned)f->index, v->fx, v->fy);
-    }
+    v->fx = k[0];
+    v->fy = k[1];
+    v->cx = k[2];
+    v->cy = k[3];
     memcpy(v->c2w, f->c2w, sizeof v->c2w);
     return NERF_OK;
 }
@@ -313,28 +185,12 @@ static int load_frames(blender_ctx *b, const nerf__dataset_config *cfg)
 
 static int parse_file(blender_ctx *b, const nerf__dataset_config *cfg)
 {
-    unsigned char *text;
-    size_t size;
-    int rc = nerf__file_read(&b->ds->env, b->json_path, JSON_MAX_BYTES, &text,
-                             &size);
-    if (rc != NERF_OK) {
-        return rc;
-    }
-    const char *end = NULL;
-    cJSON *root = cJSON_ParseWithLengthOpts((const char *)text, size, &end, 0);
-    if (root == NULL) {
-        size_t pos = end ? (size_t)(end - (const char *)text) : 0;
-        size_t line = 1;
-        for (size_t i = 0; i < pos && i < size; i++) {
-            line += text[i] == '\n';
-        }
-        rc = nerf__error(NERF_EFORMAT, "%s: invalid JSON at line %zu (byte "
-                         "%zu)", b->json_path, line, pos);
-    } else {
+    cJSON *root = NULL;
+    int rc = nerf__transforms_parse(&b->ds->env, b->json_path, &root);
+    if (rc == NERF_OK) {
         rc = parse_frames(b, root, cfg);
     }
     cJSON_Delete(root);
-    nerf__free(&b->ds->env, text);
     return rc;
 }
 

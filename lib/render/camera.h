@@ -13,6 +13,14 @@
 int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn);
 
 /*
+ * Copy a full-size camera into a caller's versioned struct, as many bytes
+ * as its struct_size says, so that callers built against an older, smaller
+ * nerf_camera keep working.  The caller's struct_size is kept.
+ */
+int nerf__camera_write(nerf_camera *out, const nerf_camera *cam,
+                       const char *fn);
+
+/*
  * Rays of pixels first .. first + n - 1 (row-major pixel index) of a
  * validated camera: origins and unnormalised directions, n x 3 each.
  */

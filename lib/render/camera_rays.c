@@ -58,6 +58,22 @@ int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn)
     return NERF_OK;
 }
 
+int nerf__camera_write(nerf_camera *out, const nerf_camera *cam,
+                       const char *fn)
+{
+    uint32_t size = out->struct_size;
+    if (size < offsetof(nerf_camera, cy) + sizeof out->cy || size > 65536) {
+        return nerf__error(NERF_EINVAL, "%s: camera struct_size %u is "
+                           "invalid (initialise it with nerf_camera_init)",
+                           fn, (unsigned)size);
+    }
+    size_t n = size < sizeof *cam ? size : sizeof *cam;
+    memcpy((char *)out + sizeof cam->struct_size,
+           (const char *)cam + sizeof cam->struct_size,
+           n - sizeof cam->struct_size);
+    return NERF_OK;
+}
+
 void nerf__camera_rays(const nerf_camera *cam, size_t first, size_t n,
                        float *origins, float *directions)
 {

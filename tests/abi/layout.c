@@ -63,6 +63,15 @@ FROZEN(nerf_camera, cx, 72);
 FROZEN(nerf_camera, cy, 76);
 SIZE(nerf_camera, 80);
 
+FROZEN(nerf_camera_path_options, struct_size, 0);
+FROZEN(nerf_camera_path_options, width, 4);
+FROZEN(nerf_camera_path_options, height, 8);
+FROZEN(nerf_camera_path_options, flags, 12);
+FROZEN(nerf_camera_path_options, focal, 16);
+FROZEN(nerf_camera_path_options, fov_x, 20);
+FROZEN(nerf_camera_path_options, hooks, 24);
+SIZE(nerf_camera_path_options, 32);
+
 FROZEN(nerf_sampler_options, struct_size, 0);
 FROZEN(nerf_sampler_options, n_coarse, 4);
 FROZEN(nerf_sampler_options, n_fine, 8);
@@ -142,6 +151,9 @@ _Static_assert(NERF_PARAM_LEARNING_RATE == 100 && NERF_PARAM_ADAM_EPS == 105,
                "parameter keys renumbered");
 _Static_assert(NERF_PRESET_REFERENCE == 1 && NERF_PRESET_TINY == 2,
                "presets renumbered");
+_Static_assert(NERF_CAMERA_PATH_FILE_SIZE == 0x1u &&
+               NERF_CAMERA_PATH_FILE_INTRINSICS == 0x2u,
+               "camera path flags renumbered");
 _Static_assert(NERF_CAMERA_PIXEL_CORNER == 0x1u &&
                NERF_SAMPLE_TRAINING == 0x1u && NERF_PROGRESS_RENDER == 1,
                "render flags renumbered");

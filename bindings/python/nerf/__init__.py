@@ -37,9 +37,10 @@ from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
                    last_error, library_path, log_stderr, log_to_stderr,
                    param_bounds, set_log_handler, status_string, version,
                    version_number, version_string)
-from .data import (DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE, SPLIT_TEST,
-                   SPLIT_TRAIN, SPLIT_VAL, Dataset, psnr, read_png, ssim,
-                   write_png, write_scene)
+from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
+                   DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE, SPLIT_TEST,
+                   SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
+                   read_png, ssim, write_png, write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
@@ -50,7 +51,8 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
                      RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
-                      DatasetOptions, Hooks, ModelOptions, Progress,
+                      CameraPathOptions, DatasetOptions, Hooks, ModelOptions,
+                      Progress,
                       ProgressStruct, RendererOptions, SamplerOptions,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
@@ -64,10 +66,11 @@ __all__ = [
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats",
     "write_scene", "read_png", "write_png", "psnr", "ssim",
+    "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
-    "TrainerOptions", "SceneOptions", "Hooks", "ProgressStruct",
-    "TrainStatsStruct",
+    "TrainerOptions", "SceneOptions", "CameraPathOptions", "Hooks",
+    "ProgressStruct", "TrainStatsStruct",
     # Errors.
     "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
     "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",
@@ -87,5 +90,6 @@ __all__ = [
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",
     "SPLIT_TRAIN", "SPLIT_VAL", "SPLIT_TEST",
     "DATASET_BLENDER", "DATASET_LLFF", "IMAGE_MAX_SIDE",
+    "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
 ]
 

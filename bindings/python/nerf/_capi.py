@@ -17,9 +17,10 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
                     c_uint, c_uint8, c_uint32, c_uint64, c_void_p)
 
 from . import _loader, errors
-from .structs import (LOG_CB, Camera, DatasetOptions, Hooks, ModelOptions,
-                      ProgressStruct, RendererOptions, SamplerOptions,
-                      SceneOptions, TrainerOptions, TrainStatsStruct)
+from .structs import (LOG_CB, Camera, CameraPathOptions, DatasetOptions,
+                      Hooks, ModelOptions, ProgressStruct, RendererOptions,
+                      SamplerOptions, SceneOptions, TrainerOptions,
+                      TrainStatsStruct)
 
 
 class _Opaque(ctypes.Structure):
@@ -47,11 +48,16 @@ class nerf_trainer(_Opaque):
     pass
 
 
+class nerf_camera_path(_Opaque):
+    pass
+
+
 ModelP = POINTER(nerf_model)
 SamplerP = POINTER(nerf_sampler)
 RendererP = POINTER(nerf_renderer)
 DatasetP = POINTER(nerf_dataset)
 TrainerP = POINTER(nerf_trainer)
+CameraPathP = POINTER(nerf_camera_path)
 
 PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
 
@@ -102,6 +108,14 @@ _PROTOTYPES = {
     "nerf_camera_rays": (c_int, [POINTER(Camera), c_size_t, c_size_t, _F, _F],
                          True),
     "nerf_camera_look_at": (c_int, [POINTER(Camera), _F, _F, _F], True),
+    "nerf_camera_path_options_init": (c_int, [POINTER(CameraPathOptions),
+                                              c_size_t], True),
+    "nerf_camera_path_load": (c_int, [POINTER(CameraPathP), c_char_p,
+                                      POINTER(CameraPathOptions)], True),
+    "nerf_camera_path_destroy": (None, [CameraPathP], False),
+    "nerf_camera_path_count": (c_uint32, [CameraPathP], False),
+    "nerf_camera_path_camera": (c_int, [CameraPathP, c_uint32,
+                                        POINTER(Camera)], True),
     # Sampler.
     "nerf_sampler_options_init": (c_int, [POINTER(SamplerOptions), c_size_t],
                                   True),

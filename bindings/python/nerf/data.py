@@ -7,8 +7,8 @@ import weakref
 from typing import Any, Callable, List, Optional, Tuple, Union
 
 from . import _buffers, _handle
-from ._capi import DatasetP, lib
-from .structs import Camera, DatasetOptions, SceneOptions
+from ._capi import CameraPathP, DatasetP, lib
+from .structs import Camera, CameraPathOptions, DatasetOptions, SceneOptions
 
 # nerf_split and nerf_dataset_format
 SPLIT_TRAIN = 0
@@ -21,6 +21,10 @@ FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff"}
 
 #: Largest width or height the PNG functions accept.
 IMAGE_MAX_SIDE = 16384
+
+# Flags of nerf_camera_path_options.
+CAMERA_PATH_FILE_SIZE = 0x1
+CAMERA_PATH_FILE_INTRINSICS = 0x2
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -158,6 +162,40 @@ class Dataset(_handle.Handle):
             lib.nerf_dataset_spiral_camera(ptr, int(index), int(n_views),
                                            ctypes.byref(cam))
         return cam
+
+
+def load_camera_path(path: Any, *, log: LogFn = None,
+                     log_level: Optional[int] = None,
+                     **options: Any) -> List[Camera]:
+    """The cameras of a camera path file (``nerf_camera_path_load``), in
+    file order: a .npy of camera-to-world matrices, shape (N, 3, 4),
+    (N, 4, 4), (N, 12) or (N, 16), float32 or float64; or a
+    transforms-style JSON file (Blender, instant-ngp).
+
+    Keyword options are fields of :class:`nerf.CameraPathOptions`: width
+    and height (default: the file's w and h), focal (pixels) or fov_x
+    (degrees), and flags (``CAMERA_PATH_FILE_SIZE``,
+    ``CAMERA_PATH_FILE_INTRINSICS``: the file's size or intrinsics win
+    where it has them).  A .npy file needs width, height and focal or
+    fov_x.  Failures raise NerfFormatError, NerfIOError or
+    NerfInvalidArgument with a message naming the file and the problem.
+    """
+    opts = CameraPathOptions(**options)
+    hooks = _handle.make_hooks(log, log_level)
+    if hooks is not None:
+        opts.hooks = ctypes.pointer(hooks[0])
+    cp = CameraPathP()
+    lib.nerf_camera_path_load(ctypes.byref(cp), _handle.fspath(path),
+                              ctypes.byref(opts))
+    try:
+        cameras = []
+        for i in range(lib.nerf_camera_path_count(cp)):
+            cam = Camera()
+            lib.nerf_camera_path_camera(cp, i, ctypes.byref(cam))
+            cameras.append(cam)
+        return cameras
+    finally:
+        lib.nerf_camera_path_destroy(cp)
 
 
 def write_scene(path: Any, *, log: LogFn = None,

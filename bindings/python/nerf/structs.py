@@ -197,6 +197,23 @@ class RendererOptions(_Versioned):
     ]
 
 
+class CameraPathOptions(_Versioned):
+    """``nerf_camera_path_options``: how a camera path file becomes
+    cameras (see :func:`nerf.load_camera_path`)."""
+
+    _c_name_ = "nerf_camera_path_options"
+    _c_init_ = "nerf_camera_path_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("width", c_uint32),
+        ("height", c_uint32),
+        ("flags", c_uint32),
+        ("focal", c_float),
+        ("fov_x", c_float),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
 class DatasetOptions(_Versioned):
     """``nerf_dataset_options``: how a dataset is read."""
 
@@ -454,4 +471,4 @@ class Camera(_Versioned):
 #: Every struct mirror, for the layout test.
 ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
-               TrainerOptions, TrainStatsStruct)
+               TrainerOptions, TrainStatsStruct, CameraPathOptions)

@@ -173,6 +173,16 @@ static void structs(void)
     FIELD(nerf_train_stats, psnr_coarse);
     FIELD(nerf_train_stats, learning_rate);
     end_struct();
+
+    BEGIN(nerf_camera_path_options);
+    FIELD(nerf_camera_path_options, struct_size);
+    FIELD(nerf_camera_path_options, width);
+    FIELD(nerf_camera_path_options, height);
+    FIELD(nerf_camera_path_options, flags);
+    FIELD(nerf_camera_path_options, focal);
+    FIELD(nerf_camera_path_options, fov_x);
+    FIELD(nerf_camera_path_options, hooks);
+    end_struct();
 }
 
 static void constants(void)
@@ -213,6 +223,8 @@ static void constants(void)
     CONST(NERF_DATASET_BLENDER);
     CONST(NERF_DATASET_LLFF);
     CONST(NERF_IMAGE_MAX_SIDE);
+    CONST(NERF_CAMERA_PATH_FILE_SIZE);
+    CONST(NERF_CAMERA_PATH_FILE_INTRINSICS);
 }
 
 int main(void)

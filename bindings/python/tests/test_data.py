@@ -5,6 +5,7 @@ import json
 import math
 import os
 import shutil
+import struct
 
 import _support
 from _support import TestCase, flat, nerf, shape
@@ -101,6 +102,104 @@ class Datasets(TestCase):
             nerf.Dataset(broken)
         with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
             nerf.Dataset(_support.scene_dir(), downscale=0)
+
+
+def write_npy(path, descr, shape, values):
+    """A .npy file written by hand, so that no NumPy is needed."""
+    header = "{'descr': '%s', 'fortran_order': False, 'shape': %r, }" % (
+        descr, tuple(shape))
+    header += " " * (63 - (10 + len(header)) % 64) + "\n"
+    fmt = "<%d%s" % (len(values), "f" if descr == "<f4" else "d")
+    with open(path, "wb") as f:
+        f.write(b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)))
+        f.write(header.encode("ascii") + struct.pack(fmt, *values))
+
+
+# Two camera-to-world matrices, 4 x 4, row by row.
+POSES = [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 4, 0, 0, 0, 1],
+         [0, 0, 1, 4, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 1]]
+
+
+class CameraPaths(TestCase):
+    def test_npy(self):
+        path = os.path.join(_support.tmpdir(), "path.npy")
+        write_npy(path, "<f8", (2, 4, 4), POSES[0] + POSES[1])
+        cams = nerf.load_camera_path(path, width=32, height=24, fov_x=90)
+        self.assertEqual(len(cams), 2)
+        for cam, pose in zip(cams, POSES):
+            self.assertIsInstance(cam, nerf.Camera)
+            self.assertEqual(list(cam.c2w), [float(v) for v in pose[:12]])
+            self.assertEqual((cam.width, cam.height), (32, 24))
+            self.assertAlmostEqual(cam.fx, 16.0, places=4)
+            self.assertEqual((cam.cx, cam.cy), (16.0, 12.0))
+        # 3 x 4 float32, flattened: the same cameras.
+        flat12 = os.path.join(_support.tmpdir(), "path12.npy")
+        write_npy(flat12, "<f4", (2, 12), POSES[0][:12] + POSES[1][:12])
+        again = nerf.load_camera_path(flat12, width=32, height=24, focal=16)
+        self.assertEqual([c.pose for c in again], [c.pose for c in cams])
+        # The camera works with the rest of the API.
+        origins, _ = cams[1].rays(0, 1)
+        self.assertEqual(flat(origins), [4.0, 0.0, 0.0])
+
+    def test_numpy_save(self):
+        try:
+            import numpy as np
+        except ImportError:
+            self.skipTest("NumPy is not installed")
+        path = os.path.join(_support.tmpdir(), "saved.npy")
+        np.save(path, np.array(POSES, dtype=np.float32).reshape(2, 4, 4))
+        cams = nerf.load_camera_path(path, width=8, height=8, fov_x=60)
+        self.assertEqual(cams[1].pose[2], [-1.0, 0.0, 0.0, 0.0])
+
+    def test_json(self):
+        path = os.path.join(_support.scene_dir(), "transforms_test.json")
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "transforms_test.json",
+                                  "set width and height"):
+            nerf.load_camera_path(path)
+        logged = []
+        cams = nerf.load_camera_path(
+            path, width=20, height=10, log=lambda lvl, msg: logged.append(msg))
+        with nerf.Dataset(_support.scene_dir(), "test") as ds:
+            self.assertEqual(len(cams), len(ds))
+            ref = ds.camera(0)
+        self.assertEqual((cams[0].width, cams[0].height), (20, 10))
+        self.assertEqual(cams[0].pose, ref.pose)
+        self.assertAlmostEqual(cams[0].fx, ref.fx * 20 / ref.width, places=3)
+        self.assertTrue(any("camera path of" in m for m in logged))
+        # fov_x replaces the file's angle unless the file comes first.
+        wide = nerf.load_camera_path(path, width=20, height=10, fov_x=90)
+        self.assertAlmostEqual(wide[0].fx, 10.0, places=4)
+        kept = nerf.load_camera_path(
+            path, width=20, height=10, fov_x=90,
+            flags=nerf.CAMERA_PATH_FILE_INTRINSICS)
+        self.assertAlmostEqual(kept[0].fx, cams[0].fx, places=4)
+
+    def test_errors(self):
+        d = _support.tmpdir()
+        npy = os.path.join(d, "bad.npy")
+        write_npy(npy, "<f4", (2, 3, 3), [1.0] * 18)
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
+                                  "bad.npy", "shape is (2, 3, 3)"):
+            nerf.load_camera_path(npy, width=8, height=8, fov_x=50)
+        good = os.path.join(d, "good.npy")
+        write_npy(good, "<f8", (1, 4, 4), POSES[0])
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "good.npy", "set focal or fov_x"):
+            nerf.load_camera_path(good, width=8, height=8)
+        nan = os.path.join(d, "nan.npy")
+        write_npy(nan, "<f8", (1, 4, 4), [float("nan")] + POSES[0][1:])
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
+                                  "nan.npy", "NaN"):
+            nerf.load_camera_path(nan, width=8, height=8, fov_x=50)
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "absent.json"):
+            nerf.load_camera_path(os.path.join(d, "absent.json"))
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "not both"):
+            nerf.load_camera_path(good, width=8, height=8, focal=5,
+                                  fov_x=50)
+        with self.assertRaises(TypeError):
+            nerf.load_camera_path(good, hooks=None)
 
 
 class Png(TestCase):

@@ -1,0 +1,213 @@
+#include "transforms.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#include "error.h"
+#include "file_io.h"
+
+#define PI_D 3.14159265358979323846
+
+void nerf__intrinsics_none(nerf__intrinsics *in)
+{
+    in->angle_x = in->angle_y = in->fl_x = in->fl_y = NAN;
+    in->cx = in->cy = in->w = in->h = NAN;
+}
+
+int nerf__transforms_parse_text(const char *path, const unsigned char *text,
+                                size_t size, cJSON **root_out)
+{
+    const char *end = NULL;
+    *root_out = cJSON_ParseWithLengthOpts((const char *)text, size, &end, 0);
+    if (*root_out == NULL) {
+        size_t pos = end ? (size_t)(end - (const char *)text) : 0;
+        size_t line = 1;
+        for (size_t i = 0; i < pos && i < size; i++) {
+            line += text[i] == '\n';
+        }
+        return nerf__error(NERF_EFORMAT, "%s: invalid JSON at line %zu (byte "
+                           "%zu)", path, line, pos);
+    }
+    return NERF_OK;
+}
+
+int nerf__transforms_parse(const nerf__env *env, const char *path,
+                           cJSON **root_out)
+{
+    *root_out = NULL;
+    unsigned char *text;
+    size_t size;
+    int rc = nerf__file_read(env, path, NERF__TRANSFORMS_MAX_BYTES, &text,
+                             &size);
+    if (rc == NERF_OK) {
+        rc = nerf__transforms_parse_text(path, text, size, root_out);
+        nerf__free(env, text);
+    }
+    return rc;
+}
+
+/* Read key as a finite number into *out when present. */
+static int get_number(const char *path, const cJSON *obj, const char *key,
+                      const char *where, double *out)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (item == NULL) {
+        return NERF_OK;
+    }
+    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble)) {
+        return nerf__error(NERF_EFORMAT, "%s: %sfield '%s' is not a finite "
+                           "number", path, where, key);
+    }
+    *out = item->valuedouble;
+    return NERF_OK;
+}
+
+int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
+                                     const char *where, nerf__intrinsics *in)
+{
+    static const char *const keys[] = {"camera_angle_x", "camera_angle_y",
+                                       "fl_x", "fl_y", "cx", "cy", "w", "h"};
+    double *fields[] = {&in->angle_x, &in->angle_y, &in->fl_x, &in->fl_y,
+                        &in->cx, &in->cy, &in->w, &in->h};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        int rc = get_number(path, obj, keys[i], where, fields[i]);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    return NERF_OK;
+}
+
+int nerf__transforms_top(const char *path, const cJSON *root,
+                         nerf__intrinsics *top, const cJSON **frames_out)
+{
+    if (!cJSON_IsObject(root)) {
+        return nerf__error(NERF_EFORMAT, "%s: the top level is not a JSON "
+                           "object", path);
+    }
+    nerf__intrinsics_none(top);
+    int rc = nerf__transforms_read_intrinsics(path, root, "", top);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
+    if (!cJSON_IsArray(frames)) {
+        return nerf__error(NERF_EFORMAT, "%s: %s 'frames'", path,
+                           frames ? "not a list:" : "missing field");
+    }
+    *frames_out = frames;
+    return NERF_OK;
+}
+
+static double det3(const double *m, size_t stride)
+{
+    const double *r0 = m, *r1 = m + stride, *r2 = m + 2 * stride;
+    return r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) -
+           r0[1] * (r1[0] * r2[2] - r1[2] * r2[0]) +
+           r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]);
+}
+
+const char *nerf__pose_problem(const double c2w[12], const double *last)
+{
+    for (int k = 0; k < 16; k++) {
+        if (!isfinite(k < 12 ? c2w[k] : last ? last[k - 12] : 0.0)) {
+            return "has a NaN or infinite value";
+        }
+    }
+    static const double homogeneous[4] = {0.0, 0.0, 0.0, 1.0};
+    for (int c = 0; last != NULL && c < 4; c++) {
+        /* Exported matrices carry float noise; anything more is not a
+         * rigid pose. */
+        if (!(fabs(last[c] - homogeneous[c]) <= 1e-4)) {
+            return "has a last row other than [0, 0, 0, 1]";
+        }
+    }
+    if (fabs(det3(c2w, 4)) < 1e-9) {
+        return "has a degenerate rotation";
+    }
+    return NULL;
+}
+
+/* transform_matrix: 4 rows (or the top 3) of 4 finite numbers. */
+int nerf__transforms_read_matrix(const char *path, const cJSON *frame,
+                                 uint32_t idx, double c2w[12])
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(frame,
+                                                      "transform_matrix");
+    if (m == NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
+                           "'transform_matrix'", path, (unsigned)idx);
+    }
+    int rows = cJSON_IsArray(m) ? cJSON_GetArraySize(m) : -1;
+    if (rows != 3 && rows != 4) {
+        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
+                           "must be a list of 4 rows of 4 numbers", path,
+                           (unsigned)idx);
+    }
+    double last[4] = {0.0, 0.0, 0.0, 1.0};
+    for (int r = 0; r < rows; r++) {
+        const cJSON *row = cJSON_GetArrayItem(m, r);
+        if (!cJSON_IsArray(row) || cJSON_GetArraySize(row) != 4) {
+            return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
+                               "row %d is not a list of 4 numbers", path,
+                               (unsigned)idx, r);
+        }
+        for (int c = 0; c < 4; c++) {
+            const cJSON *v = cJSON_GetArrayItem(row, c);
+            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) {
+                return nerf__error(NERF_EFORMAT, "%s: frame %u: "
+                                   "transform_matrix[%d][%d] is not a finite "
+                                   "number", path, (unsigned)idx, r, c);
+            }
+            double *dst = r < 3 ? &c2w[r * 4 + c] : &last[c];
+            *dst = v->valuedouble;
+        }
+    }
+    const char *why = nerf__pose_problem(c2w, last);
+    if (why != NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix %s",
+                           path, (unsigned)idx, why);
+    }
+    return NERF_OK;
+}
+
+int nerf__transforms_focal(const char *path, uint32_t idx,
+                           const nerf__intrinsics *in, double w, double h,
+                           double out[4])
+{
+    double angles[2] = {in->angle_x, in->angle_y};
+    for (int i = 0; i < 2; i++) {
+        if (!isnan(angles[i]) && !(angles[i] > 0.0 && angles[i] < PI_D)) {
+            return nerf__error(NERF_EFORMAT, "%s: frame %u: camera_angle_%c "
+                               "%g is not in (0, pi)", path, (unsigned)idx,
+                               i ? 'y' : 'x', angles[i]);
+        }
+    }
+    double fx, fy;
+    if (!isnan(in->fl_x)) {
+        fx = in->fl_x;
+    } else if (!isnan(in->angle_x)) {
+        fx = 0.5 * w / tan(0.5 * in->angle_x);
+    } else {
+        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
+                           "'camera_angle_x' (or 'fl_x')", path,
+                           (unsigned)idx);
+    }
+    if (!isnan(in->fl_y)) {
+        fy = in->fl_y;
+    } else if (!isnan(in->angle_y)) {
+        fy = 0.5 * h / tan(0.5 * in->angle_y);
+    } else {
+        fy = fx;
+    }
+    if (!(fx > 0.0) || !(fy > 0.0)) {
+        return nerf__error(NERF_EFORMAT, "%s: frame %u: focal length must be "
+                           "positive (fx %g, fy %g)", path, (unsigned)idx, fx,
+                           fy);
+    }
+    out[0] = fx;
+    out[1] = fy;
+    out[2] = isnan(in->cx) ? 0.5 * w : in->cx;
+    out[3] = isnan(in->cy) ? 0.5 * h : in->cy;
+    return NERF_OK;
+}

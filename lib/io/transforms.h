@@ -1,0 +1,71 @@
+/*
+ * transforms.json files (Blender's transforms_<split>.json and instant-ngp's
+ * transforms.json): the parts that the dataset loader and camera paths
+ * share, so that both accept and refuse exactly the same files.  Every
+ * error message starts with the file's path.
+ */
+#ifndef NERF_IO_TRANSFORMS_H
+#define NERF_IO_TRANSFORMS_H
+
+#include <cJSON.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "env.h"
+
+/* Generous: a transforms file lists one small object per frame. */
+#define NERF__TRANSFORMS_MAX_BYTES (64u << 20)
+
+/* Intrinsics fields, at top level or per frame; NAN when absent. */
+typedef struct nerf__intrinsics {
+    double angle_x, angle_y, fl_x, fl_y, cx, cy, w, h;
+} nerf__intrinsics;
+
+/* All fields NAN. */
+void nerf__intrinsics_none(nerf__intrinsics *in);
+
+/*
+ * Read the file at path and parse it; free *root_out with cJSON_Delete.
+ * Invalid JSON is NERF_EFORMAT naming the line.
+ */
+int nerf__transforms_parse(const nerf__env *env, const char *path,
+                           cJSON **root_out);
+
+/* The same for the file's bytes, already read; path names it in messages. */
+int nerf__transforms_parse_text(const char *path, const unsigned char *text,
+                                size_t size, cJSON **root_out);
+
+/*
+ * The top level: an object whose top-level intrinsics go to *top (fields
+ * absent stay NAN) and whose 'frames' list goes to *frames_out.
+ */
+int nerf__transforms_top(const char *path, const cJSON *root,
+                         nerf__intrinsics *top, const cJSON **frames_out);
+
+/*
+ * Overlay the intrinsics fields present in obj onto *in.  where prefixes
+ * field names in messages ("frame 3: ", or "" at top level).
+ */
+int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
+                                     const char *where, nerf__intrinsics *in);
+
+/* Frame idx's transform_matrix as a validated 3x4 row-major c2w. */
+int nerf__transforms_read_matrix(const char *path, const cJSON *frame,
+                                 uint32_t idx, double c2w[12]);
+
+/*
+ * Focal lengths and principal point, {fx, fy, cx, cy}, of frame idx for an
+ * image of w x h pixels: fl_x, else camera_angle_x; fl_y, else
+ * camera_angle_y, else fx; cx, cy default to the centre.
+ */
+int nerf__transforms_focal(const char *path, uint32_t idx,
+                           const nerf__intrinsics *in, double w, double h,
+                           double out[4]);
+
+/*
+ * Why a camera-to-world pose cannot be used, or NULL if it can: c2w is its
+ * top 3x4 (row-major), last its bottom row or NULL when it has none.
+ */
+const char *nerf__pose_problem(const double c2w[12], const double *last);
+
+#endif
