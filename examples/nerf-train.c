@@ -12,19 +12,21 @@
 #include "common/scene_setup.h"
 
 static const char usage[] =
-    "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference]\n"
-    "                  [--steps N] [--downscale K] [--batch N] [--seed N]\n"
-    "                  [--lr RATE] [--checkpoint-every N] [--resume]\n"
+    "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
+    "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
+    "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
     "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
-    "                CPU) or tiny (default)\n"
+    "                CPU), tiny (default) or fast (hash grid and small MLPs)\n"
     "  --steps N     train until the model has taken N steps (default 2000)\n"
+    "  --seconds S   also stop after S seconds of training, saving MODEL\n"
     "  --downscale K load images K times smaller (default 1)\n"
     "  --batch N     rays per step (default 1024)\n"
     "  --seed N      seed of initialisation and sampling (default 0)\n"
     "  --lr RATE     initial learning rate, decaying tenfold over the run\n"
-    "                (default 5e-4 for reference, 5e-3 for tiny)\n"
+    "                (default 5e-4 for reference, 5e-3 for tiny, 1e-2 for\n"
+    "                fast)\n"
     "  --checkpoint-every N  save MODEL every N steps (default 500)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
     "                batch and seed give the same result as an unbroken run)\n"
@@ -41,6 +43,8 @@ static void on_signal(int sig)
 typedef struct run_state {
     progress bar;
     uint64_t first_step;
+    double seconds;  /* time budget, 0 = none */
+    int out_of_time;
 } run_state;
 
 static int on_progress(const nerf_progress *p, void *user)
@@ -50,14 +54,17 @@ static int on_progress(const nerf_progress *p, void *user)
     snprintf(note, sizeof note, "step %llu loss %.5f psnr %.2f",
              (unsigned long long)(st->first_step + p->done), p->loss, p->psnr);
     progress_update(&st->bar, p->done, note);
-    return interrupted ? 1 : 0;
+    if (st->seconds > 0.0 && p->elapsed >= st->seconds) {
+        st->out_of_time = 1;
+    }
+    return interrupted || st->out_of_time ? 1 : 0;
 }
 
 typedef struct args {
     const char *data, *out;
     int preset;
     uint64_t steps, downscale, batch, seed, every;
-    double lr;
+    double lr, seconds;
     int resume;
 } args;
 
@@ -88,12 +95,15 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--out") == 0) {
             a->out = v;
         } else if (strcmp(k, "--preset") == 0) {
-            a->preset = strcmp(v, "tiny") == 0 ? NERF_PRESET_TINY
+            a->preset = strcmp(v, "tiny") == 0        ? NERF_PRESET_TINY
                         : strcmp(v, "reference") == 0 ? NERF_PRESET_REFERENCE
+                        : strcmp(v, "fast") == 0      ? NERF_PRESET_FAST
                                                       : 0;
             bad = a->preset == 0;
         } else if (strcmp(k, "--steps") == 0) {
             bad = cli_uint(v, 1, UINT64_C(1) << 40, &a->steps);
+        } else if (strcmp(k, "--seconds") == 0) {
+            bad = cli_double(v, &a->seconds) || !(a->seconds > 0.0);
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
         } else if (strcmp(k, "--batch") == 0) {
@@ -120,7 +130,9 @@ static int parse(int argc, char **argv, args *a)
         return -1;
     }
     if (a->lr == 0.0) {
-        a->lr = a->preset == NERF_PRESET_TINY ? 5e-3 : 5e-4;
+        a->lr = a->preset == NERF_PRESET_TINY   ? 5e-3
+                : a->preset == NERF_PRESET_FAST ? 1e-2
+                                                : 5e-4;
     }
     return 0;
 }
@@ -201,6 +213,8 @@ int main(int argc, char **argv)
     signal(SIGTERM, on_signal);
     run_state st;
     st.first_step = nerf_model_step(m);
+    st.seconds = a.seconds;
+    st.out_of_time = 0;
     uint64_t todo = a.steps > st.first_step ? a.steps - st.first_step : 0;
     progress_begin(&st.bar, "nerf-train", todo);
     nerf_trainer_set_progress(t, on_progress, &st);
@@ -212,7 +226,11 @@ int main(int argc, char **argv)
     snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, saved %s)",
              (unsigned long long)nerf_model_step(m), stats.psnr, a.out);
     progress_end(&st.bar, note);
-    if (rc == NERF_ECANCELLED) {
+    if (rc == NERF_ECANCELLED && st.out_of_time && !interrupted) {
+        fprintf(stderr, "nerf-train: stopped after %.0f s as asked; resume "
+                "with --resume\n", a.seconds);
+        rc = NERF_OK;
+    } else if (rc == NERF_ECANCELLED) {
         fprintf(stderr, "nerf-train: interrupted; resume with --resume\n");
     } else if (rc != NERF_OK) {
         cli_report("nerf-train", rc);

@@ -187,8 +187,19 @@ typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
-    NERF_ENCODING_FREQUENCY = 1   /**< Sinusoidal positional encoding. */
+    NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
+    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
+                                       only; its tables are trained). */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
+                                       (directions only). */
 } nerf_encoding_kind;
+
+/** Activation turning the network's density output into sigma. */
+typedef enum nerf_density_activation {
+    NERF_DENSITY_RELU = 0, /**< The paper's: ReLU, applied when rendering. */
+    NERF_DENSITY_EXP = 1   /**< exp, truncated at exp(15) (hash-grid
+                                models). */
+} nerf_density_activation;
 
 /** Flags for nerf_model_options.encoding_flags. */
 #define NERF_ENCODING_INCLUDE_INPUT 0x1u /**< Prepend the raw input. */
@@ -197,7 +208,9 @@ typedef enum nerf_encoding_kind {
 /** Named configurations for nerf_model_options_preset(). */
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
-    NERF_PRESET_TINY = 2       /**< Small and fast, for trials and tests. */
+    NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
+    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and small MLPs
+                                    (Mueller et al. 2022), one network. */
 } nerf_preset;
 
 /** Which of the model's two networks a call addresses. */
@@ -231,6 +244,35 @@ typedef struct nerf_model_options {
     uint32_t reserved0;       /**< Must be 0. */
     uint64_t seed;            /**< Seed of initialisation and training; default 0. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
+    /* Since 0.2: the hash-grid model.  Zero-filled by an older caller,
+     * which gives the reference behaviour. */
+    uint32_t dir_encoding;    /**< nerf_encoding_kind of the view
+                                   direction: FREQUENCY (the default; 0
+                                   reads as FREQUENCY) or
+                                   SPHERICAL_HARMONICS. */
+    uint32_t sh_degree;       /**< Bands of the direction harmonics, 1..4
+                                   (degree^2 values); default 4. */
+    uint32_t hash_levels;     /**< Hash-grid levels, 1..32; default 16. */
+    uint32_t hash_features;   /**< Features per level, 1..8; default 2. */
+    uint32_t hash_log2_size;  /**< log2 of entries per level, 10..24;
+                                   default 19. */
+    uint32_t hash_min_resolution; /**< Coarsest cells across the bound;
+                                   default 16. */
+    uint32_t hash_max_resolution; /**< Finest cells across the bound
+                                   (>= min); default 2048 (per unit of
+                                   bound: the fast preset scales it). */
+    float bound;              /**< The hash grid covers [-bound, bound]^3;
+                                   default 1.5 (Blender scenes). */
+    uint32_t geo_features;    /**< 0 (default): the reference head, a
+                                   width-wide feature plus sigma.  G > 0:
+                                   the head has G outputs, the first being
+                                   the density, and all G feed the colour
+                                   branch. */
+    uint32_t view_depth;      /**< Layers of the colour branch before the
+                                   rgb layer, 1..8; default 1. */
+    uint32_t density_activation; /**< nerf_density_activation; default
+                                   RELU. */
+    uint32_t reserved1;       /**< Must be 0. */
 } nerf_model_options;
 
 /**

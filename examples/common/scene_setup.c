@@ -9,11 +9,13 @@ int setup_model_preset(const nerf_model *model)
     if (nerf_model_get_options(model, &have) != NERF_OK) {
         return 0;
     }
-    static const int presets[] = {NERF_PRESET_REFERENCE, NERF_PRESET_TINY};
+    static const int presets[] = {NERF_PRESET_REFERENCE, NERF_PRESET_TINY,
+                                  NERF_PRESET_FAST};
     for (size_t i = 0; i < sizeof presets / sizeof presets[0]; i++) {
         NERF_MODEL_OPTIONS_INIT(&want);
         nerf_model_options_preset(&want, presets[i]);
-        if (want.depth == have.depth && want.width == have.width &&
+        if (want.encoding == have.encoding && want.depth == have.depth &&
+            want.width == have.width &&
             want.view_width == have.view_width) {
             return presets[i];
         }

@@ -5,8 +5,10 @@
 #include <string.h>
 
 #include "fused.h"
+#include "hashgrid.h"
 #include "parallel.h"
 #include "rng.h"
+#include "sh.h"
 
 static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
 {
@@ -15,12 +17,35 @@ static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
     return l;
 }
 
+static uint32_t dir_width(const nerf__network *net)
+{
+    if (!net->use_viewdirs) {
+        return 0;
+    }
+    if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
+        return nerf__sh_width(net->sh_degree);
+    }
+    return nerf__encoding_width(&net->dir_enc);
+}
+
 void nerf__network_layout(nerf__network *net, size_t offset)
 {
-    net->pos_width = nerf__encoding_width(&net->pos_enc);
-    net->dir_width = net->use_viewdirs ? nerf__encoding_width(&net->dir_enc) : 0;
+    net->dir_width = dir_width(net);
     net->offset = offset;
     size_t at = offset;
+    if (nerf__network_has_table(net)) {
+        /* The table comes first: the layers after it are what weight
+         * decay applies to. */
+        net->pos_width = nerf__hashgrid_width(&net->hash);
+        net->table = at;
+        at += net->hash.count;
+    } else {
+        net->pos_width = nerf__encoding_width(&net->pos_enc);
+        net->table = 0;
+    }
+    if (net->view_depth < 1) {
+        net->view_depth = 1;
+    }
     for (uint32_t i = 0; i < net->depth; i++) {
         uint32_t in = i == 0 ? net->pos_width : net->width;
         if (i > 0 && i == net->skip) {
@@ -28,14 +53,19 @@ void nerf__network_layout(nerf__network *net, size_t offset)
         }
         net->trunk[i] = place(in, net->width, &at);
     }
+    memset(net->view, 0, sizeof net->view);
+    memset(&net->rgb, 0, sizeof net->rgb);
     if (net->use_viewdirs) {
-        net->head = place(net->width, net->width + 1, &at);
-        net->view = place(net->width + net->dir_width, net->view_width, &at);
-        net->rgb = place(net->view_width, 3, &at);
+        const uint32_t V = net->view_width;
+        net->head = place(net->width, nerf__network_head_width(net), &at);
+        net->view[0] = place(nerf__network_feature_width(net) + net->dir_width,
+                             V, &at);
+        for (uint32_t k = 1; k < net->view_depth; k++) {
+            net->view[k] = place(V, V, &at);
+        }
+        net->rgb = place(V, 3, &at);
     } else {
         net->head = place(net->width, 4, &at);
-        memset(&net->view, 0, sizeof net->view);
-        memset(&net->rgb, 0, sizeof net->rgb);
     }
     net->count = at - offset;
 }
@@ -61,8 +91,19 @@ void nerf__network_init(const nerf__network *net, float *params,
      * separate layers would be: same fan-in, so the same bound. */
     init_linear(&net->head, params, seed, stream_base + NERF__MAX_DEPTH);
     if (net->use_viewdirs) {
-        init_linear(&net->view, params, seed, stream_base + NERF__MAX_DEPTH + 1);
+        /* Streams as the reference network had them, extra colour layers
+         * and the table after. */
+        init_linear(&net->view[0], params, seed,
+                    stream_base + NERF__MAX_DEPTH + 1);
         init_linear(&net->rgb, params, seed, stream_base + NERF__MAX_DEPTH + 2);
+        for (uint32_t k = 1; k < net->view_depth; k++) {
+            init_linear(&net->view[k], params, seed,
+                        stream_base + NERF__MAX_DEPTH + 2 + k);
+        }
+    }
+    if (nerf__network_has_table(net)) {
+        nerf__hashgrid_init(&net->hash, params + net->table, seed,
+                            stream_base + 2 * NERF__MAX_DEPTH);
     }
 }
 
@@ -73,6 +114,12 @@ static size_t grad_width(const nerf__network *net)
     size_t g = net->width + 1;
     if (net->view_width > g) {
         g = net->view_width;
+    }
+    if (nerf__network_head_width(net) > g) {
+        g = nerf__network_head_width(net);
+    }
+    if (nerf__network_has_table(net) && net->pos_width > g) {
+        g = net->pos_width; /* the table's gradient input */
     }
     return g;
 }
@@ -96,18 +143,20 @@ int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
                            "(at most %d per call)", n, 1 << 24);
     }
     size_t layers = keep ? net->depth : 2;
-    size_t sizes[8] = {
+    size_t view_layers = keep ? net->view_depth : 2;
+    size_t sizes[9] = {
         round64(n * net->pos_width),
         round64(n * net->dir_width),
+        keep && nerf__network_has_table(net) ? round64(n * 3) : 0,
         round64(layers * n * net->width),
         round64(n * nerf__network_head_width(net)),
-        round64(n * net->view_width),
+        round64(view_layers * n * net->view_width),
         round64(n * 3),
         keep ? round64(n * grad_width(net)) : 0,
         keep ? round64(n * grad_width(net)) : 0,
     };
     size_t total = 0;
-    for (int i = 0; i < 8; i++) {
+    for (int i = 0; i < 9; i++) {
         total += sizes[i];
     }
     float *block = nerf__alloc(env, total * sizeof(float));
@@ -115,10 +164,11 @@ int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
         return NERF_ENOMEM;
     }
     nerf__workspace_release(env, ws);
-    float **slots[8] = {&ws->enc_pos, &ws->enc_dir, &ws->trunk, &ws->head,
-                        &ws->view, &ws->rgb, &ws->grad_a, &ws->grad_b};
+    float **slots[9] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
+                        &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
+                        &ws->grad_b};
     float *at = block;
-    for (int i = 0; i < 8; i++) {
+    for (int i = 0; i < 9; i++) {
         *slots[i] = sizes[i] ? at : NULL;
         at += sizes[i];
     }
@@ -202,11 +252,89 @@ static void encode(const nerf__encoding *enc, size_t n, const float *in,
     nerf__parallel_for(n, 4 * out_stride, encode_rows, &j);
 }
 
+static void encode_sh_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    nerf__sh_forward(j->net->sh_degree, end - begin, j->in + 3 * begin, 3,
+                     j->out + begin * j->out_stride, j->out_stride);
+}
+
+/* The hash grid over the pool: forward by ranges of samples, backward by
+ * levels (each level's table is written by one thread, in sample order, so
+ * the gradients do not depend on the split). */
+typedef struct table_job {
+    const nerf__hashgrid *hg;
+    const float *table, *in, *d_out;
+    float *out, *grad;
+    size_t n, stride;
+} table_job;
+
+static void table_forward_rows(void *ctx, size_t begin, size_t end)
+{
+    const table_job *j = ctx;
+    nerf__hashgrid_forward_range(j->hg, j->table, begin, end, j->in, 3,
+                                 j->out, j->stride);
+}
+
+/* Coarse levels are dense and cheap, fine ones hashed and slow: blocks
+ * pair them (0, L-1, 1, L-2, ...) so that contiguous ranges of blocks cost
+ * about the same. */
+static void table_backward_level(void *ctx, size_t block)
+{
+    const table_job *j = ctx;
+    const uint32_t L = j->hg->levels;
+    uint32_t level = block % 2 ? L - 1 - (uint32_t)(block / 2)
+                               : (uint32_t)(block / 2);
+    nerf__hashgrid_backward_level(j->hg, level, j->n, j->in, 3, j->d_out,
+                                  j->stride, j->grad);
+}
+
+static void encode_positions(const nerf__network *net, const float *params,
+                             nerf__workspace *ws, size_t n,
+                             const float *positions)
+{
+    if (!nerf__network_has_table(net)) {
+        encode(&net->pos_enc, n, positions, ws->enc_pos, net->pos_width);
+        return;
+    }
+    table_job j = {.hg = &net->hash, .table = params + net->table,
+                   .in = positions, .out = ws->enc_pos,
+                   .stride = net->pos_width};
+    nerf__parallel_for(n, 200 * net->hash.levels, table_forward_rows, &j);
+    if (ws->pos) {
+        memcpy(ws->pos, positions, n * 3 * sizeof(float));
+    }
+}
+
+static void encode_directions(const nerf__network *net, nerf__workspace *ws,
+                              size_t n, const float *directions)
+{
+    if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
+        rows_job j = {.net = net, .in = directions, .out = ws->enc_dir,
+                      .out_stride = net->dir_width};
+        nerf__parallel_for(n, 40, encode_sh_rows, &j);
+    } else {
+        encode(&net->dir_enc, n, directions, ws->enc_dir, net->dir_width);
+    }
+}
+
 static float *trunk_buffer(const nerf__network *net, nerf__workspace *ws,
                            uint32_t layer)
 {
     size_t slot = ws->keep ? layer : layer % 2;
     return ws->trunk + slot * ws->n * net->width;
+}
+
+static float *view_buffer(const nerf__network *net, nerf__workspace *ws,
+                          uint32_t layer)
+{
+    size_t slot = ws->keep ? layer : layer % 2;
+    return ws->view + slot * ws->n * net->view_width;
+}
+
+static float exp_density(float x)
+{
+    return expf(x < NERF__EXP_DENSITY_MAX ? x : NERF__EXP_DENSITY_MAX);
 }
 
 /* The sigmoid on rgb, and the outputs copied out of the workspace. */
@@ -235,9 +363,10 @@ static void output_rows(void *ctx, size_t begin, size_t end)
                (end - begin) * 3 * sizeof(float));
     }
     if (j->sigma_out) {
-        const float *s = ws->head + (net->use_viewdirs ? net->width : 3);
+        const float *s = ws->head + nerf__network_sigma_col(net);
         for (size_t i = begin; i < end; i++) {
-            j->sigma_out[i] = s[i * HW];
+            float x = s[i * HW];
+            j->sigma_out[i] = net->exp_density ? exp_density(x) : x;
         }
     }
 }
@@ -249,7 +378,7 @@ void nerf__network_forward(const nerf__network *net, const float *params,
 {
     const uint32_t W = net->width, Ep = net->pos_width;
     ws->n = n;
-    encode(&net->pos_enc, n, positions, ws->enc_pos, Ep);
+    encode_positions(net, params, ws, n, positions);
 
     const float *x = ws->enc_pos;
     size_t ldx = Ep;
@@ -274,15 +403,22 @@ void nerf__network_forward(const nerf__network *net, const float *params,
     nerf__bias_add(n, HW, ws->head, HW, params + net->head.b);
 
     if (net->use_viewdirs) {
-        const nerf__linear *v = &net->view, *r = &net->rgb;
+        const nerf__linear *v0 = &net->view[0], *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
-        encode(&net->dir_enc, n, directions, ws->enc_dir, Ed);
-        gemm_forward(n, V, W, ws->head, HW, params + v->w, v->in, 0.0f,
-                     ws->view, V);
-        gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v->w + W, v->in, 1.0f,
-                     ws->view, V);
-        nerf__bias_relu(n, V, ws->view, V, params + v->b);
-        gemm_forward(n, 3, V, ws->view, V, params + r->w, V, 0.0f, ws->rgb, 3);
+        const uint32_t F = nerf__network_feature_width(net);
+        encode_directions(net, ws, n, directions);
+        float *h = view_buffer(net, ws, 0);
+        gemm_forward(n, V, F, ws->head, HW, params + v0->w, v0->in, 0.0f, h, V);
+        gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v0->w + F, v0->in,
+                     1.0f, h, V);
+        nerf__bias_relu(n, V, h, V, params + v0->b);
+        for (uint32_t k = 1; k < net->view_depth; k++) {
+            float *hk = view_buffer(net, ws, k);
+            gemm_forward(n, V, V, h, V, params + net->view[k].w, V, 0.0f, hk, V);
+            nerf__bias_relu(n, V, hk, V, params + net->view[k].b);
+            h = hk;
+        }
+        gemm_forward(n, 3, V, h, V, params + r->w, V, 0.0f, ws->rgb, 3);
     }
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
                   .sigma_out = sigma_out};
@@ -310,19 +446,40 @@ static void sigmoid_backward(nerf__workspace *ws, const float *d_rgb,
     nerf__parallel_for(ws->n, 12, sigmoid_backward_rows, &j);
 }
 
-/* Column `col` of rows of ld: the raw density's gradient. */
+/*
+ * The density logit's gradient into its head column (rows of ld, one
+ * float each): set, or added where the colour branch has already put
+ * the column's other gradient there.
+ */
 static void sigma_grad_rows(void *ctx, size_t begin, size_t end)
 {
     const rows_job *j = ctx;
+    const nerf__network *net = j->net;
+    const size_t HW = nerf__network_head_width(net);
+    const float *logit = j->ws->head + nerf__network_sigma_col(net);
+    const bool add = net->geo_features > 0;
     for (size_t i = begin; i < end; i++) {
-        j->dz[i * j->ld] = j->d_sigma ? j->d_sigma[i] : 0.0f;
+        float g = j->d_sigma ? j->d_sigma[i] : 0.0f;
+        if (net->exp_density) {
+            g *= exp_density(logit[i * HW]);
+        }
+        j->dz[i * j->ld] = add ? j->dz[i * j->ld] + g : g;
     }
 }
 
-static void sigma_grad(size_t n, const float *d_sigma, float *dz, size_t ld)
+static void sigma_grad(const nerf__network *net, nerf__workspace *ws,
+                       const float *d_sigma, float *d_head)
 {
-    rows_job j = {.d_sigma = d_sigma, .dz = dz, .ld = ld};
-    nerf__parallel_for(n, 2, sigma_grad_rows, &j);
+    const uint32_t HW = nerf__network_head_width(net);
+    rows_job j = {.net = net, .ws = ws, .d_sigma = d_sigma,
+                  .dz = d_head + nerf__network_sigma_col(net), .ld = HW};
+    nerf__parallel_for(ws->n, 4, sigma_grad_rows, &j);
+}
+
+/* The buffer of the two gradient scratch buffers that p is not. */
+static float *other(nerf__workspace *ws, const float *p)
+{
+    return p == ws->grad_a ? ws->grad_b : ws->grad_a;
 }
 
 void nerf__network_backward(const nerf__network *net, const float *params,
@@ -335,31 +492,45 @@ void nerf__network_backward(const nerf__network *net, const float *params,
     float *d_head = ws->grad_a;
 
     if (net->use_viewdirs) {
-        const nerf__linear *v = &net->view, *r = &net->rgb;
+        const nerf__linear *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
+        const uint32_t F = nerf__network_feature_width(net);
         float *dz = ws->grad_b; /* [n, 3] */
         sigmoid_backward(ws, d_rgb, dz, 3);
+        const float *h_top = view_buffer(net, ws, net->view_depth - 1);
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
-        gemm_weight_grad(n, 3, V, dz, 3, ws->view, V, grads + r->w, V);
+        gemm_weight_grad(n, 3, V, dz, 3, h_top, V, grads + r->w, V);
         float *d_view = ws->grad_a; /* [n, V] */
         gemm_input_grad(n, 3, V, dz, 3, params + r->w, V, d_view, V);
-        nerf__relu_backward_bias(n, V, ws->view, V, d_view, V, grads + v->b);
-        gemm_weight_grad(n, V, W, d_view, V, ws->head, HW, grads + v->w, v->in);
-        gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed, grads + v->w + W,
-                         v->in);
-        /* d_view lives in grad_a, so the head gradient goes to grad_b. */
-        d_head = ws->grad_b;
-        gemm_input_grad(n, V, W, d_view, V, params + v->w, v->in, d_head, HW);
-        sigma_grad(n, d_sigma, d_head + W, HW);
+        for (uint32_t k = net->view_depth; k-- > 1;) {
+            const nerf__linear *v = &net->view[k];
+            const float *h_in = view_buffer(net, ws, k - 1);
+            nerf__relu_backward_bias(n, V, view_buffer(net, ws, k), V, d_view,
+                                     V, grads + v->b);
+            gemm_weight_grad(n, V, V, d_view, V, h_in, V, grads + v->w, V);
+            float *d_in = other(ws, d_view);
+            gemm_input_grad(n, V, V, d_view, V, params + v->w, V, d_in, V);
+            d_view = d_in;
+        }
+        const nerf__linear *v0 = &net->view[0];
+        nerf__relu_backward_bias(n, V, view_buffer(net, ws, 0), V, d_view, V,
+                                 grads + v0->b);
+        gemm_weight_grad(n, V, F, d_view, V, ws->head, HW, grads + v0->w,
+                         v0->in);
+        gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed,
+                         grads + v0->w + F, v0->in);
+        d_head = other(ws, d_view);
+        gemm_input_grad(n, V, F, d_view, V, params + v0->w, v0->in, d_head, HW);
+        sigma_grad(net, ws, d_sigma, d_head);
     } else {
         sigmoid_backward(ws, d_rgb, d_head, 4);
-        sigma_grad(n, d_sigma, d_head + 3, 4);
+        sigma_grad(net, ws, d_sigma, d_head);
     }
 
     const float *h_last = trunk_buffer(net, ws, net->depth - 1);
     nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
     gemm_weight_grad(n, HW, W, d_head, HW, h_last, W, grads + net->head.w, W);
-    float *dh = d_head == ws->grad_a ? ws->grad_b : ws->grad_a;
+    float *dh = other(ws, d_head);
     gemm_input_grad(n, HW, W, d_head, HW, params + net->head.w, W, dh, W);
 
     for (uint32_t i = net->depth; i-- > 0;) {
@@ -369,6 +540,16 @@ void nerf__network_backward(const nerf__network *net, const float *params,
         if (i == 0) {
             gemm_weight_grad(n, W, l->in, dh, W, ws->enc_pos, Ep, grads + l->w,
                              l->in);
+            if (nerf__network_has_table(net)) {
+                float *d_enc = other(ws, dh);
+                gemm_input_grad(n, W, Ep, dh, W, params + l->w, l->in, d_enc,
+                                Ep);
+                table_job tj = {.hg = &net->hash, .in = ws->pos,
+                                .d_out = d_enc, .grad = grads + net->table,
+                                .n = n, .stride = Ep};
+                nerf__parallel_blocks(net->hash.levels, 200 * n,
+                                      table_backward_level, &tj);
+            }
             break;
         }
         const float *x = trunk_buffer(net, ws, i - 1);
@@ -379,7 +560,7 @@ void nerf__network_backward(const nerf__network *net, const float *params,
             hidden_col = Ep;
         }
         gemm_weight_grad(n, W, W, dh, W, x, W, grads + l->w + hidden_col, l->in);
-        float *dx = dh == ws->grad_a ? ws->grad_b : ws->grad_a;
+        float *dx = other(ws, dh);
         gemm_input_grad(n, W, W, dh, W, params + l->w + hidden_col, l->in, dx, W);
         dh = dx;
     }
@@ -393,7 +574,9 @@ double nerf__network_flops_per_sample(const nerf__network *net)
     }
     f += 2.0 * net->head.in * net->head.out;
     if (net->use_viewdirs) {
-        f += 2.0 * net->view.in * net->view.out;
+        for (uint32_t k = 0; k < net->view_depth; k++) {
+            f += 2.0 * net->view[k].in * net->view[k].out;
+        }
         f += 2.0 * net->rgb.in * net->rgb.out;
     }
     return f;

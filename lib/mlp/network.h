@@ -1,6 +1,11 @@
 /*
  * The NeRF network: a ReLU trunk with a skip connection, a head giving the
- * 256-wide feature and sigma, and a view branch giving rgb.  Samples are
+ * 256-wide feature and sigma, and a view branch giving rgb.  The same code
+ * runs the hash-grid model of Mueller et al. (2022): a hash-grid position
+ * encoding whose table is trained with the layers, a one-layer trunk, a
+ * 16-wide head whose first output is log-density (exp activation) and whose
+ * whole output feeds a two-layer colour branch with spherical-harmonics
+ * directions.  Samples are
  * rows of row-major matrices and every layer is one cblas_sgemm per pass
  * (two where the input is a concatenation: the concatenation is never
  * copied, each part multiplies its own column block of the weights).
@@ -19,8 +24,13 @@
 
 #include "encoding.h"
 #include "env.h"
+#include "hashgrid.h"
 
 #define NERF__MAX_DEPTH 32
+#define NERF__MAX_VIEW_DEPTH 8
+/* Truncated exponential: log-densities above this give exp(this), and
+ * their gradient uses the same value, so a large logit cannot overflow. */
+#define NERF__EXP_DENSITY_MAX 15.0f
 
 typedef struct nerf__linear {
     uint32_t in, out;
@@ -29,20 +39,34 @@ typedef struct nerf__linear {
 } nerf__linear;
 
 typedef struct nerf__network {
+    /* pos_enc.kind and dir_enc.kind say which encoding each input uses:
+     * NERF_ENCODING_FREQUENCY (pos_enc/dir_enc hold its settings),
+     * NERF_ENCODING_HASHGRID (hash) or NERF_ENCODING_SPHERICAL_HARMONICS
+     * (sh_degree). */
     nerf__encoding pos_enc, dir_enc;
+    nerf__hashgrid hash;
+    uint32_t sh_degree;
     uint32_t pos_width, dir_width; /* encoded widths */
-    uint32_t depth, width, skip, view_width;
+    uint32_t depth, width, skip, view_width, view_depth;
+    /* 0: the reference head, a width-wide feature plus sigma.  G > 0: a
+     * G-wide head whose column 0 is also the density, all of it feeding
+     * the colour branch. */
+    uint32_t geo_features;
     bool use_viewdirs;
+    bool exp_density; /* sigma = exp(x) rather than raw x (ReLU later) */
+    size_t table;     /* offset of the hash table in the parameter array */
     nerf__linear trunk[NERF__MAX_DEPTH];
-    /* With view directions: rows [0, width) are the feature layer, row
-     * width is sigma (the reference's feature_linear and alpha_linear,
-     * fused so that one sgemm serves both).  Without: the 4-wide
-     * output_linear, [r, g, b, sigma]. */
+    /* With view directions and no geo_features: rows [0, width) are the
+     * feature layer, row width is sigma (the reference's feature_linear
+     * and alpha_linear, fused so that one sgemm serves both).  Without
+     * view directions: the 4-wide output_linear, [r, g, b, sigma]. */
     nerf__linear head;
-    nerf__linear view; /* [feature, gamma(d)] -> view_width, ReLU */
+    /* view[0]: [feature, encoded d] -> view_width; the rest view_width ->
+     * view_width; all ReLU. */
+    nerf__linear view[NERF__MAX_VIEW_DEPTH];
     nerf__linear rgb;  /* view_width -> 3, sigmoid */
     size_t offset;     /* first parameter in the model's array */
-    size_t count;      /* number of parameters */
+    size_t count;      /* number of parameters, table included */
 } nerf__network;
 
 /*
@@ -54,7 +78,30 @@ void nerf__network_layout(nerf__network *net, size_t offset);
 /* Floats per sample in the head's output. */
 static inline uint32_t nerf__network_head_width(const nerf__network *net)
 {
-    return net->use_viewdirs ? net->width + 1 : 4;
+    if (!net->use_viewdirs) {
+        return 4;
+    }
+    return net->geo_features ? net->geo_features : net->width + 1;
+}
+
+/* Head columns [0, this) feed the colour branch. */
+static inline uint32_t nerf__network_feature_width(const nerf__network *net)
+{
+    return net->geo_features ? net->geo_features : net->width;
+}
+
+/* The head column holding the density logit. */
+static inline uint32_t nerf__network_sigma_col(const nerf__network *net)
+{
+    if (!net->use_viewdirs) {
+        return 3;
+    }
+    return net->geo_features ? 0 : net->width;
+}
+
+static inline bool nerf__network_has_table(const nerf__network *net)
+{
+    return net->pos_enc.kind == NERF_ENCODING_HASHGRID;
 }
 
 /*
@@ -78,9 +125,10 @@ typedef struct nerf__workspace {
     bool keep;
     float *enc_pos; /* [n, pos_width] */
     float *enc_dir; /* [n, dir_width] */
+    float *pos;     /* [n, 3], the positions, kept for a table's backward */
     float *trunk;   /* [depth or 2][n, width], after ReLU */
     float *head;    /* [n, head_width] */
-    float *view;    /* [n, view_width], after ReLU */
+    float *view;    /* [view_depth][n, view_width], after ReLU */
     float *rgb;     /* [n, 3], after the sigmoid */
     float *grad_a;  /* [n, width + 1], gradient scratch */
     float *grad_b;  /* [n, width + 1] */

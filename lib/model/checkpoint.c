@@ -16,7 +16,9 @@
 
 #define MAGIC "NERFCKPT"
 #define MAGIC_LEN 8
-#define FORMAT_VERSION 1u
+/* 2 (libnerf 0.2): adds the options2 section; version 1 files still load,
+ * with the reference values of the fields it holds. */
+#define FORMAT_VERSION 2u
 #define HEADER_SIZE 48u
 /* The frame every version keeps: magic, version, header size and a final
  * CRC, so that any version's header can at least be verified. */
@@ -31,11 +33,15 @@
 #define TAG_PARAMS (TAG_REQUIRED | 3u)
 #define TAG_ADAM_M (TAG_REQUIRED | 4u)
 #define TAG_ADAM_V (TAG_REQUIRED | 5u)
-#define N_SECTIONS 5
+#define TAG_OPTIONS2 (TAG_REQUIRED | 6u)
+#define N_SECTIONS 6
+#define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
 #define TRAINING_SIZE 64u /* 6 f64 hyperparameters, u64 step, u64 count */
 #define N_OPTION_U32 11
+#define OPTIONS2_SIZE 48u /* the 12 u32 fields appended in 0.2 */
+#define N_OPTION2_U32 12
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
@@ -88,6 +94,39 @@ static unsigned char *put_options(unsigned char *p, const nerf_model_options *o)
     return p + OPTIONS_SIZE;
 }
 
+/* The fields appended to nerf_model_options in 0.2, in its order; the
+ * float bound is stored as its bits. */
+static void option2_fields(const nerf_model_options *o,
+                           uint32_t f[N_OPTION2_U32])
+{
+    uint32_t bound_bits;
+    memcpy(&bound_bits, &o->bound, sizeof bound_bits);
+    f[0] = o->dir_encoding;
+    f[1] = o->sh_degree;
+    f[2] = o->hash_levels;
+    f[3] = o->hash_features;
+    f[4] = o->hash_log2_size;
+    f[5] = o->hash_min_resolution;
+    f[6] = o->hash_max_resolution;
+    f[7] = bound_bits;
+    f[8] = o->geo_features;
+    f[9] = o->view_depth;
+    f[10] = o->density_activation;
+    f[11] = o->reserved1;
+}
+
+static unsigned char *put_options2(unsigned char *p,
+                                   const nerf_model_options *o)
+{
+    uint32_t f[N_OPTION2_U32];
+    option2_fields(o, f);
+    p = put_section(p, TAG_OPTIONS2, OPTIONS2_SIZE);
+    for (int i = 0; i < N_OPTION2_U32; i++) {
+        nerf__store_le32(p + 4 * i, f[i]);
+    }
+    return p + OPTIONS2_SIZE;
+}
+
 static unsigned char *put_training(unsigned char *p, const nerf_model *m)
 {
     const nerf__adam *a = &m->adam;
@@ -114,8 +153,8 @@ static unsigned char *put_floats(unsigned char *p, uint32_t tag,
 
 static size_t payload_size(size_t n_params)
 {
-    return N_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + TRAINING_SIZE +
-           3 * 4 * n_params;
+    return N_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
+           TRAINING_SIZE + 3 * 4 * n_params;
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -124,7 +163,8 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     p = put_training(p, m);
     p = put_floats(p, TAG_PARAMS, m->params, m->n_params);
     p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
-    put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
+    p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
+    put_options2(p, &m->opts);
 }
 
 static void put_header(unsigned char *h, const ckpt_header *hd)
@@ -342,7 +382,7 @@ typedef struct sections {
 
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
-    "Adam second moments"};
+    "Adam second moments", "options (0.2)"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -394,7 +434,7 @@ static int split_sections(const nerf__env *env, const char *path,
         }
         at += (size_t)len;
     }
-    for (int i = 0; i < N_SECTIONS; i++) {
+    for (int i = 0; i < N_CORE_SECTIONS; i++) {
         if (s->body[i] == NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (no "
                                "%s section)", path, section_names[i]);
@@ -425,6 +465,26 @@ static void get_options(const unsigned char *p, nerf_model_options *o)
     o->hooks = NULL;
 }
 
+static void get_options2(const unsigned char *p, nerf_model_options *o)
+{
+    uint32_t f[N_OPTION2_U32];
+    for (int i = 0; i < N_OPTION2_U32; i++) {
+        f[i] = nerf__load_le32(p + 4 * i);
+    }
+    o->dir_encoding = f[0];
+    o->sh_degree = f[1];
+    o->hash_levels = f[2];
+    o->hash_features = f[3];
+    o->hash_log2_size = f[4];
+    o->hash_min_resolution = f[5];
+    o->hash_max_resolution = f[6];
+    memcpy(&o->bound, &f[7], sizeof o->bound);
+    o->geo_features = f[8];
+    o->view_depth = f[9];
+    o->density_activation = f[10];
+    o->reserved1 = f[11];
+}
+
 /* Options and sizes: everything that can be checked before allocating. */
 static int check_shapes(const char *path, const sections *s,
                         nerf_model_options *o, uint64_t *n_params)
@@ -434,7 +494,15 @@ static int check_shapes(const char *path, const sections *s,
                            "section has the wrong size)", path,
                            section_names[s->len[0] != OPTIONS_SIZE ? 0 : 1]);
     }
+    if (s->body[5] != NULL && s->len[5] != OPTIONS2_SIZE) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
+                           "section has the wrong size)", path,
+                           section_names[5]);
+    }
     get_options(s->body[0], o);
+    if (s->body[5] != NULL) {
+        get_options2(s->body[5], o);
+    }
     if (nerf__model_check_options(o) != NERF_OK) {
         char why[512];
         snprintf(why, sizeof why, "%s", nerf_last_error());
@@ -448,7 +516,7 @@ static int check_shapes(const char *path, const sections *s,
                            "parameters but its options need %llu", path,
                            (unsigned long long)n, (unsigned long long)need);
     }
-    for (int i = 2; i < N_SECTIONS; i++) {
+    for (int i = 2; i < N_CORE_SECTIONS; i++) {
         if (s->len[i] / 4 != n || s->len[i] % 4 != 0) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
                                "section holds %llu bytes, expected %llu)",

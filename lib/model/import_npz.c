@@ -173,8 +173,8 @@ static int import_head(npz_import *c, const char *prefix,
                            1, W);
     }
     if (rc == NERF_OK) {
-        rc = import_linear(c, prefix, "views_linears.0", net->view.w,
-                           net->view.b, net->view.out, net->view.in);
+        rc = import_linear(c, prefix, "views_linears.0", net->view[0].w,
+                           net->view[0].b, net->view[0].out, net->view[0].in);
     }
     if (rc == NERF_OK) {
         rc = import_linear(c, prefix, "rgb_linear", net->rgb.w, net->rgb.b, 3,

@@ -23,6 +23,34 @@ static void reference_options(nerf_model_options *o)
     o->view_width = 128;
     o->use_viewdirs = 1;
     o->use_fine = 1;
+    o->dir_encoding = NERF_ENCODING_FREQUENCY;
+    o->sh_degree = 4;
+    o->hash_levels = 16;
+    o->hash_features = 2;
+    o->hash_log2_size = 19;
+    o->hash_min_resolution = 16;
+    o->hash_max_resolution = 2048;
+    o->bound = 1.5f;
+    o->view_depth = 1;
+    o->density_activation = NERF_DENSITY_RELU;
+}
+
+/* Mueller et al.'s NeRF configuration: hash grid, a 64-wide one-layer
+ * density network with 16 outputs, a two-layer 64-wide colour network on
+ * spherical harmonics. */
+static void fast_options(nerf_model_options *o)
+{
+    reference_options(o);
+    o->encoding = NERF_ENCODING_HASHGRID;
+    o->dir_encoding = NERF_ENCODING_SPHERICAL_HARMONICS;
+    o->depth = 1;
+    o->width = 64;
+    o->skip_layer = 0;
+    o->geo_features = 16;
+    o->view_width = 64;
+    o->view_depth = 2;
+    o->density_activation = NERF_DENSITY_EXP;
+    o->use_fine = 0;
 }
 
 NERF_API int nerf_model_options_init(nerf_model_options *opts,
@@ -55,6 +83,9 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
         o.skip_layer = 2;
         o.view_width = 32;
         break;
+    case NERF_PRESET_FAST:
+        fast_options(&o);
+        break;
     default:
         return nerf__error(NERF_EINVAL, "nerf_model_options_preset: unknown "
                            "preset %d", preset);
@@ -67,11 +98,84 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     return NERF_OK;
 }
 
+static void hash_setup(nerf__hashgrid *hg, const nerf_model_options *o)
+{
+    memset(hg, 0, sizeof *hg);
+    hg->levels = o->hash_levels;
+    hg->features = o->hash_features;
+    hg->log2_table = o->hash_log2_size;
+    hg->min_resolution = o->hash_min_resolution;
+    hg->max_resolution = o->hash_max_resolution;
+    for (int c = 0; c < 3; c++) {
+        hg->bound_min[c] = -o->bound;
+        hg->bound_max[c] = o->bound;
+    }
+}
+
+static const char *check_hash(const nerf_model_options *o)
+{
+    if (o->hash_levels < 1 || o->hash_levels > NERF__HASHGRID_MAX_LEVELS) {
+        return "hash_levels must be 1..32";
+    }
+    if (o->hash_features < 1 || o->hash_features > NERF__HASHGRID_MAX_FEATURES) {
+        return "hash_features must be 1..8";
+    }
+    if (o->hash_log2_size < 10 || o->hash_log2_size > 24) {
+        return "hash_log2_size must be 10..24";
+    }
+    if (o->hash_min_resolution < 1 ||
+        o->hash_max_resolution < o->hash_min_resolution ||
+        o->hash_max_resolution > NERF__HASHGRID_MAX_RESOLUTION) {
+        return "hash resolutions must satisfy 1 <= min <= max <= 2^20";
+    }
+    if (!(o->bound > 0.0f) || !(o->bound < 1e6f)) {
+        return "bound must be a positive finite number below 1e6";
+    }
+    return NULL;
+}
+
+/* The fields added in 0.2. */
+static const char *check_fast_fields(const nerf_model_options *o)
+{
+    const uint32_t dir = o->dir_encoding ? o->dir_encoding
+                                         : NERF_ENCODING_FREQUENCY;
+    if (dir != NERF_ENCODING_FREQUENCY &&
+        dir != NERF_ENCODING_SPHERICAL_HARMONICS) {
+        return "dir_encoding must be FREQUENCY or SPHERICAL_HARMONICS";
+    }
+    if (dir == NERF_ENCODING_SPHERICAL_HARMONICS &&
+        (o->sh_degree < 1 || o->sh_degree > 4)) {
+        return "sh_degree must be 1..4";
+    }
+    if (o->encoding == NERF_ENCODING_HASHGRID) {
+        const char *what = check_hash(o);
+        if (what) {
+            return what;
+        }
+    }
+    if (o->view_depth < 1 || o->view_depth > NERF__MAX_VIEW_DEPTH) {
+        return "view_depth must be 1..8";
+    }
+    if (o->geo_features > 4096) {
+        return "geo_features must be 0..4096";
+    }
+    if (o->density_activation > NERF_DENSITY_EXP) {
+        return "density_activation is not a known nerf_density_activation";
+    }
+    if (o->reserved1 != 0) {
+        return "reserved1 must be 0";
+    }
+    return NULL;
+}
+
 int nerf__model_check_options(const nerf_model_options *o)
 {
-    const char *what = NULL;
-    if (o->encoding != NERF_ENCODING_FREQUENCY) {
-        what = "encoding is not a known nerf_encoding_kind";
+    const char *what = check_fast_fields(o);
+    if (what) {
+        /* reported below */
+    } else if (o->encoding != NERF_ENCODING_FREQUENCY &&
+               o->encoding != NERF_ENCODING_HASHGRID) {
+        what = "encoding must be FREQUENCY or HASHGRID";
     } else if (o->encoding_flags & ~(NERF_ENCODING_INCLUDE_INPUT |
                                      NERF_ENCODING_SCALE_PI)) {
         what = "encoding_flags has unknown bits";
@@ -106,13 +210,24 @@ static void setup_network(nerf__network *net, const nerf_model_options *o,
     memset(net, 0, sizeof *net);
     bool raw = (o->encoding_flags & NERF_ENCODING_INCLUDE_INPUT) != 0;
     bool pi = (o->encoding_flags & NERF_ENCODING_SCALE_PI) != 0;
+    const uint32_t dir = o->dir_encoding ? o->dir_encoding
+                                         : NERF_ENCODING_FREQUENCY;
     net->pos_enc = (nerf__encoding){o->encoding, 3, o->pos_frequencies, raw, pi};
-    net->dir_enc = (nerf__encoding){o->encoding, 3, o->dir_frequencies, raw, pi};
+    net->dir_enc = (nerf__encoding){dir, 3, o->dir_frequencies, raw, pi};
+    net->sh_degree = o->sh_degree;
+    if (o->encoding == NERF_ENCODING_HASHGRID) {
+        hash_setup(&net->hash, o);
+        /* Checked by nerf__model_check_options(), so it cannot fail. */
+        (void)nerf__hashgrid_layout(&net->hash);
+    }
     net->depth = o->depth;
     net->width = o->width;
     net->skip = o->skip_layer;
     net->view_width = o->use_viewdirs ? o->view_width : 0;
+    net->view_depth = o->view_depth;
+    net->geo_features = o->use_viewdirs ? o->geo_features : 0;
     net->use_viewdirs = o->use_viewdirs != 0;
+    net->exp_density = o->density_activation == NERF_DENSITY_EXP;
     nerf__network_layout(net, offset);
 }
 
@@ -140,7 +255,13 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         offset += m->nets[i].count;
     }
     m->n_params = offset;
-    m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7};
+    if (opts->encoding == NERF_ENCODING_HASHGRID) {
+        /* Mueller et al.'s Adam: beta2 0.99 and a tiny eps, which the
+         * rarely touched hash entries need to move at all. */
+        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15};
+    } else {
+        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7};
+    }
     float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
     for (int i = 0; i < 4; i++) {
         *arrays[i] = nerf__calloc(env, m->n_params, sizeof(float));

@@ -45,6 +45,11 @@ NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
         o.n_coarse = 32;
         o.n_fine = 64;
         break;
+    case NERF_PRESET_FAST:
+        /* One network, so one pass of samples. */
+        o.n_coarse = 128;
+        o.n_fine = 0;
+        break;
     default:
         return nerf__error(NERF_EINVAL, "nerf_sampler_options_preset: "
                            "unknown preset %d", preset);

@@ -38,7 +38,20 @@ FROZEN(nerf_model_options, use_fine, 40);
 FROZEN(nerf_model_options, reserved0, 44);
 FROZEN(nerf_model_options, seed, 48);
 FROZEN(nerf_model_options, hooks, 56);
-SIZE(nerf_model_options, 64);
+/* Appended in 0.2. */
+FROZEN(nerf_model_options, dir_encoding, 64);
+FROZEN(nerf_model_options, sh_degree, 68);
+FROZEN(nerf_model_options, hash_levels, 72);
+FROZEN(nerf_model_options, hash_features, 76);
+FROZEN(nerf_model_options, hash_log2_size, 80);
+FROZEN(nerf_model_options, hash_min_resolution, 84);
+FROZEN(nerf_model_options, hash_max_resolution, 88);
+FROZEN(nerf_model_options, bound, 92);
+FROZEN(nerf_model_options, geo_features, 96);
+FROZEN(nerf_model_options, view_depth, 100);
+FROZEN(nerf_model_options, density_activation, 104);
+FROZEN(nerf_model_options, reserved1, 108);
+SIZE(nerf_model_options, 112);
 
 FROZEN(nerf_scene_options, struct_size, 0);
 FROZEN(nerf_scene_options, width, 4);

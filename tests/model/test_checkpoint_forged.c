@@ -95,13 +95,16 @@ TEST(payload_layout_is_as_documented)
     unsigned char *file = good_file(&size);
     payload p;
     split_payload(file, size, &p);
-    CHECK_EQ_INT(p.n, 5);
-    const uint32_t tags[5] = {0x80000001u, 0x80000002u, 0x80000003u,
-                              0x80000004u, 0x80000005u};
-    for (int i = 0; i < 5 && i < p.n; i++) {
+    CHECK_EQ_INT(p.n, 6);
+    const uint32_t tags[6] = {0x80000001u, 0x80000002u, 0x80000003u,
+                              0x80000004u, 0x80000005u, 0x80000006u};
+    for (int i = 0; i < 6 && i < p.n; i++) {
         CHECK_EQ_INT(p.s[i].tag, tags[i]);
     }
-    if (p.n == 5) {
+    if (p.n == 6) {
+        CHECK_EQ_INT(p.s[5].len, 48);
+        CHECK_EQ_INT(le32(p.s[5].data + 1 * 4), 4);   /* sh_degree */
+        CHECK_EQ_INT(le32(p.s[5].data + 9 * 4), 1);   /* view_depth */
         CHECK_EQ_INT(p.s[0].len, 52);
         CHECK_EQ_INT(le32(p.s[0].data + 4 * 4), 4);   /* depth */
         CHECK_EQ_INT(le32(p.s[0].data + 5 * 4), 64);  /* width */
@@ -193,9 +196,23 @@ static void edit_duplicate(payload *p)
     add_section(p, p->s[0].tag, p->s[0].data, p->s[0].len);
 }
 
+/* The Adam second moments, a section every version has. */
 static void edit_drop_last(payload *p)
 {
+    free(p->s[4].data);
+    p->s[4] = p->s[--p->n];
+}
+
+/* A version 1 file: no options2 section, which reads as the reference
+ * values of its fields. */
+static void edit_drop_options2(payload *p)
+{
     free(p->s[--p->n].data);
+}
+
+static void edit_short_options2(payload *p)
+{
+    p->s[5].len -= 4;
 }
 
 static void edit_short_array(payload *p)
@@ -222,6 +239,8 @@ TEST(forged_payloads)
     forge("duplicate options", edit_duplicate, NERF_EFORMAT);
     forge("no adam_v", edit_drop_last, NERF_EFORMAT);
     forge("short adam_m", edit_short_array, NERF_EFORMAT);
+    forge("short options2", edit_short_options2, NERF_EFORMAT);
+    forge("version 1, no options2", edit_drop_options2, NERF_OK);
     forge("unknown optional section", edit_add_optional, NERF_OK);
     forge("unknown optional section first", edit_add_optional_first, NERF_OK);
     forge("sections reordered", edit_shuffle, NERF_OK);

@@ -2,7 +2,9 @@
  * The network against a plain double-precision reference written here:
  * forward values, and every parameter's gradient against central finite
  * differences of the reference.  Covers every layer, the skip
- * concatenation, both heads and the view branch.
+ * concatenation, both heads and the view branch, and the hash-grid form:
+ * its table, a G-wide head, a deeper colour branch, spherical harmonics and
+ * the exponential density.
  */
 #include <math.h>
 #include <string.h>
@@ -10,6 +12,7 @@
 #include "../harness.h"
 #include "model.h"
 #include "rng.h"
+#include "sh.h"
 
 #define N 12
 #define MAXW 512
@@ -25,6 +28,65 @@ static double enc_value(const nerf__encoding *e, const float *x, uint32_t j)
     uint32_t k = j / 6, r = j % 6;
     double a = ldexp(e->scale_pi ? M_PI : 1.0, (int)k) * (double)x[r % 3];
     return r < 3 ? sin(a) : cos(a);
+}
+
+/* Trilinear interpolation of each level's table, in double, with the
+ * library's cell convention (vertices at u N_l = 0..N_l, u clamped to the
+ * unit cube, the far face in the last cell) and its entry index. */
+static void hash_value(const nerf__network *net, const double *P,
+                       const float *x, double *out)
+{
+    const nerf__hashgrid *hg = &net->hash;
+    const uint32_t F = hg->features;
+    for (uint32_t l = 0; l < hg->levels; l++) {
+        const double res = hg->resolution[l];
+        uint32_t cell[3];
+        double frac[3];
+        for (int a = 0; a < 3; a++) {
+            double u = (x[a] - hg->bound_min[a]) /
+                       (double)(hg->bound_max[a] - hg->bound_min[a]);
+            u = u < 0.0 ? 0.0 : u > 1.0 ? 1.0 : u;
+            double k = floor(u * res);
+            k = k > res - 1 ? res - 1 : k;
+            cell[a] = (uint32_t)k;
+            frac[a] = u * res - k;
+        }
+        for (uint32_t f = 0; f < F; f++) {
+            out[l * F + f] = 0.0;
+        }
+        for (int c = 0; c < 8; c++) {
+            int bx = c & 1, by = (c >> 1) & 1, bz = (c >> 2) & 1;
+            double w = (bx ? frac[0] : 1 - frac[0]) *
+                       (by ? frac[1] : 1 - frac[1]) *
+                       (bz ? frac[2] : 1 - frac[2]);
+            uint32_t e = nerf__hashgrid_index(hg, l, cell[0] + bx,
+                                              cell[1] + by, cell[2] + bz);
+            const double *t = P + net->table + hg->offset[l] + (size_t)e * F;
+            for (uint32_t f = 0; f < F; f++) {
+                out[l * F + f] += w * t[f];
+            }
+        }
+    }
+}
+
+static void encode_dir(const nerf__network *net, const float *d, double *ed)
+{
+    if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
+        float v[16];
+        nerf__sh_forward(net->sh_degree, 1, d, 3, v, 16);
+        for (uint32_t j = 0; j < net->dir_width; j++) {
+            ed[j] = v[j];
+        }
+        return;
+    }
+    for (uint32_t j = 0; j < net->dir_width; j++) {
+        ed[j] = enc_value(&net->dir_enc, d, j);
+    }
+}
+
+static double density(const nerf__network *net, double x)
+{
+    return net->exp_density ? exp(fmin(x, NERF__EXP_DENSITY_MAX)) : x;
 }
 
 static void linear(const nerf__linear *l, const double *P, const double *in,
@@ -44,8 +106,12 @@ static void ref_forward(const nerf__network *net, const double *P,
                         double *sigma)
 {
     double ex[MAXW], ed[MAXW], h[MAXW], in[MAXW], out[MAXW];
-    for (uint32_t j = 0; j < net->pos_width; j++) {
-        ex[j] = enc_value(&net->pos_enc, x, j);
+    if (nerf__network_has_table(net)) {
+        hash_value(net, P, x, ex);
+    } else {
+        for (uint32_t j = 0; j < net->pos_width; j++) {
+            ex[j] = enc_value(&net->pos_enc, x, j);
+        }
     }
     memcpy(h, ex, net->pos_width * sizeof(double));
     uint32_t hw = net->pos_width;
@@ -61,20 +127,23 @@ static void ref_forward(const nerf__network *net, const double *P,
     }
     linear(&net->head, P, h, out, false);
     if (net->use_viewdirs) {
-        *sigma = out[net->width];
-        for (uint32_t j = 0; j < net->dir_width; j++) {
-            ed[j] = enc_value(&net->dir_enc, d, j);
-        }
-        memcpy(in, out, net->width * sizeof(double));
-        memcpy(in + net->width, ed, net->dir_width * sizeof(double));
+        const uint32_t F = nerf__network_feature_width(net);
+        *sigma = density(net, out[nerf__network_sigma_col(net)]);
+        encode_dir(net, d, ed);
+        memcpy(in, out, F * sizeof(double));
+        memcpy(in + F, ed, net->dir_width * sizeof(double));
         double v[MAXW], z[3];
-        linear(&net->view, P, in, v, true);
+        linear(&net->view[0], P, in, v, true);
+        for (uint32_t k = 1; k < net->view_depth; k++) {
+            memcpy(in, v, net->view_width * sizeof(double));
+            linear(&net->view[k], P, in, v, true);
+        }
         linear(&net->rgb, P, v, z, false);
         for (int c = 0; c < 3; c++) {
             rgb[c] = 1.0 / (1.0 + exp(-z[c]));
         }
     } else {
-        *sigma = out[3];
+        *sigma = density(net, out[3]);
         for (int c = 0; c < 3; c++) {
             rgb[c] = 1.0 / (1.0 + exp(-out[c]));
         }
@@ -238,6 +307,31 @@ TEST(gradients_no_positional_encoding)
     check_network(&o, NERF_NETWORK_COARSE);
 }
 
+/* A small hash grid: dense coarse levels and a hashed fine one, a 4-wide
+ * head, two colour layers, harmonics and exp density. */
+TEST(gradients_hash_grid_form)
+{
+    nerf_model_options o;
+    small_options(&o);
+    CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_FAST));
+    o.hash_levels = 3;
+    o.hash_log2_size = 10;
+    o.hash_min_resolution = 2;
+    o.hash_max_resolution = 16;
+    o.bound = 1.0f;
+    o.width = 9;
+    o.geo_features = 4;
+    o.view_width = 5;
+    o.sh_degree = 3;
+    check_network(&o, NERF_NETWORK_COARSE);
+    o.sh_degree = 4;
+    o.depth = 2;
+    o.view_depth = 3;
+    o.density_activation = NERF_DENSITY_RELU;
+    o.encoding = NERF_ENCODING_FREQUENCY;
+    check_network(&o, NERF_NETWORK_COARSE);
+}
+
 /* Counts allocations so that the test can see the training path reuse
  * its buffers. */
 static size_t n_allocs;
@@ -295,6 +389,7 @@ int main(void)
     RUN(gradients_without_viewdirs);
     RUN(gradients_paper_form_no_skip);
     RUN(gradients_no_positional_encoding);
+    RUN(gradients_hash_grid_form);
     RUN(buffers_are_reused);
     HARNESS_EXIT();
 }

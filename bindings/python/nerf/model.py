@@ -13,7 +13,9 @@ from .structs import ModelOptions
 # nerf_preset
 PRESET_REFERENCE = 1
 PRESET_TINY = 2
-PRESETS = {"reference": PRESET_REFERENCE, "tiny": PRESET_TINY}
+PRESET_FAST = 3
+PRESETS = {"reference": PRESET_REFERENCE, "tiny": PRESET_TINY,
+           "fast": PRESET_FAST}
 
 # nerf_network
 NETWORK_COARSE = 0
@@ -22,6 +24,10 @@ NETWORKS = {"coarse": NETWORK_COARSE, "fine": NETWORK_FINE}
 
 # nerf_encoding_kind and flags
 ENCODING_FREQUENCY = 1
+ENCODING_HASHGRID = 2
+ENCODING_SPHERICAL_HARMONICS = 3
+DENSITY_RELU = 0
+DENSITY_EXP = 1
 ENCODING_INCLUDE_INPUT = 0x1
 ENCODING_SCALE_PI = 0x2
 

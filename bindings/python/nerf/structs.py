@@ -134,6 +134,19 @@ class ModelOptions(_Versioned):
         ("reserved0", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
+        # Appended in libnerf 0.2.
+        ("dir_encoding", c_uint32),
+        ("sh_degree", c_uint32),
+        ("hash_levels", c_uint32),
+        ("hash_features", c_uint32),
+        ("hash_log2_size", c_uint32),
+        ("hash_min_resolution", c_uint32),
+        ("hash_max_resolution", c_uint32),
+        ("bound", c_float),
+        ("geo_features", c_uint32),
+        ("view_depth", c_uint32),
+        ("density_activation", c_uint32),
+        ("reserved1", c_uint32),
     ]
 
 

@@ -73,6 +73,18 @@ static void structs(void)
     FIELD(nerf_model_options, reserved0);
     FIELD(nerf_model_options, seed);
     FIELD(nerf_model_options, hooks);
+    FIELD(nerf_model_options, dir_encoding);
+    FIELD(nerf_model_options, sh_degree);
+    FIELD(nerf_model_options, hash_levels);
+    FIELD(nerf_model_options, hash_features);
+    FIELD(nerf_model_options, hash_log2_size);
+    FIELD(nerf_model_options, hash_min_resolution);
+    FIELD(nerf_model_options, hash_max_resolution);
+    FIELD(nerf_model_options, bound);
+    FIELD(nerf_model_options, geo_features);
+    FIELD(nerf_model_options, view_depth);
+    FIELD(nerf_model_options, density_activation);
+    FIELD(nerf_model_options, reserved1);
     end_struct();
 
     BEGIN(nerf_scene_options);

@@ -42,9 +42,23 @@ class Create(TestCase):
                                   "width"):
             nerf.Model(preset="tiny", width=0)
 
+    def test_fast_preset(self):
+        with nerf.Model(preset="fast", seed=1, hash_log2_size=12,
+                        hash_levels=4) as model:
+            opts = model.options
+            self.assertEqual(opts.encoding, nerf.ENCODING_HASHGRID)
+            self.assertEqual(opts.dir_encoding,
+                             nerf.ENCODING_SPHERICAL_HARMONICS)
+            self.assertEqual(opts.density_activation, nerf.DENSITY_EXP)
+            self.assertEqual((opts.use_fine, opts.hash_levels), (0, 4))
+            pos, dirs = points(5)
+            _, sigma = model.query(pos, dirs)
+            # exp activation: every density is positive.
+            self.assertTrue(all(v > 0.0 for v in flat(sigma)))
+
     def test_options_struct(self):
         opts = nerf.ModelOptions(depth=3, seed=9)
-        self.assertEqual(opts.struct_size, 64)
+        self.assertEqual(opts.struct_size, 112)
         d = opts.to_dict()
         self.assertEqual((d["depth"], d["seed"]), (3, 9))
         self.assertNotIn("struct_size", d)
