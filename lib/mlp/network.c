@@ -234,6 +234,7 @@ typedef struct rows_job {
     size_t out_stride;
     float *rgb_out, *sigma_out;
     const float *d_rgb, *d_sigma;
+    const float *pos; /* positions, for a table's bound */
     float *dz;
     size_t ld;
 } rows_job;
@@ -337,6 +338,26 @@ static float exp_density(float x)
     return expf(x < NERF__EXP_DENSITY_MAX ? x : NERF__EXP_DENSITY_MAX);
 }
 
+/*
+ * A hash grid has nothing to say outside its bound (it would repeat the
+ * faces' values along every ray leaving the box), so space there is empty:
+ * density 0, and no gradient reaches the logit.
+ */
+static bool outside(const nerf__network *net, const float *pos, size_t i)
+{
+    if (!nerf__network_has_table(net)) {
+        return false;
+    }
+    const nerf__hashgrid *hg = &net->hash;
+    const float *p = pos + 3 * i;
+    for (int a = 0; a < 3; a++) {
+        if (!(p[a] >= hg->bound_min[a] && p[a] <= hg->bound_max[a])) {
+            return true;
+        }
+    }
+    return false;
+}
+
 /* The sigmoid on rgb, and the outputs copied out of the workspace. */
 static void output_rows(void *ctx, size_t begin, size_t end)
 {
@@ -366,7 +387,8 @@ static void output_rows(void *ctx, size_t begin, size_t end)
         const float *s = ws->head + nerf__network_sigma_col(net);
         for (size_t i = begin; i < end; i++) {
             float x = s[i * HW];
-            j->sigma_out[i] = net->exp_density ? exp_density(x) : x;
+            float sigma = net->exp_density ? exp_density(x) : x;
+            j->sigma_out[i] = outside(net, j->pos, i) ? 0.0f : sigma;
         }
     }
 }
@@ -421,7 +443,7 @@ void nerf__network_forward(const nerf__network *net, const float *params,
         gemm_forward(n, 3, V, h, V, params + r->w, V, 0.0f, ws->rgb, 3);
     }
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
-                  .sigma_out = sigma_out};
+                  .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 60, output_rows, &j);
 }
 
@@ -462,6 +484,9 @@ static void sigma_grad_rows(void *ctx, size_t begin, size_t end)
         float g = j->d_sigma ? j->d_sigma[i] : 0.0f;
         if (net->exp_density) {
             g *= exp_density(logit[i * HW]);
+        }
+        if (outside(net, j->ws->pos, i)) {
+            g = 0.0f;
         }
         j->dz[i * j->ld] = add ? j->dz[i * j->ld] + g : g;
     }

@@ -84,8 +84,16 @@ static void encode_dir(const nerf__network *net, const float *d, double *ed)
     }
 }
 
-static double density(const nerf__network *net, double x)
+/* The activated density; a hash-grid network has none outside its bound. */
+static double density(const nerf__network *net, double x, const float *p)
 {
+    if (nerf__network_has_table(net)) {
+        for (int a = 0; a < 3; a++) {
+            if (p[a] < net->hash.bound_min[a] || p[a] > net->hash.bound_max[a]) {
+                return 0.0;
+            }
+        }
+    }
     return net->exp_density ? exp(fmin(x, NERF__EXP_DENSITY_MAX)) : x;
 }
 
@@ -128,7 +136,7 @@ static void ref_forward(const nerf__network *net, const double *P,
     linear(&net->head, P, h, out, false);
     if (net->use_viewdirs) {
         const uint32_t F = nerf__network_feature_width(net);
-        *sigma = density(net, out[nerf__network_sigma_col(net)]);
+        *sigma = density(net, out[nerf__network_sigma_col(net)], x);
         encode_dir(net, d, ed);
         memcpy(in, out, F * sizeof(double));
         memcpy(in + F, ed, net->dir_width * sizeof(double));
@@ -143,7 +151,7 @@ static void ref_forward(const nerf__network *net, const double *P,
             rgb[c] = 1.0 / (1.0 + exp(-z[c]));
         }
     } else {
-        *sigma = density(net, out[3]);
+        *sigma = density(net, out[3], x);
         for (int c = 0; c < 3; c++) {
             rgb[c] = 1.0 / (1.0 + exp(-out[c]));
         }
@@ -318,7 +326,7 @@ TEST(gradients_hash_grid_form)
     o.hash_log2_size = 10;
     o.hash_min_resolution = 2;
     o.hash_max_resolution = 16;
-    o.bound = 1.0f;
+    o.bound = 0.8f; /* some of the points in [-1, 1]^3 fall outside */
     o.width = 9;
     o.geo_features = 4;
     o.view_width = 5;
