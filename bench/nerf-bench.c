@@ -101,6 +101,22 @@ static int blas_threads(void)
 #endif
 }
 
+static void set_blas_threads(int n)
+{
+#ifdef HAVE_OPENBLAS_SET_NUM_THREADS
+    if (n > 0) {
+        openblas_set_num_threads(n);
+    }
+#else
+    (void)n;
+#endif
+}
+
+/* OpenBLAS threads while rendering (--render-blas-threads; 0: unchanged).
+ * Renderer workers each call the BLAS, so one worker per core over a
+ * single-threaded BLAS is the other way to use the cores. */
+static int render_blas_threads;
+
 static const char *blas_config(void)
 {
 #ifdef HAVE_OPENBLAS_GET_CONFIG
@@ -597,6 +613,7 @@ typedef struct figures {
     /* rendering */
     int render_ok;
     uint32_t render_workers;
+    int render_blas_threads;
     uint64_t render_rays;
     double render_seconds, render_rays_per_s;
     /* memory */
@@ -657,8 +674,11 @@ static int measure_render(preset_setup *p, uint32_t workers, double budget,
     NERF_RENDERER_OPTIONS_INIT(&ro);
     ro.threads = workers;
     ro.white_background = 1;
+    const int blas_before = blas_threads();
+    set_blas_threads(render_blas_threads);
     nerf_renderer *r = NULL;
     if (nerf_renderer_create(&r, p->model, p->eval_sampler, &ro) != NERF_OK) {
+        set_blas_threads(blas_before);
         return -1;
     }
     /* The top rows of an 800x800 view: cost does not depend on where rays
@@ -683,7 +703,9 @@ static int measure_render(preset_setup *p, uint32_t workers, double budget,
         elapsed = now() - t0;
     }
     f->render_workers = r->threads;
+    f->render_blas_threads = blas_threads();
     nerf_renderer_destroy(r);
+    set_blas_threads(blas_before);
     free(o);
     free(d);
     free(rgb);
@@ -851,6 +873,7 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
     cJSON_AddNumberToObject(o, "render_rays_timed", (double)f->render_rays);
     cJSON_AddNumberToObject(o, "render_seconds_timed", f->render_seconds);
     cJSON_AddNumberToObject(o, "render_workers", f->render_workers);
+    cJSON_AddNumberToObject(o, "render_blas_threads", f->render_blas_threads);
 
     cJSON_AddNumberToObject(o, "flops_per_sample_forward", f->flops_sample_fw);
     cJSON_AddNumberToObject(o, "flops_per_train_ray", f->flops_train_ray);
@@ -1094,7 +1117,7 @@ static void c_render_gf(char *b, size_t s, const preset_setup *p,
 static void c_workers(char *b, size_t s, const preset_setup *p,
                       const figures *f)
 {
-    snprintf(b, s, "%u", f->render_workers);
+    snprintf(b, s, "%u x %d BLAS", f->render_workers, f->render_blas_threads);
 }
 static void c_rss(char *b, size_t s, const preset_setup *p, const figures *f)
 {
@@ -1167,7 +1190,7 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "  train_sgemm_share", c_train_share, ps, fs, n);
     row(out, "render rays/s", c_render, ps, fs, n);
     row(out, "  timed rays", c_render_rays, ps, fs, n);
-    row(out, "  renderer workers", c_workers, ps, fs, n);
+    row(out, "  renderer workers x BLAS threads", c_workers, ps, fs, n);
     row(out, "  GFLOP/s", c_render_gf, ps, fs, n);
     row(out, "  sgemm-bound rays/s", c_render_bound, ps, fs, n);
     row(out, "  render_sgemm_share", c_render_share, ps, fs, n);
@@ -1220,6 +1243,8 @@ static void usage(FILE *out, const char *argv0)
         "                  worker (default: OpenBLAS's own count and the\n"
         "                  renderer's default workers)\n"
         "  --workers W     renderer worker threads (0: library default)\n"
+        "  --render-blas-threads K  OpenBLAS threads while rendering; with\n"
+        "                  --threads N, N/K workers (default: as training)\n"
         "  --size S        side of the training images (default 64)\n"
         "  --render-size S side of the memory-measuring render (default 800)\n"
         "  --rss-rows K    rows rendered for the reference preset's memory\n"
@@ -1263,6 +1288,12 @@ int main(int argc, char **argv)
                 usage(stderr, argv[0]);
                 return 2;
             }
+        } else if (strcmp(a, "--render-blas-threads") == 0 && has_value) {
+            render_blas_threads = atoi(argv[++i]);
+            if (render_blas_threads < 1) {
+                usage(stderr, argv[0]);
+                return 2;
+            }
         } else if (strcmp(a, "--workers") == 0 && has_value) {
             ri.workers_requested = (uint32_t)atoi(argv[++i]);
             workers_given = true;
@@ -1299,7 +1330,10 @@ int main(int argc, char **argv)
 #endif
         /* N threads in all, as a peer given N threads would use. */
         if (!workers_given) {
-            ri.workers_requested = 1;
+            ri.workers_requested =
+                render_blas_threads > 0 && render_blas_threads < ri.threads_requested
+                    ? (uint32_t)(ri.threads_requested / render_blas_threads)
+                    : 1;
         }
     }
     ri.cores = nerf__cpu_count();
