@@ -31,7 +31,7 @@ meson compile -C "$build" nerf-bench
 echo "== nerf-bench (load: $(cut -d' ' -f1-3 /proc/loadavg))"
 # The table goes to stderr, the JSON to the file.
 "$build/bench/nerf-bench" --json --preset all --seconds "$seconds" \
-    --threads "$threads" "$@" >"$out/nerf-bench.json"
+    --threads "$threads" --render-blas-threads 1 "$@" >"$out/nerf-bench.json"
 
 # Debian's interpreter, which python3-torch installs into: the python3 first
 # on PATH may be another one.
