@@ -4,6 +4,7 @@
  * 48-byte little-endian header with its own CRC, then a zlib stream whose
  * content is a list of tagged sections (u32 tag, u64 length, bytes).
  */
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -65,65 +66,74 @@ static unsigned char *put_section(unsigned char *p, uint32_t tag, uint64_t len)
     return p + SECTION_HEAD;
 }
 
-/* The options in the order of nerf_model_options, hooks excluded. */
-static void option_fields(const nerf_model_options *o,
-                          uint32_t f[N_OPTION_U32])
+/*
+ * The 32-bit fields of nerf_model_options in file order: the options
+ * section's (the u64 seed follows them) and the options2 section's.  One
+ * table serves writing and reading; bound, a float, travels as its bits.
+ */
+static const size_t option_u32[N_OPTION_U32] = {
+    offsetof(nerf_model_options, encoding),
+    offsetof(nerf_model_options, pos_frequencies),
+    offsetof(nerf_model_options, dir_frequencies),
+    offsetof(nerf_model_options, encoding_flags),
+    offsetof(nerf_model_options, depth),
+    offsetof(nerf_model_options, width),
+    offsetof(nerf_model_options, skip_layer),
+    offsetof(nerf_model_options, view_width),
+    offsetof(nerf_model_options, use_viewdirs),
+    offsetof(nerf_model_options, use_fine),
+    offsetof(nerf_model_options, reserved0),
+};
+
+_Static_assert(sizeof(float) == sizeof(uint32_t), "bound travels as 32 bits");
+
+static const size_t option2_u32[N_OPTION2_U32] = {
+    offsetof(nerf_model_options, dir_encoding),
+    offsetof(nerf_model_options, sh_degree),
+    offsetof(nerf_model_options, hash_levels),
+    offsetof(nerf_model_options, hash_features),
+    offsetof(nerf_model_options, hash_log2_size),
+    offsetof(nerf_model_options, hash_min_resolution),
+    offsetof(nerf_model_options, hash_max_resolution),
+    offsetof(nerf_model_options, bound),
+    offsetof(nerf_model_options, geo_features),
+    offsetof(nerf_model_options, view_depth),
+    offsetof(nerf_model_options, density_activation),
+    offsetof(nerf_model_options, reserved1),
+};
+
+static void store_fields(unsigned char *p, const nerf_model_options *o,
+                         const size_t *offsets, int n)
 {
-    f[0] = o->encoding;
-    f[1] = o->pos_frequencies;
-    f[2] = o->dir_frequencies;
-    f[3] = o->encoding_flags;
-    f[4] = o->depth;
-    f[5] = o->width;
-    f[6] = o->skip_layer;
-    f[7] = o->view_width;
-    f[8] = o->use_viewdirs;
-    f[9] = o->use_fine;
-    f[10] = o->reserved0;
+    for (int i = 0; i < n; i++) {
+        uint32_t v;
+        memcpy(&v, (const char *)o + offsets[i], sizeof v);
+        nerf__store_le32(p + 4 * i, v);
+    }
+}
+
+static void load_fields(const unsigned char *p, nerf_model_options *o,
+                        const size_t *offsets, int n)
+{
+    for (int i = 0; i < n; i++) {
+        uint32_t v = nerf__load_le32(p + 4 * i);
+        memcpy((char *)o + offsets[i], &v, sizeof v);
+    }
 }
 
 static unsigned char *put_options(unsigned char *p, const nerf_model_options *o)
 {
-    uint32_t f[N_OPTION_U32];
-    option_fields(o, f);
     p = put_section(p, TAG_OPTIONS, OPTIONS_SIZE);
-    for (int i = 0; i < N_OPTION_U32; i++) {
-        nerf__store_le32(p + 4 * i, f[i]);
-    }
+    store_fields(p, o, option_u32, N_OPTION_U32);
     nerf__store_le64(p + 4 * N_OPTION_U32, o->seed);
     return p + OPTIONS_SIZE;
-}
-
-/* The fields appended to nerf_model_options in 0.2, in its order; the
- * float bound is stored as its bits. */
-static void option2_fields(const nerf_model_options *o,
-                           uint32_t f[N_OPTION2_U32])
-{
-    uint32_t bound_bits;
-    memcpy(&bound_bits, &o->bound, sizeof bound_bits);
-    f[0] = o->dir_encoding;
-    f[1] = o->sh_degree;
-    f[2] = o->hash_levels;
-    f[3] = o->hash_features;
-    f[4] = o->hash_log2_size;
-    f[5] = o->hash_min_resolution;
-    f[6] = o->hash_max_resolution;
-    f[7] = bound_bits;
-    f[8] = o->geo_features;
-    f[9] = o->view_depth;
-    f[10] = o->density_activation;
-    f[11] = o->reserved1;
 }
 
 static unsigned char *put_options2(unsigned char *p,
                                    const nerf_model_options *o)
 {
-    uint32_t f[N_OPTION2_U32];
-    option2_fields(o, f);
     p = put_section(p, TAG_OPTIONS2, OPTIONS2_SIZE);
-    for (int i = 0; i < N_OPTION2_U32; i++) {
-        nerf__store_le32(p + 4 * i, f[i]);
-    }
+    store_fields(p, o, option2_u32, N_OPTION2_U32);
     return p + OPTIONS2_SIZE;
 }
 
@@ -446,43 +456,14 @@ static int split_sections(const nerf__env *env, const char *path,
 static void get_options(const unsigned char *p, nerf_model_options *o)
 {
     nerf_model_options_init(o, sizeof *o);
-    uint32_t f[N_OPTION_U32];
-    for (int i = 0; i < N_OPTION_U32; i++) {
-        f[i] = nerf__load_le32(p + 4 * i);
-    }
-    o->encoding = f[0];
-    o->pos_frequencies = f[1];
-    o->dir_frequencies = f[2];
-    o->encoding_flags = f[3];
-    o->depth = f[4];
-    o->width = f[5];
-    o->skip_layer = f[6];
-    o->view_width = f[7];
-    o->use_viewdirs = f[8];
-    o->use_fine = f[9];
-    o->reserved0 = f[10];
+    load_fields(p, o, option_u32, N_OPTION_U32);
     o->seed = nerf__load_le64(p + 4 * N_OPTION_U32);
     o->hooks = NULL;
 }
 
 static void get_options2(const unsigned char *p, nerf_model_options *o)
 {
-    uint32_t f[N_OPTION2_U32];
-    for (int i = 0; i < N_OPTION2_U32; i++) {
-        f[i] = nerf__load_le32(p + 4 * i);
-    }
-    o->dir_encoding = f[0];
-    o->sh_degree = f[1];
-    o->hash_levels = f[2];
-    o->hash_features = f[3];
-    o->hash_log2_size = f[4];
-    o->hash_min_resolution = f[5];
-    o->hash_max_resolution = f[6];
-    memcpy(&o->bound, &f[7], sizeof o->bound);
-    o->geo_features = f[8];
-    o->view_depth = f[9];
-    o->density_activation = f[10];
-    o->reserved1 = f[11];
+    load_fields(p, o, option2_u32, N_OPTION2_U32);
 }
 
 /* Options and sizes: everything that can be checked before allocating. */
