@@ -189,7 +189,10 @@ typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
     NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
-                                       only; its tables are trained). */
+                                       only; its tables are trained).  The
+                                       model then also owns an occupancy
+                                       grid (128^3 cells over the bound)
+                                       for ray-marching samplers. */
     NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
                                        (directions only). */
 } nerf_encoding_kind;
@@ -675,6 +678,22 @@ typedef struct nerf_sampler_options {
     uint32_t reserved1;   /**< Must be 0. */
     uint64_t seed;        /**< Key of the random streams; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    /* Since 0.2: ray marching.  Zero-filled by an older caller, which
+     * gives stratified and hierarchical sampling. */
+    uint32_t march_steps; /**< 0 (the default): stratified and
+                               hierarchical sampling as above.  N in
+                               1..65536: march through the model's
+                               occupancy grid (hash-grid models only) in
+                               steps of a world distance of the grid's
+                               diagonal / N, from max(t_near, entry into
+                               the bound) to min(t_far, exit), skipping
+                               empty cells and stopping a ray once its
+                               transmittance falls below 1e-4.  n_fine,
+                               lindisp and paper_bins are then unused;
+                               ndc is refused.  NERF_PRESET_FAST sets
+                               1024 (instant-ngp's). */
+    uint32_t max_samples; /**< With march_steps: at most this many samples
+                               per ray, 1..65536; default 1024. */
 } nerf_sampler_options;
 
 /**
@@ -689,7 +708,9 @@ NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
 /**
  * Set the sample counts of a nerf_preset in an initialised @p opts; other
  * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
- * NERF_PRESET_TINY: 32 + 64.
+ * NERF_PRESET_TINY: 32 + 64.  NERF_PRESET_FAST: ray marching, march_steps
+ * 1024 and max_samples 1024 (n_coarse 128 and n_fine 0 for a caller that
+ * turns marching off); the other presets set march_steps 0.
  * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
  * NERF_EVERSION as nerf_sampler_create().
  */
@@ -847,8 +868,9 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
  * serve several renderers.
  *
  * @return NERF_OK; NERF_EINVAL (NULL model or sampler, out-of-range
- * options); NERF_EVERSION for an options struct from a newer header with
- * non-zero unknown fields; NERF_ENOMEM.
+ * options, a marching sampler with a model that has no occupancy grid);
+ * NERF_EVERSION for an options struct from a newer header with non-zero
+ * unknown fields; NERF_ENOMEM.
  */
 NERF_API int nerf_renderer_create(nerf_renderer **out,
                                   const nerf_model *model,
@@ -1231,7 +1253,8 @@ typedef struct nerf_trainer_options {
                                    image side, (0, 1]; default 0.5. */
     float raw_noise_std;      /**< Gaussian noise on raw density in
                                    training; default NERF_NOISE_AUTO (1 with
-                                   an NDC sampler, else 0). */
+                                   an NDC sampler, else 0).  Not applied
+                                   with a marching sampler. */
     int32_t white_background; /**< 1: composite renders on white, 0: black,
                                    -1 (default): as the dataset's images
                                    were (white for Blender scenes loaded
@@ -1265,6 +1288,12 @@ typedef struct nerf_train_stats {
     double psnr;           /**< PSNR (dB) of the last pass's colours. */
     double psnr_coarse;    /**< PSNR (dB) of the coarse pass. */
     double learning_rate;  /**< The rate the step used. */
+    /* Since 0.2. */
+    double samples_per_ray; /**< Network evaluations per ray in the step,
+                                 all passes: n_coarse (+ n_coarse +
+                                 n_fine with a fine pass), or with ray
+                                 marching the mean count of marched
+                                 samples. */
 } nerf_train_stats;
 
 /**
@@ -1279,7 +1308,14 @@ typedef struct nerf_train_stats {
  * k, loaded and trained on with the same dataset, sampler and options
  * continues bit for bit as the uninterrupted run would.
  *
- * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset);
+ * With a marching sampler (march_steps > 0) the trainer also keeps the
+ * model's occupancy grid current: every 16 steps, from step 0, it samples
+ * the model's density in every cell (the first 256 steps) or in the
+ * occupied cells and a random quarter of the others (later), keyed by the
+ * model's seed and the grid's update count, both saved in checkpoints.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
+ * a marching sampler with a model that has no occupancy grid);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_ENOMEM.
  */
@@ -1298,8 +1334,9 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *trainer);
  * learning rate.
  * @param stats_out NULL, or figures of the step (set its struct_size).
  * @return NERF_OK; NERF_EINVAL; NERF_ENOMEM (first step only: later steps
- * reuse their buffers); NERF_ERROR if the loss is not finite (the weights
- * are then left as they were before the step).
+ * reuse their buffers, except that with ray marching they grow when a
+ * step has more samples than any before); NERF_ERROR if the loss is not
+ * finite (the weights are then left as they were before the step).
  */
 NERF_API int nerf_trainer_step(nerf_trainer *trainer,
                                nerf_train_stats *stats_out);

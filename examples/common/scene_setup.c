@@ -36,6 +36,11 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_get_options(model, &mo);
+    if (mo.encoding == NERF_ENCODING_HASHGRID) {
+        /* Any hash-grid model has an occupancy grid to march through,
+         * whatever its layer sizes. */
+        nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
+    }
     if (!mo.use_fine && n_fine == 0) {
         /* The paper's "no hierarchical sampling" ablation: 256 coarse. */
         so.n_coarse = so.n_coarse + so.n_fine;

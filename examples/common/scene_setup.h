@@ -13,7 +13,8 @@ int setup_model_preset(const nerf_model *model);
 /*
  * A sampler for rendering or training model on dataset (which may be NULL:
  * then a Blender-like scene with near 2, far 6 is assumed).  The sample
- * counts follow the model's preset (the reference ones otherwise);
+ * counts follow the model's preset (the reference ones otherwise; a
+ * hash-grid model marches through its occupancy grid as the fast preset);
  * n_coarse/n_fine override them when non-zero.  Bounds and NDC follow the
  * dataset; near/far override the bounds when far > near.
  */

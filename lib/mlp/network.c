@@ -129,13 +129,10 @@ static size_t round64(size_t floats)
     return (floats + 15) & ~(size_t)15; /* keep every buffer 64-byte aligned */
 }
 
-int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
-                            const nerf__network *net, size_t n, bool keep)
+static int reserve(const nerf__env *env, nerf__workspace *ws,
+                   const nerf__network *net, size_t n, bool keep,
+                   bool density_only)
 {
-    if (n <= ws->cap && (ws->keep || !keep)) {
-        ws->n = n;
-        return NERF_OK;
-    }
     /* cblas takes int dimensions: refuse batches whose matrices it cannot
      * address. */
     if (n > (size_t)1 << 24) {
@@ -143,15 +140,15 @@ int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
                            "(at most %d per call)", n, 1 << 24);
     }
     size_t layers = keep ? net->depth : 2;
-    size_t view_layers = keep ? net->view_depth : 2;
+    size_t view_layers = density_only ? 0 : keep ? net->view_depth : 2;
     size_t sizes[9] = {
         round64(n * net->pos_width),
-        round64(n * net->dir_width),
+        density_only ? 0 : round64(n * net->dir_width),
         keep && nerf__network_has_table(net) ? round64(n * 3) : 0,
         round64(layers * n * net->width),
         round64(n * nerf__network_head_width(net)),
         round64(view_layers * n * net->view_width),
-        round64(n * 3),
+        density_only ? 0 : round64(n * 3),
         keep ? round64(n * grad_width(net)) : 0,
         keep ? round64(n * grad_width(net)) : 0,
     };
@@ -176,7 +173,28 @@ int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
     ws->cap = n;
     ws->n = n;
     ws->keep = keep;
+    ws->density_only = density_only;
     return NERF_OK;
+}
+
+int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
+                            const nerf__network *net, size_t n, bool keep)
+{
+    if (n <= ws->cap && (ws->keep || !keep) && !ws->density_only) {
+        ws->n = n;
+        return NERF_OK;
+    }
+    return reserve(env, ws, net, n, keep, false);
+}
+
+int nerf__workspace_reserve_density(const nerf__env *env, nerf__workspace *ws,
+                                    const nerf__network *net, size_t n)
+{
+    if (n <= ws->cap) {
+        ws->n = n;
+        return NERF_OK;
+    }
+    return reserve(env, ws, net, n, false, true);
 }
 
 void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws)
@@ -445,6 +463,51 @@ void nerf__network_forward(const nerf__network *net, const float *params,
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
                   .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 60, output_rows, &j);
+}
+
+/* Density from the head's one column, ws->head [n, 1]. */
+static void density_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    const nerf__network *net = j->net;
+    const float b = j->params[net->head.b + nerf__network_sigma_col(net)];
+    for (size_t i = begin; i < end; i++) {
+        float x = j->ws->head[i] + b;
+        float sigma = net->exp_density ? exp_density(x) : x;
+        j->sigma_out[i] = outside(net, j->pos, i) ? 0.0f : sigma;
+    }
+}
+
+void nerf__network_density(const nerf__network *net, const float *params,
+                           nerf__workspace *ws, size_t n,
+                           const float *positions, float *sigma_out)
+{
+    const uint32_t W = net->width, Ep = net->pos_width;
+    ws->n = n;
+    encode_positions(net, params, ws, n, positions);
+    const float *x = ws->enc_pos;
+    size_t ldx = Ep;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        const nerf__linear *l = &net->trunk[i];
+        float *y = trunk_buffer(net, ws, i);
+        if (i > 0 && i == net->skip) {
+            gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in, 0.0f,
+                         y, W);
+            gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f, y, W);
+        } else {
+            gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f, y, W);
+        }
+        nerf__bias_relu(n, W, y, W, params + l->b);
+        x = y;
+        ldx = W;
+    }
+    /* Only the density row of the head's weights. */
+    const size_t row = (size_t)nerf__network_sigma_col(net) * W;
+    gemm_forward(n, 1, W, x, ldx, params + net->head.w + row, W, 0.0f,
+                 ws->head, 1);
+    rows_job j = {.net = net, .params = params, .ws = ws,
+                  .sigma_out = sigma_out, .pos = positions};
+    nerf__parallel_for(n, 30, density_rows, &j);
 }
 
 /* dz = d_rgb * rgb (1 - rgb): the sigmoid's backward, into rows of ld. */

@@ -123,6 +123,7 @@ typedef struct nerf__workspace {
     size_t cap;
     size_t n;      /* samples in the last forward */
     bool keep;
+    bool density_only; /* no direction, colour branch or rgb buffers */
     float *enc_pos; /* [n, pos_width] */
     float *enc_dir; /* [n, dir_width] */
     float *pos;     /* [n, 3], the positions, kept for a table's backward */
@@ -136,6 +137,10 @@ typedef struct nerf__workspace {
 
 int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
                             const nerf__network *net, size_t n, bool keep);
+/* A workspace for nerf__network_density() only: about a third of the
+ * memory of a full one (no colour branch).  A full workspace serves too. */
+int nerf__workspace_reserve_density(const nerf__env *env, nerf__workspace *ws,
+                                    const nerf__network *net, size_t n);
 void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws);
 
 /*
@@ -148,6 +153,18 @@ void nerf__network_forward(const nerf__network *net, const float *params,
                            nerf__workspace *ws, size_t n,
                            const float *positions, const float *directions,
                            float *rgb_out, float *sigma_out);
+
+/*
+ * Density only, for occupancy-grid updates: the position encoding, the
+ * trunk and the head's density column, without the colour branch.
+ * sigma_out[n] receives what nerf__network_forward() gives as sigma (up
+ * to rounding: the head is one column here).  ws must have been reserved
+ * for n samples by either reserve call; the activations of its last
+ * forward are overwritten.
+ */
+void nerf__network_density(const nerf__network *net, const float *params,
+                           nerf__workspace *ws, size_t n,
+                           const float *positions, float *sigma_out);
 
 /*
  * Backward the last forward (which must have kept its activations), given

@@ -4,6 +4,8 @@
  * 48-byte little-endian header with its own CRC, then a zlib stream whose
  * content is a list of tagged sections (u32 tag, u64 length, bytes).
  */
+#include <math.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -14,6 +16,7 @@
 #include "byteorder.h"
 #include "file_io.h"
 #include "model.h"
+#include "occupancy.h"
 
 #define MAGIC "NERFCKPT"
 #define MAGIC_LEN 8
@@ -35,7 +38,12 @@
 #define TAG_ADAM_M (TAG_REQUIRED | 4u)
 #define TAG_ADAM_V (TAG_REQUIRED | 5u)
 #define TAG_OPTIONS2 (TAG_REQUIRED | 6u)
-#define N_SECTIONS 6
+/* Optional: a reader that does not know it loads the model with a fresh
+ * grid, which training refills within a few updates. */
+#define TAG_OCCUPANCY 7u
+#define N_REQUIRED_SECTIONS 6
+#define N_SECTIONS 7
+#define OCCUPANCY_INDEX 6
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
@@ -43,6 +51,7 @@
 #define N_OPTION_U32 11
 #define OPTIONS2_SIZE 48u /* the 12 u32 fields appended in 0.2 */
 #define N_OPTION2_U32 12
+#define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
@@ -161,10 +170,31 @@ static unsigned char *put_floats(unsigned char *p, uint32_t tag,
     return p + 4 * n;
 }
 
-static size_t payload_size(size_t n_params)
+/* The occupancy grid: its EMA and update counter, from which loading
+ * rebuilds the bits exactly as the last update set them. */
+static size_t occupancy_size(const nerf_model *m)
 {
-    return N_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
-           TRAINING_SIZE + 3 * 4 * n_params;
+    return m->grid ? SECTION_HEAD + OCCUPANCY_HEAD + 4 * m->grid->cells : 0;
+}
+
+static unsigned char *put_occupancy(unsigned char *p, const nerf_model *m)
+{
+    const nerf__occupancy *g = m->grid;
+    p = put_section(p, TAG_OCCUPANCY, OCCUPANCY_HEAD + 4 * (uint64_t)g->cells);
+    nerf__store_le32(p, g->res);
+    nerf__store_le32(p + 4, 0);
+    nerf__store_le64(p + 8, g->updates);
+    p += OCCUPANCY_HEAD;
+    for (size_t i = 0; i < g->cells; i++) {
+        nerf__store_lef32(p + 4 * i, g->ema[i]);
+    }
+    return p + 4 * g->cells;
+}
+
+static size_t payload_size(const nerf_model *m)
+{
+    return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
+           TRAINING_SIZE + 3 * 4 * m->n_params + occupancy_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -174,7 +204,10 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     p = put_floats(p, TAG_PARAMS, m->params, m->n_params);
     p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
     p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
-    put_options2(p, &m->opts);
+    p = put_options2(p, &m->opts);
+    if (m->grid) {
+        put_occupancy(p, m);
+    }
 }
 
 static void put_header(unsigned char *h, const ckpt_header *hd)
@@ -254,7 +287,7 @@ NERF_API int nerf_model_save(const nerf_model *model, const char *path)
         return nerf__error(NERF_EINVAL, "nerf_model_save: NULL %s",
                            model ? "path" : "model");
     }
-    size_t size = payload_size(model->n_params);
+    size_t size = payload_size(model);
     unsigned char *payload = nerf__alloc(&model->env, size);
     if (payload == NULL) {
         return nerf__error_prefix(NERF_ENOMEM, path);
@@ -392,13 +425,15 @@ typedef struct sections {
 
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
-    "Adam second moments", "options (0.2)"};
+    "Adam second moments", "options (0.2)", "occupancy grid"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
 {
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
-    if ((tag & TAG_REQUIRED) && index < N_SECTIONS) {
+    bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS
+                                      : tag == TAG_OCCUPANCY;
+    if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
                                "%s sections)", path, section_names[index]);
@@ -506,7 +541,43 @@ static int check_shapes(const char *path, const sections *s,
                                (unsigned long long)(4 * n));
         }
     }
+    if (s->body[OCCUPANCY_INDEX] != NULL) {
+        /* Only a grid of the size this libnerf gives the model fits. */
+        const uint64_t R = NERF__MODEL_GRID_RESOLUTION;
+        const uint64_t len = s->len[OCCUPANCY_INDEX];
+        const unsigned char *b = s->body[OCCUPANCY_INDEX];
+        if (o->encoding != NERF_ENCODING_HASHGRID ||
+            len != OCCUPANCY_HEAD + 4 * R * R * R ||
+            nerf__load_le32(b) != R || nerf__load_le32(b + 4) != 0) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                               "occupancy grid section does not fit the "
+                               "model)", path);
+        }
+    }
     *n_params = n;
+    return NERF_OK;
+}
+
+/* The saved EMA into the model's fresh grid.  A genuine EMA is a finite
+ * density >= 0 in every cell. */
+static int set_occupancy(const char *path, nerf_model *m,
+                         const unsigned char *b)
+{
+    nerf__occupancy *g = m->grid;
+    const unsigned char *p = b + OCCUPANCY_HEAD;
+    for (size_t i = 0; i < g->cells; i++) {
+        float e = nerf__load_lef32(p + 4 * i);
+        if (!(e >= 0.0f) || !isfinite(e)) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                               "(occupancy grid cell %zu holds %g)", path, i,
+                               (double)e);
+        }
+        g->ema[i] = e;
+    }
+    /* The bits, mean and threshold follow from the EMA as the last update
+     * computed them (see nerf__occupancy_rebuild_bits). */
+    g->updates = nerf__load_le64(b + 8);
+    nerf__occupancy_rebuild_bits(g);
     return NERF_OK;
 }
 
@@ -559,6 +630,13 @@ static int build_model(const nerf__env *env, const char *path,
     if (rc != NERF_OK) {
         nerf_model_destroy(m);
         return rc;
+    }
+    if (s.body[OCCUPANCY_INDEX] != NULL) {
+        rc = set_occupancy(path, m, s.body[OCCUPANCY_INDEX]);
+        if (rc != NERF_OK) {
+            nerf_model_destroy(m);
+            return rc;
+        }
     }
     get_floats(s.body[2], m->params, m->n_params);
     get_floats(s.body[3], m->adam_m, m->n_params);

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "occupancy.h"
 #include "options.h"
 
 /* Samples per block in nerf_model_query(): bounds its memory (about 10 MB
@@ -270,6 +271,21 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
             return NERF_ENOMEM;
         }
     }
+    if (opts->encoding == NERF_ENCODING_HASHGRID) {
+        /* The grid covers the hash grid's bound: outside it the model has
+         * no density, so there is nothing to march. */
+        const float lo[3] = {-opts->bound, -opts->bound, -opts->bound};
+        const float hi[3] = {opts->bound, opts->bound, opts->bound};
+        nerf__occupancy_options go;
+        nerf__occupancy_defaults(&go, lo, hi);
+        go.resolution = NERF__MODEL_GRID_RESOLUTION;
+        go.seed = opts->seed;
+        int rc = nerf__occupancy_create(env, &go, &m->grid);
+        if (rc != NERF_OK) {
+            nerf_model_destroy(m);
+            return rc;
+        }
+    }
     *out = m;
     return NERF_OK;
 }
@@ -325,6 +341,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->grads);
     nerf__free(&env, model->adam_m);
     nerf__free(&env, model->adam_v);
+    nerf__occupancy_destroy(model->grid);
     nerf__free(&env, model);
 }
 
@@ -414,6 +431,18 @@ int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
     }
     nerf__network_forward(net, m->params, ws, n, positions, directions,
                           rgb_out, sigma_out);
+    return NERF_OK;
+}
+
+int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, const float *positions, float *sigma_out)
+{
+    const nerf__network *net = &m->nets[network];
+    int rc = nerf__workspace_reserve_density(&m->env, ws, net, n);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__network_density(net, m->params, ws, n, positions, sigma_out);
     return NERF_OK;
 }
 

@@ -11,6 +11,10 @@
 #include "env.h"
 #include "network.h"
 
+/* lib/render/occupancy.h: a self-contained structure over common, which
+ * the model owns and the render code marches through. */
+struct nerf__occupancy;
+
 struct nerf_model {
     nerf__env env;
     nerf_model_options opts; /* as created; opts.hooks is NULL */
@@ -25,7 +29,14 @@ struct nerf_model {
     float *adam_v;
     uint64_t step;           /* optimiser steps taken */
     nerf__adam adam;
+    /* Hash-grid models: the occupancy grid over [-bound, bound]^3 that a
+     * marching sampler skips empty space with (NULL otherwise).  Its EMA
+     * and update counter are training state, saved in checkpoints. */
+    struct nerf__occupancy *grid;
 };
+
+/* Cells per axis of a model's occupancy grid. */
+#define NERF__MODEL_GRID_RESOLUTION 128u
 
 /* Validate options (already read into a full-size struct). */
 int nerf__model_check_options(const nerf_model_options *o);
@@ -38,7 +49,8 @@ size_t nerf__model_options_param_count(const nerf_model_options *o);
 
 /*
  * Allocate a model for opts with zeroed parameters and optimiser state
- * (no initialisation): the loaders fill it.  env is copied.
+ * (no initialisation): the loaders fill it.  A hash-grid model gets a
+ * fresh occupancy grid.  env is copied.
  */
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
                       const nerf__env *env);
@@ -64,6 +76,13 @@ int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
                         size_t n, const float *positions,
                         const float *directions, float *rgb_out,
                         float *sigma_out);
+
+/*
+ * Density of network `network` at n points (as nerf__model_forward()'s
+ * sigma, without the colour branch), through ws, which grows if needed.
+ */
+int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, const float *positions, float *sigma_out);
 
 /* Accumulate the gradients of the forward held in ws into m->grads. */
 void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,

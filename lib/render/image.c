@@ -39,7 +39,7 @@ static int image_chunk(void *p, nerf__worker *w, size_t first, size_t count)
         s.first_ray = at;
         nerf__pass_out out[NERF__PASSES];
         memset(out, 0, sizeof out);
-        nerf__pass_out *last = &out[s.sampler->opts.n_fine > 0 ? 1 : 0];
+        nerf__pass_out *last = &out[nerf__sampler_last_pass(s.sampler)];
         if (job->rgb) {
             last->rgb = job->rgb + 3 * at;
         } else if (job->rgb8) {

@@ -12,6 +12,7 @@ void nerf__batch_init(nerf__batch *b, const nerf__env *env)
 {
     memset(b, 0, sizeof *b);
     b->env = *env;
+    nerf__march_samples_init(&b->march, env);
 }
 
 void nerf__batch_release(nerf__batch *b)
@@ -19,9 +20,24 @@ void nerf__batch_release(nerf__batch *b)
     for (int p = 0; p < NERF__PASSES; p++) {
         nerf__workspace_release(&b->ws_env, &b->ws[p]);
     }
+    nerf__render_march_release(b);
     nerf__free(&b->env, b->block);
     nerf__env env = b->env;
     nerf__batch_init(b, &env);
+}
+
+int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
+                            const char *fn)
+{
+    if (nerf__sampler_marches(s) && m->grid == NULL) {
+        return nerf__error(NERF_EINVAL, "%s: the sampler marches "
+                           "(march_steps = %u) through an occupancy grid, "
+                           "which only hash-grid models have (encoding "
+                           "NERF_ENCODING_HASHGRID, as NERF_PRESET_FAST); "
+                           "use march_steps = 0 with this model", fn,
+                           (unsigned)s->opts.march_steps);
+    }
+    return NERF_OK;
 }
 
 static size_t round16(size_t floats)
@@ -273,9 +289,18 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
 {
     const nerf_model *m = s->model;
     const nerf_sampler_options *so = &s->sampler->opts;
-    const uint32_t n_c = so->n_coarse, n_f = so->n_fine;
+    const bool march = nerf__sampler_marches(s->sampler);
+    /* Marching needs only the per-ray arrays of the block. */
+    const uint32_t n_c = march ? 0 : so->n_coarse;
+    const uint32_t n_f = march ? 0 : so->n_fine;
     b->kept = false;
+    b->marched = false;
     b->n_rays = 0;
+    b->n_evaluated = 0;
+    if (march && m->grid == NULL) {
+        return nerf__error(NERF_EINVAL, "render: the sampler marches through "
+                           "an occupancy grid, which this model has not");
+    }
     int rc = reserve(b, n_rays, n_c, n_f, s->keep);
     if (rc != NERF_OK) {
         return rc;
@@ -291,6 +316,13 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     }
     b->n_rays = n_rays;
     b->white = s->white_background;
+    if (march) {
+        b->n_pass = 1;
+        b->n_samples[0] = b->n_samples[1] = 0;
+        b->net[0] = b->net[1] = 0;
+        b->marched = true;
+        return nerf__render_march(b, s, n_rays, origins, directions, out);
+    }
     b->n_pass = n_f > 0 ? 2 : 1;
     b->n_samples[0] = n_c;
     b->n_samples[1] = n_c + n_f;
@@ -323,6 +355,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
             nerf__parallel_for(n_rays, 40 * samples, add_noise, &j);
         }
         nerf__parallel_for(n_rays, 40 * samples, composite_pass, &j);
+        b->n_evaluated += n_rays * samples;
     }
     b->kept = s->keep;
     return NERF_OK;
@@ -353,6 +386,12 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
     if (!b->kept || b->model != m) {
         return nerf__error(NERF_EINVAL, "render backward: the last forward "
                            "did not keep its state for this model");
+    }
+    if (b->marched) {
+        nerf__render_march_backward(b, m, d_rgb ? d_rgb[0] : NULL,
+                                    d_depth ? d_depth[0] : NULL,
+                                    d_opacity ? d_opacity[0] : NULL);
+        return NERF_OK;
     }
     for (uint32_t pass = 0; pass < b->n_pass; pass++) {
         const float *gr = d_rgb ? d_rgb[pass] : NULL;

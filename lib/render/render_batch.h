@@ -4,6 +4,15 @@
  * compositing again.  The image renderer calls it on blocks of pixels; the
  * trainer calls it on its batch of random rays with `keep` set, then calls
  * nerf__render_batch_backward() with the loss gradients of its outputs.
+ *
+ * With a marching sampler (march_steps > 0) the batch takes the fast path
+ * instead (render_march.c): one pass of samples marched through the
+ * model's occupancy grid, packed (a variable number per ray), the network
+ * on the packed samples, and compositing with early termination.  With
+ * `keep` (training) every ray is marched in full at once, so that one
+ * forward holds everything the backward needs; without it (rendering) the
+ * rays are marched a few samples at a time and each stops being marched
+ * once it is opaque, so the network sees few samples past the surfaces.
  */
 #ifndef NERF_RENDER_BATCH_H
 #define NERF_RENDER_BATCH_H
@@ -12,6 +21,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "composite_packed.h"
+#include "march.h"
 #include "model.h"
 #include "sampler.h"
 
@@ -41,6 +52,10 @@ typedef struct nerf__render_setup {
     const float *noise[NERF__PASSES];
     /* Keep activations, samples and weights for the backward pass. */
     bool keep;
+    /* Marching only, for tests that compare skipping with references:
+     * place samples in empty cells too, and (zero_empty) give the samples
+     * in empty cells density 0, which is what skipping them amounts to. */
+    bool march_everywhere, march_zero_empty;
 } nerf__render_setup;
 
 /* Outputs of one pass; any pointer may be NULL. */
@@ -68,6 +83,12 @@ typedef struct nerf__batch {
     float *rgb[NERF__PASSES];       /* [n_rays * n_samples, 3] */
     float *sigma[NERF__PASSES];     /* [n_rays * n_samples], noise added */
     float *dir_norm;                /* [n_rays], |d| of the sampled rays */
+    /* Network evaluations of the last batch, all passes and pieces. */
+    size_t n_evaluated;
+    /* Marching: the packed samples of the last batch (with keep, all of
+     * them; otherwise the last piece's), and their points. */
+    nerf__march_samples march;
+    float *march_points;            /* [march.total, 3] */
     /* private */
     const nerf_model *model;
     bool white, kept;
@@ -79,6 +100,17 @@ typedef struct nerf__batch {
     float *d_rgb, *d_sigma;
     nerf__env ws_env;
     nerf__workspace ws[NERF__PASSES];
+    /* private, marching (render_march.c) */
+    bool marched;                   /* the last batch took this path */
+    nerf__packed_batch packed;      /* what the backward composites */
+    float bg[3];
+    size_t cap_packed, cap_march_rays;
+    bool cap_packed_keep;
+    void *packed_block, *march_block;
+    float *m_dirs, *m_rgb, *m_sigma, *m_d_rgb, *m_d_sigma;
+    nerf__composite_state *m_state;      /* [n_rays] */
+    uint32_t *m_first, *m_count, *m_active, *m_act_first; /* [n_rays] */
+    float *m_o, *m_d, *m_view;           /* [n_rays, 3], rays going */
 } nerf__batch;
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env);
@@ -110,5 +142,24 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
                                 const float *const d_rgb[NERF__PASSES],
                                 const float *const d_depth[NERF__PASSES],
                                 const float *const d_opacity[NERF__PASSES]);
+
+/*
+ * The marching path (render_march.c), which nerf__render_batch() and its
+ * backward hand over to when the sampler marches; only pass 0 is used.
+ * The rays have been checked and b sized for n_rays per-ray values.
+ */
+int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
+                       size_t n_rays, const float *origins,
+                       const float *directions,
+                       const nerf__pass_out out[NERF__PASSES]);
+void nerf__render_march_backward(nerf__batch *b, nerf_model *m,
+                                 const float *d_rgb, const float *d_depth,
+                                 const float *d_opacity);
+void nerf__render_march_release(nerf__batch *b);
+
+/* Check, at renderer or trainer creation, that the sampler can work with
+ * the model (a marching sampler needs the model's occupancy grid). */
+int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
+                            const char *fn);
 
 #endif

@@ -93,8 +93,8 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
     }
     nerf_renderer_options o;
     default_options(&o);
-    int rc = NERF_OK;
-    if (opts) {
+    int rc = nerf__render_check_pair(model, sampler, "nerf_renderer_create");
+    if (opts && rc == NERF_OK) {
         rc = nerf__options_read(&o, sizeof o, opts, "nerf_renderer_options");
     }
     if (rc == NERF_OK) {
@@ -127,9 +127,16 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
     r->chunk = ((size_t)o.chunk_rays + NERF__RENDER_BLOCK - 1) /
                NERF__RENDER_BLOCK * NERF__RENDER_BLOCK;
     atomic_init(&r->cancel, 0);
-    nerf__log(&r->env, NERF_LOG_DEBUG, "renderer: %u thread(s), chunks of "
-              "%zu rays, %u + %u samples", r->threads, r->chunk,
-              sampler->opts.n_coarse, sampler->opts.n_fine);
+    if (nerf__sampler_marches(sampler)) {
+        nerf__log(&r->env, NERF_LOG_DEBUG, "renderer: %u thread(s), chunks "
+                  "of %zu rays, marching %u steps, at most %u samples",
+                  r->threads, r->chunk, sampler->opts.march_steps,
+                  sampler->opts.max_samples);
+    } else {
+        nerf__log(&r->env, NERF_LOG_DEBUG, "renderer: %u thread(s), chunks "
+                  "of %zu rays, %u + %u samples", r->threads, r->chunk,
+                  sampler->opts.n_coarse, sampler->opts.n_fine);
+    }
     *out = r;
     return NERF_OK;
 }
@@ -174,6 +181,8 @@ void nerf__renderer_eval_setup(const nerf_renderer *r, nerf__render_setup *s)
     s->sampler = r->sampler;
     s->noise_std = r->noise_std;
     s->white_background = r->opts.white_background != 0;
+    s->march_everywhere = r->march_everywhere;
+    s->march_zero_empty = r->march_zero_empty;
     s->ndc_focal = r->sampler->opts.ndc_focal;
     s->ndc_width = (float)r->sampler->opts.ndc_width;
     s->ndc_height = (float)r->sampler->opts.ndc_height;
@@ -213,7 +222,7 @@ static int rays_chunk(void *p, nerf__worker *w, size_t first, size_t count)
         s.first_ray = at;
         nerf__pass_out out[NERF__PASSES];
         memset(out, 0, sizeof out);
-        nerf__pass_out *last = &out[s.sampler->opts.n_fine > 0 ? 1 : 0];
+        nerf__pass_out *last = &out[nerf__sampler_last_pass(s.sampler)];
         last->rgb = job->rgb ? job->rgb + 3 * at : NULL;
         last->depth = job->depth ? job->depth + at : NULL;
         last->opacity = job->opacity ? job->opacity + at : NULL;

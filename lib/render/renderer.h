@@ -45,6 +45,9 @@ struct nerf_renderer {
     void *progress_user;
     nerf__worker **workers;     /* created on demand, kept until destroy */
     uint32_t n_workers;
+    /* Marching samplers, for tests that compare skipping with references
+     * (see nerf__render_setup). */
+    bool march_everywhere, march_zero_empty;
 };
 
 /* Whether nerf_renderer_cancel() (or the progress callback) asked the

@@ -2,10 +2,16 @@
 #include <math.h>
 #include <string.h>
 
+#include "occupancy.h"
 #include "options.h"
 #include "sampler.h"
 
 #define MAX_SAMPLES 4096u
+/* Marching: steps across the bound's diagonal, and samples per ray.  The
+ * marcher handles up to 2^24 steps along a ray; these keep far below. */
+#define MAX_MARCH_STEPS 65536u
+#define MAX_MARCH_SAMPLES 65536u
+#define DEFAULT_MARCH_SAMPLES 1024u
 
 static void default_options(nerf_sampler_options *o)
 {
@@ -16,6 +22,7 @@ static void default_options(nerf_sampler_options *o)
     o->perturb = 1;
     o->t_near = 2.0f;
     o->t_far = 6.0f;
+    o->max_samples = DEFAULT_MARCH_SAMPLES;
 }
 
 NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
@@ -40,15 +47,21 @@ NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
     case NERF_PRESET_REFERENCE:
         o.n_coarse = 64;
         o.n_fine = 128;
+        o.march_steps = 0;
         break;
     case NERF_PRESET_TINY:
         o.n_coarse = 32;
         o.n_fine = 64;
+        o.march_steps = 0;
         break;
     case NERF_PRESET_FAST:
-        /* One network, so one pass of samples. */
+        /* Mueller et al.'s sampler.  The stratified counts stay valid,
+         * one pass for the one network, for a caller who sets
+         * march_steps back to 0. */
         o.n_coarse = 128;
         o.n_fine = 0;
+        o.march_steps = NERF__MARCH_STEPS_DEFAULT;
+        o.max_samples = DEFAULT_MARCH_SAMPLES;
         break;
     default:
         return nerf__error(NERF_EINVAL, "nerf_sampler_options_preset: "
@@ -94,6 +107,14 @@ static int check_options(const nerf_sampler_options *o)
     } else if (!frustum_zero && !frustum_set) {
         what = "ndc_focal, ndc_width and ndc_height must all be 0 or all "
                "positive and finite";
+    } else if (o->march_steps > MAX_MARCH_STEPS) {
+        what = "march_steps must be 0..65536";
+    } else if (o->march_steps > 0 && o->ndc) {
+        /* The grid covers a box of world space; NDC rays live elsewhere. */
+        what = "ray marching (march_steps > 0) does not support ndc";
+    } else if (o->march_steps > 0 &&
+               (o->max_samples < 1 || o->max_samples > MAX_MARCH_SAMPLES)) {
+        what = "max_samples must be 1..65536";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_sampler_options: %s", what);

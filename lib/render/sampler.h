@@ -28,8 +28,22 @@ enum {
     NERF__STREAM_STRATIFIED = 1,
     NERF__STREAM_HIERARCHICAL = 2,
     NERF__STREAM_NOISE_COARSE = 3,
-    NERF__STREAM_NOISE_FINE = 4
+    NERF__STREAM_NOISE_FINE = 4,
+    NERF__STREAM_MARCH = 5
 };
+
+/* Whether the sampler marches through an occupancy grid. */
+static inline bool nerf__sampler_marches(const nerf_sampler *s)
+{
+    return s->opts.march_steps > 0;
+}
+
+/* The pass whose outputs are the render's: the fine one when there is
+ * one (marching has a single pass). */
+static inline int nerf__sampler_last_pass(const nerf_sampler *s)
+{
+    return !nerf__sampler_marches(s) && s->opts.n_fine > 0 ? 1 : 0;
+}
 
 /* The generator of one purpose for one ray. */
 static inline nerf__rng nerf__ray_rng(uint64_t seed, uint32_t purpose,

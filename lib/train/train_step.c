@@ -4,6 +4,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "occupancy.h"
 #include "trainer.h"
 
 /*
@@ -42,11 +43,48 @@ static void fill_stats(nerf_train_stats *out, const nerf_train_stats *s)
     }
 }
 
+/* The occupancy grid's density source: the model's density-only pass. */
+static int grid_density(void *ctx, size_t n, const float *xyz, float *sigma)
+{
+    nerf_trainer *t = ctx;
+    return nerf__model_density(t->model, 0, &t->density_ws, n, xyz, sigma);
+}
+
+int nerf__trainer_update_grid(nerf_trainer *t)
+{
+    nerf_model *m = t->model;
+    nerf__occupancy *g = m->grid;
+    if (g == NULL || m->step % NERF__GRID_EVERY != 0) {
+        return NERF_OK;
+    }
+    /* The update's random draws are keyed by the model's seed (the grid's)
+     * and the grid's update count, both in checkpoints, so a resumed run
+     * refreshes the grid as the unbroken one did. */
+    size_t n_random = m->step < NERF__GRID_WARMUP ? g->cells : g->cells / 4;
+    int rc = nerf__occupancy_update(g, grid_density, t, n_random);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__log(&t->env, NERF_LOG_DEBUG, "trainer: step %llu, occupancy grid "
+              "update %llu: %zu cells sampled, %zu of %zu occupied (%.1f%%), "
+              "threshold %g", (unsigned long long)m->step,
+              (unsigned long long)g->updates, g->evaluated, g->occupied,
+              g->cells, 100.0 * (double)g->occupied / (double)g->cells,
+              (double)g->threshold);
+    return NERF_OK;
+}
+
 static int step(nerf_trainer *t, nerf_train_stats *stats)
 {
     nerf_model *m = t->model;
     const uint64_t k = m->step;
     const size_t B = t->opts.batch_rays;
+    if (t->march) {
+        int rc = nerf__trainer_update_grid(t);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
     nerf__trainer_pick_rays(t, k);
     t->setup.first_ray = k * B;
     nerf__pass_out out[NERF__PASSES];
@@ -84,6 +122,7 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
     stats->psnr = psnr_of(mse[passes - 1]);
     stats->psnr_coarse = psnr_of(mse[0]);
     stats->learning_rate = lr;
+    stats->samples_per_ray = (double)t->batch.n_evaluated / (double)B;
     return NERF_OK;
 }
 

@@ -144,6 +144,10 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
         return nerf__error(NERF_EINVAL, "nerf_trainer_create: the dataset "
                            "has no images");
     }
+    rc = nerf__render_check_pair(model, sampler, "nerf_trainer_create");
+    if (rc != NERF_OK) {
+        return rc;
+    }
     nerf_trainer *t = nerf__calloc(&env, 1, sizeof *t);
     if (t == NULL) {
         return NERF_ENOMEM;
@@ -155,6 +159,7 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     t->model = model;
     t->dataset = dataset;
     t->sampler = sampler;
+    t->march = nerf__sampler_marches(sampler);
     t->n_images = dataset->count;
     t->width = dataset->width;
     t->height = dataset->height;
@@ -182,10 +187,11 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     }
     setup_render(t);
     nerf__log(&env, NERF_LOG_INFO, "trainer: %u images of %ux%u, %u rays per "
-              "step, %s background, density noise %g, precrop %u steps",
+              "step, %s background, density noise %g, precrop %u steps%s",
               t->n_images, t->width, t->height, o.batch_rays,
-              t->white ? "white" : "black", (double)t->noise_std,
-              t->opts.precrop_steps);
+              t->white ? "white" : "black",
+              t->march ? 0.0 : (double)t->noise_std, t->opts.precrop_steps,
+              t->march ? ", ray marching through the occupancy grid" : "");
     *out = t;
     return NERF_OK;
 }
@@ -197,6 +203,7 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *t)
     }
     nerf__env env = t->env;
     nerf__batch_release(&t->batch);
+    nerf__workspace_release(&t->model->env, &t->density_ws);
     float *bufs[] = {t->origins, t->directions, t->targets, t->rgb[0],
                      t->rgb[1], t->d_rgb[0], t->d_rgb[1]};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) {

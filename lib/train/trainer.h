@@ -32,9 +32,24 @@ struct nerf_trainer {
     nerf_progress_cb progress;
     void *progress_user;
     atomic_int cancel;
+    /* A marching sampler: the model's occupancy grid is refreshed every
+     * NERF__GRID_EVERY steps, its density queried through density_ws
+     * (from the model's allocator). */
+    bool march;
+    nerf__workspace density_ws;
 };
+
+/* instant-ngp's schedule of occupancy-grid updates: every 16 steps, and
+ * every cell during the first 256 steps, while the density is still
+ * taking shape everywhere. */
+#define NERF__GRID_EVERY 16u
+#define NERF__GRID_WARMUP 256u
 
 /* Fill the trainer's rays and targets for step `step`. */
 void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step);
+
+/* Refresh the model's occupancy grid as the schedule says for the
+ * model's current step (nothing between updates). */
+int nerf__trainer_update_grid(nerf_trainer *t);
 
 #endif

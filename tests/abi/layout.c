@@ -101,7 +101,10 @@ FROZEN(nerf_sampler_options, ndc_height, 48);
 FROZEN(nerf_sampler_options, reserved1, 52);
 FROZEN(nerf_sampler_options, seed, 56);
 FROZEN(nerf_sampler_options, hooks, 64);
-SIZE(nerf_sampler_options, 72);
+/* Appended in 0.2. */
+FROZEN(nerf_sampler_options, march_steps, 72);
+FROZEN(nerf_sampler_options, max_samples, 76);
+SIZE(nerf_sampler_options, 80);
 
 FROZEN(nerf_progress, struct_size, 0);
 FROZEN(nerf_progress, kind, 4);
@@ -151,7 +154,9 @@ FROZEN(nerf_train_stats, loss, 16);
 FROZEN(nerf_train_stats, psnr, 24);
 FROZEN(nerf_train_stats, psnr_coarse, 32);
 FROZEN(nerf_train_stats, learning_rate, 40);
-SIZE(nerf_train_stats, 48);
+/* Appended in 0.2. */
+FROZEN(nerf_train_stats, samples_per_ray, 48);
+SIZE(nerf_train_stats, 56);
 
 #endif
 

@@ -20,6 +20,7 @@
 
 #include "model.h"
 #include "nerf.h"
+#include "occupancy.h"
 
 #define HEADER 48
 
@@ -158,6 +159,26 @@ static inline void query(const nerf_model *m, int network, float *rgb,
     CHECK_OK(nerf_model_query(m, network, 37, pos, dir, rgb, sigma));
 }
 
+/* Grids in the same state: EMA, bits (coarse level included) and the
+ * update counter that keys the next update. */
+static inline void check_same_grid(const nerf__occupancy *a,
+                                   const nerf__occupancy *b)
+{
+    CHECK((a == NULL) == (b == NULL));
+    if (a == NULL || b == NULL || a->cells != b->cells) {
+        CHECK(a == b);
+        return;
+    }
+    size_t n = 0;
+    CHECK(memcmp(a->ema, b->ema, a->cells * sizeof(float)) == 0);
+    CHECK(memcmp(a->bits, b->bits, a->words * sizeof(uint64_t)) == 0);
+    n = ((size_t)a->coarse_res * a->coarse_res * a->coarse_res + 63) / 64;
+    CHECK(memcmp(a->coarse, b->coarse, n * sizeof(uint64_t)) == 0);
+    CHECK(a->updates == b->updates);
+    CHECK(a->occupied == b->occupied);
+    CHECK(memcmp(&a->threshold, &b->threshold, sizeof a->threshold) == 0);
+}
+
 static inline void check_same_model(const nerf_model *a,
                                     const nerf_model *b)
 {
@@ -170,6 +191,7 @@ static inline void check_same_model(const nerf_model *a,
     CHECK(memcmp(a->params, b->params, bytes) == 0);
     CHECK(memcmp(a->adam_m, b->adam_m, bytes) == 0);
     CHECK(memcmp(a->adam_v, b->adam_v, bytes) == 0);
+    check_same_grid(a->grid, b->grid);
     nerf_model_options oa, ob;
     NERF_MODEL_OPTIONS_INIT(&oa);
     NERF_MODEL_OPTIONS_INIT(&ob);

@@ -266,12 +266,180 @@ TEST(forged_section_framing)
     free(file);
 }
 
+/* ---- the occupancy grid of hash-grid models ---------------------------- */
+
+static int ball_density(void *ctx, size_t n, const float *xyz, float *sigma)
+{
+    (void)ctx;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = xyz + 3 * i;
+        float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        sigma[i] = r2 < 0.25f ? 40.0f : 0.1f * r2;
+    }
+    return 0;
+}
+
+/* A small hash-grid model whose grid has been updated twice. */
+static nerf_model *grid_model(void)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, NERF_PRESET_FAST);
+    o.hash_levels = 2;
+    o.hash_log2_size = 10;
+    o.hash_max_resolution = 32;
+    o.seed = 77;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m) {
+        CHECK(m->grid != NULL && m->grid->res == 128);
+        CHECK_OK(nerf__occupancy_update(m->grid, ball_density, NULL,
+                                        m->grid->cells));
+        CHECK_OK(nerf__occupancy_update(m->grid, ball_density, NULL, 1000));
+    }
+    return m;
+}
+
+static void forge_grid(const char *name, void (*edit)(payload *), int want,
+                       bool fresh)
+{
+    char path[128];
+    path_in(path, sizeof path, "grid.ckpt");
+    nerf_model *ref = grid_model();
+    CHECK_OK(nerf_model_save(ref, path));
+    size_t size = 0;
+    unsigned char *file = slurp(path, &size);
+    payload p;
+    split_payload(file, size, &p);
+    if (edit) {
+        edit(&p);
+    }
+    write_payload(path, &p, NULL, 0);
+    nerf_model *m = NULL;
+    if (want != NERF_OK) {
+        expect_load_fails(path, want, name);
+    } else {
+        CHECK_OK(nerf_model_load(&m, path, NULL));
+    }
+    if (m && fresh) {
+        /* A file without the grid: the model with a fresh one. */
+        CHECK(m->grid->updates == 0 && m->grid->occupied == m->grid->cells);
+        nerf__occupancy_reset(ref->grid);
+    }
+    if (m) {
+        check_same_model(m, ref);
+    }
+    nerf_model_destroy(m);
+    nerf_model_destroy(ref);
+    free_payload(&p);
+    free(file);
+}
+
+static void edit_drop_grid(payload *p)
+{
+    free(p->s[--p->n].data);
+}
+
+static void edit_grid_resolution(payload *p)
+{
+    put32(p->s[6].data, 64);
+}
+
+static void edit_grid_short(payload *p)
+{
+    p->s[6].len -= 4;
+}
+
+static void edit_grid_negative(payload *p)
+{
+    put32(p->s[6].data + 16 + 4 * 1000, 0xbf800000u); /* -1.0f */
+}
+
+static void edit_grid_nan(payload *p)
+{
+    put32(p->s[6].data + 16 + 4 * 5, 0x7fc00000u);
+}
+
+TEST(occupancy_grid_section)
+{
+    char path[128];
+    path_in(path, sizeof path, "grid.ckpt");
+    nerf_model *m = grid_model();
+    CHECK_OK(nerf_model_save(m, path));
+    size_t size = 0;
+    unsigned char *file = slurp(path, &size);
+    payload p;
+    split_payload(file, size, &p);
+    /* Optional tag 7, last: u32 resolution, u32 0, u64 updates, then the
+     * EMA of every cell as f32, x fastest. */
+    CHECK_EQ_INT(p.n, 7);
+    if (p.n == 7 && m) {
+        const nerf__occupancy *g = m->grid;
+        CHECK_EQ_INT(p.s[6].tag, 0x00000007u);
+        CHECK_EQ_INT(p.s[6].len, 16 + 4 * 128 * 128 * 128);
+        CHECK_EQ_INT(le32(p.s[6].data), 128);
+        CHECK_EQ_INT(le32(p.s[6].data + 4), 0);
+        CHECK_EQ_INT(le64(p.s[6].data + 8), 2);
+        const size_t cell = 70 + 128 * (64 + 128 * 60);
+        uint32_t bits = le32(p.s[6].data + 16 + 4 * cell);
+        float v;
+        memcpy(&v, &bits, sizeof v);
+        CHECK(v == g->ema[cell] && v > 30.0f);
+    }
+    free_payload(&p);
+    free(file);
+    nerf_model *back = NULL;
+    CHECK_OK(nerf_model_load(&back, path, NULL));
+    if (back && m) {
+        check_same_model(back, m);
+    }
+    nerf_model_destroy(back);
+    /* A frequency-encoding model has no grid and saves none. */
+    nerf_model *tiny = trained_model(true);
+    CHECK(tiny && tiny->grid == NULL);
+    CHECK_OK(nerf_model_save(tiny, path));
+    file = slurp(path, &size);
+    split_payload(file, size, &p);
+    CHECK_EQ_INT(p.n, 6);
+    /* ... and refuses one forged into its file. */
+    if (m) {
+        size_t gsize = 0;
+        char gpath[128];
+        path_in(gpath, sizeof gpath, "grid2.ckpt");
+        CHECK_OK(nerf_model_save(m, gpath));
+        unsigned char *gfile = slurp(gpath, &gsize);
+        payload gp;
+        split_payload(gfile, gsize, &gp);
+        if (gp.n == 7) {
+            add_section(&p, gp.s[6].tag, gp.s[6].data, gp.s[6].len);
+            write_payload(path, &p, NULL, 0);
+            expect_load_fails(path, NERF_EFORMAT, "grid of a tiny model");
+        }
+        free_payload(&gp);
+        free(gfile);
+    }
+    free_payload(&p);
+    free(file);
+    nerf_model_destroy(tiny);
+    nerf_model_destroy(m);
+
+    forge_grid("no grid section", edit_drop_grid, NERF_OK, true);
+    forge_grid("grid of resolution 64", edit_grid_resolution, NERF_EFORMAT,
+               false);
+    forge_grid("short grid", edit_grid_short, NERF_EFORMAT, false);
+    forge_grid("negative EMA", edit_grid_negative, NERF_EFORMAT, false);
+    CHECK(strstr(nerf_last_error(), "occupancy grid cell 1000") != NULL);
+    forge_grid("NaN EMA", edit_grid_nan, NERF_EFORMAT, false);
+    forge_grid("sections as saved", NULL, NERF_OK, false);
+}
+
 int main(void)
 {
     make_tmpdir();
     RUN(payload_layout_is_as_documented);
     RUN(forged_payloads);
     RUN(forged_section_framing);
+    RUN(occupancy_grid_section);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "../harness.h"
+#include "occupancy.h"
 #include "render_batch.h"
 #include "rng.h"
 
@@ -157,13 +158,18 @@ static double loss(fixture *f)
 }
 
 /* Whether parameter i (relative to the network) feeds the outputs without
- * a ReLU in between: the rgb layer and the sigma row of the head. */
+ * a ReLU in between: the rgb layer and the sigma row of the head (not
+ * with geo_features, where the density column feeds the colour branch
+ * too). */
 static bool after_relus(const nerf__network *nw, size_t i)
 {
     size_t at = nw->offset + i;
     size_t sigma_row = nw->head.w + (size_t)nw->width * nw->width;
     if (at >= nw->rgb.w && at < nw->rgb.b + 3) {
         return true;
+    }
+    if (nw->geo_features > 0) {
+        return false;
     }
     return (at >= sigma_row && at < sigma_row + nw->width) ||
            at == nw->head.b + nw->width;
@@ -360,11 +366,89 @@ TEST(batch_split_reproducible)
     teardown(&f);
 }
 
+static int ball(void *ctx, size_t n, const float *xyz, float *sigma)
+{
+    (void)ctx;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = xyz + 3 * i;
+        sigma[i] = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] < 0.64f ? 100.0f
+                                                                  : 0.0f;
+    }
+    return 0;
+}
+
+/*
+ * The marching path: a small fast model, its grid keeping a ball of
+ * radius 0.8, jittered training samples.  The grid does not change during
+ * the check, so neither do the samples, and the densities stay far from
+ * early termination: the loss is a smooth function of the rgb layer.
+ */
+TEST(marching_fast_model)
+{
+    fixture f;
+    setup(&f, 0, true);
+    nerf_model_destroy(f.m);
+    nerf_sampler_destroy(f.s);
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_options_preset(&mo, NERF_PRESET_FAST);
+    mo.hash_levels = 4;
+    mo.hash_log2_size = 12;
+    mo.hash_max_resolution = 64;
+    mo.seed = 9;
+    CHECK_OK(nerf_model_create(&f.m, &mo));
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
+    so.seed = 4;
+    CHECK_OK(nerf_sampler_create(&f.s, &so));
+    if (f.m == NULL || f.s == NULL) {
+        return;
+    }
+    /* exp(logit - 1): about 0.4 per unit, so the rays are partly
+     * transparent. */
+    f.m->params[f.m->nets[0].head.b] -= 1.0f;
+    CHECK_OK(nerf__occupancy_update(f.m->grid, ball, NULL,
+                                    f.m->grid->cells));
+    f.setup.model = f.m;
+    f.setup.sampler = f.s;
+    f.setup.noise_std = 0.0f;
+    f.use_pass[0] = 1;
+    loss(&f);
+    CHECK(f.b.marched && f.b.n_pass == 1);
+    CHECK(f.b.march.total > RAYS && f.b.march.total < RAYS * 400);
+    check_direction(&f, 0, 21, true);
+    check_direction(&f, 0, 22, false);
+    /* Jittered samples are keyed by ray: one batch or two, the same. */
+    const size_t total = f.b.march.total;
+    float *t_all = malloc(sizeof(float) * total);
+    memcpy(t_all, f.b.march.t, sizeof(float) * total);
+    size_t at = 0;
+    nerf__pass_out out[2];
+    memset(out, 0, sizeof out);
+    for (int half = 0; half < 2; half++) {
+        nerf__render_setup s = f.setup;
+        s.first_ray += 6 * half;
+        CHECK_OK(nerf__render_batch(&f.b, &s, 6, f.o + 18 * half,
+                                    f.d + 18 * half, out));
+        CHECK(at + f.b.march.total <= total);
+        if (at + f.b.march.total <= total) {
+            CHECK(memcmp(f.b.march.t, t_all + at,
+                         sizeof(float) * f.b.march.total) == 0);
+        }
+        at += f.b.march.total;
+    }
+    CHECK_EQ_INT(at, total);
+    free(t_all);
+    teardown(&f);
+}
+
 int main(void)
 {
     RUN(coarse_only_with_noise);
     RUN(hierarchical_both_networks);
     RUN(no_fine_network);
     RUN(batch_split_reproducible);
+    RUN(marching_fast_model);
     HARNESS_EXIT();
 }

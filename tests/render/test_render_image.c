@@ -13,7 +13,11 @@
 
 #include "../harness.h"
 #include "composite.h"
+#include "composite_packed.h"
+#include "march.h"
+#include "model.h"
 #include "nerf.h"
+#include "occupancy.h"
 
 #define W 24
 #define H 16
@@ -136,6 +140,190 @@ TEST(chunks_and_threads_bitwise)
     CHECK(memcmp(&img, &ref, sizeof img) == 0);
     nerf_renderer_destroy(r);
     nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+/*
+ * A fast-preset model (a small hash grid) whose occupancy grid keeps a
+ * ball and a slab: the camera's rays cross empty cells, occupied ones, and
+ * both.  Random weights: the density is neither empty nor opaque.
+ */
+static int grid_shape(void *ctx, size_t n, const float *xyz, float *sigma)
+{
+    (void)ctx;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = xyz + 3 * i;
+        float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        sigma[i] = r2 < 0.36f || fabsf(p[1] + 0.5f) < 0.1f ? 100.0f : 0.0f;
+    }
+    return 0;
+}
+
+static nerf_model *fast_model(void)
+{
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_options_preset(&mo, NERF_PRESET_FAST);
+    mo.hash_levels = 4;
+    mo.hash_log2_size = 12;
+    mo.hash_max_resolution = 64;
+    mo.seed = 3;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &mo));
+    if (m) {
+        CHECK_OK(nerf__occupancy_update(m->grid, grid_shape, NULL,
+                                        m->grid->cells));
+        CHECK(m->grid->occupied > 0 && m->grid->occupied < m->grid->cells);
+    }
+    return m;
+}
+
+static nerf_sampler *fast_sampler(uint32_t max_samples)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
+    so.max_samples = max_samples;
+    nerf_sampler *s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &so));
+    return s;
+}
+
+TEST(marching_chunks_and_threads_bitwise)
+{
+    nerf_model *m = fast_model();
+    nerf_sampler *s = fast_sampler(1024);
+    if (!m || !s) {
+        return;
+    }
+    nerf_camera cam;
+    test_camera(&cam);
+    static image ref, img;
+    nerf_renderer *r = renderer(m, s, 64, 1, 1);
+    CHECK_OK(nerf_renderer_render_image(r, &cam, ref.rgb, ref.depth,
+                                        ref.opacity, NPIX));
+    nerf_renderer_destroy(r);
+    int empty = 0, partial = 0;
+    for (int i = 0; i < NPIX; i++) {
+        CHECK(isfinite(ref.rgb[3 * i]) && ref.opacity[i] >= 0.0f &&
+              ref.opacity[i] <= 1.0f + 1e-6f);
+        empty += ref.opacity[i] == 0.0f;
+        partial += ref.opacity[i] > 0.01f && ref.opacity[i] < 0.99f;
+        if (ref.opacity[i] == 0.0f) {
+            /* No sample: the white background. */
+            CHECK(ref.rgb[3 * i] == 1.0f && ref.depth[i] == 0.0f);
+        }
+    }
+    CHECK(empty > 0 && partial > 0 && empty < NPIX);
+    static const uint32_t cases[][2] = {
+        {1, 1}, {64, 2}, {100, 3}, {200, 4}, {4096, 0}, {65, 7},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        memset(&img, 0xff, sizeof img);
+        r = renderer(m, s, cases[k][0], cases[k][1], 1);
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, img.depth,
+                                            img.opacity, NPIX));
+        if (memcmp(&img, &ref, sizeof img) != 0) {
+            FAILF("marching, chunk %u, threads %u: image differs",
+                  cases[k][0], cases[k][1]);
+        }
+        CHECK_OK(nerf_renderer_render_image(r, &cam, img.rgb, img.depth,
+                                            img.opacity, NPIX));
+        CHECK(memcmp(&img, &ref, sizeof img) == 0);
+        nerf_renderer_destroy(r);
+    }
+    static float o[3 * NPIX], d[3 * NPIX];
+    CHECK_OK(nerf_camera_rays(&cam, 0, NPIX, o, d));
+    r = renderer(m, s, 128, 2, 1);
+    memset(&img, 0, sizeof img);
+    CHECK_OK(nerf_renderer_render_rays(r, NPIX, o, d, img.rgb, img.depth,
+                                       img.opacity));
+    CHECK(memcmp(&img, &ref, sizeof img) == 0);
+    nerf_renderer_destroy(r);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+/*
+ * The render in pieces is the render of the whole march: a few rays
+ * rebuilt from the marcher, a model query and compositing with early
+ * termination.  max_samples cuts rays as documented.
+ */
+TEST(marching_matches_building_blocks)
+{
+    nerf_model *m = fast_model();
+    if (!m) {
+        return;
+    }
+    nerf_camera cam;
+    test_camera(&cam);
+    enum { R = 6, MAX = 2048 };
+    const size_t pix[R] = {0, 77, 190, 200, 211, 383};
+    float o[3 * R], d[3 * R], rgb[3 * R], depth[R], opac[R];
+    for (int k = 0; k < R; k++) {
+        CHECK_OK(nerf_camera_rays(&cam, pix[k], 1, o + 3 * k, d + 3 * k));
+    }
+    static float pts[3 * MAX], dirs[3 * MAX], c[3 * MAX], sig[MAX];
+    const uint32_t limits[2] = {1024, 5};
+    for (int l = 0; l < 2; l++) {
+        nerf_sampler *s = fast_sampler(limits[l]);
+        nerf_renderer *r = renderer(m, s, 64, 1, 0);
+        CHECK_OK(nerf_renderer_render_rays(r, R, o, d, rgb, depth, opac));
+        nerf__march_options mo;
+        nerf__march_defaults(&mo, m->grid);
+        nerf__march_samples ms;
+        nerf__env env;
+        nerf__env_default(&env);
+        nerf__march_samples_init(&ms, &env);
+        nerf__march_rays rays = {.n = R, .origins = o, .dirs = d,
+                                 .near_all = 2.0f, .far_all = 6.0f};
+        CHECK_OK(nerf__march_run(m->grid, &mo, &rays, &ms));
+        CHECK(ms.total < MAX);
+        double worst = 0.0;
+        int cut = 0;
+        for (int k = 0; k < R && ms.total < MAX; k++) {
+            const size_t at = ms.offsets[k];
+            uint32_t n = (uint32_t)(ms.offsets[k + 1] - at);
+            const float *dk = d + 3 * k;
+            float len = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
+            for (uint32_t i = 0; i < n; i++) {
+                for (int a = 0; a < 3; a++) {
+                    pts[3 * i + a] = o[3 * k + a] + ms.t[at + i] * dk[a];
+                    dirs[3 * i + a] = dk[a] / len;
+                }
+            }
+            if (n > 0) {
+                CHECK_OK(nerf_model_query(m, NERF_NETWORK_COARSE, n, pts,
+                                          dirs, c, sig));
+            }
+            uint32_t use = n < limits[l] ? n : limits[l];
+            cut += use < n;
+            nerf__composite_state st;
+            nerf__composite_state_init(&st);
+            nerf__composite_packed_ray(&st, use, ms.t + at, ms.dt + at, c,
+                                       sig, NERF__COMPOSITE_EPS_DEFAULT, NULL);
+            for (int a = 0; a < 3; a++) {
+                worst = fmax(worst, fabs(st.rgb[a] - rgb[3 * k + a]));
+            }
+            worst = fmax(worst, fabs(st.depth - depth[k]) / 6.0);
+            worst = fmax(worst, fabs(st.opacity - opac[k]));
+        }
+        printf("  max_samples %u: largest difference %.3g (%d rays cut)\n",
+               limits[l], worst, cut);
+        CHECK(worst < 1e-5);
+        CHECK(l == 0 ? cut == 0 : cut > 0);
+        nerf__march_samples_release(&ms);
+        nerf_renderer_destroy(r);
+        nerf_sampler_destroy(s);
+    }
+    /* A marching sampler needs a model with a grid. */
+    nerf_model *tiny = tiny_model();
+    nerf_sampler *s = fast_sampler(1024);
+    nerf_renderer *r = NULL;
+    CHECK_EQ_INT(nerf_renderer_create(&r, tiny, s, NULL), NERF_EINVAL);
+    CHECK(r == NULL && strstr(nerf_last_error(), "occupancy grid") != NULL);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(tiny);
     nerf_model_destroy(m);
 }
 
@@ -406,6 +594,8 @@ int main(void)
 {
     RUN(chunks_and_threads_bitwise);
     RUN(matches_building_blocks);
+    RUN(marching_chunks_and_threads_bitwise);
+    RUN(marching_matches_building_blocks);
     RUN(ndc_render);
     RUN(progress_and_cancel);
     RUN(cancel_from_another_thread);

@@ -76,6 +76,51 @@ TEST(options_and_presets)
     nerf_sampler_destroy(NULL);
 }
 
+TEST(marching_options)
+{
+    nerf_sampler_options o;
+    CHECK_OK(NERF_SAMPLER_OPTIONS_INIT(&o));
+    CHECK(o.march_steps == 0 && o.max_samples == 1024);
+    CHECK_OK(nerf_sampler_options_preset(&o, NERF_PRESET_FAST));
+    CHECK(o.march_steps == 1024 && o.max_samples == 1024);
+    CHECK(o.n_coarse == 128 && o.n_fine == 0);
+    nerf_sampler *s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    nerf_sampler_destroy(s);
+    /* The other presets sample as before. */
+    CHECK_OK(nerf_sampler_options_preset(&o, NERF_PRESET_TINY));
+    CHECK(o.march_steps == 0 && o.n_coarse == 32);
+    o.march_steps = 65537;
+    CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "march_steps") != NULL);
+    o.march_steps = 65536;
+    o.max_samples = 0;
+    CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "max_samples") != NULL);
+    o.max_samples = 1;
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    nerf_sampler_destroy(s);
+    o.ndc = 1;
+    o.t_near = 0.0f;
+    o.t_far = 1.0f;
+    CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "ndc") != NULL);
+    /* Without marching max_samples is not looked at. */
+    o.march_steps = 0;
+    o.max_samples = 0;
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    nerf_sampler_destroy(s);
+    /* A caller built against the header before 0.2 gets the defaults for
+     * the fields its struct lacks: no marching. */
+    NERF_SAMPLER_OPTIONS_INIT(&o);
+    o.march_steps = 77;
+    o.struct_size = offsetof(nerf_sampler_options, march_steps);
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    CHECK(s != NULL && s->opts.march_steps == 0);
+    CHECK(s != NULL && s->opts.max_samples == 1024);
+    nerf_sampler_destroy(s);
+}
+
 TEST(stratified_evaluation)
 {
     nerf_sampler *s = make(64, 0, 2.0f, 6.0f, 0, 0, 0);
@@ -337,6 +382,7 @@ TEST(fine_union_sorted)
 int main(void)
 {
     RUN(options_and_presets);
+    RUN(marching_options);
     RUN(stratified_evaluation);
     RUN(stratified_training);
     RUN(caller_uniforms);

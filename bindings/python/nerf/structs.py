@@ -191,6 +191,9 @@ class SamplerOptions(_Versioned):
         ("reserved1", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
+        # Appended in libnerf 0.2.
+        ("march_steps", c_uint32),
+        ("max_samples", c_uint32),
     ]
 
 
@@ -306,6 +309,8 @@ class TrainStatsStruct(_Versioned):
         ("psnr", c_double),
         ("psnr_coarse", c_double),
         ("learning_rate", c_double),
+        # Appended in libnerf 0.2.
+        ("samples_per_ray", c_double),
     ]
 
 
@@ -366,12 +371,16 @@ class TrainStats:
     psnr: float
     psnr_coarse: float
     learning_rate: float
+    #: Network evaluations per ray (0 from a library before 0.2, which
+    #: leaves the field as the binding zeroed it).
+    samples_per_ray: float = 0.0
 
     @classmethod
     def from_struct(cls, s: TrainStatsStruct) -> "TrainStats":
         """Read the fields the library wrote."""
         return cls(step=s.step, loss=s.loss, psnr=s.psnr,
-                   psnr_coarse=s.psnr_coarse, learning_rate=s.learning_rate)
+                   psnr_coarse=s.psnr_coarse, learning_rate=s.learning_rate,
+                   samples_per_ray=s.samples_per_ray)
 
 
 def _vec3(v: Any, name: str) -> Any:

@@ -129,6 +129,8 @@ static void structs(void)
     FIELD(nerf_sampler_options, reserved1);
     FIELD(nerf_sampler_options, seed);
     FIELD(nerf_sampler_options, hooks);
+    FIELD(nerf_sampler_options, march_steps);
+    FIELD(nerf_sampler_options, max_samples);
     end_struct();
 
     BEGIN(nerf_progress);
@@ -184,6 +186,7 @@ static void structs(void)
     FIELD(nerf_train_stats, psnr);
     FIELD(nerf_train_stats, psnr_coarse);
     FIELD(nerf_train_stats, learning_rate);
+    FIELD(nerf_train_stats, samples_per_ray);
     end_struct();
 
     BEGIN(nerf_camera_path_options);

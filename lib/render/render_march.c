@@ -1,0 +1,438 @@
+/*
+ * The fast path of a render batch: samples marched through the model's
+ * occupancy grid (march.h), the network on the packed samples, and
+ * compositing with early termination (composite_packed.h).  See
+ * render_batch.h for when each of its two forms runs.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "occupancy.h"
+#include "parallel.h"
+#include "render_batch.h"
+
+/*
+ * Rendering marches in pieces: each round marches every ray still going
+ * by about PIECE_BUDGET / (rays going) more samples (within [PIECE_MIN,
+ * PIECE_MAX]), evaluates and composites them.  Behind a hard surface a ray
+ * is opaque after about 10 samples in occupied cells, and many rays have
+ * none at all, so with 64-ray blocks the first round of 16 samples a ray
+ * ends most of them; the few left (edges, thin or translucent parts) then
+ * get longer pieces, so a block takes a few rounds, not hundreds.  The
+ * built-in scene's solids have soft edges: there rendering evaluates 44
+ * samples a ray against 51 for whole marches, and budgets from 256 to
+ * 4096 rendered equally fast.
+ */
+#define PIECE_BUDGET 1024u
+#define PIECE_MIN 8u
+#define PIECE_MAX 256u
+
+/* Headroom when a sample buffer grows: the next batch's count is rarely
+ * the same, and growing by an eighth makes reallocations rare once the
+ * counts settle. */
+static size_t with_headroom(size_t n)
+{
+    return n + n / 8 + 64;
+}
+
+static size_t round16(size_t floats)
+{
+    return (floats + 15) & ~(size_t)15;
+}
+
+void nerf__render_march_release(nerf__batch *b)
+{
+    nerf__march_samples_release(&b->march);
+    nerf__free(&b->env, b->packed_block);
+    nerf__free(&b->env, b->march_block);
+    b->packed_block = b->march_block = NULL;
+    b->cap_packed = b->cap_march_rays = 0;
+    b->march_points = b->m_dirs = b->m_rgb = b->m_sigma = NULL;
+    b->m_d_rgb = b->m_d_sigma = NULL;
+}
+
+/* The per-sample arrays for n samples (gradients too with keep). */
+static int reserve_packed(nerf__batch *b, size_t n, bool keep)
+{
+    if (b->packed_block && n <= b->cap_packed &&
+        (b->cap_packed_keep || !keep)) {
+        return NERF_OK;
+    }
+    size_t cap = with_headroom(n);
+    if (cap > ((size_t)1 << 26)) {
+        return nerf__error(NERF_EINVAL, "render batch of %zu marched samples "
+                           "is too large", n);
+    }
+    float **slots[] = {&b->march_points, &b->m_dirs, &b->m_rgb, &b->m_sigma,
+                       &b->m_d_rgb, &b->m_d_sigma};
+    const size_t sizes[] = {3 * cap, 3 * cap, 3 * cap, cap,
+                            keep ? 3 * cap : 0, keep ? cap : 0};
+    const size_t count = sizeof sizes / sizeof sizes[0];
+    size_t total = 0;
+    for (size_t i = 0; i < count; i++) {
+        total += round16(sizes[i]);
+    }
+    float *block = nerf__alloc(&b->env, total * sizeof(float));
+    if (block == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__free(&b->env, b->packed_block);
+    b->packed_block = block;
+    for (size_t i = 0; i < count; i++) {
+        *slots[i] = sizes[i] ? block : NULL;
+        block += round16(sizes[i]);
+    }
+    b->cap_packed = cap;
+    b->cap_packed_keep = keep;
+    return NERF_OK;
+}
+
+/* The per-ray state of a render in pieces. */
+static int reserve_rays(nerf__batch *b, size_t n)
+{
+    if (b->march_block && n <= b->cap_march_rays) {
+        return NERF_OK;
+    }
+    const size_t bytes[] = {
+        n * sizeof(nerf__composite_state), n * sizeof(uint32_t),
+        n * sizeof(uint32_t), n * sizeof(uint32_t), n * sizeof(uint32_t),
+        3 * n * sizeof(float), 3 * n * sizeof(float), 3 * n * sizeof(float),
+    };
+    enum { N_ARRAYS = sizeof bytes / sizeof bytes[0] };
+    size_t total = 0;
+    for (size_t i = 0; i < N_ARRAYS; i++) {
+        total += (bytes[i] + 63) & ~(size_t)63;
+    }
+    unsigned char *p = nerf__alloc(&b->env, total);
+    if (p == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__free(&b->env, b->march_block);
+    b->march_block = p;
+    void *at[N_ARRAYS];
+    for (size_t i = 0; i < N_ARRAYS; i++) {
+        at[i] = p;
+        p += (bytes[i] + 63) & ~(size_t)63;
+    }
+    b->m_state = at[0];
+    b->m_first = at[1];
+    b->m_count = at[2];
+    b->m_active = at[3];
+    b->m_act_first = at[4];
+    b->m_o = at[5];
+    b->m_d = at[6];
+    b->m_view = at[7];
+    b->cap_march_rays = n;
+    return NERF_OK;
+}
+
+/* The marcher's settings for this sampler and grid. */
+static void march_options(const nerf__render_setup *s,
+                          const nerf__occupancy *g, nerf__march_options *mo)
+{
+    const nerf_sampler_options *so = &s->sampler->opts;
+    nerf__march_defaults(mo, g);
+    mo->step = nerf__march_step(g->lo, g->hi, so->march_steps);
+    mo->max_samples = so->max_samples;
+    mo->skip_empty = !s->march_everywhere;
+    /* Ray first_ray + k draws its offset from the stream (seed, ray), as
+     * every other per-ray draw; the trainer's rays are numbered across
+     * steps, so each step draws afresh. */
+    mo->jitter = s->training && so->perturb;
+    mo->seed = so->seed + UINT64_C(0xd1b54a32d192ed03) * NERF__STREAM_MARCH;
+    mo->iteration = 0;
+}
+
+/* What the loops over rays and samples below read; each writes only the
+ * rows of its own rays or samples. */
+typedef struct march_job {
+    nerf__batch *b;
+    const nerf__occupancy *g;
+    const nerf__march_rays *rays;
+    const float *viewdir; /* [rays->n, 3] unit directions of those rays */
+    uint32_t max_samples;
+} march_job;
+
+/* Unit view directions of the caller's rays, into b->viewdir. */
+static void view_dirs(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    nerf__batch *b = j->b;
+    const float *d = j->rays->dirs;
+    for (size_t k = begin; k < end; k++) {
+        const float *dk = d + 3 * k;
+        float len = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
+        for (int c = 0; c < 3; c++) {
+            b->viewdir[3 * k + c] = dk[c] / len;
+        }
+        b->dir_norm[k] = len;
+    }
+}
+
+/* Each packed sample gets its ray's view direction.  viewdir is indexed
+ * by the rays of j->rays. */
+static void sample_dirs(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    nerf__batch *b = j->b;
+    const size_t *off = b->march.offsets;
+    for (size_t k = begin; k < end; k++) {
+        const float *v = j->viewdir + 3 * k;
+        for (size_t i = off[k]; i < off[k + 1]; i++) {
+            memcpy(b->m_dirs + 3 * i, v, 3 * sizeof(float));
+        }
+    }
+}
+
+static void zero_empty(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    nerf__batch *b = j->b;
+    for (size_t i = begin; i < end; i++) {
+        if (!nerf__occupancy_occupied(j->g, b->march_points + 3 * i)) {
+            b->m_sigma[i] = 0.0f;
+        }
+    }
+}
+
+/* Points, directions and the network over the batch's packed samples. */
+static int evaluate(nerf__batch *b, const nerf__render_setup *s,
+                    const march_job *j, bool keep)
+{
+    const nerf_model *m = s->model;
+    const nerf__network *net = &m->nets[0];
+    const size_t total = b->march.total, n = j->rays->n;
+    int rc = reserve_packed(b, total, keep);
+    if (rc != NERF_OK || total == 0) {
+        return rc;
+    }
+    nerf__march_points(j->rays, b->march.offsets, b->march.t,
+                       b->march_points);
+    const float *dirs = NULL;
+    if (net->use_viewdirs) {
+        nerf__parallel_for(n, 6 * (total / n + 1), sample_dirs, (void *)j);
+        dirs = b->m_dirs;
+    }
+    /* Workspaces grow with headroom, so that sample counts that vary from
+     * batch to batch do not reallocate every time. */
+    nerf__workspace *ws = &b->ws[0];
+    if (total > ws->cap || (keep && !ws->keep)) {
+        rc = nerf__workspace_reserve(&b->ws_env, ws, net,
+                                     with_headroom(total), keep);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    if (keep) {
+        rc = nerf__model_forward(m, 0, ws, total, b->march_points, dirs,
+                                 b->m_rgb, b->m_sigma);
+    } else {
+        rc = nerf__workspace_reserve(&b->ws_env, ws, net, total, false);
+        if (rc == NERF_OK) {
+            nerf__network_forward(net, m->params, ws, total, b->march_points,
+                                  dirs, b->m_rgb, b->m_sigma);
+        }
+    }
+    if (rc == NERF_OK && s->march_zero_empty) {
+        march_job z = *j;
+        z.g = m->grid;
+        nerf__parallel_for(total, 20, zero_empty, &z);
+    }
+    b->n_evaluated += total;
+    return rc;
+}
+
+static float disparity_of(float depth, float opacity)
+{
+    /* As composite.c: an empty ray's 0 / 0 gives 1e10. */
+    return 1.0f / fmaxf(1e-10f, depth / opacity);
+}
+
+/* Training: every ray marched in full, one forward, one composite. */
+static int march_whole(nerf__batch *b, const nerf__render_setup *s,
+                       const nerf__march_rays *rays, const nerf__pass_out *out)
+{
+    const nerf__occupancy *g = s->model->grid;
+    nerf__march_options mo;
+    march_options(s, g, &mo);
+    int rc = nerf__march_run(g, &mo, rays, &b->march);
+    march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir};
+    if (rc == NERF_OK) {
+        rc = evaluate(b, s, &j, true);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    b->packed = (nerf__packed_batch){
+        .n_rays = rays->n, .offsets = b->march.offsets, .t = b->march.t,
+        .dt = b->march.dt, .rgb = b->m_rgb, .sigma = b->m_sigma,
+        .bg = b->white ? b->bg : NULL, .bg_stride = 0,
+        .eps = NERF__COMPOSITE_EPS_DEFAULT};
+    nerf__packed_out po = {0};
+    if (out) {
+        po.rgb = out->rgb;
+        po.depth = out->depth;
+        po.opacity = out->opacity;
+    }
+    nerf__composite_packed(&b->packed, &po);
+    if (out && out->disparity) {
+        /* Rarely wanted; composite again for the depth and opacity the
+         * caller may not have asked for. */
+        for (size_t k = 0; k < rays->n; k++) {
+            const size_t at = b->march.offsets[k];
+            nerf__composite_state st;
+            nerf__composite_state_init(&st);
+            nerf__composite_packed_ray(
+                &st, (uint32_t)(b->march.offsets[k + 1] - at),
+                b->march.t + at, b->march.dt + at, b->m_rgb + 3 * at,
+                b->m_sigma + at, b->packed.eps, NULL);
+            out->disparity[k] = disparity_of(st.depth, st.opacity);
+        }
+    }
+    return NERF_OK;
+}
+
+/* One round's compositing: the new samples of each ray going, its count
+ * and where its march resumes, and whether it is done. */
+static void composite_round(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    nerf__batch *b = j->b;
+    const nerf__march_samples *ms = &b->march;
+    for (size_t i = begin; i < end; i++) {
+        const uint32_t k = b->m_active[i];
+        const size_t at = ms->offsets[i];
+        uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
+        const uint32_t room = j->max_samples - b->m_count[k];
+        n = n < room ? n : room;
+        nerf__composite_state *st = &b->m_state[k];
+        nerf__composite_packed_ray(st, n, ms->t + at, ms->dt + at,
+                                   b->m_rgb + 3 * at, b->m_sigma + at,
+                                   NERF__COMPOSITE_EPS_DEFAULT, NULL);
+        b->m_count[k] += n;
+        const bool done = nerf__composite_state_done(
+                              st, NERF__COMPOSITE_EPS_DEFAULT) ||
+                          ms->next_step[i] == NERF__MARCH_DONE ||
+                          b->m_count[k] >= j->max_samples;
+        b->m_first[k] = done ? NERF__MARCH_DONE : ms->next_step[i];
+    }
+}
+
+/* Rendering: rounds of a few samples per ray, until every ray is opaque,
+ * out of samples or out of the bound. */
+static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
+                        const nerf__march_rays *all, const nerf__pass_out *out)
+{
+    const size_t n = all->n;
+    const nerf__occupancy *g = s->model->grid;
+    int rc = reserve_rays(b, n);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__march_options mo;
+    march_options(s, g, &mo);
+    march_job j = {.b = b, .viewdir = b->m_view,
+                   .max_samples = mo.max_samples};
+    size_t n_active = n;
+    for (size_t k = 0; k < n; k++) {
+        nerf__composite_state_init(&b->m_state[k]);
+        b->m_count[k] = 0;
+        b->m_first[k] = 0;
+        b->m_active[k] = (uint32_t)k;
+    }
+    while (n_active > 0) {
+        size_t piece = PIECE_BUDGET / n_active;
+        piece = piece < PIECE_MIN ? PIECE_MIN
+                                  : piece > PIECE_MAX ? PIECE_MAX : piece;
+        mo.max_samples = (uint32_t)piece;
+        /* The rays going, gathered, with where each resumes. */
+        for (size_t i = 0; i < n_active; i++) {
+            const uint32_t k = b->m_active[i];
+            memcpy(b->m_o + 3 * i, all->origins + 3 * k, 3 * sizeof(float));
+            memcpy(b->m_d + 3 * i, all->dirs + 3 * k, 3 * sizeof(float));
+            memcpy(b->m_view + 3 * i, b->viewdir + 3 * k, 3 * sizeof(float));
+            b->m_act_first[i] = b->m_first[k];
+        }
+        nerf__march_rays rays = *all;
+        rays.n = n_active;
+        rays.origins = b->m_o;
+        rays.dirs = b->m_d;
+        rays.first_step = b->m_act_first;
+        j.rays = &rays;
+        rc = nerf__march_run(g, &mo, &rays, &b->march);
+        if (rc == NERF_OK) {
+            rc = evaluate(b, s, &j, false);
+        }
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        nerf__parallel_for(n_active, 30 * piece + 30, composite_round, &j);
+        size_t going = 0;
+        for (size_t i = 0; i < n_active; i++) {
+            const uint32_t k = b->m_active[i];
+            if (b->m_first[k] != NERF__MARCH_DONE) {
+                b->m_active[going++] = k;
+            }
+        }
+        n_active = going;
+    }
+    if (out == NULL) {
+        return NERF_OK;
+    }
+    for (size_t k = 0; k < n; k++) {
+        const nerf__composite_state *st = &b->m_state[k];
+        if (out->rgb) {
+            nerf__composite_state_rgb(st, b->white ? b->bg : NULL,
+                                      out->rgb + 3 * k);
+        }
+        if (out->depth) {
+            out->depth[k] = st->depth;
+        }
+        if (out->opacity) {
+            out->opacity[k] = st->opacity;
+        }
+        if (out->disparity) {
+            out->disparity[k] = disparity_of(st->depth, st->opacity);
+        }
+    }
+    return NERF_OK;
+}
+
+int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
+                       size_t n_rays, const float *origins,
+                       const float *directions,
+                       const nerf__pass_out out[NERF__PASSES])
+{
+    const nerf_sampler_options *so = &s->sampler->opts;
+    b->bg[0] = b->bg[1] = b->bg[2] = 1.0f;
+    b->march.n_rays = b->march.total = 0;
+    if (n_rays == 0) {
+        b->kept = s->keep;
+        return NERF_OK;
+    }
+    nerf__march_rays rays = {
+        .n = n_rays, .origins = origins, .dirs = directions,
+        .near_all = so->t_near, .far_all = so->t_far,
+        .first_ray = s->first_ray};
+    march_job j = {.b = b, .rays = &rays};
+    nerf__parallel_for(n_rays, 32, view_dirs, &j);
+    const nerf__pass_out *o = out ? &out[0] : NULL;
+    int rc = s->keep ? march_whole(b, s, &rays, o)
+                     : march_pieces(b, s, &rays, o);
+    if (rc == NERF_OK) {
+        b->kept = s->keep;
+    }
+    return rc;
+}
+
+void nerf__render_march_backward(nerf__batch *b, nerf_model *m,
+                                 const float *d_rgb, const float *d_depth,
+                                 const float *d_opacity)
+{
+    if (b->march.total == 0 || (!d_rgb && !d_depth && !d_opacity)) {
+        return;
+    }
+    nerf__composite_packed_backward(&b->packed, d_rgb, d_depth, d_opacity,
+                                    b->m_d_rgb, b->m_d_sigma);
+    nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+}
