@@ -134,6 +134,7 @@ static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
 
 int main(int argc, char **argv)
 {
+    cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
         fputs(usage, stderr);

@@ -168,6 +168,7 @@ static int open_model(const args *a, const nerf_hooks *hooks, nerf_model **m)
 
 int main(int argc, char **argv)
 {
+    cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
         fputs(usage, stderr);

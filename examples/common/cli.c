@@ -72,3 +72,18 @@ void cli_log(int level, const char *msg, void *user)
         fprintf(stderr, "%s: %s\n", program ? program : "libnerf", msg);
     }
 }
+
+/* Weak: resolved from the OpenBLAS that libnerf loads, absent with
+ * another BLAS. */
+#if defined(__GNUC__)
+extern void openblas_set_num_threads(int n) __attribute__((weak));
+#endif
+
+void cli_blas_single_thread(void)
+{
+#if defined(__GNUC__)
+    if (openblas_set_num_threads && getenv("OPENBLAS_NUM_THREADS") == NULL) {
+        openblas_set_num_threads(1);
+    }
+#endif
+}

@@ -22,4 +22,12 @@ void cli_report(const char *program, int status);
 /* A log callback writing info and above to stderr, prefixed. */
 void cli_log(int level, const char *msg, void *user);
 
+/*
+ * Run OpenBLAS on one thread, unless OPENBLAS_NUM_THREADS says otherwise:
+ * libnerf then spreads each product over its own workers, which is faster
+ * for its small layers (see docs/performance.md).  A program's choice, not
+ * the library's; nothing happens with another BLAS.
+ */
+void cli_blas_single_thread(void);
+
 #endif

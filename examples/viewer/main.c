@@ -169,6 +169,7 @@ static int screenshot(viewer *v, const char *path)
 
 int main(int argc, char **argv)
 {
+    cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
         fputs(usage, stderr);

@@ -1,10 +1,10 @@
 #include "network.h"
 
-#include <cblas.h>
 #include <math.h>
 #include <string.h>
 
 #include "fused.h"
+#include "gemm.h"
 #include "hashgrid.h"
 #include "parallel.h"
 #include "rng.h"
@@ -203,36 +203,6 @@ void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws)
     memset(ws, 0, sizeof *ws);
 }
 
-/* ---- products ----------------------------------------------------------- */
-
-/* Y[n, out] = beta Y + X[n, in] W^T, W a column block of a [out, ldw]. */
-static void gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
-                         size_t ldx, const float *w, size_t ldw, float beta,
-                         float *y, size_t ldy)
-{
-    cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)out,
-                (int)in, 1.0f, x, (int)ldx, w, (int)ldw, beta, y, (int)ldy);
-}
-
-/* dW[out, in] += dY[n, out]^T X[n, in]. */
-static void gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
-                             const float *dy, size_t lddy, const float *x,
-                             size_t ldx, float *dw, size_t lddw)
-{
-    cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)out, (int)in,
-                (int)n, 1.0f, dy, (int)lddy, x, (int)ldx, 1.0f, dw, (int)lddw);
-}
-
-/* dX[n, in] = dY[n, out] W, W a column block of a [out, ldw]. */
-static void gemm_input_grad(size_t n, uint32_t out, uint32_t in,
-                            const float *dy, size_t lddy, const float *w,
-                            size_t ldw, float *dx, size_t lddx)
-{
-    cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)in,
-                (int)out, 1.0f, dy, (int)lddy, w, (int)ldw, 0.0f, dx,
-                (int)lddx);
-}
-
 static float sigmoid(float z)
 {
     return 1.0f / (1.0f + expf(-z));
@@ -427,11 +397,13 @@ void nerf__network_forward(const nerf__network *net, const float *params,
         float *y = trunk_buffer(net, ws, i);
         if (i > 0 && i == net->skip) {
             /* Input is [gamma(x), h]: one product per column block. */
-            gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in, 0.0f,
-                         y, W);
-            gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f, y, W);
+            nerf__gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in,
+                               0.0f, y, W);
+            nerf__gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f,
+                               y, W);
         } else {
-            gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f, y, W);
+            nerf__gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f,
+                               y, W);
         }
         nerf__bias_relu(n, W, y, W, params + l->b);
         x = y;
@@ -439,7 +411,8 @@ void nerf__network_forward(const nerf__network *net, const float *params,
     }
 
     const uint32_t HW = nerf__network_head_width(net);
-    gemm_forward(n, HW, W, x, ldx, params + net->head.w, W, 0.0f, ws->head, HW);
+    nerf__gemm_forward(n, HW, W, x, ldx, params + net->head.w, W, 0.0f,
+                       ws->head, HW);
     nerf__bias_add(n, HW, ws->head, HW, params + net->head.b);
 
     if (net->use_viewdirs) {
@@ -448,17 +421,19 @@ void nerf__network_forward(const nerf__network *net, const float *params,
         const uint32_t F = nerf__network_feature_width(net);
         encode_directions(net, ws, n, directions);
         float *h = view_buffer(net, ws, 0);
-        gemm_forward(n, V, F, ws->head, HW, params + v0->w, v0->in, 0.0f, h, V);
-        gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v0->w + F, v0->in,
-                     1.0f, h, V);
+        nerf__gemm_forward(n, V, F, ws->head, HW, params + v0->w, v0->in, 0.0f,
+                           h, V);
+        nerf__gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v0->w + F,
+                           v0->in, 1.0f, h, V);
         nerf__bias_relu(n, V, h, V, params + v0->b);
         for (uint32_t k = 1; k < net->view_depth; k++) {
             float *hk = view_buffer(net, ws, k);
-            gemm_forward(n, V, V, h, V, params + net->view[k].w, V, 0.0f, hk, V);
+            nerf__gemm_forward(n, V, V, h, V, params + net->view[k].w, V, 0.0f,
+                               hk, V);
             nerf__bias_relu(n, V, hk, V, params + net->view[k].b);
             h = hk;
         }
-        gemm_forward(n, 3, V, h, V, params + r->w, V, 0.0f, ws->rgb, 3);
+        nerf__gemm_forward(n, 3, V, h, V, params + r->w, V, 0.0f, ws->rgb, 3);
     }
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
                   .sigma_out = sigma_out, .pos = positions};
@@ -491,11 +466,13 @@ void nerf__network_density(const nerf__network *net, const float *params,
         const nerf__linear *l = &net->trunk[i];
         float *y = trunk_buffer(net, ws, i);
         if (i > 0 && i == net->skip) {
-            gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in, 0.0f,
-                         y, W);
-            gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f, y, W);
+            nerf__gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in,
+                               0.0f, y, W);
+            nerf__gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f,
+                               y, W);
         } else {
-            gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f, y, W);
+            nerf__gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f,
+                               y, W);
         }
         nerf__bias_relu(n, W, y, W, params + l->b);
         x = y;
@@ -503,7 +480,7 @@ void nerf__network_density(const nerf__network *net, const float *params,
     }
     /* Only the density row of the head's weights. */
     const size_t row = (size_t)nerf__network_sigma_col(net) * W;
-    gemm_forward(n, 1, W, x, ldx, params + net->head.w + row, W, 0.0f,
+    nerf__gemm_forward(n, 1, W, x, ldx, params + net->head.w + row, W, 0.0f,
                  ws->head, 1);
     rows_job j = {.net = net, .params = params, .ws = ws,
                   .sigma_out = sigma_out, .pos = positions};
@@ -587,28 +564,31 @@ void nerf__network_backward(const nerf__network *net, const float *params,
         sigmoid_backward(ws, d_rgb, dz, 3);
         const float *h_top = view_buffer(net, ws, net->view_depth - 1);
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
-        gemm_weight_grad(n, 3, V, dz, 3, h_top, V, grads + r->w, V);
+        nerf__gemm_weight_grad(n, 3, V, dz, 3, h_top, V, grads + r->w, V);
         float *d_view = ws->grad_a; /* [n, V] */
-        gemm_input_grad(n, 3, V, dz, 3, params + r->w, V, d_view, V);
+        nerf__gemm_input_grad(n, 3, V, dz, 3, params + r->w, V, d_view, V);
         for (uint32_t k = net->view_depth; k-- > 1;) {
             const nerf__linear *v = &net->view[k];
             const float *h_in = view_buffer(net, ws, k - 1);
             nerf__relu_backward_bias(n, V, view_buffer(net, ws, k), V, d_view,
                                      V, grads + v->b);
-            gemm_weight_grad(n, V, V, d_view, V, h_in, V, grads + v->w, V);
+            nerf__gemm_weight_grad(n, V, V, d_view, V, h_in, V, grads + v->w,
+                                   V);
             float *d_in = other(ws, d_view);
-            gemm_input_grad(n, V, V, d_view, V, params + v->w, V, d_in, V);
+            nerf__gemm_input_grad(n, V, V, d_view, V, params + v->w, V, d_in,
+                                  V);
             d_view = d_in;
         }
         const nerf__linear *v0 = &net->view[0];
         nerf__relu_backward_bias(n, V, view_buffer(net, ws, 0), V, d_view, V,
                                  grads + v0->b);
-        gemm_weight_grad(n, V, F, d_view, V, ws->head, HW, grads + v0->w,
+        nerf__gemm_weight_grad(n, V, F, d_view, V, ws->head, HW, grads + v0->w,
                          v0->in);
-        gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed,
+        nerf__gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed,
                          grads + v0->w + F, v0->in);
         d_head = other(ws, d_view);
-        gemm_input_grad(n, V, F, d_view, V, params + v0->w, v0->in, d_head, HW);
+        nerf__gemm_input_grad(n, V, F, d_view, V, params + v0->w, v0->in,
+                              d_head, HW);
         sigma_grad(net, ws, d_sigma, d_head);
     } else {
         sigmoid_backward(ws, d_rgb, d_head, 4);
@@ -617,21 +597,22 @@ void nerf__network_backward(const nerf__network *net, const float *params,
 
     const float *h_last = trunk_buffer(net, ws, net->depth - 1);
     nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
-    gemm_weight_grad(n, HW, W, d_head, HW, h_last, W, grads + net->head.w, W);
+    nerf__gemm_weight_grad(n, HW, W, d_head, HW, h_last, W, grads + net->head.w,
+                           W);
     float *dh = other(ws, d_head);
-    gemm_input_grad(n, HW, W, d_head, HW, params + net->head.w, W, dh, W);
+    nerf__gemm_input_grad(n, HW, W, d_head, HW, params + net->head.w, W, dh, W);
 
     for (uint32_t i = net->depth; i-- > 0;) {
         const nerf__linear *l = &net->trunk[i];
         const float *y = trunk_buffer(net, ws, i);
         nerf__relu_backward_bias(n, W, y, W, dh, W, grads + l->b);
         if (i == 0) {
-            gemm_weight_grad(n, W, l->in, dh, W, ws->enc_pos, Ep, grads + l->w,
-                             l->in);
+            nerf__gemm_weight_grad(n, W, l->in, dh, W, ws->enc_pos, Ep,
+                                   grads + l->w, l->in);
             if (nerf__network_has_table(net)) {
                 float *d_enc = other(ws, dh);
-                gemm_input_grad(n, W, Ep, dh, W, params + l->w, l->in, d_enc,
-                                Ep);
+                nerf__gemm_input_grad(n, W, Ep, dh, W, params + l->w, l->in,
+                                      d_enc, Ep);
                 table_job tj = {.hg = &net->hash, .in = ws->pos,
                                 .d_out = d_enc, .grad = grads + net->table,
                                 .n = n, .stride = Ep};
@@ -643,13 +624,15 @@ void nerf__network_backward(const nerf__network *net, const float *params,
         const float *x = trunk_buffer(net, ws, i - 1);
         size_t hidden_col = 0;
         if (i == net->skip) {
-            gemm_weight_grad(n, W, Ep, dh, W, ws->enc_pos, Ep, grads + l->w,
-                             l->in);
+            nerf__gemm_weight_grad(n, W, Ep, dh, W, ws->enc_pos, Ep,
+                                   grads + l->w, l->in);
             hidden_col = Ep;
         }
-        gemm_weight_grad(n, W, W, dh, W, x, W, grads + l->w + hidden_col, l->in);
+        nerf__gemm_weight_grad(n, W, W, dh, W, x, W, grads + l->w + hidden_col,
+                               l->in);
         float *dx = other(ws, dh);
-        gemm_input_grad(n, W, W, dh, W, params + l->w + hidden_col, l->in, dx, W);
+        nerf__gemm_input_grad(n, W, W, dh, W, params + l->w + hidden_col, l->in,
+                              dx, W);
         dh = dx;
     }
 }

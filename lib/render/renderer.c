@@ -5,18 +5,10 @@
 #include <string.h>
 
 #include "cpu.h"
+#include "gemm.h"
 #include "options.h"
 
 #define MAX_CHUNK (1u << 20)
-
-/*
- * OpenBLAS's own thread count, when the BLAS is OpenBLAS.  The reference
- * is weak so that other providers link without it; it is only read, never
- * changed (the BLAS's threading belongs to the application).
- */
-#if defined(__GNUC__)
-extern int openblas_get_num_threads(void) __attribute__((weak));
-#endif
 
 /*
  * Workers when the caller leaves the choice to us.  Each worker's sgemm
@@ -30,12 +22,7 @@ extern int openblas_get_num_threads(void) __attribute__((weak));
 static uint32_t auto_threads(void)
 {
     uint32_t cores = nerf__cpu_count();
-    int blas = 1;
-#if defined(__GNUC__)
-    if (openblas_get_num_threads) {
-        blas = openblas_get_num_threads();
-    }
-#endif
+    int blas = nerf__blas_threads();
     uint32_t t = blas > 1 ? cores / (uint32_t)blas : cores;
     return t ? t : 1;
 }

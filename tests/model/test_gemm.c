@@ -1,0 +1,160 @@
+/*
+ * The layer products, against sums in double: with OpenBLAS on one thread
+ * (the products cut into blocks over libnerf's workers) and on two (one
+ * call each), at shapes that cut along each dimension, with strides and
+ * accumulation.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../harness.h"
+#include "gemm.h"
+#include "parallel.h"
+
+#if defined(__GNUC__)
+extern void openblas_set_num_threads(int n) __attribute__((weak));
+#endif
+
+static int set_blas_threads(int n)
+{
+#if defined(__GNUC__)
+    if (openblas_set_num_threads) {
+        openblas_set_num_threads(n);
+        return nerf__blas_threads() == n;
+    }
+#endif
+    (void)n;
+    return 0;
+}
+
+static uint64_t state = 12345;
+
+static float uniform(void)
+{
+    state = state * 6364136223846793005u + 1442695040888963407u;
+    return (float)((state >> 40) / 16777216.0) * 2.0f - 1.0f;
+}
+
+static float *random_matrix(size_t rows, size_t ld)
+{
+    float *m = malloc(rows * ld * sizeof *m);
+    for (size_t i = 0; i < rows * ld; i++) {
+        m[i] = uniform();
+    }
+    return m;
+}
+
+/* |got - want| within a float sum's error bound over k terms of size 1. */
+static int close_to(const float *got, const double *want, size_t rows,
+                    size_t cols, size_t ld, size_t k)
+{
+    const double tol = 4e-7 * (double)(k + 1) + 1e-6;
+    for (size_t i = 0; i < rows; i++) {
+        for (size_t j = 0; j < cols; j++) {
+            if (fabs((double)got[i * ld + j] - want[i * cols + j]) > tol) {
+                FAILF("element (%zu, %zu): %.9g, want %.9g", i, j,
+                      (double)got[i * ld + j], want[i * cols + j]);
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+typedef struct shape {
+    size_t n;
+    uint32_t out, in;
+} shape;
+
+/* n large enough that the pool cuts it; out > in and out < in so that the
+ * weight gradient is cut along rows and along columns. */
+static const shape shapes[] = {
+    {4099, 64, 32}, {3001, 3, 64}, {2048, 16, 1}, {5, 64, 64}, {1, 7, 9},
+};
+
+static void check_shape(const shape *s)
+{
+    const size_t n = s->n, out = s->out, in = s->in;
+    const size_t ldx = in + 3, ldw = in + 5, ldy = out + 2;
+    float *x = random_matrix(n, ldx);
+    float *w = random_matrix(out, ldw);
+    float *y = random_matrix(n, ldy); /* beta = 1 adds to it */
+    float *dy = random_matrix(n, ldy);
+    float *dw = random_matrix(out, ldw); /* the gradient accumulates */
+    float *dx = random_matrix(n, ldx);
+    double *want_y = malloc(n * out * sizeof *want_y);
+    double *want_dw = malloc(out * in * sizeof *want_dw);
+    double *want_dx = malloc(n * in * sizeof *want_dx);
+    for (size_t i = 0; i < n; i++) {
+        for (size_t o = 0; o < out; o++) {
+            double acc = y[i * ldy + o];
+            for (size_t k = 0; k < in; k++) {
+                acc += (double)x[i * ldx + k] * w[o * ldw + k];
+            }
+            want_y[i * out + o] = acc;
+        }
+        for (size_t k = 0; k < in; k++) {
+            double acc = 0.0;
+            for (size_t o = 0; o < out; o++) {
+                acc += (double)dy[i * ldy + o] * w[o * ldw + k];
+            }
+            want_dx[i * in + k] = acc;
+        }
+    }
+    for (size_t o = 0; o < out; o++) {
+        for (size_t k = 0; k < in; k++) {
+            double acc = dw[o * ldw + k];
+            for (size_t i = 0; i < n; i++) {
+                acc += (double)dy[i * ldy + o] * x[i * ldx + k];
+            }
+            want_dw[o * in + k] = acc;
+        }
+    }
+    nerf__gemm_forward(n, s->out, s->in, x, ldx, w, ldw, 1.0f, y, ldy);
+    nerf__gemm_input_grad(n, s->out, s->in, dy, ldy, w, ldw, dx, ldx);
+    nerf__gemm_weight_grad(n, s->out, s->in, dy, ldy, x, ldx, dw, ldw);
+    CHECK(close_to(y, want_y, n, out, ldy, in + 1));
+    CHECK(close_to(dx, want_dx, n, in, ldx, out));
+    CHECK(close_to(dw, want_dw, out, in, ldw, n + 1));
+    free(x);
+    free(w);
+    free(y);
+    free(dy);
+    free(dw);
+    free(dx);
+    free(want_y);
+    free(want_dw);
+    free(want_dx);
+}
+
+TEST(products_with_blas_threads)
+{
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; i++) {
+        check_shape(&shapes[i]);
+    }
+}
+
+TEST(products_over_own_workers)
+{
+    if (!set_blas_threads(1)) {
+        printf("SKIP: the BLAS is not OpenBLAS: its thread count cannot be "
+               "set, so the products are never cut\n");
+        return;
+    }
+    if (nerf__parallel_threads() < 2) {
+        printf("note: one core: the products run as one call\n");
+    }
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; i++) {
+        check_shape(&shapes[i]);
+    }
+    set_blas_threads(2);
+}
+
+int main(void)
+{
+    RUN(products_with_blas_threads);
+    RUN(products_over_own_workers);
+    HARNESS_EXIT();
+}
