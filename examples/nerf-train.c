@@ -15,6 +15,7 @@ static const char usage[] =
     "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
     "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
     "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
+    "                  [--random-background 0|1]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
     "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
@@ -30,6 +31,10 @@ static const char usage[] =
     "  --checkpoint-every N  save MODEL every N steps (default 500)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
     "                batch and seed give the same result as an unbroken run)\n"
+    "  --random-background 0|1  1: train each ray of images with alpha\n"
+    "                (Blender scenes) against a random background colour, so\n"
+    "                that empty space cannot pass for the background (default\n"
+    "                1 for fast, 0 for the others)\n"
     "Ctrl-C stops after the current step and saves MODEL.\n";
 
 static volatile sig_atomic_t interrupted;
@@ -66,6 +71,7 @@ typedef struct args {
     uint64_t steps, downscale, batch, seed, every;
     double lr, seconds;
     int resume;
+    int random_bg; /* -1: as the preset's model */
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -76,6 +82,7 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     a->batch = 1024;
     a->every = 500;
+    a->random_bg = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
@@ -114,6 +121,10 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, UINT32_MAX, &a->every);
         } else if (strcmp(k, "--lr") == 0) {
             bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
+        } else if (strcmp(k, "--random-background") == 0) {
+            uint64_t on = 0;
+            bad = cli_uint(v, 0, 1, &on);
+            a->random_bg = (int)on;
         } else {
             fprintf(stderr, "nerf-train: unknown argument '%s'\n", k);
             bad = 1;
@@ -208,6 +219,13 @@ int main(int argc, char **argv)
              * untrained rim occupied.  On the built-in scene (64 px, 600
              * steps) 500 crop steps gave 33.4 dB test PSNR, none 35.9. */
             to.precrop_steps = 0;
+            /* As Mueller et al.: with a background the images do not
+             * show, the density must go to zero wherever the images are
+             * transparent, which is also what lets marching skip it. */
+            to.random_background = 1;
+        }
+        if (a.random_bg >= 0) {
+            to.random_background = a.random_bg;
         }
         to.checkpoint_path = a.out;
         to.hooks = &hooks;

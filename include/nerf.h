@@ -1266,6 +1266,27 @@ typedef struct nerf_trainer_options {
     uint32_t reserved0;       /**< Must be 0. */
     const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
+    /* Since 0.2.  Zero-filled by an older caller, which gives 0.1's
+     * behaviour. */
+    uint32_t batch_samples;   /**< 0 (default): every step takes batch_rays
+                                   rays.  N > 0: a step takes rays, of the
+                                   batch_rays it draws, until their samples
+                                   reach N (at least one ray), so that a
+                                   step's cost stays even while the count
+                                   per ray changes: with a marching sampler
+                                   it falls from hundreds to tens as the
+                                   occupancy grid learns where the scene
+                                   is.  batch_rays is then the most rays a
+                                   step takes. */
+    int32_t random_background; /**< 1: train on images with alpha (Blender
+                                    scenes) against a random background
+                                    colour per ray, the target composited
+                                    onto it and the render finished on it,
+                                    so that the model cannot paint empty
+                                    space in the background's colour
+                                    (Mueller et al.).  0 (default): the
+                                    background is white_background's.
+                                    Images without alpha ignore it. */
 } nerf_trainer_options;
 
 /**
@@ -1294,6 +1315,8 @@ typedef struct nerf_train_stats {
                                  n_fine with a fine pass), or with ray
                                  marching the mean count of marched
                                  samples. */
+    uint64_t rays;          /**< Rays the step trained on: batch_rays, or
+                                 fewer with batch_samples. */
 } nerf_train_stats;
 
 /**

@@ -170,6 +170,7 @@ NERF_API void nerf_dataset_destroy(nerf_dataset *ds)
     }
     nerf__env env = ds->env;
     nerf__free(&env, ds->pixels);
+    nerf__free(&env, ds->alpha);
     nerf__free(&env, ds->views);
     nerf__free(&env, ds);
 }

@@ -64,6 +64,73 @@ static void composite_box(const float *rgba, uint32_t src_w, uint32_t factor,
     }
 }
 
+static bool has_transparency(const float *rgba, size_t pixels)
+{
+    for (size_t i = 0; i < pixels; i++) {
+        if (rgba[4 * i + 3] < 1.0f) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* The mean alpha of each block, the same blocks composite_box() takes. */
+static void coverage_box(const float *rgba, uint32_t src_w, uint32_t factor,
+                         uint32_t w, uint32_t h, uint16_t *dst)
+{
+    double scale = 65535.0 / ((double)factor * factor);
+    for (uint32_t oy = 0; oy < h; oy++) {
+        for (uint32_t ox = 0; ox < w; ox++) {
+            double acc = 0.0;
+            for (uint32_t dy = 0; dy < factor; dy++) {
+                const float *p = rgba + ((size_t)(oy * factor + dy) * src_w +
+                                         (size_t)ox * factor) * 4;
+                for (uint32_t dx = 0; dx < factor; dx++, p += 4) {
+                    acc += p[3];
+                }
+            }
+            double q = acc * scale + 0.5;
+            dst[(size_t)oy * w + ox] = (uint16_t)(q > 65535.0 ? 65535.0 : q);
+        }
+    }
+}
+
+/*
+ * Keep the coverage of image index.  Opaque scenes (LLFF photographs, RGB
+ * files) never allocate the plane; the first image with a transparent
+ * pixel allocates it for all, the images before it being opaque.
+ */
+static int store_alpha(nerf_dataset *ds, uint32_t index, const char *path,
+                       const float *rgba, uint32_t factor)
+{
+    const size_t per_image = (size_t)ds->width * ds->height;
+    const bool opaque = !has_transparency(
+        rgba, (size_t)ds->src_width * ds->src_height);
+    if (ds->alpha == NULL) {
+        if (opaque) {
+            return NERF_OK;
+        }
+        /* No overflow: first_image() checked per_image * 3 * count. */
+        ds->alpha = nerf__alloc(&ds->env,
+                                per_image * ds->count * sizeof *ds->alpha);
+        if (ds->alpha == NULL) {
+            return nerf__error_prefix(NERF_ENOMEM, path);
+        }
+        for (size_t i = 0; i < per_image * ds->count; i++) {
+            ds->alpha[i] = 65535;
+        }
+    }
+    uint16_t *dst = ds->alpha + per_image * index;
+    if (opaque) {
+        for (size_t i = 0; i < per_image; i++) {
+            dst[i] = 65535;
+        }
+    } else {
+        coverage_box(rgba, ds->src_width, factor, ds->width, ds->height, dst);
+    }
+    return NERF_OK;
+}
+
 /* The first image fixes the size of all: allocate the pixel store. */
 static int first_image(nerf_dataset *ds, const char *path, uint32_t w,
                        uint32_t h, uint32_t factor)
@@ -111,6 +178,8 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
         composite_box(rgba, w, factor, ds->width, ds->height,
                       white_background ? 1.0f : 0.0f,
                       ds->pixels + per_image * index);
+        ds->alpha_bg = white_background ? 1.0f : 0.0f;
+        rc = store_alpha(ds, index, path, rgba, factor);
     }
     nerf__free(&ds->env, rgba);
     return rc;

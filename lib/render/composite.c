@@ -2,6 +2,7 @@
 #include "composite.h"
 
 #include <math.h>
+#include <stddef.h>
 
 /* Distance to the next sample, scaled to world units. */
 static float delta(uint32_t n, const float *t, uint32_t i, float dir_norm)
@@ -10,9 +11,22 @@ static float delta(uint32_t n, const float *t, uint32_t i, float dir_norm)
     return dt * dir_norm;
 }
 
+/* x * 1.0f is x exactly, so white through the general path is the
+ * white of before. */
+static const float white_bg[3] = {1.0f, 1.0f, 1.0f};
+
 void nerf__composite_ray(uint32_t n, const float *t, float dir_norm,
                          const float *rgb, const float *sigma, bool white,
                          float *weights, nerf__ray_out *out)
+{
+    nerf__composite_ray_bg(n, t, dir_norm, rgb, sigma,
+                           white ? white_bg : NULL, weights, out);
+}
+
+void nerf__composite_ray_bg(uint32_t n, const float *t, float dir_norm,
+                            const float *rgb, const float *sigma,
+                            const float *bg, float *weights,
+                            nerf__ray_out *out)
 {
     float trans = 1.0f;
     float r = 0.0f, g = 0.0f, b = 0.0f, depth = 0.0f, acc = 0.0f;
@@ -30,10 +44,10 @@ void nerf__composite_ray(uint32_t n, const float *t, float dir_norm,
         depth += w * t[i];
         acc += w;
     }
-    if (white) {
-        r += 1.0f - acc;
-        g += 1.0f - acc;
-        b += 1.0f - acc;
+    if (bg) {
+        r += (1.0f - acc) * bg[0];
+        g += (1.0f - acc) * bg[1];
+        b += (1.0f - acc) * bg[2];
     }
     out->rgb[0] = r;
     out->rgb[1] = g;
@@ -60,11 +74,24 @@ void nerf__composite_ray_backward(uint32_t n, const float *t, float dir_norm,
                                   float d_depth, float d_opacity,
                                   float *d_rgb, float *d_sigma)
 {
+    nerf__composite_ray_backward_bg(n, t, dir_norm, rgb, sigma,
+                                    white ? white_bg : NULL, d_out_rgb,
+                                    d_depth, d_opacity, d_rgb, d_sigma);
+}
+
+void nerf__composite_ray_backward_bg(uint32_t n, const float *t,
+                                     float dir_norm, const float *rgb,
+                                     const float *sigma, const float *bg,
+                                     const float *d_out_rgb, float d_depth,
+                                     float d_opacity, float *d_rgb,
+                                     float *d_sigma)
+{
     const float dc[3] = {d_out_rgb ? d_out_rgb[0] : 0.0f,
                          d_out_rgb ? d_out_rgb[1] : 0.0f,
                          d_out_rgb ? d_out_rgb[2] : 0.0f};
-    /* On white, rgb carries + 1 - sum w: each weight also gains -dc. */
-    const float bg = white ? dc[0] + dc[1] + dc[2] : 0.0f;
+    /* rgb carries + (1 - sum w) bg: each weight also gains -dc . bg. */
+    const float dbg = bg ? dc[0] * bg[0] + dc[1] * bg[1] + dc[2] * bg[2]
+                         : 0.0f;
     /* d_sigma doubles as storage for T while going forward. */
     float trans = 1.0f;
     for (uint32_t i = 0; i < n; i++) {
@@ -82,7 +109,7 @@ void nerf__composite_ray_backward(uint32_t n, const float *t, float dir_norm,
         float ti = d_sigma[i];
         float w = alpha * ti;
         float g = dc[0] * rgb[3 * i] + dc[1] * rgb[3 * i + 1] +
-                  dc[2] * rgb[3 * i + 2] - bg + d_depth * t[i] + d_opacity;
+                  dc[2] * rgb[3 * i + 2] - dbg + d_depth * t[i] + d_opacity;
         for (int c = 0; c < 3; c++) {
             d_rgb[3 * i + c] = w * dc[c];
         }

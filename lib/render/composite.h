@@ -45,4 +45,21 @@ void nerf__composite_ray_backward(uint32_t n, const float *t, float dir_norm,
                                   float d_depth, float d_opacity,
                                   float *d_rgb, float *d_sigma);
 
+/*
+ * The same two functions finishing the ray on background colour bg[3]
+ * (rgb += (1 - opacity) bg; NULL: black), so that training can give each
+ * ray its own.  The functions above are these with bg white or NULL, bit
+ * for bit.
+ */
+void nerf__composite_ray_bg(uint32_t n, const float *t, float dir_norm,
+                            const float *rgb, const float *sigma,
+                            const float *bg, float *weights,
+                            nerf__ray_out *out);
+void nerf__composite_ray_backward_bg(uint32_t n, const float *t,
+                                     float dir_norm, const float *rgb,
+                                     const float *sigma, const float *bg,
+                                     const float *d_out_rgb, float d_depth,
+                                     float d_opacity, float *d_rgb,
+                                     float *d_sigma);
+
 #endif

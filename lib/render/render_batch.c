@@ -251,6 +251,13 @@ static void add_noise(void *ctx, size_t begin, size_t end)
     }
 }
 
+/* The background ray k is finished on (NULL: black). */
+static const float *ray_background(const nerf__batch *b, size_t k)
+{
+    static const float white[3] = {1.0f, 1.0f, 1.0f};
+    return b->ray_bg ? b->ray_bg + 3 * k : b->white ? white : NULL;
+}
+
 static void composite_pass(void *ctx, size_t begin, size_t end)
 {
     const batch_job *j = ctx;
@@ -261,9 +268,10 @@ static void composite_pass(void *ctx, size_t begin, size_t end)
     for (size_t k = begin; k < end; k++) {
         nerf__ray_out r;
         size_t at = k * m;
-        nerf__composite_ray(m, b->t[pass] + at, b->dir_norm[k],
-                            b->rgb[pass] + 3 * at, b->sigma[pass] + at,
-                            b->white, b->weights[pass] + at, &r);
+        nerf__composite_ray_bg(m, b->t[pass] + at, b->dir_norm[k],
+                               b->rgb[pass] + 3 * at, b->sigma[pass] + at,
+                               ray_background(b, k), b->weights[pass] + at,
+                               &r);
         if (out == NULL) {
             continue;
         }
@@ -301,6 +309,12 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
         return nerf__error(NERF_EINVAL, "render: the sampler marches through "
                            "an occupancy grid, which this model has not");
     }
+    if (!march && s->sample_budget > 0) {
+        /* Every ray has the same count: the budget is a number of rays. */
+        const size_t per_ray = n_c + (n_f > 0 ? (size_t)n_c + n_f : 0);
+        const size_t fit = (s->sample_budget + per_ray - 1) / per_ray;
+        n_rays = fit < n_rays ? fit : n_rays;
+    }
     int rc = reserve(b, n_rays, n_c, n_f, s->keep);
     if (rc != NERF_OK) {
         return rc;
@@ -316,6 +330,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     }
     b->n_rays = n_rays;
     b->white = s->white_background;
+    b->ray_bg = s->background;
     if (march) {
         b->n_pass = 1;
         b->n_samples[0] = b->n_samples[1] = 0;
@@ -369,9 +384,10 @@ static void composite_backward(void *ctx, size_t begin, size_t end)
     const uint32_t s = b->n_samples[pass];
     for (size_t k = begin; k < end; k++) {
         size_t at = k * s;
-        nerf__composite_ray_backward(
+        nerf__composite_ray_backward_bg(
             s, b->t[pass] + at, b->dir_norm[k], b->rgb[pass] + 3 * at,
-            b->sigma[pass] + at, b->white, j->d_rgb ? j->d_rgb + 3 * k : NULL,
+            b->sigma[pass] + at, ray_background(b, k),
+            j->d_rgb ? j->d_rgb + 3 * k : NULL,
             j->d_depth ? j->d_depth[k] : 0.0f,
             j->d_opacity ? j->d_opacity[k] : 0.0f, b->d_rgb + 3 * at,
             b->d_sigma + at);

@@ -56,6 +56,15 @@ typedef struct nerf__render_setup {
      * place samples in empty cells too, and (zero_empty) give the samples
      * in empty cells density 0, which is what skipping them amounts to. */
     bool march_everywhere, march_zero_empty;
+    /* Training with nerf_trainer_options.batch_samples: take the first
+     * rays of the batch whose samples reach this many (at least one ray;
+     * 0: all).  The batch's n_rays says how many were taken. */
+    size_t sample_budget;
+    /* Training with nerf_trainer_options.random_background: ray k is
+     * finished on the colour background + 3 k (both paths, forward and
+     * backward) instead of white_background's.  It must stay unchanged
+     * until the backward.  NULL: white_background. */
+    const float *background;
 } nerf__render_setup;
 
 /* Outputs of one pass; any pointer may be NULL. */
@@ -74,7 +83,7 @@ typedef struct nerf__pass_out {
  */
 typedef struct nerf__batch {
     nerf__env env;
-    size_t n_rays;
+    size_t n_rays;                  /* as asked, or fewer (sample_budget) */
     uint32_t n_pass;
     uint32_t n_samples[NERF__PASSES];
     int net[NERF__PASSES];          /* network index of each pass */
@@ -92,6 +101,7 @@ typedef struct nerf__batch {
     /* private */
     const nerf_model *model;
     bool white, kept;
+    const float *ray_bg;            /* setup's background */
     size_t cap_rays;
     uint32_t cap_c, cap_f;
     bool cap_keep;

@@ -248,14 +248,36 @@ static float disparity_of(float depth, float opacity)
     return 1.0f / fmaxf(1e-10f, depth / opacity);
 }
 
+/* The fewest first rays whose samples reach `budget` (all if they never
+ * do, at least one), and the marched batch cut to them. */
+static size_t cut_to_budget(nerf__march_samples *ms, size_t budget)
+{
+    size_t n = 1;
+    while (n < ms->n_rays && ms->offsets[n] < budget) {
+        n++;
+    }
+    n = n < ms->n_rays ? n : ms->n_rays;
+    ms->n_rays = n;
+    ms->total = ms->offsets[n];
+    return n;
+}
+
 /* Training: every ray marched in full, one forward, one composite. */
 static int march_whole(nerf__batch *b, const nerf__render_setup *s,
-                       const nerf__march_rays *rays, const nerf__pass_out *out)
+                       const nerf__march_rays *all, const nerf__pass_out *out)
 {
     const nerf__occupancy *g = s->model->grid;
     nerf__march_options mo;
     march_options(s, g, &mo);
-    int rc = nerf__march_run(g, &mo, rays, &b->march);
+    int rc = nerf__march_run(g, &mo, all, &b->march);
+    /* The rays kept: a prefix, so their draws are the same as without a
+     * budget. */
+    nerf__march_rays kept = *all;
+    const nerf__march_rays *rays = &kept;
+    if (rc == NERF_OK && s->sample_budget > 0) {
+        kept.n = cut_to_budget(&b->march, s->sample_budget);
+        b->n_rays = kept.n;
+    }
     march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir};
     if (rc == NERF_OK) {
         rc = evaluate(b, s, &j, true);
@@ -266,7 +288,8 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
     b->packed = (nerf__packed_batch){
         .n_rays = rays->n, .offsets = b->march.offsets, .t = b->march.t,
         .dt = b->march.dt, .rgb = b->m_rgb, .sigma = b->m_sigma,
-        .bg = b->white ? b->bg : NULL, .bg_stride = 0,
+        .bg = b->ray_bg ? b->ray_bg : b->white ? b->bg : NULL,
+        .bg_stride = b->ray_bg ? 3 : 0,
         .eps = NERF__COMPOSITE_EPS_DEFAULT};
     nerf__packed_out po = {0};
     if (out) {
@@ -382,8 +405,9 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
     for (size_t k = 0; k < n; k++) {
         const nerf__composite_state *st = &b->m_state[k];
         if (out->rgb) {
-            nerf__composite_state_rgb(st, b->white ? b->bg : NULL,
-                                      out->rgb + 3 * k);
+            const float *bg = b->ray_bg ? b->ray_bg + 3 * k
+                              : b->white ? b->bg : NULL;
+            nerf__composite_state_rgb(st, bg, out->rgb + 3 * k);
         }
         if (out->depth) {
             out->depth[k] = st->depth;

@@ -29,7 +29,8 @@ enum {
     NERF__STREAM_HIERARCHICAL = 2,
     NERF__STREAM_NOISE_COARSE = 3,
     NERF__STREAM_NOISE_FINE = 4,
-    NERF__STREAM_MARCH = 5
+    NERF__STREAM_MARCH = 5,
+    NERF__STREAM_BACKGROUND = 6 /* the trainer's random backgrounds */
 };
 
 /* Whether the sampler marches through an occupancy grid. */

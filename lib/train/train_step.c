@@ -97,9 +97,11 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
         return rc;
     }
     const uint32_t passes = t->batch.n_pass;
+    /* With batch_samples the batch took the first n of the B rays. */
+    const size_t n = t->batch.n_rays;
     double mse[NERF__PASSES] = {0.0, 0.0};
     for (uint32_t p = 0; p < passes; p++) {
-        mse[p] = pass_loss(3 * B, t->rgb[p], t->targets, t->d_rgb[p]);
+        mse[p] = pass_loss(3 * n, t->rgb[p], t->targets, t->d_rgb[p]);
     }
     double loss = mse[0] + mse[1];
     if (!isfinite(loss)) {
@@ -122,7 +124,8 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
     stats->psnr = psnr_of(mse[passes - 1]);
     stats->psnr_coarse = psnr_of(mse[0]);
     stats->learning_rate = lr;
-    stats->samples_per_ray = (double)t->batch.n_evaluated / (double)B;
+    stats->samples_per_ray = (double)t->batch.n_evaluated / (double)n;
+    stats->rays = n;
     return NERF_OK;
 }
 

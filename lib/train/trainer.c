@@ -1,6 +1,7 @@
 #include "trainer.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "camera.h"
@@ -43,6 +44,10 @@ static int check_options(const nerf_trainer_options *o)
         what = "checkpoint_every needs a checkpoint_path";
     } else if (o->reserved0 != 0) {
         what = "reserved0 must be 0";
+    } else if (o->batch_samples > (1u << 26)) {
+        what = "batch_samples must be 0..67108864";
+    } else if (o->random_background != 0 && o->random_background != 1) {
+        what = "random_background must be 0 or 1";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);
@@ -81,6 +86,12 @@ static int alloc_buffers(nerf_trainer *t)
             return NERF_ENOMEM;
         }
     }
+    if (t->random_bg) {
+        t->backgrounds = nerf__calloc(&t->env, n, sizeof(float));
+        if (t->backgrounds == NULL) {
+            return NERF_ENOMEM;
+        }
+    }
     return NERF_OK;
 }
 
@@ -104,6 +115,8 @@ static void setup_render(nerf_trainer *t)
     s->keep = true;
     s->white_background = t->white;
     s->noise_std = t->noise_std;
+    s->sample_budget = t->opts.batch_samples;
+    s->background = t->backgrounds;
     if (t->sampler->opts.ndc) {
         /* The NDC frustum of a forward-facing scene is that of its
          * training images unless the sampler fixes one. */
@@ -165,6 +178,8 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     t->height = dataset->height;
     t->white = o.white_background == -1 ? dataset->white_background != 0
                                          : o.white_background == 1;
+    /* Opaque images have nothing to put a background behind. */
+    t->random_bg = o.random_background == 1 && dataset->alpha != NULL;
     t->noise_std = o.raw_noise_std == NERF_NOISE_AUTO
                        ? (sampler->opts.ndc ? 1.0f : 0.0f)
                        : o.raw_noise_std;
@@ -186,10 +201,17 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
         return rc;
     }
     setup_render(t);
-    nerf__log(&env, NERF_LOG_INFO, "trainer: %u images of %ux%u, %u rays per "
+    char per_step[64];
+    if (o.batch_samples > 0) {
+        snprintf(per_step, sizeof per_step, "up to %u rays of %u samples",
+                 o.batch_rays, o.batch_samples);
+    } else {
+        snprintf(per_step, sizeof per_step, "%u rays", o.batch_rays);
+    }
+    nerf__log(&env, NERF_LOG_INFO, "trainer: %u images of %ux%u, %s per "
               "step, %s background, density noise %g, precrop %u steps%s",
-              t->n_images, t->width, t->height, o.batch_rays,
-              t->white ? "white" : "black",
+              t->n_images, t->width, t->height, per_step,
+              t->random_bg ? "random" : t->white ? "white" : "black",
               t->march ? 0.0 : (double)t->noise_std, t->opts.precrop_steps,
               t->march ? ", ray marching through the occupancy grid" : "");
     *out = t;
@@ -209,6 +231,7 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *t)
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) {
         nerf__free(&env, bufs[i]);
     }
+    nerf__free(&env, t->backgrounds);
     nerf__free(&env, t->cameras);
     nerf__free(&env, t->checkpoint_path);
     nerf__free(&env, t);

@@ -29,6 +29,10 @@ struct nerf_trainer {
      * the loss gradient of each pass's colours. */
     float *origins, *directions, *targets;
     float *rgb[NERF__PASSES], *d_rgb[NERF__PASSES];
+    /* random_background on a dataset with alpha: [batch_rays, 3], the
+     * colour each ray's target and render are finished on (else NULL). */
+    bool random_bg;
+    float *backgrounds;
     nerf_progress_cb progress;
     void *progress_user;
     atomic_int cancel;
@@ -45,7 +49,8 @@ struct nerf_trainer {
 #define NERF__GRID_EVERY 16u
 #define NERF__GRID_WARMUP 256u
 
-/* Fill the trainer's rays and targets for step `step`. */
+/* Fill the trainer's rays and targets (and with random_bg their
+ * backgrounds) for step `step`. */
 void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step);
 
 /* Refresh the model's occupancy grid as the schedule says for the

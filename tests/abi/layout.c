@@ -145,7 +145,10 @@ FROZEN(nerf_trainer_options, checkpoint_every, 24);
 FROZEN(nerf_trainer_options, reserved0, 28);
 FROZEN(nerf_trainer_options, checkpoint_path, 32);
 FROZEN(nerf_trainer_options, hooks, 40);
-SIZE(nerf_trainer_options, 48);
+/* Appended in 0.2. */
+FROZEN(nerf_trainer_options, batch_samples, 48);
+FROZEN(nerf_trainer_options, random_background, 52);
+SIZE(nerf_trainer_options, 56);
 
 FROZEN(nerf_train_stats, struct_size, 0);
 FROZEN(nerf_train_stats, reserved0, 4);
@@ -156,7 +159,8 @@ FROZEN(nerf_train_stats, psnr_coarse, 32);
 FROZEN(nerf_train_stats, learning_rate, 40);
 /* Appended in 0.2. */
 FROZEN(nerf_train_stats, samples_per_ray, 48);
-SIZE(nerf_train_stats, 56);
+FROZEN(nerf_train_stats, rays, 56);
+SIZE(nerf_train_stats, 64);
 
 #endif
 

@@ -2,6 +2,7 @@
 #include <nerf.h>
 
 #include "data_fixtures.h"
+#include "dataset.h"
 #include "../harness.h"
 
 enum { W = 8, H = 6, FRAMES = 4 };
@@ -388,6 +389,99 @@ TEST(gray_and_16bit_frames)
     nerf_dataset_destroy(ds);
 }
 
+/* Frame f rewritten as an 8-bit RGB file (opaque = 1) or RGBA file with
+ * every alpha 255 (opaque = 2). */
+static void write_opaque(const char *dir, int f, int opaque)
+{
+    uint16_t px[W * H * 4];
+    const int ch = opaque == 1 ? 3 : 4;
+    for (int i = 0; i < W * H; i++) {
+        float p[4];
+        pixel(f, i % W, i / W, p);
+        p[3] = 1.0f;
+        for (int c = 0; c < ch; c++) {
+            px[ch * i + c] = (uint16_t)(p[c] * 255.0f + 0.5f);
+        }
+    }
+    char p[1024], name[32];
+    snprintf(name, sizeof name, "train/r_%d.png", f);
+    fx_path(p, sizeof p, dir, name);
+    fx_write_png(p, W, H, opaque == 1 ? 2 : 6, 8, px, NULL, 0, NULL, 0);
+}
+
+/*
+ * The loader keeps each stored pixel's coverage (the mean alpha of its
+ * block) beside the composited colours, which random-background training
+ * needs; scenes whose images are opaque keep none.  What the public API
+ * hands out does not change.
+ */
+TEST(alpha_kept_beside_pixels)
+{
+    char dir[1024];
+    blender_scene(dir, sizeof dir);
+    int frames[FRAMES] = {0, 1, 2, 3};
+    for (int k = 1; k <= 2; k++) {
+        for (uint32_t white = 0; white <= 1; white++) {
+            nerf_dataset_options o;
+            NERF_DATASET_OPTIONS_INIT(&o);
+            o.downscale = (uint32_t)k;
+            o.white_background = white;
+            nerf_dataset *ds = NULL;
+            CHECK_OK(nerf_dataset_load(&ds, dir, &o));
+            if (ds == NULL) {
+                continue;
+            }
+            CHECK(ds->alpha != NULL);
+            CHECK(ds->alpha_bg == (float)white);
+            if (k == 1) {
+                check_images(ds, frames, FRAMES, (float)white);
+            }
+            const int w = W / k, h = H / k;
+            int bad = 0;
+            for (int f = 0; f < FRAMES && ds->alpha; f++) {
+                for (int y = 0; y < h; y++) {
+                    for (int x = 0; x < w; x++) {
+                        double a = 0.0;
+                        for (int dy = 0; dy < k; dy++) {
+                            for (int dx = 0; dx < k; dx++) {
+                                float p[4];
+                                pixel(f, x * k + dx, y * k + dy, p);
+                                a += p[3];
+                            }
+                        }
+                        double want = a / (k * k) * 65535.0;
+                        uint16_t got = ds->alpha[((size_t)f * h + y) * w + x];
+                        bad += fabs(got - want) > 0.5 + 1e-6;
+                    }
+                }
+            }
+            CHECK_EQ_INT(bad, 0);
+            nerf_dataset_destroy(ds);
+        }
+    }
+    /* One opaque frame among transparent ones: its coverage is full. */
+    write_opaque(dir, 0, 1);
+    nerf_dataset *ds = NULL;
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    CHECK(ds && ds->alpha != NULL);
+    if (ds && ds->alpha) {
+        int bad = 0;
+        for (int i = 0; i < W * H; i++) {
+            bad += ds->alpha[i] != 65535;
+        }
+        CHECK_EQ_INT(bad, 0);
+        CHECK(ds->alpha[W * H] != 65535 || ds->alpha[W * H + 1] != 65535);
+    }
+    nerf_dataset_destroy(ds);
+    /* Opaque files, RGB or RGBA, keep no coverage. */
+    for (int f = 0; f < FRAMES; f++) {
+        write_opaque(dir, f, f % 2 ? 2 : 1);
+    }
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    CHECK(ds && ds->alpha == NULL);
+    nerf_dataset_destroy(ds);
+}
+
 /* One bad variant: edit the json (or not), load, expect status and words. */
 static void expect_failure(const char *from, const char *to, int status,
                            const char *word)
@@ -550,6 +644,7 @@ int main(void)
     RUN(skip_and_missing_images);
     RUN(instant_ngp_fields);
     RUN(gray_and_16bit_frames);
+    RUN(alpha_kept_beside_pixels);
     RUN(bad_json);
     RUN(bad_images);
     RUN(folders_and_options);

@@ -138,7 +138,7 @@ TEST(disparity_and_weights)
 
 /* The loss L = g_rgb . rgb + g_d depth + g_o opacity of the double forward. */
 static double loss_d(uint32_t n, const double *t, double dnorm,
-                     const double *rgb, const double *sigma, bool white,
+                     const double *rgb, const double *sigma, const float *bg,
                      const double *g)
 {
     double trans = 1.0, c[3] = {0, 0, 0}, depth = 0.0, acc = 0.0;
@@ -154,15 +154,19 @@ static double loss_d(uint32_t n, const double *t, double dnorm,
         depth += w * t[i];
         acc += w;
     }
-    if (white) {
+    if (bg) {
         for (int k = 0; k < 3; k++) {
-            c[k] += 1.0 - acc;
+            c[k] += (1.0 - acc) * bg[k];
         }
     }
     return g[0] * c[0] + g[1] * c[1] + g[2] * c[2] + g[3] * depth + g[4] * acc;
 }
 
-static void check_grad(uint32_t n, bool white, uint64_t seed, double *worst)
+/* bg: NULL (black), white (through the bool entry point) or a colour. */
+static const float white_bg[3] = {1.0f, 1.0f, 1.0f};
+
+static void check_grad(uint32_t n, const float *bg, uint64_t seed,
+                       double *worst)
 {
     float t[64], rgb[3 * 64], sigma[64], d_rgb[3 * 64], d_sigma[64];
     double td[64], rgbd[3 * 64], sd[64];
@@ -180,8 +184,13 @@ static void check_grad(uint32_t n, bool white, uint64_t seed, double *worst)
     }
     const float dnorm = 1.7f;
     const float g[5] = {0.3f, -1.1f, 0.7f, 0.05f, -0.4f};
-    nerf__composite_ray_backward(n, t, dnorm, rgb, sigma, white, g, g[3],
-                                 g[4], d_rgb, d_sigma);
+    if (bg == NULL || bg == white_bg) {
+        nerf__composite_ray_backward(n, t, dnorm, rgb, sigma, bg != NULL, g,
+                                     g[3], g[4], d_rgb, d_sigma);
+    } else {
+        nerf__composite_ray_backward_bg(n, t, dnorm, rgb, sigma, bg, g, g[3],
+                                        g[4], d_rgb, d_sigma);
+    }
     double gd[5];
     for (int k = 0; k < 5; k++) {
         gd[k] = g[k];
@@ -199,9 +208,9 @@ static void check_grad(uint32_t n, bool white, uint64_t seed, double *worst)
         float analytic = i < n ? d_sigma[i] : d_rgb[i - n];
         double x0 = *x;
         *x = x0 + h;
-        double lp = loss_d(n, td, dnorm, rgbd, sd, white, gd);
+        double lp = loss_d(n, td, dnorm, rgbd, sd, bg, gd);
         *x = x0 - h;
-        double lm = loss_d(n, td, dnorm, rgbd, sd, white, gd);
+        double lm = loss_d(n, td, dnorm, rgbd, sd, bg, gd);
         *x = x0;
         double fd = (lp - lm) / (2 * h);
         double err = fabs(analytic - fd) / (fabs(fd) + 1e-3);
@@ -219,7 +228,60 @@ TEST(backward_matches_finite_differences)
 {
     double worst = 0.0;
     for (uint64_t seed = 0; seed < 6; seed++) {
-        check_grad(seed % 2 ? 24 : 7, seed % 3 == 0, seed, &worst);
+        check_grad(seed % 2 ? 24 : 7, seed % 3 == 0 ? white_bg : NULL, seed,
+                   &worst);
+    }
+    printf("  worst relative error %.2e\n", worst);
+}
+
+/*
+ * Random-background training finishes each ray on its own colour: the
+ * colour enters the render as (1 - opacity) bg, and its gradient reaches
+ * every weight as -dc . bg.  White and black through the colour entry
+ * points are the bool ones bit for bit, so the default stays as it was.
+ */
+TEST(coloured_background)
+{
+    float t[24], rgb[3 * 24], sigma[24], w[24], d_rgb[2][3 * 24],
+        d_sigma[2][24];
+    grid(24, 2.0f, 6.0f, t);
+    nerf__rng rng = nerf__rng_make(19, 0);
+    for (int i = 0; i < 24; i++) {
+        /* Partly transparent: the last sample, 1e10 long, is empty. */
+        sigma[i] = i < 23 ? 0.4f * nerf__rng_uniform(&rng) + 0.05f : -0.1f;
+        for (int c = 0; c < 3; c++) {
+            rgb[3 * i + c] = nerf__rng_uniform(&rng);
+        }
+    }
+    const float g[3] = {0.4f, -0.9f, 0.25f};
+    const float bg[3] = {0.2f, 0.9f, 0.55f};
+    nerf__ray_out black, a, b;
+    nerf__composite_ray(24, t, 1.1f, rgb, sigma, false, w, &black);
+    CHECK(black.opacity > 0.2f && black.opacity < 0.9f);
+    nerf__composite_ray_bg(24, t, 1.1f, rgb, sigma, bg, w, &a);
+    for (int c = 0; c < 3; c++) {
+        CHECK_NEAR(a.rgb[c], black.rgb[c] + (1.0f - black.opacity) * bg[c],
+                   1e-6);
+    }
+    for (int white = 0; white < 2; white++) {
+        nerf__composite_ray(24, t, 1.1f, rgb, sigma, white, w, &a);
+        nerf__composite_ray_bg(24, t, 1.1f, rgb, sigma,
+                               white ? white_bg : NULL, w, &b);
+        CHECK(memcmp(&a, &b, sizeof a) == 0);
+        nerf__composite_ray_backward(24, t, 1.1f, rgb, sigma, white, g, 0.1f,
+                                     -0.3f, d_rgb[0], d_sigma[0]);
+        nerf__composite_ray_backward_bg(24, t, 1.1f, rgb, sigma,
+                                        white ? white_bg : NULL, g, 0.1f,
+                                        -0.3f, d_rgb[1], d_sigma[1]);
+        CHECK(memcmp(d_rgb[0], d_rgb[1], sizeof d_rgb[0]) == 0);
+        CHECK(memcmp(d_sigma[0], d_sigma[1], sizeof d_sigma[0]) == 0);
+    }
+    double worst = 0.0;
+    for (uint64_t seed = 0; seed < 6; seed++) {
+        const float colours[3][3] = {{0.2f, 0.9f, 0.55f},
+                                     {0.0f, 0.0f, 1.0f},
+                                     {0.7f, 0.05f, 0.3f}};
+        check_grad(seed % 2 ? 24 : 7, colours[seed % 3], seed + 40, &worst);
     }
     printf("  worst relative error %.2e\n", worst);
 }
@@ -252,6 +314,7 @@ int main(void)
     RUN(empty_space_background);
     RUN(disparity_and_weights);
     RUN(backward_matches_finite_differences);
+    RUN(coloured_background);
     RUN(backward_opaque_sample);
     HARNESS_EXIT();
 }

@@ -383,12 +383,14 @@ static int ball(void *ctx, size_t n, const float *xyz, float *sigma)
  * the check, so neither do the samples, and the densities stay far from
  * early termination: the loss is a smooth function of the rgb layer.
  */
-TEST(marching_fast_model)
+/* Swap the fixture's model and sampler for a small fast model whose grid
+ * keeps a ball of radius 0.8, and its marching sampler. */
+static bool use_fast(fixture *f)
 {
-    fixture f;
-    setup(&f, 0, true);
-    nerf_model_destroy(f.m);
-    nerf_sampler_destroy(f.s);
+    nerf_model_destroy(f->m);
+    nerf_sampler_destroy(f->s);
+    f->m = NULL;
+    f->s = NULL;
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, NERF_PRESET_FAST);
@@ -396,23 +398,110 @@ TEST(marching_fast_model)
     mo.hash_log2_size = 12;
     mo.hash_max_resolution = 64;
     mo.seed = 9;
-    CHECK_OK(nerf_model_create(&f.m, &mo));
+    CHECK_OK(nerf_model_create(&f->m, &mo));
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
     nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
     so.seed = 4;
-    CHECK_OK(nerf_sampler_create(&f.s, &so));
-    if (f.m == NULL || f.s == NULL) {
-        return;
+    CHECK_OK(nerf_sampler_create(&f->s, &so));
+    if (f->m == NULL || f->s == NULL) {
+        return false;
     }
     /* exp(logit - 1): about 0.4 per unit, so the rays are partly
      * transparent. */
-    f.m->params[f.m->nets[0].head.b] -= 1.0f;
-    CHECK_OK(nerf__occupancy_update(f.m->grid, ball, NULL,
-                                    f.m->grid->cells));
-    f.setup.model = f.m;
-    f.setup.sampler = f.s;
-    f.setup.noise_std = 0.0f;
+    f->m->params[f->m->nets[0].head.b] -= 1.0f;
+    CHECK_OK(nerf__occupancy_update(f->m->grid, ball, NULL,
+                                    f->m->grid->cells));
+    f->setup.model = f->m;
+    f->setup.sampler = f->s;
+    f->setup.noise_std = 0.0f;
+    return true;
+}
+
+/*
+ * Each pass's colours of the rays on per-ray backgrounds against the same
+ * rays on black: the difference must be (1 - opacity) bg, ray by ray.
+ */
+static void check_backgrounds(fixture *f, const float *bg)
+{
+    float black[2][3 * RAYS], rgb[2][3 * RAYS], opac[2][RAYS];
+    nerf__pass_out out[2];
+    for (int p = 0; p < 2; p++) {
+        out[p] = (nerf__pass_out){black[p], NULL, NULL, opac[p]};
+    }
+    nerf__render_setup s = f->setup;
+    s.white_background = false;
+    s.background = NULL;
+    CHECK_OK(nerf__render_batch(&f->b, &s, RAYS, f->o, f->d, out));
+    for (int p = 0; p < 2; p++) {
+        out[p].rgb = rgb[p];
+    }
+    /* The per-ray colours override white_background. */
+    s.white_background = true;
+    s.background = bg;
+    CHECK_OK(nerf__render_batch(&f->b, &s, RAYS, f->o, f->d, out));
+    int bad = 0;
+    double clear = 0.0;
+    for (uint32_t p = 0; p < f->b.n_pass; p++) {
+        for (int k = 0; k < RAYS; k++) {
+            clear += 1.0 - opac[p][k];
+            for (int c = 0; c < 3; c++) {
+                float want = black[p][3 * k + c] +
+                             (1.0f - opac[p][k]) * bg[3 * k + c];
+                bad += fabsf(rgb[p][3 * k + c] - want) > 1e-5f;
+            }
+        }
+    }
+    CHECK_EQ_INT(bad, 0);
+    CHECK(clear > 0.5); /* the backgrounds showed */
+}
+
+/*
+ * random_background training: every ray finished on its own colour, in
+ * the forward and in the backward, on both paths.  A backward that
+ * finished on white (or black) instead fails the head comparisons.
+ */
+TEST(per_ray_background)
+{
+    float bg[3 * RAYS];
+    nerf__rng g = nerf__rng_make(31, 0);
+    for (int i = 0; i < 3 * RAYS; i++) {
+        bg[i] = nerf__rng_uniform(&g);
+    }
+    fixture f;
+    setup(&f, 16, true);
+    avoid_kinks(&f);
+    check_backgrounds(&f, bg);
+    f.setup.background = bg;
+    f.use_pass[0] = 1;
+    check_direction(&f, 0, 31, true);
+    check_direction(&f, 0, 32, false);
+    f.use_pass[0] = 0;
+    f.use_pass[1] = 1;
+    check_direction(&f, 1, 33, true);
+    teardown(&f);
+
+    setup(&f, 0, true);
+    if (use_fast(&f)) {
+        check_backgrounds(&f, bg);
+        f.setup.background = bg;
+        f.use_pass[0] = 1;
+        loss(&f);
+        CHECK(f.b.marched);
+        check_direction(&f, 0, 34, true);
+        check_direction(&f, 0, 35, false);
+    }
+    teardown(&f);
+}
+
+TEST(marching_fast_model)
+{
+    fixture f;
+    setup(&f, 0, true);
+    if (!use_fast(&f)) {
+        teardown(&f);
+        return;
+    }
     f.use_pass[0] = 1;
     loss(&f);
     CHECK(f.b.marched && f.b.n_pass == 1);
@@ -450,5 +539,6 @@ int main(void)
     RUN(no_fine_network);
     RUN(batch_split_reproducible);
     RUN(marching_fast_model);
+    RUN(per_ray_background);
     HARNESS_EXIT();
 }

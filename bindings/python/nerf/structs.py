@@ -253,6 +253,10 @@ class TrainerOptions(_Versioned):
 
     ``checkpoint_path`` accepts a str or path; it is stored encoded with
     :func:`os.fsencode` and kept alive by the struct.
+    ``random_background`` (0 or 1, default 0): 1 composites each training
+    ray's target (an image with alpha) and its render onto the same random
+    colour, so that the model cannot fill empty space with the background's
+    colour; images without alpha ignore it.
     """
 
     _c_name_ = "nerf_trainer_options"
@@ -268,6 +272,8 @@ class TrainerOptions(_Versioned):
         ("reserved0", c_uint32),
         ("checkpoint_path", c_char_p),
         ("hooks", POINTER(Hooks)),
+        ("batch_samples", c_uint32),
+        ("random_background", c_int32),
     ]
 
     def _set(self, name: str, value: Any) -> None:
@@ -311,6 +317,7 @@ class TrainStatsStruct(_Versioned):
         ("learning_rate", c_double),
         # Appended in libnerf 0.2.
         ("samples_per_ray", c_double),
+        ("rays", c_uint64),
     ]
 
 
@@ -374,13 +381,15 @@ class TrainStats:
     #: Network evaluations per ray (0 from a library before 0.2, which
     #: leaves the field as the binding zeroed it).
     samples_per_ray: float = 0.0
+    #: Rays the step trained on (0 from a library before 0.2).
+    rays: int = 0
 
     @classmethod
     def from_struct(cls, s: TrainStatsStruct) -> "TrainStats":
         """Read the fields the library wrote."""
         return cls(step=s.step, loss=s.loss, psnr=s.psnr,
                    psnr_coarse=s.psnr_coarse, learning_rate=s.learning_rate,
-                   samples_per_ray=s.samples_per_ray)
+                   samples_per_ray=s.samples_per_ray, rays=s.rays)
 
 
 def _vec3(v: Any, name: str) -> Any:

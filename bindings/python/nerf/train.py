@@ -21,8 +21,11 @@ class Trainer(_handle.ProgressHandle):
 
     ``Trainer(model, dataset, sampler, batch_rays=1024, ...)``; keyword
     options are fields of :class:`nerf.TrainerOptions` (``checkpoint_path``
-    may be a str or path).  The trainer keeps the model, dataset and sampler
-    alive; nothing else may use the model while a step runs.
+    may be a str or path), for example ``random_background=1`` to train a
+    Blender scene's rays against random background colours (as instant-ngp
+    does; images without alpha ignore it).  The trainer keeps the model,
+    dataset and sampler alive; nothing else may use the model while a step
+    runs.
 
     ``progress``: the default callback of :meth:`run`, called after every
     step with a :class:`nerf.Progress`; a true return value cancels.

@@ -176,6 +176,8 @@ static void structs(void)
     FIELD(nerf_trainer_options, reserved0);
     FIELD(nerf_trainer_options, checkpoint_path);
     FIELD(nerf_trainer_options, hooks);
+    FIELD(nerf_trainer_options, batch_samples);
+    FIELD(nerf_trainer_options, random_background);
     end_struct();
 
     BEGIN(nerf_train_stats);
@@ -187,6 +189,7 @@ static void structs(void)
     FIELD(nerf_train_stats, psnr_coarse);
     FIELD(nerf_train_stats, learning_rate);
     FIELD(nerf_train_stats, samples_per_ray);
+    FIELD(nerf_train_stats, rays);
     end_struct();
 
     BEGIN(nerf_camera_path_options);

@@ -63,6 +63,22 @@ class Training(TestCase):
         with self.assertRaises(TypeError):
             nerf.Trainer(model, sampler, ds)
 
+    def test_random_background(self):
+        # The built-in scene's images have alpha, so the option changes the
+        # targets (and the loss), deterministically; 0 or 1 only.
+        losses = []
+        for rb in (0, 1, 1):
+            ds, model, sampler = _support.tiny_setup(seed=3)
+            with trainer(model, ds, sampler, random_background=rb) as t:
+                losses.append(t.step().loss)
+        self.assertNotEqual(losses[0], losses[1])
+        self.assertEqual(losses[1], losses[2])
+        self.assertEqual(nerf.TrainerOptions().random_background, 0)
+        ds, model, sampler = _support.tiny_setup()
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "random_background"):
+            trainer(model, ds, sampler, random_background=2)
+
     def test_checkpoint(self):
         path = os.path.join(_support.tmpdir(), "ckpt.nerf")
         ds, model, sampler = _support.tiny_setup()
