@@ -350,7 +350,14 @@ typedef enum nerf_param {
                                                lr0 (lr1/lr0)^(t/steps). */
     NERF_PARAM_ADAM_BETA1 = 103,          /**< Default 0.9. */
     NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999. */
-    NERF_PARAM_ADAM_EPS = 105             /**< Default 1e-7 (the paper's). */
+    NERF_PARAM_ADAM_EPS = 105,            /**< Default 1e-7 (the paper's);
+                                               1e-15 for hash-grid models
+                                               (Mueller et al.'s). */
+    /** Since 0.2.  L2 penalty on the network layers (not on a hash
+     * table): weight_decay * w is added to each layer parameter's
+     * gradient.  Default 0; 1e-6 for hash-grid models, as Mueller et al.
+     * train them. */
+    NERF_PARAM_WEIGHT_DECAY = 106
 } nerf_param;
 
 /**

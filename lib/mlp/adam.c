@@ -1,6 +1,7 @@
 #include "adam.h"
 
 #include <math.h>
+#include <stdbool.h>
 
 #include "parallel.h"
 
@@ -10,28 +11,51 @@ double nerf__adam_rate(const nerf__adam *hp, uint64_t step)
 }
 
 typedef struct adam_job {
-    float b1, b2, one_b1, one_b2, step, inv_sqrt_c2, eps;
-    float *params, *m, *v;
-    const float *grads;
+    float b1, b2, one_b1, one_b2, step, inv_sqrt_c2, eps, decay;
+    bool sparse;
+    float *params, *m, *v, *grads;
 } adam_job;
 
-static void adam_range(void *ctx, size_t begin, size_t end)
+/* The update of parameter i with gradient g (weight decay included). */
+#define ADAM_ONE(j, params, m, v, i, g)                                       \
+    do {                                                                      \
+        float g_ = (g) + (j)->decay * params[i];                              \
+        float m_ = (j)->b1 * m[i] + (j)->one_b1 * g_;                         \
+        float v_ = (j)->b2 * v[i] + (j)->one_b2 * g_ * g_;                    \
+        m[i] = m_;                                                            \
+        v[i] = v_;                                                            \
+        params[i] -= (j)->step * m_ / (sqrtf(v_) * (j)->inv_sqrt_c2 +         \
+                                       (j)->eps);                             \
+    } while (0)
+
+static void adam_dense(void *ctx, size_t begin, size_t end)
 {
     const adam_job *j = ctx;
     float *restrict params = j->params, *restrict m = j->m, *restrict v = j->v;
-    const float *restrict grads = j->grads;
+    float *restrict grads = j->grads;
+    for (size_t i = begin; i < end; i++) {
+        ADAM_ONE(j, params, m, v, i, grads[i]);
+        grads[i] = 0.0f;
+    }
+}
+
+static void adam_sparse(void *ctx, size_t begin, size_t end)
+{
+    const adam_job *j = ctx;
+    float *restrict params = j->params, *restrict m = j->m, *restrict v = j->v;
+    float *restrict grads = j->grads;
     for (size_t i = begin; i < end; i++) {
         float g = grads[i];
-        float mi = j->b1 * m[i] + j->one_b1 * g;
-        float vi = j->b2 * v[i] + j->one_b2 * g * g;
-        m[i] = mi;
-        v[i] = vi;
-        params[i] -= j->step * mi / (sqrtf(vi) * j->inv_sqrt_c2 + j->eps);
+        if (g != 0.0f) {
+            ADAM_ONE(j, params, m, v, i, g);
+            grads[i] = 0.0f;
+        }
     }
 }
 
 void nerf__adam_update(const nerf__adam *hp, uint64_t t, double lr, size_t n,
-                       float *params, const float *grads, float *m, float *v)
+                       float *params, float *grads, float *m, float *v,
+                       unsigned flags)
 {
     /* 1 - beta in double: 1 - 0.999f would be off by 1e-5 relative. */
     const double c1 = 1.0 - pow(hp->beta1, (double)t);
@@ -46,7 +70,9 @@ void nerf__adam_update(const nerf__adam *hp, uint64_t t, double lr, size_t n,
         .step = (float)(lr / c1),
         .inv_sqrt_c2 = (float)(1.0 / sqrt(c2)),
         .eps = (float)hp->eps,
+        .decay = (flags & NERF__ADAM_DECAY) ? (float)hp->weight_decay : 0.0f,
         .params = params, .m = m, .v = v, .grads = grads,
     };
-    nerf__parallel_for(n, 12, adam_range, &j);
+    nerf__parallel_for(n, 12, (flags & NERF__ADAM_SPARSE) ? adam_sparse
+                                                          : adam_dense, &j);
 }

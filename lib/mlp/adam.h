@@ -10,11 +10,27 @@ typedef struct nerf__adam {
     double lr_final;    /* rate reached after decay_steps */
     double decay_steps;
     double beta1, beta2, eps;
+    double weight_decay; /* L2 on the ranges updated with NERF__ADAM_DECAY */
 } nerf__adam;
 
 /* lr(step) = lr (lr_final / lr)^(step / decay_steps), continuing past it
  * as the reference does. */
 double nerf__adam_rate(const nerf__adam *hp, uint64_t step);
+
+/* How nerf__adam_update() treats its range. */
+enum {
+    /* Add weight_decay * p to each gradient (an L2 penalty): the layers
+     * of a hash-grid model, as Mueller et al. regularise them. */
+    NERF__ADAM_DECAY = 1u,
+    /*
+     * Leave parameters whose gradient is exactly zero as they are, moments
+     * included: a hash table, most of whose entries no sample of a step
+     * touches.  Mueller et al.'s optimiser does the same; dense Adam
+     * would keep moving untouched entries on their stale momentum, and
+     * would cost a full pass over tens of millions of entries per step.
+     */
+    NERF__ADAM_SPARSE = 2u
+};
 
 /*
  * One Adam update of n parameters at step t (1-based, the step being
@@ -22,9 +38,11 @@ double nerf__adam_rate(const nerf__adam *hp, uint64_t step);
  *   m = b1 m + (1 - b1) g,  v = b2 v + (1 - b2) g^2,
  *   p -= lr * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps).
  * This is Algorithm 1 of Kingma and Ba, also PyTorch's form; eps is added
- * to the bias-corrected root.
+ * to the bias-corrected root.  flags: NERF__ADAM_*.  The gradients are
+ * zeroed as they are consumed, which saves the next step a pass over them.
  */
 void nerf__adam_update(const nerf__adam *hp, uint64_t t, double lr, size_t n,
-                       float *params, const float *grads, float *m, float *v);
+                       float *params, float *grads, float *m, float *v,
+                       unsigned flags);
 
 #endif

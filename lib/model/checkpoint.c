@@ -41,9 +41,13 @@
 /* Optional: a reader that does not know it loads the model with a fresh
  * grid, which training refills within a few updates. */
 #define TAG_OCCUPANCY 7u
+/* Optional: hyperparameters added after 0.2's first release (weight
+ * decay).  A reader that does not know it trains on without them. */
+#define TAG_TRAINING2 8u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 7
+#define N_SECTIONS 8
 #define OCCUPANCY_INDEX 6
+#define TRAINING2_INDEX 7
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
@@ -52,6 +56,7 @@
 #define OPTIONS2_SIZE 48u /* the 12 u32 fields appended in 0.2 */
 #define N_OPTION2_U32 12
 #define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
+#define TRAINING2_SIZE 8u /* f64 weight decay */
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
@@ -160,6 +165,13 @@ static unsigned char *put_training(unsigned char *p, const nerf_model *m)
     return p + TRAINING_SIZE;
 }
 
+static unsigned char *put_training2(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_TRAINING2, TRAINING2_SIZE);
+    nerf__store_lef64(p, m->adam.weight_decay);
+    return p + TRAINING2_SIZE;
+}
+
 static unsigned char *put_floats(unsigned char *p, uint32_t tag,
                                  const float *x, size_t n)
 {
@@ -194,7 +206,8 @@ static unsigned char *put_occupancy(unsigned char *p, const nerf_model *m)
 static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
-           TRAINING_SIZE + 3 * 4 * m->n_params + occupancy_size(m);
+           TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
+           TRAINING2_SIZE + occupancy_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -205,6 +218,7 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
     p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
     p = put_options2(p, &m->opts);
+    p = put_training2(p, m);
     if (m->grid) {
         put_occupancy(p, m);
     }
@@ -425,14 +439,16 @@ typedef struct sections {
 
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
-    "Adam second moments", "options (0.2)", "occupancy grid"};
+    "Adam second moments", "options (0.2)", "occupancy grid",
+    "training state (0.2)"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
 {
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS
-                                      : tag == TAG_OCCUPANCY;
+                                      : tag == TAG_OCCUPANCY ||
+                                            tag == TAG_TRAINING2;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -510,10 +526,14 @@ static int check_shapes(const char *path, const sections *s,
                            "section has the wrong size)", path,
                            section_names[s->len[0] != OPTIONS_SIZE ? 0 : 1]);
     }
-    if (s->body[5] != NULL && s->len[5] != OPTIONS2_SIZE) {
-        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
-                           "section has the wrong size)", path,
-                           section_names[5]);
+    const int sized[2] = {5, TRAINING2_INDEX};
+    const uint64_t sizes[2] = {OPTIONS2_SIZE, TRAINING2_SIZE};
+    for (int i = 0; i < 2; i++) {
+        if (s->body[sized[i]] != NULL && s->len[sized[i]] != sizes[i]) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
+                               "section has the wrong size)", path,
+                               section_names[sized[i]]);
+        }
     }
     get_options(s->body[0], o);
     if (s->body[5] != NULL) {
@@ -582,13 +602,10 @@ static int set_occupancy(const char *path, nerf_model *m,
 }
 
 /* Hyperparameters go through the public setter, which checks their range. */
-static int set_training(const char *path, nerf_model *m, const unsigned char *p)
+static int set_params(const char *path, nerf_model *m, const int *keys, int n,
+                      const unsigned char *p)
 {
-    static const int keys[6] = {
-        NERF_PARAM_LEARNING_RATE, NERF_PARAM_LEARNING_RATE_FINAL,
-        NERF_PARAM_DECAY_STEPS, NERF_PARAM_ADAM_BETA1, NERF_PARAM_ADAM_BETA2,
-        NERF_PARAM_ADAM_EPS};
-    for (int i = 0; i < 6; i++) {
+    for (int i = 0; i < n; i++) {
         if (nerf_model_set_param(m, keys[i], nerf__load_lef64(p + 8 * i)) !=
             NERF_OK) {
             char why[512];
@@ -597,8 +614,26 @@ static int set_training(const char *path, nerf_model *m, const unsigned char *p)
                                "hyperparameter (%s)", path, why);
         }
     }
-    m->step = nerf__load_le64(p + 48);
     return NERF_OK;
+}
+
+/* training2 may be NULL: a file from before weight decay trained without
+ * it, so resuming it goes on without. */
+static int set_training(const char *path, nerf_model *m, const unsigned char *p,
+                        const unsigned char *training2)
+{
+    static const int keys[6] = {
+        NERF_PARAM_LEARNING_RATE, NERF_PARAM_LEARNING_RATE_FINAL,
+        NERF_PARAM_DECAY_STEPS, NERF_PARAM_ADAM_BETA1, NERF_PARAM_ADAM_BETA2,
+        NERF_PARAM_ADAM_EPS};
+    static const int keys2[1] = {NERF_PARAM_WEIGHT_DECAY};
+    int rc = set_params(path, m, keys, 6, p);
+    m->adam.weight_decay = 0.0;
+    if (rc == NERF_OK && training2 != NULL) {
+        rc = set_params(path, m, keys2, 1, training2);
+    }
+    m->step = nerf__load_le64(p + 48);
+    return rc;
 }
 
 static void get_floats(const unsigned char *p, float *x, size_t n)
@@ -625,7 +660,7 @@ static int build_model(const nerf__env *env, const char *path,
         if (rc != NERF_OK) {
             return nerf__error_prefix(rc, path);
         }
-        rc = set_training(path, m, s.body[1]);
+        rc = set_training(path, m, s.body[1], s.body[TRAINING2_INDEX]);
     }
     if (rc != NERF_OK) {
         nerf_model_destroy(m);

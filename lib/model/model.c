@@ -259,9 +259,9 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
     if (opts->encoding == NERF_ENCODING_HASHGRID) {
         /* Mueller et al.'s Adam: beta2 0.99 and a tiny eps, which the
          * rarely touched hash entries need to move at all. */
-        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15};
+        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15, 1e-6};
     } else {
-        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7};
+        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0};
     }
     float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
     for (int i = 0; i < 4; i++) {
@@ -449,6 +449,7 @@ int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
 void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
                           const float *d_rgb, const float *d_sigma)
 {
+    m->grads_dirty = true;
     nerf__network_backward(&m->nets[network], m->params, m->grads, ws, d_rgb,
                            d_sigma);
 }
@@ -456,12 +457,37 @@ void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
 void nerf__model_zero_grad(nerf_model *m)
 {
     memset(m->grads, 0, m->n_params * sizeof(float));
+    m->grads_dirty = false;
+}
+
+void nerf__model_clear_grad(nerf_model *m)
+{
+    if (m->grads_dirty) {
+        nerf__model_zero_grad(m);
+    }
+}
+
+static void adam_range(nerf_model *m, double lr, size_t begin, size_t end,
+                       unsigned flags)
+{
+    nerf__adam_update(&m->adam, m->step, lr, end - begin, m->params + begin,
+                      m->grads + begin, m->adam_m + begin, m->adam_v + begin,
+                      flags);
 }
 
 void nerf__model_adam_step(nerf_model *m)
 {
     double lr = nerf__adam_rate(&m->adam, m->step);
     m->step++;
-    nerf__adam_update(&m->adam, m->step, lr, m->n_params, m->params, m->grads,
-                      m->adam_m, m->adam_v);
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        const nerf__network *net = &m->nets[i];
+        size_t layers = net->offset;
+        if (nerf__network_has_table(net)) {
+            /* The table comes first in a network's slice. */
+            layers = net->table + net->hash.count;
+            adam_range(m, lr, net->table, layers, NERF__ADAM_SPARSE);
+        }
+        adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
+    }
+    m->grads_dirty = false;
 }

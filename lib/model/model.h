@@ -28,6 +28,9 @@ struct nerf_model {
     float *adam_m;
     float *adam_v;
     uint64_t step;           /* optimiser steps taken */
+    /* Whether grads may hold anything but zeros: the Adam step zeroes
+     * them as it reads them, so that training needs no separate pass. */
+    bool grads_dirty;
     nerf__adam adam;
     /* Hash-grid models: the occupancy grid over [-bound, bound]^3 that a
      * marching sampler skips empty space with (NULL otherwise).  Its EMA
@@ -89,6 +92,8 @@ void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
                           const float *d_rgb, const float *d_sigma);
 
 void nerf__model_zero_grad(nerf_model *m);
+/* Zero the gradients unless they are known to be zero already. */
+void nerf__model_clear_grad(nerf_model *m);
 
 /* Take one Adam step with the scheduled learning rate; step++. */
 void nerf__model_adam_step(nerf_model *m);

@@ -16,6 +16,7 @@ static const param_info params[] = {
     {NERF_PARAM_ADAM_BETA1, 0.0, 0.9999999, offsetof(nerf__adam, beta1)},
     {NERF_PARAM_ADAM_BETA2, 0.0, 0.9999999, offsetof(nerf__adam, beta2)},
     {NERF_PARAM_ADAM_EPS, 1e-30, 1.0, offsetof(nerf__adam, eps)},
+    {NERF_PARAM_WEIGHT_DECAY, 0.0, 1.0, offsetof(nerf__adam, weight_decay)},
 };
 
 static const param_info *find(int key)

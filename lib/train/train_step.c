@@ -109,7 +109,7 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
                            "step %llu (try a lower learning rate)", loss,
                            (unsigned long long)k);
     }
-    nerf__model_zero_grad(m);
+    nerf__model_clear_grad(m);
     const float *d_rgb[NERF__PASSES] = {t->d_rgb[0], passes > 1 ? t->d_rgb[1] : NULL};
     const float *none[NERF__PASSES] = {NULL, NULL};
     rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none, none);

@@ -198,7 +198,7 @@ static inline void check_same_model(const nerf_model *a,
     CHECK_OK(nerf_model_get_options(a, &oa));
     CHECK_OK(nerf_model_get_options(b, &ob));
     CHECK(memcmp(&oa, &ob, sizeof oa) == 0);
-    for (int p = NERF_PARAM_LEARNING_RATE; p <= NERF_PARAM_ADAM_EPS; p++) {
+    for (int p = NERF_PARAM_LEARNING_RATE; p <= NERF_PARAM_WEIGHT_DECAY; p++) {
         double va = 0, vb = 1;
         CHECK_OK(nerf_model_get_param(a, p, &va));
         CHECK_OK(nerf_model_get_param(b, p, &vb));

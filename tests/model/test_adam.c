@@ -1,4 +1,7 @@
 /* Adam and the learning-rate schedule against hand-computed numbers. */
+#include <stdlib.h>
+#include <string.h>
+
 #include "../harness.h"
 #include "adam.h"
 #include "model.h"
@@ -11,19 +14,122 @@ TEST(three_steps_by_hand)
     static const double want_m[3] = {0.05, -0.055, -0.0245};
     static const double want_v[3] = {0.00025, 0.00124975, 0.00131100025};
     static const float g[3] = {0.5f, -1.0f, 0.25f};
-    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.999, 1e-7};
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.999, 1e-7, 0.0};
     float p = 1.0f, m = 0.0f, v = 0.0f;
     for (int t = 0; t < 3; t++) {
-        nerf__adam_update(&hp, (uint64_t)t + 1, 0.1, 1, &p, &g[t], &m, &v);
+        float grad = g[t];
+        nerf__adam_update(&hp, (uint64_t)t + 1, 0.1, 1, &p, &grad, &m, &v, 0);
+        CHECK(grad == 0.0f); /* consumed */
         CHECK_NEAR(p, want_p[t], 3e-7);
         CHECK_NEAR(m, want_m[t], 1e-8);
         CHECK_NEAR(v, want_v[t], 1e-10);
     }
 }
 
+/* Weight decay adds wd * p to the gradient before the moments see it. */
+TEST(weight_decay)
+{
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.25};
+    float p[2] = {2.0f, 2.0f}, g[2] = {0.5f, 0.5f}, m[2] = {0}, v[2] = {0};
+    nerf__adam_update(&hp, 1, 0.1, 1, &p[0], &g[0], &m[0], &v[0],
+                      NERF__ADAM_DECAY);
+    nerf__adam_update(&hp, 1, 0.1, 1, &p[1], &g[1], &m[1], &v[1], 0);
+    /* Effective gradient 0.5 + 0.25 * 2 = 1 against 0.5 without. */
+    CHECK_NEAR(m[0], 0.1, 1e-7);
+    CHECK_NEAR(m[1], 0.05, 1e-7);
+    CHECK_NEAR(v[0], 0.01, 1e-8);
+    /* The first step moves by lr either way (m / sqrt(v) = sign). */
+    CHECK_NEAR(p[0], 1.9, 1e-6);
+    CHECK_NEAR(p[1], 1.9, 1e-6);
+}
+
+/* A sparse range leaves entries with a zero gradient exactly as they
+ * were, moments included, and updates the others as a dense one would. */
+TEST(sparse_skips_untouched)
+{
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.5};
+    enum { N = 64 };
+    float ps[N], gs[N], ms[N], vs[N], pd[N], gd[N], md[N], vd[N];
+    for (int i = 0; i < N; i++) {
+        ps[i] = pd[i] = 0.01f * (float)i - 0.3f;
+        ms[i] = md[i] = 0.002f * (float)(i % 7);
+        vs[i] = vd[i] = 0.001f * (float)(i % 5) + 1e-4f;
+        gs[i] = gd[i] = (i % 3 == 0) ? 0.0f : 0.05f * (float)(i - 30);
+    }
+    for (uint64_t t = 5; t < 8; t++) {
+        nerf__adam_update(&hp, t, 0.1, N, ps, gs, ms, vs, NERF__ADAM_SPARSE);
+        nerf__adam_update(&hp, t, 0.1, N, pd, gd, md, vd, 0);
+        for (int i = 0; i < N; i++) {
+            float g = (i % 3 == 0) ? 0.0f : 0.05f * (float)(i - 30);
+            CHECK(gs[i] == 0.0f && gd[i] == 0.0f);
+            gs[i] = gd[i] = g;
+        }
+    }
+    for (int i = 0; i < N; i++) {
+        if (i % 3 == 0) {
+            /* Untouched: as set up (no decay in a sparse range either). */
+            CHECK(ps[i] == 0.01f * (float)i - 0.3f);
+            CHECK(ms[i] == 0.002f * (float)(i % 7));
+            CHECK(vs[i] == 0.001f * (float)(i % 5) + 1e-4f);
+            /* Dense Adam would have moved it on its momentum. */
+            if (ms[i] != 0.0f) {
+                CHECK(pd[i] != ps[i]);
+            }
+        } else {
+            CHECK(ps[i] == pd[i] && ms[i] == md[i] && vs[i] == vd[i]);
+        }
+    }
+}
+
+/* A hash-grid model: the table is updated sparsely, the layers densely
+ * with weight decay. */
+TEST(model_regions)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, NERF_PRESET_FAST);
+    o.hash_levels = 2;
+    o.hash_log2_size = 10;
+    o.hash_max_resolution = 32;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m == NULL) {
+        return;
+    }
+    double wd = 0.0;
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_WEIGHT_DECAY, &wd));
+    CHECK_NEAR(wd, 1e-6, 1e-18);
+    const nerf__network *net = &m->nets[0];
+    const size_t table = net->table, layers = net->table + net->hash.count;
+    CHECK(net->hash.count > 2 && layers < m->n_params);
+    float *before = malloc(m->n_params * sizeof(float));
+    if (before == NULL) {
+        nerf_model_destroy(m);
+        return;
+    }
+    memcpy(before, m->params, m->n_params * sizeof(float));
+    nerf__model_zero_grad(m);
+    m->grads[table + 1] = 0.5f;     /* one touched table entry */
+    nerf__model_adam_step(m);
+    CHECK(m->params[table] == before[table]);
+    CHECK(m->params[table + 1] != before[table + 1]);
+    CHECK(m->params[table + 2] == before[table + 2]);
+    /* A layer parameter with no gradient still moves: weight decay. */
+    size_t w = layers + 3;
+    CHECK(before[w] != 0.0f && m->params[w] != before[w]);
+    for (size_t i = 0; i < m->n_params; i++) {
+        if (m->grads[i] != 0.0f) {
+            CHECK(m->grads[i] == 0.0f);
+            break;
+        }
+    }
+    free(before);
+    nerf_model_destroy(m);
+}
+
 TEST(schedule)
 {
-    nerf__adam hp = {5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7};
+    nerf__adam hp = {5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0};
     CHECK_NEAR(nerf__adam_rate(&hp, 0), 5e-4, 1e-15);
     CHECK_NEAR(nerf__adam_rate(&hp, 250000), 5e-5, 1e-15);
     CHECK_NEAR(nerf__adam_rate(&hp, 125000), sqrt(5e-4 * 5e-5), 1e-15);
@@ -57,6 +163,9 @@ TEST(model_step_uses_schedule)
 int main(void)
 {
     RUN(three_steps_by_hand);
+    RUN(weight_decay);
+    RUN(sparse_skips_untouched);
+    RUN(model_regions);
     RUN(schedule);
     RUN(model_step_uses_schedule);
     HARNESS_EXIT();

@@ -95,13 +95,17 @@ TEST(payload_layout_is_as_documented)
     unsigned char *file = good_file(&size);
     payload p;
     split_payload(file, size, &p);
-    CHECK_EQ_INT(p.n, 6);
-    const uint32_t tags[6] = {0x80000001u, 0x80000002u, 0x80000003u,
-                              0x80000004u, 0x80000005u, 0x80000006u};
-    for (int i = 0; i < 6 && i < p.n; i++) {
+    CHECK_EQ_INT(p.n, 7);
+    const uint32_t tags[7] = {0x80000001u, 0x80000002u, 0x80000003u,
+                              0x80000004u, 0x80000005u, 0x80000006u,
+                              0x00000008u};
+    for (int i = 0; i < 7 && i < p.n; i++) {
         CHECK_EQ_INT(p.s[i].tag, tags[i]);
     }
-    if (p.n == 6) {
+    if (p.n == 7) {
+        /* training state (0.2): the weight decay, 0 for this model. */
+        CHECK_EQ_INT(p.s[6].len, 8);
+        CHECK_EQ_INT(le64(p.s[6].data), 0);
         CHECK_EQ_INT(p.s[5].len, 48);
         CHECK_EQ_INT(le32(p.s[5].data + 1 * 4), 4);   /* sh_degree */
         CHECK_EQ_INT(le32(p.s[5].data + 9 * 4), 1);   /* view_depth */
@@ -203,11 +207,25 @@ static void edit_drop_last(payload *p)
     p->s[4] = p->s[--p->n];
 }
 
-/* A version 1 file: no options2 section, which reads as the reference
- * values of its fields. */
+/* A version 1 file: no options2 or training2 section, which read as the
+ * reference values of their fields. */
 static void edit_drop_options2(payload *p)
 {
-    free(p->s[--p->n].data);
+    for (int k = 0; k < 2; k++) {
+        free(p->s[5].data);
+        memmove(&p->s[5], &p->s[6], (size_t)(p->n - 6) * sizeof p->s[0]);
+        p->n--;
+    }
+}
+
+static void edit_short_training2(payload *p)
+{
+    p->s[6].len -= 1;
+}
+
+static void edit_weight_decay_negative(payload *p)
+{
+    put64(p->s[6].data, 0xbff0000000000000u); /* -1.0 */
 }
 
 static void edit_short_options2(payload *p)
@@ -241,6 +259,9 @@ TEST(forged_payloads)
     forge("short adam_m", edit_short_array, NERF_EFORMAT);
     forge("short options2", edit_short_options2, NERF_EFORMAT);
     forge("version 1, no options2", edit_drop_options2, NERF_OK);
+    forge("short training2", edit_short_training2, NERF_EFORMAT);
+    forge("negative weight decay", edit_weight_decay_negative, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "106") != NULL);
     forge("unknown optional section", edit_add_optional, NERF_OK);
     forge("unknown optional section first", edit_add_optional_first, NERF_OK);
     forge("sections reordered", edit_shuffle, NERF_OK);
@@ -342,22 +363,22 @@ static void edit_drop_grid(payload *p)
 
 static void edit_grid_resolution(payload *p)
 {
-    put32(p->s[6].data, 64);
+    put32(p->s[7].data, 64);
 }
 
 static void edit_grid_short(payload *p)
 {
-    p->s[6].len -= 4;
+    p->s[7].len -= 4;
 }
 
 static void edit_grid_negative(payload *p)
 {
-    put32(p->s[6].data + 16 + 4 * 1000, 0xbf800000u); /* -1.0f */
+    put32(p->s[7].data + 16 + 4 * 1000, 0xbf800000u); /* -1.0f */
 }
 
 static void edit_grid_nan(payload *p)
 {
-    put32(p->s[6].data + 16 + 4 * 5, 0x7fc00000u);
+    put32(p->s[7].data + 16 + 4 * 5, 0x7fc00000u);
 }
 
 TEST(occupancy_grid_section)
@@ -372,16 +393,21 @@ TEST(occupancy_grid_section)
     split_payload(file, size, &p);
     /* Optional tag 7, last: u32 resolution, u32 0, u64 updates, then the
      * EMA of every cell as f32, x fastest. */
-    CHECK_EQ_INT(p.n, 7);
-    if (p.n == 7 && m) {
+    CHECK_EQ_INT(p.n, 8);
+    if (p.n == 8 && m) {
         const nerf__occupancy *g = m->grid;
-        CHECK_EQ_INT(p.s[6].tag, 0x00000007u);
-        CHECK_EQ_INT(p.s[6].len, 16 + 4 * 128 * 128 * 128);
-        CHECK_EQ_INT(le32(p.s[6].data), 128);
-        CHECK_EQ_INT(le32(p.s[6].data + 4), 0);
-        CHECK_EQ_INT(le64(p.s[6].data + 8), 2);
+        /* Before it, training2 with the hash-grid default decay. */
+        double wd;
+        uint64_t wd_bits = le64(p.s[6].data);
+        memcpy(&wd, &wd_bits, sizeof wd);
+        CHECK(wd == 1e-6);
+        CHECK_EQ_INT(p.s[7].tag, 0x00000007u);
+        CHECK_EQ_INT(p.s[7].len, 16 + 4 * 128 * 128 * 128);
+        CHECK_EQ_INT(le32(p.s[7].data), 128);
+        CHECK_EQ_INT(le32(p.s[7].data + 4), 0);
+        CHECK_EQ_INT(le64(p.s[7].data + 8), 2);
         const size_t cell = 70 + 128 * (64 + 128 * 60);
-        uint32_t bits = le32(p.s[6].data + 16 + 4 * cell);
+        uint32_t bits = le32(p.s[7].data + 16 + 4 * cell);
         float v;
         memcpy(&v, &bits, sizeof v);
         CHECK(v == g->ema[cell] && v > 30.0f);
@@ -400,7 +426,7 @@ TEST(occupancy_grid_section)
     CHECK_OK(nerf_model_save(tiny, path));
     file = slurp(path, &size);
     split_payload(file, size, &p);
-    CHECK_EQ_INT(p.n, 6);
+    CHECK_EQ_INT(p.n, 7);
     /* ... and refuses one forged into its file. */
     if (m) {
         size_t gsize = 0;
@@ -410,8 +436,8 @@ TEST(occupancy_grid_section)
         unsigned char *gfile = slurp(gpath, &gsize);
         payload gp;
         split_payload(gfile, gsize, &gp);
-        if (gp.n == 7) {
-            add_section(&p, gp.s[6].tag, gp.s[6].data, gp.s[6].len);
+        if (gp.n == 8) {
+            add_section(&p, gp.s[7].tag, gp.s[7].data, gp.s[7].len);
             write_payload(path, &p, NULL, 0);
             expect_load_fails(path, NERF_EFORMAT, "grid of a tiny model");
         }
@@ -430,6 +456,25 @@ TEST(occupancy_grid_section)
     forge_grid("negative EMA", edit_grid_negative, NERF_EFORMAT, false);
     CHECK(strstr(nerf_last_error(), "occupancy grid cell 1000") != NULL);
     forge_grid("NaN EMA", edit_grid_nan, NERF_EFORMAT, false);
+    /* A file from before weight decay resumes without it. */
+    nerf_model *old = NULL;
+    path_in(path, sizeof path, "grid.ckpt");
+    m = grid_model();
+    CHECK_OK(nerf_model_save(m, path));
+    file = slurp(path, &size);
+    split_payload(file, size, &p);
+    free(p.s[6].data);
+    p.s[6] = p.s[7];
+    p.n--;
+    write_payload(path, &p, NULL, 0);
+    CHECK_OK(nerf_model_load(&old, path, NULL));
+    double wd = 1.0;
+    CHECK_OK(nerf_model_get_param(old, NERF_PARAM_WEIGHT_DECAY, &wd));
+    CHECK(wd == 0.0);
+    nerf_model_destroy(old);
+    nerf_model_destroy(m);
+    free_payload(&p);
+    free(file);
     forge_grid("sections as saved", NULL, NERF_OK, false);
 }
 

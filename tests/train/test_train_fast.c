@@ -14,6 +14,7 @@
 #include "occupancy.h"
 #include "renderer.h"
 #include "train_fixture.h"
+#include "trainer.h"
 
 /*
  * A smaller hash grid than the preset's (8 levels of 2^15 entries, up to
@@ -301,6 +302,49 @@ TEST(no_sample_in_an_empty_cell)
     nerf__batch_release(&b);
 }
 
+/*
+ * With batch_samples a step takes the fewest first rays of its batch whose
+ * marched samples reach the budget.  Run last: it trains the model on.
+ */
+TEST(batch_samples_takes_rays_up_to_a_budget)
+{
+    if (trained == NULL) {
+        FAILF("no trained model");
+        return;
+    }
+    enum { RAYS = 1024, BUDGET = 4000 };
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = RAYS;
+    o.batch_samples = BUDGET;
+    o.precrop_steps = 0;
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, trained, fx.train, sampler, &o));
+    for (int k = 0; t && k < 3; k++) {
+        nerf_train_stats st;
+        memset(&st, 0, sizeof st);
+        st.struct_size = sizeof st;
+        CHECK_OK(nerf_trainer_step(t, &st));
+        const nerf__march_samples *ms = &t->batch.march;
+        const size_t n = (size_t)st.rays;
+        CHECK(n >= 1 && n < RAYS && n == ms->n_rays);
+        CHECK(ms->total == ms->offsets[n]);
+        CHECK(ms->total >= BUDGET);
+        CHECK(n == 1 || ms->offsets[n - 1] < BUDGET);
+        CHECK(fabs(st.samples_per_ray - (double)ms->total / (double)n) <
+              1e-9 * st.samples_per_ray);
+        printf("  step %llu: %zu rays, %zu samples for a budget of %d\n",
+               (unsigned long long)st.step, n, ms->total, BUDGET);
+    }
+    nerf_trainer_destroy(t);
+    /* Out of range. */
+    o.batch_samples = (1u << 26) + 1;
+    t = NULL;
+    CHECK(nerf_trainer_create(&t, trained, fx.train, sampler, &o) ==
+          NERF_EINVAL);
+    CHECK(t == NULL);
+}
+
 int main(void)
 {
     const int width = env_int("NERF_TEST_WIDTH", WIDTH);
@@ -311,6 +355,7 @@ int main(void)
     RUN(fast_preset_learns_the_builtin_scene);
     RUN(skipping_is_rendering_empty_cells_as_empty);
     RUN(no_sample_in_an_empty_cell);
+    RUN(batch_samples_takes_rays_up_to_a_budget);
     nerf_model_destroy(trained);
     nerf_sampler_destroy(sampler);
     fixture_close(&fx);

@@ -247,6 +247,53 @@ TEST(bad_arguments)
     nerf_sampler_destroy(s);
 }
 
+/*
+ * Without marching every ray has the same samples, so a budget is a number
+ * of rays: the fewest whose samples reach it.  They are the batch's first
+ * rays, drawn as without a budget, so the loss is that of those rays alone:
+ * a batch_rays of exactly that many gives the same step.
+ */
+TEST(batch_samples_without_marching)
+{
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *a = tiny_model(1), *b = tiny_model(1);
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_sampler_options_preset(&so, NERF_PRESET_TINY);
+    const uint32_t per_ray = so.n_coarse + so.n_coarse + so.n_fine;
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 64;
+    o.precrop_steps = 0;
+    o.batch_samples = 20 * per_ray + 1; /* 21 rays */
+    nerf_trainer *ta = NULL, *tb = NULL;
+    CHECK_OK(nerf_trainer_create(&ta, a, fx.train, s, &o));
+    o.batch_samples = 0;
+    o.batch_rays = 21;
+    CHECK_OK(nerf_trainer_create(&tb, b, fx.train, s, &o));
+    for (int k = 0; ta && tb && k < 2; k++) {
+        nerf_train_stats sa, sb;
+        memset(&sa, 0, sizeof sa);
+        memset(&sb, 0, sizeof sb);
+        sa.struct_size = sb.struct_size = sizeof sa;
+        CHECK_OK(nerf_trainer_step(ta, &sa));
+        CHECK_OK(nerf_trainer_step(tb, &sb));
+        CHECK_EQ_INT(sa.rays, 21);
+        CHECK_EQ_INT(sb.rays, 21);
+        CHECK(sa.samples_per_ray == (double)per_ray);
+        /* The first step draws the same rays; later ones do not (ray
+         * numbers run on from batch_rays per step). */
+        if (k == 0) {
+            CHECK(sa.loss == sb.loss);
+        }
+    }
+    nerf_trainer_destroy(ta);
+    nerf_trainer_destroy(tb);
+    nerf_model_destroy(a);
+    nerf_model_destroy(b);
+    nerf_sampler_destroy(s);
+}
+
 TEST(allocation_failures)
 {
     nerf_sampler *s = tiny_sampler(1);
@@ -284,6 +331,7 @@ int main(void)
     RUN(marching_needs_a_grid);
     RUN(run_progress_cancel_and_checkpoints);
     RUN(bad_arguments);
+    RUN(batch_samples_without_marching);
     RUN(allocation_failures);
     fixture_close(&fx);
     HARNESS_EXIT();

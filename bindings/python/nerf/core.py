@@ -22,6 +22,7 @@ PARAM_DECAY_STEPS = 102
 PARAM_ADAM_BETA1 = 103
 PARAM_ADAM_BETA2 = 104
 PARAM_ADAM_EPS = 105
+PARAM_WEIGHT_DECAY = 106
 
 #: Parameter names accepted wherever a parameter key is expected.
 PARAMS = {
@@ -31,6 +32,7 @@ PARAMS = {
     "adam_beta1": PARAM_ADAM_BETA1,
     "adam_beta2": PARAM_ADAM_BETA2,
     "adam_eps": PARAM_ADAM_EPS,
+    "weight_decay": PARAM_WEIGHT_DECAY,
 }
 
 

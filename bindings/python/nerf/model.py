@@ -176,7 +176,7 @@ class Model(_handle.Handle):
     def set_param(self, param: Union[str, int], value: float) -> None:
         """Set a training hyperparameter by name ("learning_rate",
         "learning_rate_final", "decay_steps", "adam_beta1", "adam_beta2",
-        "adam_eps") or number (``nerf.PARAM_*``)."""
+        "adam_eps", "weight_decay") or number (``nerf.PARAM_*``)."""
         with self._using() as ptr:
             lib.nerf_model_set_param(ptr, param_key(param), float(value))
 

@@ -88,6 +88,16 @@ class Params(TestCase):
                 m.set_param("adam_beta1", hi + 1)
             with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
                 m.get_param(7)
+            # Weight decay: none for the paper's network, Mueller et al.'s
+            # 1e-6 for a hash-grid model; 0..1.
+            self.assertEqual(m.get_param("weight_decay"), 0.0)
+            m.set_param(nerf.PARAM_WEIGHT_DECAY, 1e-5)
+            self.assertAlmostEqual(m.get_param("weight_decay"), 1e-5)
+            self.assertEqual(nerf.param_bounds("weight_decay"), (0.0, 1.0))
+            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+                m.set_param("weight_decay", -1e-6)
+        with nerf.Model(preset="fast", hash_log2_size=10) as m:
+            self.assertAlmostEqual(m.get_param("weight_decay"), 1e-6)
 
 
 class Query(TestCase):
