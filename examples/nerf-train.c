@@ -15,7 +15,7 @@ static const char usage[] =
     "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
     "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
     "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
-    "                  [--random-background 0|1]\n"
+    "                  [--batch-samples N] [--random-background 0|1]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
     "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
@@ -31,6 +31,9 @@ static const char usage[] =
     "  --checkpoint-every N  save MODEL every N steps (default 500)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
     "                batch and seed give the same result as an unbroken run)\n"
+    "  --batch-samples N  a step takes rays until their samples reach N\n"
+    "                (--batch is then the most rays a step takes; default 0:\n"
+    "                always --batch rays)\n"
     "  --random-background 0|1  1: train each ray of images with alpha\n"
     "                (Blender scenes) against a random background colour, so\n"
     "                that empty space cannot pass for the background (default\n"
@@ -68,7 +71,7 @@ static int on_progress(const nerf_progress *p, void *user)
 typedef struct args {
     const char *data, *out;
     int preset;
-    uint64_t steps, downscale, batch, seed, every;
+    uint64_t steps, downscale, batch, batch_samples, seed, every;
     double lr, seconds;
     int resume;
     int random_bg; /* -1: as the preset's model */
@@ -121,6 +124,8 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, UINT32_MAX, &a->every);
         } else if (strcmp(k, "--lr") == 0) {
             bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
+        } else if (strcmp(k, "--batch-samples") == 0) {
+            bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
         } else if (strcmp(k, "--random-background") == 0) {
             uint64_t on = 0;
             bad = cli_uint(v, 0, 1, &on);
@@ -209,6 +214,7 @@ int main(int argc, char **argv)
         nerf_trainer_options to;
         NERF_TRAINER_OPTIONS_INIT(&to);
         to.batch_rays = (uint32_t)a.batch;
+        to.batch_samples = (uint32_t)a.batch_samples;
         to.checkpoint_every = (uint32_t)a.every;
         nerf_model_options mo;
         NERF_MODEL_OPTIONS_INIT(&mo);
