@@ -3,7 +3,8 @@
 
 #include <stdint.h>
 
-/* Processors online, at least 1: the default worker count. */
+/* Processors online when first asked, at least 1: the default worker
+ * count. */
 uint32_t nerf__cpu_count(void);
 
 #endif
