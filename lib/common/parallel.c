@@ -39,6 +39,13 @@ static struct {
 
 static atomic_flag busy = ATOMIC_FLAG_INIT;
 
+static _Thread_local bool inline_only;
+
+void nerf__parallel_set_inline(int on)
+{
+    inline_only = on != 0;
+}
+
 static void part_range(size_t n, unsigned parts, unsigned k, size_t *begin,
                        size_t *end)
 {
@@ -125,7 +132,7 @@ void nerf__parallel_for(size_t n, size_t cost, nerf__range_fn fn, void *ctx)
     if (parts > n) {
         parts = n;
     }
-    if (parts < 2 || atomic_flag_test_and_set(&busy)) {
+    if (parts < 2 || inline_only || atomic_flag_test_and_set(&busy)) {
         fn(ctx, 0, n);
         return;
     }

@@ -42,4 +42,12 @@ void nerf__parallel_blocks(size_t n_blocks, size_t cost_per_block,
 /* Threads the pool may use, the caller included (at least 1). */
 unsigned nerf__parallel_threads(void);
 
+/*
+ * For threads that are themselves one of a set covering every core (the
+ * renderer's workers): with `on`, this thread's calls run their ranges
+ * itself instead of handing some to the pool, whose workers would only
+ * compete with the set's other threads for the cores.
+ */
+void nerf__parallel_set_inline(int on);
+
 #endif

@@ -11,12 +11,14 @@
 #include <string.h>
 #include <time.h>
 
+#include "parallel.h"
 #include "renderer.h"
 
 #define MSG_MAX 512
 
 typedef struct pool {
     nerf_renderer *r;
+    bool cover_cores; /* the workers occupy every core between them */
     nerf__chunk_fn fn;
     void *job;
     size_t n, n_chunks;
@@ -87,6 +89,7 @@ static void *worker_main(void *arg)
 {
     worker_arg *a = arg;
     pool *p = a->p;
+    nerf__parallel_set_inline(p->cover_cores);
     pthread_mutex_lock(&p->mu);
     for (;;) {
         if (p->stop || p->next >= p->n_chunks) {
@@ -152,6 +155,7 @@ static int run_threads(nerf_renderer *r, uint32_t threads, size_t n,
     p.job = job;
     p.n = n;
     p.n_chunks = (n + r->chunk - 1) / r->chunk;
+    p.cover_cores = threads >= nerf__parallel_threads();
     if (pthread_mutex_init(&p.mu, NULL) != 0) {
         return nerf__error(NERF_ERROR, "render: cannot create a mutex");
     }
