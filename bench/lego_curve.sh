@@ -11,9 +11,13 @@
 #
 #   NERF_CURVE_MARKS  minutes (default "1 2 5 10 20 30")
 #   NERF_CURVE_STEPS  --steps: the learning rate decays tenfold over them
-#                     (default 10000, about what 30 minutes reach here)
-#   NERF_CURVE_SKIP   nerf-eval --skip: every K-th test view (default 1,
-#                     all 200 views of lego)
+#                     (default 30000, about what 30 minutes reach here)
+#   NERF_CURVE_SKIP   nerf-eval --skip at the marks before the last: every
+#                     K-th test view (default 8: 25 views of lego, about two
+#                     minutes each)
+#   NERF_CURVE_FINAL_SKIP  the same at the last mark (default 1: all 200
+#                     views, the full protocol)
+#   NERF_CURVE_ARGS   more nerf-train arguments (default none)
 #   NERF_CURVE_BUILD  build folder (default build/release)
 #
 # Prints one line per mark: minutes, step, test PSNR, SSIM, eval seconds.
@@ -27,8 +31,11 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 data=${1:-../shared/data/lego}
 out=${2:-out/curve}
 marks=${NERF_CURVE_MARKS:-1 2 5 10 20 30}
-steps=${NERF_CURVE_STEPS:-10000}
-skip=${NERF_CURVE_SKIP:-1}
+steps=${NERF_CURVE_STEPS:-30000}
+skip=${NERF_CURVE_SKIP:-8}
+final_skip=${NERF_CURVE_FINAL_SKIP:-1}
+# shellcheck disable=SC2206 # extra arguments are meant to split
+extra=(${NERF_CURVE_ARGS:-})
 build=${NERF_CURVE_BUILD:-build/release}
 
 if [ ! -f "$data/transforms_train.json" ]; then
@@ -43,20 +50,26 @@ model=$out/fast.nerf
 rm -f "$model"
 
 done_s=0
-printf '%-8s %-7s %-9s %-7s %s\n' minutes step psnr ssim eval_s
+last=${marks##* }
+printf '%-8s %-7s %-9s %-7s %-6s %s\n' minutes step psnr ssim views eval_s
 for m in $marks; do
   todo=$((m * 60 - done_s))
   "$build/examples/nerf-train" --data "$data" --out "$model" --preset fast \
       --steps "$steps" --seconds "$todo" --checkpoint-every 1000000 \
-      --resume >"$out/train-$m.log" 2>&1
+      --resume ${extra[@]+"${extra[@]}"} >"$out/train-$m.log" 2>&1
   done_s=$((m * 60))
   cp "$model" "$out/fast-${m}min.nerf"
+  k=$skip
+  if [ "$m" = "$last" ]; then
+    k=$final_skip
+  fi
   "$build/examples/nerf-eval" --model "$model" --data "$data" \
-      --skip "$skip" --json >"$out/eval-$m.json" 2>"$out/eval-$m.log"
+      --skip "$k" --json >"$out/eval-$m.json" 2>"$out/eval-$m.log"
   step=$(sed -n 's/.*(step \([0-9]*\),.*/\1/p' "$out/train-$m.log" | tail -1)
   "${PYTHON:-/usr/bin/python3}" -c '
 import json, sys
 e = json.load(open(sys.argv[1]))
-print("%-8s %-7s %-9.2f %-7.4f %.0f" % (sys.argv[2], sys.argv[3], e["psnr"],
-      e["ssim"], e["seconds"]))' "$out/eval-$m.json" "$m" "${step:-?}"
+print("%-8s %-7s %-9.2f %-7.4f %-6d %.0f" % (sys.argv[2], sys.argv[3],
+      e["psnr"], e["ssim"], e["views"], e["seconds"]))' \
+      "$out/eval-$m.json" "$m" "${step:-?}"
 done

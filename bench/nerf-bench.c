@@ -59,7 +59,7 @@
 #define MIN_TRAIN_STEPS 2
 #define MAX_CALLS 512
 /* The fast preset's trainer refreshes every cell of the occupancy grid
- * every 16 steps up to step 256 and a quarter of the empty ones after:
+ * every 16 steps up to step 256 and a sixteenth of the empty ones after:
  * warming up past that, the grid has carved the empty space and the
  * timed steps are in the regime a long run spends its time in. */
 #define FAST_WARMUP_STEPS 320u
@@ -1059,7 +1059,7 @@ static int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
 
     /* The refresh rule of the timed steps' regime. */
     const size_t n_random =
-        step < NERF__GRID_WARMUP ? g->cells : g->cells / 4;
+        step < NERF__GRID_WARMUP ? g->cells : g->cells / NERF__GRID_RANDOM_DIV;
     grid_ctx gc = {m, &t->density_ws};
     for (int i = 0; i < 2 && rc == NERF_OK; i++) {
         double a = now();
@@ -1904,7 +1904,7 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "fast: training timed in whole cycles of %u steps (one "
                 "occupancy-grid refresh each) after the warm-up steps "
                 "(grid fully refreshed every %u steps before step %u, "
-                "occupied cells and a quarter of the others after).  "
+                "occupied cells and a sixteenth of the others after).  "
                 "Samples: network evaluations (stats.samples_per_ray in "
                 "training; rendering: counted by replaying the timed call "
                 "in the renderer's blocks of %u rays).  Rendering: "

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "multiversion.h"
 #include "rng.h"
 
 /*
@@ -165,7 +166,7 @@ typedef struct tile {
  * comparison so that the compiler can use the SIMD min and max, whose
  * handling of NaN (the second operand wins) sends NaN to 0.
  */
-static void load_positions(const nerf__hashgrid *hg, size_t m,
+static ALWAYS_INLINE void load_positions(const nerf__hashgrid *hg, size_t m,
                            const float *restrict in, size_t in_stride,
                            tile *restrict t)
 {
@@ -213,7 +214,7 @@ static inline void weights(tile *restrict t, size_t s, float fx, float fy,
 }
 
 /* Corner entries and weights at level l of the m positions in t->u. */
-static void corners(const nerf__hashgrid *hg, uint32_t l, size_t m,
+static ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l, size_t m,
                     tile *restrict t)
 {
     const float N = (float)hg->resolution[l];
@@ -313,7 +314,7 @@ static ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
     }
 }
 
-static void gather_any(const tile *t, size_t m, const float *table, uint32_t F,
+static ALWAYS_INLINE void gather_any(const tile *t, size_t m, const float *table, uint32_t F,
                        float *out, size_t out_stride)
 {
     switch (F) {
@@ -325,7 +326,7 @@ static void gather_any(const tile *t, size_t m, const float *table, uint32_t F,
     }
 }
 
-static void scatter_any(const tile *t, size_t m, float *grad, uint32_t F,
+static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad, uint32_t F,
                         const float *d, size_t d_stride)
 {
     switch (F) {
@@ -337,6 +338,7 @@ static void scatter_any(const tile *t, size_t m, float *grad, uint32_t F,
     }
 }
 
+NERF__MULTIVERSION
 void nerf__hashgrid_forward_range(const nerf__hashgrid *hg, const float *table,
                                   size_t begin, size_t end, const float *in,
                                   size_t in_stride, float *out,
@@ -365,6 +367,7 @@ void nerf__hashgrid_forward_range(const nerf__hashgrid *hg, const float *table,
  * fast as blocking by BLOCK at 2^18 samples), and the order of the adds
  * into each entry is fixed by the samples alone.
  */
+NERF__MULTIVERSION
 void nerf__hashgrid_backward_level(const nerf__hashgrid *hg, uint32_t level,
                                    size_t n, const float *in, size_t in_stride,
                                    const float *d_out, size_t d_stride,

@@ -1,5 +1,6 @@
 #include "fused.h"
 
+#include "multiversion.h"
 #include "parallel.h"
 
 /*
@@ -24,7 +25,8 @@ typedef struct fused_job {
     size_t n;
 } fused_job;
 
-static void bias_relu_rows(void *ctx, size_t begin, size_t end)
+NERF__MULTIVERSION static void bias_relu_rows(void *ctx, size_t begin,
+                                              size_t end)
 {
     const fused_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
@@ -43,7 +45,8 @@ void nerf__bias_relu(size_t n, size_t cols, float *y, size_t ld,
     nerf__parallel_for(n, 2 * cols, bias_relu_rows, &j);
 }
 
-static void bias_add_rows(void *ctx, size_t begin, size_t end)
+NERF__MULTIVERSION static void bias_add_rows(void *ctx, size_t begin,
+                                             size_t end)
 {
     const fused_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
@@ -68,7 +71,8 @@ static void column_span(const fused_job *j, size_t begin, size_t end,
     *c1 = end * LINE < j->cols ? end * LINE : j->cols;
 }
 
-static void relu_backward_cols(void *ctx, size_t begin, size_t end)
+NERF__MULTIVERSION static void relu_backward_cols(void *ctx, size_t begin,
+                                                  size_t end)
 {
     const fused_job *j = ctx;
     size_t c0, c1;
@@ -94,7 +98,8 @@ void nerf__relu_backward_bias(size_t n, size_t cols, const float *y,
                        relu_backward_cols, &j);
 }
 
-static void bias_backward_cols(void *ctx, size_t begin, size_t end)
+NERF__MULTIVERSION static void bias_backward_cols(void *ctx, size_t begin,
+                                                  size_t end)
 {
     const fused_job *j = ctx;
     size_t c0, c1;

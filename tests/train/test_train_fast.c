@@ -20,10 +20,10 @@
  * A smaller hash grid than the preset's (8 levels of 2^15 entries, up to
  * 256 cells across the bound) on a 48x48 scene: enough for its few solids
  * and cheap enough for CI, which also runs this under the sanitizers.
- * On the 2-core development machine these settings reach 28.6 dB (the
- * same bits in release, debug and sanitized builds) in about 40 s of
- * training in a release build with another job running, 80 s with
- * ASan+UBSan; most of it is the first 100 steps, whose untrained density
+ * On the 2-core development machine these settings reach 29.3 dB (the
+ * same bits in release, debug and sanitized builds) in about 20 s of
+ * training in a release build with another job running; most of it is
+ * the first 100 steps, whose untrained density
  * leaves half the grid occupied (250 samples a ray, against about 45
  * later), and the 16 updates of every cell in the first 256 steps.  The
  * threshold leaves a margin for floating-point differences between BLAS
