@@ -15,6 +15,7 @@
 
 #include "byteorder.h"
 #include "file_io.h"
+#include "gemm_bf16.h"
 #include "model.h"
 #include "occupancy.h"
 
@@ -108,7 +109,7 @@ static const size_t option2_u32[N_OPTION2_U32] = {
     offsetof(nerf_model_options, geo_features),
     offsetof(nerf_model_options, view_depth),
     offsetof(nerf_model_options, density_activation),
-    offsetof(nerf_model_options, reserved1),
+    offsetof(nerf_model_options, matmul), /* reserved1 (0) before bf16 */
 };
 
 static void store_fields(unsigned char *p, const nerf_model_options *o,
@@ -501,9 +502,27 @@ static void get_options2(const unsigned char *p, nerf_model_options *o)
     load_fields(p, o, option2_u32, N_OPTION2_U32);
 }
 
+/*
+ * A checkpoint of a bf16 model holds fp32 weights like any other, so where
+ * bf16 products are not available it still loads, computing in fp32 (and
+ * saying so), rather than leaving its weights unusable on this machine.
+ */
+static void matmul_here(const nerf__env *env, const char *path,
+                        nerf_model_options *o)
+{
+    const char *why;
+    if (o->matmul == NERF_MATMUL_BF16 && !nerf__bf16_supported(&why)) {
+        nerf__log(env, NERF_LOG_WARN, "%s: the model was saved with bf16 "
+                  "products, which are not available here (%s): it computes "
+                  "in fp32", path, why);
+        o->matmul = NERF_MATMUL_FP32;
+    }
+}
+
 /* Options and sizes: everything that can be checked before allocating. */
-static int check_shapes(const char *path, const sections *s,
-                        nerf_model_options *o, uint64_t *n_params)
+static int check_shapes(const nerf__env *env, const char *path,
+                        const sections *s, nerf_model_options *o,
+                        uint64_t *n_params)
 {
     if (s->len[0] != OPTIONS_SIZE || s->len[1] != TRAINING_SIZE) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
@@ -519,6 +538,7 @@ static int check_shapes(const char *path, const sections *s,
     if (s->body[5] != NULL) {
         get_options2(s->body[5], o);
     }
+    matmul_here(env, path, o);
     if (nerf__model_check_options(o) != NERF_OK) {
         char why[512];
         snprintf(why, sizeof why, "%s", nerf_last_error());
@@ -617,7 +637,7 @@ static int build_model(const nerf__env *env, const char *path,
     uint64_t n = 0;
     int rc = split_sections(env, path, payload, size, &s);
     if (rc == NERF_OK) {
-        rc = check_shapes(path, &s, &o, &n);
+        rc = check_shapes(env, path, &s, &o, &n);
     }
     nerf_model *m = NULL;
     if (rc == NERF_OK) {
@@ -641,6 +661,7 @@ static int build_model(const nerf__env *env, const char *path,
     get_floats(s.body[2], m->params, m->n_params);
     get_floats(s.body[3], m->adam_m, m->n_params);
     get_floats(s.body[4], m->adam_v, m->n_params);
+    nerf__model_weights_changed(m);
     *out = m;
     return NERF_OK;
 }
