@@ -433,6 +433,74 @@ TEST(occupancy_grid_section)
     forge_grid("sections as saved", NULL, NERF_OK, false);
 }
 
+/*
+ * The matmul field travels in the last slot of options2 (reserved1, zero,
+ * before bf16 products).  A bf16 checkpoint loads as bf16 where bf16
+ * products are available, and as fp32, with a warning, where they are not
+ * (test_checkpoint_forged_no_bf16 runs this file with oneDNN's ISA capped
+ * below AVX512-BF16).  An unknown kind is a corrupt file.
+ */
+static uint32_t matmul_value;
+
+static void edit_matmul(payload *p)
+{
+    put32(p->s[5].data + 11 * 4, matmul_value);
+}
+
+static char warning[1024];
+
+static void keep_warning(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == NERF_LOG_WARN) {
+        snprintf(warning, sizeof warning, "%s", msg);
+    }
+}
+
+TEST(matmul_in_options2)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    matmul_value = NERF_MATMUL_BF16;
+    edit_matmul(&p);
+    char path[128];
+    path_in(path, sizeof path, "bf16.ckpt");
+    write_payload(path, &p, NULL, 0);
+    nerf_hooks h;
+    NERF_HOOKS_INIT(&h);
+    h.log_cb = keep_warning;
+    h.log_level = NERF_LOG_WARN;
+    warning[0] = '\0';
+    nerf_model *m = NULL, *ref = trained_model(true);
+    CHECK_OK(nerf_model_load(&m, path, &h));
+    if (m && ref) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        CHECK_OK(nerf_model_get_options(m, &o));
+        CHECK(memcmp(m->params, ref->params, m->n_params * sizeof(float)) == 0);
+        if (nerf_matmul_supported(NERF_MATMUL_BF16)) {
+            CHECK_EQ_INT(o.matmul, NERF_MATMUL_BF16);
+            CHECK(m->bf16 != NULL);
+            CHECK(warning[0] == '\0');
+        } else {
+            CHECK_EQ_INT(o.matmul, NERF_MATMUL_FP32);
+            CHECK(m->bf16 == NULL);
+            CHECK(strstr(warning, path) != NULL);
+            CHECK(strstr(warning, "fp32") != NULL);
+            printf("  loaded as fp32: %s\n", warning);
+        }
+    }
+    nerf_model_destroy(m);
+    nerf_model_destroy(ref);
+    free_payload(&p);
+    free(file);
+    matmul_value = 2;
+    forge("matmul 2", edit_matmul, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "matmul") != NULL);
+}
+
 int main(void)
 {
     make_tmpdir();
@@ -440,6 +508,7 @@ int main(void)
     RUN(forged_payloads);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
+    RUN(matmul_in_options2);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }
