@@ -36,6 +36,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "bf16.h"
 #include "parallel.h"
 
 #if DNNL_CPU_THREADING_RUNTIME == DNNL_RUNTIME_OMP
@@ -55,17 +56,7 @@
 /* Two widths (floor and ceiling of the split) per weight-gradient call. */
 #define WIDTHS 2
 
-/*
- * The conversion loops are plain C that the compiler vectorises; on x86
- * they are compiled for AVX2, which every CPU that passes the support
- * check (AVX512-BF16) has, and which doubles their speed over the
- * baseline SSE2.  Nothing here runs before that check.
- */
-#if defined(__GNUC__) && defined(__x86_64__)
-#define WIDE __attribute__((target("avx2")))
-#else
-#define WIDE
-#endif
+#define WIDE NERF__BF16_WIDE
 
 /* ---- process-wide: support check and engine ----------------------------- */
 
@@ -225,21 +216,10 @@ int nerf__bf16_supported(const char **why)
 
 /* ---- rounding ----------------------------------------------------------- */
 
-static inline uint16_t round_bf16(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    if ((u & 0x7fffffffu) > 0x7f800000u) {
-        return (uint16_t)((u >> 16) | 0x40u); /* keep NaN a (quiet) NaN */
-    }
-    u += 0x7fffu + ((u >> 16) & 1u); /* nearest, ties to even */
-    return (uint16_t)(u >> 16);
-}
-
 WIDE void nerf__bf16_round(const float *x, size_t n, uint16_t *out)
 {
     for (size_t i = 0; i < n; i++) {
-        out[i] = round_bf16(x[i]);
+        out[i] = nerf__bf16_from_float(x[i]);
     }
 }
 
@@ -260,7 +240,7 @@ static WIDE void round_rows(void *ctx, size_t begin, size_t end)
             const float *x = j->parts[p].x + i * j->parts[p].ldx;
             const uint32_t in = j->parts[p].in;
             for (uint32_t c = 0; c < in; c++) {
-                o[c] = round_bf16(x[c]);
+                o[c] = nerf__bf16_from_float(x[c]);
             }
             o += in;
         }
@@ -907,7 +887,7 @@ static int weights_for(nerf__bf16 *b, const float *w, size_t rows,
 int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                        const nerf__layer_part *parts, int n_parts,
                        const float *w, size_t ldw, const float *b, int relu,
-                       float *y, size_t ldy)
+                       float *y, size_t ldy, uint16_t *kept)
 {
     if (n == 0) {
         return NERF_OK;
@@ -917,7 +897,7 @@ int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     nerf__bf16_scratch *s;
     const uint16_t *wb;
     int rc = scratch_get(c, &s);
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && kept == NULL) {
         rc = grow(&s->env, &s->a, &s->a_cap, n, k);
     }
     if (rc == NERF_OK) {
@@ -927,18 +907,18 @@ int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     if (rc != NERF_OK) {
         return rc;
     }
-    round_parts(parts, n_parts, n, s->a, k);
+    uint16_t *a = kept ? kept : s->a;
+    round_parts(parts, n_parts, n, a, k);
     int64_t flags = (b ? F_BIAS : 0) | (relu ? F_RELU : 0);
     /* Y = X W^T: B = W^T, W [out, ldw] read by columns. */
-    return row_product(be, s, n, k, out, s->a, k, wb, 1, ldw, y, ldy, b,
-                       flags);
+    return row_product(be, s, n, k, out, a, k, wb, 1, ldw, y, ldy, b, flags);
 }
 
 int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                        const float *dy, size_t lddy,
+                        const float *dy, size_t lddy, const uint16_t *dyb,
                         const nerf__layer_part *parts, int n_parts,
-                        const float *w, size_t ldw, float *dw, int dx_part,
-                        float *dx, size_t lddx)
+                        const uint16_t *kept, const float *w, size_t ldw,
+                        float *dw, int dx_part, float *dx, size_t lddx)
 {
     if (n == 0) {
         return NERF_OK;
@@ -947,20 +927,26 @@ int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     const size_t k = parts_width(parts, n_parts);
     nerf__bf16_scratch *s;
     int rc = scratch_get(c, &s);
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && dyb == NULL) {
         rc = grow(&s->env, &s->a, &s->a_cap, n, out);
     }
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && kept == NULL) {
         rc = grow(&s->env, &s->x, &s->x_cap, n, k);
     }
     if (rc != NERF_OK) {
         return rc;
     }
-    const nerf__layer_part d = {dy, lddy, out};
-    round_parts(&d, 1, n, s->a, out);
-    round_parts(parts, n_parts, n, s->x, k);
+    if (dyb == NULL) {
+        const nerf__layer_part d = {dy, lddy, out};
+        round_parts(&d, 1, n, s->a, out);
+        dyb = s->a;
+    }
+    if (kept == NULL) {
+        round_parts(parts, n_parts, n, s->x, k);
+        kept = s->x;
+    }
     /* One product serves every part: their columns are adjacent in dW. */
-    rc = weight_product(be, s, n, out, k, s->a, s->x, dw, ldw);
+    rc = weight_product(be, s, n, out, k, dyb, kept, dw, ldw);
     if (rc != NERF_OK || dx == NULL) {
         return rc;
     }
@@ -976,6 +962,6 @@ int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
         return rc;
     }
     /* dX = dY W_q: B is W's column block, [out, in] rows of ldw. */
-    return row_product(be, s, n, out, in, s->a, out, wb, ldw, 1, dx, lddx,
+    return row_product(be, s, n, out, in, dyb, out, wb, ldw, 1, dx, lddx,
                        NULL, 0);
 }

@@ -72,12 +72,12 @@ void nerf__bf16_weights_changed(nerf__bf16 *b);
 int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                        const nerf__layer_part *parts, int n_parts,
                        const float *w, size_t ldw, const float *b, int relu,
-                       float *y, size_t ldy);
+                       float *y, size_t ldy, uint16_t *kept);
 int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                        const float *dy, size_t lddy,
+                        const float *dy, size_t lddy, const uint16_t *dyb,
                         const nerf__layer_part *parts, int n_parts,
-                        const float *w, size_t ldw, float *dw, int dx_part,
-                        float *dx, size_t lddx);
+                        const uint16_t *kept, const float *w, size_t ldw,
+                        float *dw, int dx_part, float *dx, size_t lddx);
 
 void nerf__bf16_scratch_free(nerf__bf16_scratch *s);
 
@@ -123,24 +123,24 @@ static inline int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n,
                                      const nerf__layer_part *parts,
                                      int n_parts, const float *w, size_t ldw,
                                      const float *b, int relu, float *y,
-                                     size_t ldy)
+                                     size_t ldy, uint16_t *kept)
 {
     (void)c, (void)n, (void)out, (void)parts, (void)n_parts, (void)w;
-    (void)ldw, (void)b, (void)relu, (void)y, (void)ldy;
+    (void)ldw, (void)b, (void)relu, (void)y, (void)ldy, (void)kept;
     return nerf__error(NERF_ERROR, "bf16 products: not built");
 }
 
 static inline int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n,
                                       uint32_t out, const float *dy,
-                                      size_t lddy,
+                                      size_t lddy, const uint16_t *dyb,
                                       const nerf__layer_part *parts,
-                                      int n_parts, const float *w, size_t ldw,
-                                      float *dw, int dx_part, float *dx,
-                                      size_t lddx)
+                                      int n_parts, const uint16_t *kept,
+                                      const float *w, size_t ldw, float *dw,
+                                      int dx_part, float *dx, size_t lddx)
 {
-    (void)c, (void)n, (void)out, (void)dy, (void)lddy, (void)parts;
-    (void)n_parts, (void)w, (void)ldw, (void)dw, (void)dx_part, (void)dx;
-    (void)lddx;
+    (void)c, (void)n, (void)out, (void)dy, (void)lddy, (void)dyb;
+    (void)parts, (void)n_parts, (void)kept, (void)w, (void)ldw, (void)dw;
+    (void)dx_part, (void)dx, (void)lddx;
     return nerf__error(NERF_ERROR, "bf16 products: not built");
 }
 

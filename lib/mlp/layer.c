@@ -9,13 +9,13 @@
 int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                         const nerf__layer_part *parts, int n_parts,
                         const float *w, size_t ldw, const float *b, bool relu,
-                        float *y, size_t ldy)
+                        float *y, size_t ldy, uint16_t *kept)
 {
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(b != NULL || !relu);
     if (c->bf16) {
         return nerf__bf16_forward(c, n, out, parts, n_parts, w, ldw, b, relu,
-                                  y, ldy);
+                                  y, ldy, kept);
     }
     size_t col = 0;
     for (int p = 0; p < n_parts; p++) {
@@ -32,17 +32,18 @@ int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
 }
 
 int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                         const float *dy, size_t lddy,
+                         const float *dy, size_t lddy, const uint16_t *dyb,
                          const nerf__layer_part *parts, int n_parts,
-                         const float *w, size_t ldw, float *dw, int dx_part,
-                         float *dx, size_t lddx)
+                         const uint16_t *kept, const float *w, size_t ldw,
+                         float *dw, int dx_part, float *dx, size_t lddx)
 {
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(dx == NULL || (dx_part >= 0 && dx_part < n_parts));
     if (c->bf16) {
-        return nerf__bf16_backward(c, n, out, dy, lddy, parts, n_parts, w, ldw,
-                                   dw, dx_part, dx, lddx);
+        return nerf__bf16_backward(c, n, out, dy, lddy, dyb, parts, n_parts,
+                                   kept, w, ldw, dw, dx_part, dx, lddx);
     }
+    assert(dyb == NULL && kept == NULL);
     size_t col = 0, dx_col = 0;
     for (int p = 0; p < n_parts; p++) {
         nerf__gemm_weight_grad(n, out, parts[p].in, dy, lddy, parts[p].x,

@@ -51,25 +51,32 @@ typedef struct nerf__layer_ctx {
  * Y[n, out] = act(sum_p X_p W_p^T + b).  W is [out, ldw] from w, the
  * parts' column blocks side by side from column 0.  b [out] may be NULL
  * (no bias); relu needs a bias.
+ *
+ * bf16 only: `kept`, when not NULL, receives the rounded input (the parts
+ * side by side, [n, sum of their widths]) for the backward to reuse, which
+ * spares rounding it again; the fp32 path ignores it.
  * @return NERF_OK, or (bf16 only) NERF_ENOMEM or NERF_ERROR with a message.
  */
 int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                         const nerf__layer_part *parts, int n_parts,
                         const float *w, size_t ldw, const float *b, bool relu,
-                        float *y, size_t ldy);
+                        float *y, size_t ldy, uint16_t *kept);
 
 /*
  * The products of the layer's backward, given dY [n, out] (the gradient
  * of its output before the activation, stride lddy):
  * dW_p += dY^T X_p for every part (dw has w's layout), then, when dx is
  * not NULL, dX = dY W_q for q = dx_part.
+ *
+ * bf16 only (NULL otherwise): dyb is dY already rounded ([n, out],
+ * contiguous; dy is then not read) and kept what the forward kept.
  * @return as nerf__layer_forward().
  */
 int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                         const float *dy, size_t lddy,
+                         const float *dy, size_t lddy, const uint16_t *dyb,
                          const nerf__layer_part *parts, int n_parts,
-                         const float *w, size_t ldw, float *dw, int dx_part,
-                         float *dx, size_t lddx);
+                         const uint16_t *kept, const float *w, size_t ldw,
+                         float *dw, int dx_part, float *dx, size_t lddx);
 
 void nerf__layer_scratch_free(struct nerf__bf16_scratch *s);
 

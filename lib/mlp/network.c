@@ -129,6 +129,46 @@ static size_t round64(size_t floats)
     return (floats + 15) & ~(size_t)15; /* keep every buffer 64-byte aligned */
 }
 
+/* Layers in order: the trunk, the head, the colour branch and rgb. */
+static uint32_t layer_count(const nerf__network *net)
+{
+    return net->depth + 1 + (net->use_viewdirs ? net->view_depth + 1 : 0);
+}
+
+static const nerf__linear *layer_at(const nerf__network *net, uint32_t index)
+{
+    if (index < net->depth) {
+        return &net->trunk[index];
+    }
+    index -= net->depth;
+    if (index == 0) {
+        return &net->head;
+    }
+    return index - 1 < net->view_depth ? &net->view[index - 1] : &net->rgb;
+}
+
+/* Inputs of the layers before `index`, side by side. */
+static size_t input_columns(const nerf__network *net, uint32_t index)
+{
+    size_t k = 0;
+    for (uint32_t i = 0; i < index; i++) {
+        k += layer_at(net, i)->in;
+    }
+    return k;
+}
+
+/*
+ * A bf16 network that keeps its activations also keeps each layer's input
+ * as its forward product rounded it ([n, in], layer after layer), so that
+ * the weight gradient need not round it again: NULL otherwise.
+ */
+static uint16_t *kept_input(const nerf__network *net, nerf__workspace *ws,
+                            uint32_t index)
+{
+    return net->bf16 && ws->kept ? ws->kept + ws->n * input_columns(net, index)
+                                 : NULL;
+}
+
 static int reserve(const nerf__env *env, nerf__workspace *ws,
                    const nerf__network *net, size_t n, bool keep,
                    bool density_only)
@@ -141,7 +181,13 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     }
     size_t layers = keep ? net->depth : 2;
     size_t view_layers = density_only ? 0 : keep ? net->view_depth : 2;
-    size_t sizes[9] = {
+    /* bf16 storage, in floats (two values each). */
+    const bool bf16 = keep && net->bf16 != NULL;
+    size_t kept = bf16 ? (n * input_columns(net, layer_count(net)) + 1) / 2 : 0;
+    size_t grad16 = bf16 ? (n * grad_width(net) + 1) / 2 : 0;
+    size_t partials = bf16 ? NERF__RELU_BF16_PARTIALS(n, grad_width(net)) : 0;
+    enum { SLOTS = 12 };
+    size_t sizes[SLOTS] = {
         round64(n * net->pos_width),
         density_only ? 0 : round64(n * net->dir_width),
         keep && nerf__network_has_table(net) ? round64(n * 3) : 0,
@@ -151,9 +197,12 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         density_only ? 0 : round64(n * 3),
         keep ? round64(n * grad_width(net)) : 0,
         keep ? round64(n * grad_width(net)) : 0,
+        round64(kept),
+        round64(grad16),
+        round64(partials),
     };
     size_t total = 0;
-    for (int i = 0; i < 9; i++) {
+    for (int i = 0; i < SLOTS; i++) {
         total += sizes[i];
     }
     float *block = nerf__alloc(env, total * sizeof(float));
@@ -161,14 +210,18 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         return NERF_ENOMEM;
     }
     nerf__workspace_release(env, ws);
-    float **slots[9] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
-                        &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
-                        &ws->grad_b};
+    float *kept_at = NULL, *grad16_at = NULL;
+    float **slots[SLOTS] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
+                            &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
+                            &ws->grad_b, &kept_at, &grad16_at,
+                            &ws->partials};
     float *at = block;
-    for (int i = 0; i < 9; i++) {
+    for (int i = 0; i < SLOTS; i++) {
         *slots[i] = sizes[i] ? at : NULL;
         at += sizes[i];
     }
+    ws->kept = (uint16_t *)kept_at;
+    ws->grad_bf16 = (uint16_t *)grad16_at;
     ws->enc_pos = block; /* first slot: also the block to free */
     ws->env = *env;
     ws->cap = n;
@@ -408,7 +461,7 @@ static int trunk_forward(const nerf__network *net, const float *params,
         };
         int rc = nerf__layer_forward(&c, n, W, parts, skip ? 2 : 1,
                                      params + l->w, l->in, params + l->b,
-                                     true, y, W);
+                                     true, y, W, kept_input(net, ws, i));
         if (rc != NERF_OK) {
             return rc;
         }
@@ -435,7 +488,8 @@ int nerf__network_forward(const nerf__network *net, const float *params,
     const nerf__layer_part top = {x, W, W};
     if (rc == NERF_OK) {
         rc = nerf__layer_forward(&c, n, HW, &top, 1, params + net->head.w, W,
-                                 params + net->head.b, false, ws->head, HW);
+                                 params + net->head.b, false, ws->head, HW,
+                                 kept_input(net, ws, net->depth));
     }
     if (rc == NERF_OK && net->use_viewdirs) {
         const nerf__linear *v0 = &net->view[0], *r = &net->rgb;
@@ -445,20 +499,25 @@ int nerf__network_forward(const nerf__network *net, const float *params,
         float *h = view_buffer(net, ws, 0);
         const nerf__layer_part in0[2] = {{ws->head, HW, F},
                                          {ws->enc_dir, Ed, Ed}};
+        const uint32_t first = net->depth + 1; /* view[0]'s index */
         rc = nerf__layer_forward(&c, n, V, in0, 2, params + v0->w, v0->in,
-                                 params + v0->b, true, h, V);
+                                 params + v0->b, true, h, V,
+                                 kept_input(net, ws, first));
         for (uint32_t k = 1; k < net->view_depth && rc == NERF_OK; k++) {
             float *hk = view_buffer(net, ws, k);
             const nerf__layer_part in = {h, V, V};
             rc = nerf__layer_forward(&c, n, V, &in, 1, params + net->view[k].w,
-                                     V, params + net->view[k].b, true, hk, V);
+                                     V, params + net->view[k].b, true, hk, V,
+                                     kept_input(net, ws, first + k));
             h = hk;
         }
         /* The rgb bias is added by the sigmoid pass (output_rows). */
         const nerf__layer_part in = {h, V, V};
         if (rc == NERF_OK) {
             rc = nerf__layer_forward(&c, n, 3, &in, 1, params + r->w, V, NULL,
-                                     false, ws->rgb, 3);
+                                     false, ws->rgb, 3,
+                                     kept_input(net, ws,
+                                                first + net->view_depth));
         }
     }
     if (rc != NERF_OK) {
@@ -499,7 +558,7 @@ int nerf__network_density(const nerf__network *net, const float *params,
     const nerf__layer_part top = {x, W, W};
     if (rc == NERF_OK) {
         rc = nerf__layer_forward(&c, n, 1, &top, 1, params + net->head.w + row,
-                                 W, NULL, false, ws->head, 1);
+                                 W, NULL, false, ws->head, 1, NULL);
     }
     if (rc != NERF_OK) {
         return rc;
@@ -570,6 +629,25 @@ static float *other(nerf__workspace *ws, const float *p)
     return p == ws->grad_a ? ws->grad_b : ws->grad_a;
 }
 
+/*
+ * The ReLU backward and bias gradient of a layer whose output was y, on
+ * its output gradient dy.  A bf16 network's products read the masked
+ * gradient only rounded: it comes back rounded (dy is then left as it
+ * was); fp32 networks get NULL and the masked gradient in dy.
+ */
+static const uint16_t *relu_backward(const nerf__network *net,
+                                     nerf__workspace *ws, size_t cols,
+                                     const float *y, float *dy, float *db)
+{
+    if (net->bf16 && ws->grad_bf16) {
+        nerf__relu_backward_bias_bf16(ws->n, cols, y, cols, dy, cols, db,
+                                      ws->grad_bf16, ws->partials);
+        return ws->grad_bf16;
+    }
+    nerf__relu_backward_bias(ws->n, cols, y, cols, dy, cols, db);
+    return NULL;
+}
+
 int nerf__network_backward(const nerf__network *net, const float *params,
                            float *grads, nerf__workspace *ws,
                            const float *d_rgb, const float *d_sigma)
@@ -585,21 +663,26 @@ int nerf__network_backward(const nerf__network *net, const float *params,
         const nerf__linear *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
         const uint32_t F = nerf__network_feature_width(net);
+        const uint32_t first = net->depth + 1; /* view[0]'s index */
         float *dz = ws->grad_b; /* [n, 3] */
         sigmoid_backward(ws, d_rgb, dz, 3);
         const nerf__layer_part h_top = {view_buffer(net, ws, net->view_depth - 1),
                                         V, V};
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
         float *d_view = ws->grad_a; /* [n, V] */
-        rc = nerf__layer_backward(&c, n, 3, dz, 3, &h_top, 1, params + r->w, V,
-                                  grads + r->w, 0, d_view, V);
+        rc = nerf__layer_backward(&c, n, 3, dz, 3, NULL, &h_top, 1,
+                                  kept_input(net, ws, first + net->view_depth),
+                                  params + r->w, V, grads + r->w, 0, d_view,
+                                  V);
         for (uint32_t k = net->view_depth; k-- > 1 && rc == NERF_OK;) {
             const nerf__linear *v = &net->view[k];
             const nerf__layer_part h_in = {view_buffer(net, ws, k - 1), V, V};
-            nerf__relu_backward_bias(n, V, view_buffer(net, ws, k), V, d_view,
-                                     V, grads + v->b);
+            const uint16_t *g16 = relu_backward(net, ws, V,
+                                                view_buffer(net, ws, k),
+                                                d_view, grads + v->b);
             float *d_in = other(ws, d_view);
-            rc = nerf__layer_backward(&c, n, V, d_view, V, &h_in, 1,
+            rc = nerf__layer_backward(&c, n, V, d_view, V, g16, &h_in, 1,
+                                      kept_input(net, ws, first + k),
                                       params + v->w, V, grads + v->w, 0, d_in,
                                       V);
             d_view = d_in;
@@ -608,12 +691,13 @@ int nerf__network_backward(const nerf__network *net, const float *params,
             return rc;
         }
         const nerf__linear *v0 = &net->view[0];
-        nerf__relu_backward_bias(n, V, view_buffer(net, ws, 0), V, d_view, V,
-                                 grads + v0->b);
+        const uint16_t *g16 = relu_backward(net, ws, V, view_buffer(net, ws, 0),
+                                            d_view, grads + v0->b);
         const nerf__layer_part in0[2] = {{ws->head, HW, F},
                                          {ws->enc_dir, Ed, Ed}};
         d_head = other(ws, d_view);
-        rc = nerf__layer_backward(&c, n, V, d_view, V, in0, 2, params + v0->w,
+        rc = nerf__layer_backward(&c, n, V, d_view, V, g16, in0, 2,
+                                  kept_input(net, ws, first), params + v0->w,
                                   v0->in, grads + v0->w, 0, d_head, HW);
         if (rc != NERF_OK) {
             return rc;
@@ -628,25 +712,28 @@ int nerf__network_backward(const nerf__network *net, const float *params,
                                      W};
     nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
     float *dh = other(ws, d_head);
-    rc = nerf__layer_backward(&c, n, HW, d_head, HW, &h_last, 1,
+    rc = nerf__layer_backward(&c, n, HW, d_head, HW, NULL, &h_last, 1,
+                              kept_input(net, ws, net->depth),
                               params + net->head.w, W, grads + net->head.w, 0,
                               dh, W);
 
     for (uint32_t i = net->depth; i-- > 0 && rc == NERF_OK;) {
         const nerf__linear *l = &net->trunk[i];
-        const float *y = trunk_buffer(net, ws, i);
-        nerf__relu_backward_bias(n, W, y, W, dh, W, grads + l->b);
+        const uint16_t *g16 = relu_backward(net, ws, W, trunk_buffer(net, ws, i),
+                                            dh, grads + l->b);
+        uint16_t *kept = kept_input(net, ws, i);
         if (i == 0) {
             const nerf__layer_part enc = {ws->enc_pos, Ep, Ep};
             if (!nerf__network_has_table(net)) {
-                rc = nerf__layer_backward(&c, n, W, dh, W, &enc, 1,
+                rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
                                           params + l->w, l->in, grads + l->w,
                                           -1, NULL, 0);
                 break;
             }
             float *d_enc = other(ws, dh);
-            rc = nerf__layer_backward(&c, n, W, dh, W, &enc, 1, params + l->w,
-                                      l->in, grads + l->w, 0, d_enc, Ep);
+            rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
+                                      params + l->w, l->in, grads + l->w, 0,
+                                      d_enc, Ep);
             if (rc == NERF_OK) {
                 table_job tj = {.hg = &net->hash, .in = ws->pos,
                                 .d_out = d_enc, .grad = grads + net->table,
@@ -662,8 +749,8 @@ int nerf__network_backward(const nerf__network *net, const float *params,
         const nerf__layer_part x = {trunk_buffer(net, ws, i - 1), W, W};
         const nerf__layer_part parts[2] = {{ws->enc_pos, Ep, Ep}, x};
         float *dx = other(ws, dh);
-        rc = nerf__layer_backward(&c, n, W, dh, W, skip ? parts : &x,
-                                  skip ? 2 : 1, params + l->w, l->in,
+        rc = nerf__layer_backward(&c, n, W, dh, W, g16, skip ? parts : &x,
+                                  skip ? 2 : 1, kept, params + l->w, l->in,
                                   grads + l->w, skip ? 1 : 0, dx, W);
         dh = dx;
     }

@@ -137,6 +137,11 @@ typedef struct nerf__workspace {
     float *rgb;     /* [n, 3], after the sigmoid */
     float *grad_a;  /* [n, width + 1], gradient scratch */
     float *grad_b;  /* [n, width + 1] */
+    /* bf16 networks with keep: every layer's input as its forward product
+     * rounded it, and a rounded gradient ([n, width + 1]). */
+    uint16_t *kept;
+    uint16_t *grad_bf16;
+    float *partials;  /* the bias sums of nerf__relu_backward_bias_bf16 */
     nerf__env env;  /* what reserved it, for the bf16 scratch */
     /* The rounded operands of a bf16 network's products, created by its
      * first product (layer.h). */
