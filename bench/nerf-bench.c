@@ -18,9 +18,14 @@
  *  - peak resident memory of an 800x800 render, in a child process;
  *  - thread counts and the BLAS build.
  *
+ * With --matmul bf16 the models compute their products in bf16 through
+ * oneDNN (NERF_MATMUL_BF16); the bound stays the fp32 cblas_sgemm one, so
+ * the shares then say how far bf16 goes past what fp32 products allow.
+ *
  *   nerf-bench [--json] [--preset reference|tiny|fast|all] [--seconds S]
  *              [--threads N] [--workers W] [--size S] [--render-size S]
  *              [--rss-rows K] [--full] [--no-800] [--fast-warmup N]
+ *              [--matmul fp32|bf16]
  *
  * With --json, stdout holds exactly one JSON object and the table goes to
  * stderr.  Run `nerf-bench --help` for what each option does.
@@ -141,6 +146,8 @@ static void set_blas_threads(int n)
  * Renderer workers each call the BLAS, so one worker per core over a
  * single-threaded BLAS is the other way to use the cores. */
 static int render_blas_threads;
+/* nerf_matmul of every model the bench creates (--matmul). */
+static int bench_matmul = NERF_MATMUL_FP32;
 
 static const char *blas_config(void)
 {
@@ -397,6 +404,7 @@ static int preset_make(preset_setup *p, int id)
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, id);
+    mo.matmul = (uint32_t)bench_matmul;
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
     nerf_sampler_options_preset(&so, id);
@@ -1441,6 +1449,8 @@ static void print_json(const run_info *ri, const preset_setup *ps,
     cJSON_AddStringToObject(root, "tool", "nerf-bench");
     cJSON_AddStringToObject(root, "libnerf_version", nerf_version_string());
     cJSON_AddStringToObject(root, "build_info", nerf_build_info());
+    cJSON_AddStringToObject(root, "matmul",
+                            bench_matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
     const char *cfg = blas_config(), *core = blas_corename();
     const char *coretype = getenv("OPENBLAS_CORETYPE");
     if (cfg) {
@@ -1803,6 +1813,14 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
             "training: one calling thread\n",
             ri->cores, ri->blas_threads,
             ri->threads_requested > 0 ? " (--threads)" : "");
+    if (bench_matmul == NERF_MATMUL_BF16) {
+        fprintf(out, "matmul: bf16 (oneDNN, cut over libnerf's %u "
+                "threads); the sgemm rows are fp32 cblas_sgemm, so a share "
+                "is bf16 rays/s over the fp32 bound\n",
+                nerf__parallel_threads());
+    } else {
+        fprintf(out, "matmul: fp32 (cblas_sgemm)\n");
+    }
     if (ri->load_start[0] >= 0.0) {
         fprintf(out,
                 "load average: %.2f %.2f %.2f at the start, %.2f %.2f "
@@ -1928,7 +1946,7 @@ static void usage(FILE *out, const char *argv0)
         "usage: %s [--json] [--preset reference|tiny|fast|all]\n"
         "       [--seconds S] [--threads N] [--workers W] [--size S]\n"
         "       [--render-size S] [--rss-rows K] [--full] [--no-800]\n"
-        "       [--fast-warmup N]\n"
+        "       [--fast-warmup N] [--matmul fp32|bf16]\n"
         "\n"
         "  --json          print one JSON object on stdout (the table goes\n"
         "                  to stderr)\n"
@@ -1953,7 +1971,10 @@ static void usage(FILE *out, const char *argv0)
         "  --fast-warmup N training steps of the fast preset before the\n"
         "                  timed ones (default %u: past the grid's warm-up\n"
         "                  refreshes, which end at step %u); its steps are\n"
-        "                  timed in whole cycles of %u, at least one\n",
+        "                  timed in whole cycles of %u, at least one\n"
+        "  --matmul M      the models' products: fp32 (default, cblas) or\n"
+        "                  bf16 (oneDNN; see nerf_matmul_supported); the\n"
+        "                  sgemm bound is fp32 either way\n",
         argv0, MIN_TRAIN_STEPS, FAST_WARMUP_STEPS, NERF__GRID_WARMUP,
         NERF__GRID_EVERY);
 }
@@ -2013,6 +2034,16 @@ int main(int argc, char **argv)
             ri.full = true;
         } else if (strcmp(a, "--no-800") == 0) {
             ri.no_rss = true;
+        } else if (strcmp(a, "--matmul") == 0 && has_value) {
+            const char *v = argv[++i];
+            if (strcmp(v, "fp32") == 0) {
+                bench_matmul = NERF_MATMUL_FP32;
+            } else if (strcmp(v, "bf16") == 0) {
+                bench_matmul = NERF_MATMUL_BF16;
+            } else {
+                usage(stderr, argv[0]);
+                return 2;
+            }
         } else if (strcmp(a, "--fast-warmup") == 0 && has_value) {
             int w = atoi(argv[++i]);
             if (w < 0) {
@@ -2048,6 +2079,15 @@ int main(int argc, char **argv)
                     ? (uint32_t)(ri.threads_requested / render_blas_threads)
                     : 1;
         }
+    }
+    if (!nerf_matmul_supported(bench_matmul)) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        o.matmul = (uint32_t)bench_matmul;
+        nerf_model *m = NULL;
+        nerf_model_create(&m, &o); /* fails, and says why */
+        fprintf(stderr, "nerf-bench: --matmul bf16: %s\n", nerf_last_error());
+        return 2;
     }
     ri.cores = nerf__cpu_count();
     ri.blas_threads = blas_threads();
