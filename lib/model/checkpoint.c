@@ -42,16 +42,22 @@
 /* Optional: a reader that does not know it loads the model with a fresh
  * grid, which training refills within a few updates. */
 #define TAG_OCCUPANCY 7u
+/* Optional: how the model computes its products (nerf_model_options.
+ * matmul), written for bf16 models only.  The weights are fp32 either way,
+ * so a reader that does not know it loads the model computing in fp32. */
+#define TAG_MATMUL 8u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 7
+#define N_SECTIONS 8
 #define OCCUPANCY_INDEX 6
+#define MATMUL_INDEX 7
+#define MATMUL_SIZE 8u /* u32 matmul, u32 reserved */
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
 #define TRAINING_SIZE 64u /* 6 f64 hyperparameters, u64 step, u64 count */
 #define N_OPTION_U32 11
 #define OPTIONS2_SIZE 48u /* the 12 u32 fields appended in 0.2 */
-#define N_OPTION2_U32 12
+#define N_OPTION2_U32 11  /* and a reserved 0 */
 #define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
 
 /* Refuse files beyond 64 GiB before reading them. */
@@ -109,7 +115,6 @@ static const size_t option2_u32[N_OPTION2_U32] = {
     offsetof(nerf_model_options, geo_features),
     offsetof(nerf_model_options, view_depth),
     offsetof(nerf_model_options, density_activation),
-    offsetof(nerf_model_options, matmul), /* reserved1 (0) before bf16 */
 };
 
 static void store_fields(unsigned char *p, const nerf_model_options *o,
@@ -144,7 +149,23 @@ static unsigned char *put_options2(unsigned char *p,
 {
     p = put_section(p, TAG_OPTIONS2, OPTIONS2_SIZE);
     store_fields(p, o, option2_u32, N_OPTION2_U32);
+    /* The struct's reserved1 here, which matmul replaced there: matmul
+     * has a section of its own (TAG_MATMUL) that old readers can skip. */
+    nerf__store_le32(p + 4 * N_OPTION2_U32, 0);
     return p + OPTIONS2_SIZE;
+}
+
+static size_t matmul_size(const nerf_model *m)
+{
+    return m->opts.matmul != NERF_MATMUL_FP32 ? SECTION_HEAD + MATMUL_SIZE : 0;
+}
+
+static unsigned char *put_matmul(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_MATMUL, MATMUL_SIZE);
+    nerf__store_le32(p, m->opts.matmul);
+    nerf__store_le32(p + 4, 0);
+    return p + MATMUL_SIZE;
 }
 
 static unsigned char *put_training(unsigned char *p, const nerf_model *m)
@@ -195,7 +216,8 @@ static unsigned char *put_occupancy(unsigned char *p, const nerf_model *m)
 static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
-           TRAINING_SIZE + 3 * 4 * m->n_params + occupancy_size(m);
+           TRAINING_SIZE + 3 * 4 * m->n_params + occupancy_size(m) +
+           matmul_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -207,7 +229,10 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
     p = put_options2(p, &m->opts);
     if (m->grid) {
-        put_occupancy(p, m);
+        p = put_occupancy(p, m);
+    }
+    if (matmul_size(m)) {
+        put_matmul(p, m);
     }
 }
 
@@ -426,14 +451,15 @@ typedef struct sections {
 
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
-    "Adam second moments", "options (0.2)", "occupancy grid"};
+    "Adam second moments", "options (0.2)", "occupancy grid", "matmul"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
 {
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS
-                                      : tag == TAG_OCCUPANCY;
+                                      : tag == TAG_OCCUPANCY ||
+                                            tag == TAG_MATMUL;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -502,6 +528,25 @@ static void get_options2(const unsigned char *p, nerf_model_options *o)
     load_fields(p, o, option2_u32, N_OPTION2_U32);
 }
 
+/* The matmul section: what it holds, or why it is corrupt (NULL: fine). */
+static const char *get_matmul(const sections *s, nerf_model_options *o)
+{
+    const unsigned char *b = s->body[MATMUL_INDEX];
+    if (b == NULL) {
+        return NULL; /* fp32, as every file before the section */
+    }
+    if (s->len[MATMUL_INDEX] != MATMUL_SIZE || nerf__load_le32(b + 4) != 0) {
+        return "the matmul section has the wrong size or a non-zero reserved "
+               "field";
+    }
+    uint32_t v = nerf__load_le32(b);
+    if (v > NERF_MATMUL_BF16) {
+        return "the matmul section holds no known nerf_matmul";
+    }
+    o->matmul = v;
+    return NULL;
+}
+
 /*
  * A checkpoint of a bf16 model holds fp32 weights like any other, so where
  * bf16 products are not available it still loads, computing in fp32 (and
@@ -537,6 +582,16 @@ static int check_shapes(const nerf__env *env, const char *path,
     get_options(s->body[0], o);
     if (s->body[5] != NULL) {
         get_options2(s->body[5], o);
+        if (nerf__load_le32(s->body[5] + 4 * N_OPTION2_U32) != 0) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                               "reserved field of options (0.2) is not 0)",
+                               path);
+        }
+    }
+    const char *bad = get_matmul(s, o);
+    if (bad) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s)", path,
+                           bad);
     }
     matmul_here(env, path, o);
     if (nerf__model_check_options(o) != NERF_OK) {
