@@ -425,7 +425,11 @@ NERF_API double nerf_model_learning_rate(const nerf_model *model);
 NERF_API int nerf_model_save(const nerf_model *model, const char *path);
 
 /**
- * Load a checkpoint written by nerf_model_save().
+ * Load a checkpoint written by nerf_model_save().  The model computes as it
+ * was saved, fp32 or bf16 (nerf_model_options.matmul), except that a bf16
+ * model loads computing in fp32 where nerf_matmul_supported() says bf16 is
+ * not available: its weights are fp32 either way, and a warning goes to
+ * the log.
  * @param hooks allocation and logging for the new model; NULL = defaults.
  * @return NERF_OK; NERF_EIO (cannot open or read); NERF_EFORMAT (not a
  * checkpoint, truncated or corrupted); NERF_EVERSION (written by a newer
