@@ -47,6 +47,7 @@
 
 #include "composite_packed.h"
 #include "cpu.h"
+#include "gemm_bf16.h"
 #include "hashgrid.h"
 #include "march.h"
 #include "model.h"
@@ -709,6 +710,8 @@ typedef struct figures {
     /* memory */
     rss_result rss;
     bool rss_skipped;
+    /* bf16: oneDNN primitives the model created for everything above */
+    size_t bf16_primitives;
 } figures;
 
 static int measure_training(preset_setup *p, const nerf_dataset *ds,
@@ -1185,6 +1188,8 @@ static int measure(preset_setup *p, const nerf_dataset *ds, double budget,
     }
     nerf_trainer_destroy(kept);
     free(l);
+    f->bf16_primitives = p->model->bf16 ? nerf__bf16_primitives(p->model->bf16)
+                                        : 0;
     if (failed) {
         fprintf(stderr, "nerf-bench: %s: %s: %s\n", p->name, failed,
                 nerf_last_error());
@@ -1362,6 +1367,7 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
     cJSON_AddNumberToObject(o, "render_seconds_timed", f->render_seconds);
     cJSON_AddNumberToObject(o, "render_workers", f->render_workers);
     cJSON_AddNumberToObject(o, "render_blas_threads", f->render_blas_threads);
+    cJSON_AddNumberToObject(o, "bf16_primitives", (double)f->bf16_primitives);
 
     cJSON_AddNumberToObject(o, "flops_per_sample_forward", f->flops_sample_fw);
     if (p->march) {
@@ -1770,6 +1776,11 @@ static void c_bd_samples(char *b, size_t s, const preset_setup *p,
     }
     snprintf(b, s, "%zu, %d rounds", f->bd.samples, f->bd.rounds);
 }
+static void c_prims(char *b, size_t s, const preset_setup *p,
+                    const figures *f)
+{
+    snprintf(b, s, "%zu", f->bf16_primitives);
+}
 static void c_workers(char *b, size_t s, const preset_setup *p,
                       const figures *f)
 {
@@ -1872,6 +1883,9 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "  GFLOP/s", c_render_gf, ps, fs, n);
     row(out, "  sgemm-bound rays/s", c_render_bound, ps, fs, n);
     row(out, "  render_sgemm_share", c_render_share, ps, fs, n);
+    if (bench_matmul == NERF_MATMUL_BF16) {
+        row(out, "oneDNN primitives (bf16)", c_prims, ps, fs, n);
+    }
     char label[64];
     snprintf(label, sizeof label, "peak RSS, %ux%u render", ri->render_side,
              ri->render_side);

@@ -351,6 +351,14 @@ void nerf__bf16_weights_changed(nerf__bf16 *b)
     }
 }
 
+size_t nerf__bf16_primitives(nerf__bf16 *b)
+{
+    pthread_mutex_lock(&b->cache_mu);
+    size_t n = b->n_prims;
+    pthread_mutex_unlock(&b->cache_mu);
+    return n;
+}
+
 /* Round the weights again if they changed since the last time.  Threads
  * that find the copy current pay one atomic load. */
 static void sync_weights(nerf__bf16 *b)

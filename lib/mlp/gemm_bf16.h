@@ -68,6 +68,9 @@ void nerf__bf16_destroy(nerf__bf16 *b);
 /* The parameters were written: the next product refreshes the copy. */
 void nerf__bf16_weights_changed(nerf__bf16 *b);
 
+/* oneDNN primitives created so far (for benchmarks). */
+size_t nerf__bf16_primitives(nerf__bf16 *b);
+
 /* The layer products (layer.h) for a context whose bf16 is set. */
 int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                        const nerf__layer_part *parts, int n_parts,
@@ -115,6 +118,12 @@ static inline void nerf__bf16_destroy(nerf__bf16 *b)
 static inline void nerf__bf16_weights_changed(nerf__bf16 *b)
 {
     (void)b;
+}
+
+static inline size_t nerf__bf16_primitives(nerf__bf16 *b)
+{
+    (void)b;
+    return 0;
 }
 
 /* Unreachable: no context can name a backend that cannot be created. */
