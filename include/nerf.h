@@ -229,10 +229,10 @@ typedef enum nerf_matmul {
                                in fp32; bias and ReLU fused into the
                                product.  Through oneDNN, on CPUs with
                                AVX512-BF16: ask nerf_matmul_supported()
-                               first.  About twice the fp32 rate on
-                               256-wide layers; results differ from fp32
-                               by the rounding (relative errors of order
-                               1e-3). */
+                               first.  Several times the fp32 rate on
+                               wide layers (docs/performance.md); results
+                               differ from fp32 by the rounding (relative
+                               errors of order 1e-3). */
 } nerf_matmul;
 
 /**
