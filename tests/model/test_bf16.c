@@ -208,6 +208,7 @@ TEST(fp32_checkpoint_loads_as_fp32)
 
 /* ---- bf16 against fp32 -------------------------------------------------- */
 
+#if NERF_HAVE_BF16
 static float bf16_value(uint16_t h)
 {
     uint32_t u = (uint32_t)h << 16;
@@ -215,6 +216,8 @@ static float bf16_value(uint16_t h)
     memcpy(&f, &u, sizeof f);
     return f;
 }
+
+#endif
 
 TEST(rounding)
 {
