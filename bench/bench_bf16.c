@@ -269,7 +269,7 @@ static float *filled(size_t count, float scale)
 {
     float *p = malloc(count * sizeof(float));
     for (size_t i = 0; p && i < count; i++) {
-        p[i] = scale * (float)((i * 2654435761u) % 1000u) / 1000.0f - 0.5f * scale;
+        p[i] = scale * ((float)((i * 2654435761u) % 1000u) / 1000.0f - 0.5f);
     }
     return p;
 }

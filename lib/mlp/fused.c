@@ -110,9 +110,9 @@ void nerf__relu_backward_bias(size_t n, size_t cols, const float *y,
 static NERF__BF16_WIDE void relu_backward_bf16_rows(void *ctx, size_t block)
 {
     const fused_job *j = ctx;
-    const size_t r0 = block * NERF__RELU_BF16_ROWS;
-    const size_t r1 = r0 + NERF__RELU_BF16_ROWS < j->n ? r0 + NERF__RELU_BF16_ROWS
-                                                       : j->n;
+    const size_t rows = NERF__RELU_BF16_ROWS;
+    const size_t r0 = block * rows;
+    const size_t r1 = r0 + rows < j->n ? r0 + rows : j->n;
     float *restrict part = j->out + block * j->cols;
     float g[CHUNK];
     for (size_t c = 0; c < j->cols; c++) {
@@ -143,7 +143,8 @@ static void sum_partials_cols(void *ctx, size_t begin, size_t end)
     const fused_job *j = ctx;
     size_t c0, c1;
     column_span(j, begin, end, &c0, &c1);
-    const size_t blocks = (j->n + NERF__RELU_BF16_ROWS - 1) / NERF__RELU_BF16_ROWS;
+    const size_t rows = NERF__RELU_BF16_ROWS;
+    const size_t blocks = (j->n + rows - 1) / rows;
     for (size_t b = 0; b < blocks; b++) {
         const float *p = j->out + b * j->cols;
         for (size_t c = c0; c < c1; c++) {

@@ -56,8 +56,6 @@
 /* Two widths (floor and ceiling of the split) per weight-gradient call. */
 #define WIDTHS 2
 
-#define WIDE NERF__BF16_WIDE
-
 /* ---- process-wide: support check and engine ----------------------------- */
 
 static struct {
@@ -216,7 +214,8 @@ int nerf__bf16_supported(const char **why)
 
 /* ---- rounding ----------------------------------------------------------- */
 
-WIDE void nerf__bf16_round(const float *x, size_t n, uint16_t *out)
+NERF__BF16_WIDE void nerf__bf16_round(const float *x, size_t n,
+                                      uint16_t *out)
 {
     for (size_t i = 0; i < n; i++) {
         out[i] = nerf__bf16_from_float(x[i]);
@@ -231,7 +230,7 @@ typedef struct round_job {
     size_t ldo;
 } round_job;
 
-static WIDE void round_rows(void *ctx, size_t begin, size_t end)
+static NERF__BF16_WIDE void round_rows(void *ctx, size_t begin, size_t end)
 {
     const round_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
@@ -757,8 +756,9 @@ static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     size_t cost = (n / j.blocks + 1) * k * cols / 16 + 1;
     nerf__parallel_blocks(j.blocks, cost, rows_block, &j);
     int st = atomic_load(&j.status);
-    return st == dnnl_success ? NERF_OK
-                              : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
+    return st == dnnl_success
+               ? NERF_OK
+               : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
 }
 
 /* dW[out, in] += dY^T X, cut along dW's longer side into one range per
@@ -866,8 +866,9 @@ static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     size_t cost = n * (out * in / j.blocks + 1) / 16 + 1;
     nerf__parallel_blocks(j.blocks, cost, wgrad_block, &j);
     int st = atomic_load(&j.status);
-    return st == dnnl_success ? NERF_OK
-                              : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
+    return st == dnnl_success
+               ? NERF_OK
+               : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
 }
 
 /* ---- the layer products ------------------------------------------------- */

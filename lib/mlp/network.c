@@ -666,8 +666,8 @@ int nerf__network_backward(const nerf__network *net, const float *params,
         const uint32_t first = net->depth + 1; /* view[0]'s index */
         float *dz = ws->grad_b; /* [n, 3] */
         sigmoid_backward(ws, d_rgb, dz, 3);
-        const nerf__layer_part h_top = {view_buffer(net, ws, net->view_depth - 1),
-                                        V, V};
+        const nerf__layer_part h_top = {
+            view_buffer(net, ws, net->view_depth - 1), V, V};
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
         float *d_view = ws->grad_a; /* [n, V] */
         rc = nerf__layer_backward(&c, n, 3, dz, 3, NULL, &h_top, 1,
@@ -719,8 +719,9 @@ int nerf__network_backward(const nerf__network *net, const float *params,
 
     for (uint32_t i = net->depth; i-- > 0 && rc == NERF_OK;) {
         const nerf__linear *l = &net->trunk[i];
-        const uint16_t *g16 = relu_backward(net, ws, W, trunk_buffer(net, ws, i),
-                                            dh, grads + l->b);
+        const uint16_t *g16 = relu_backward(net, ws, W,
+                                            trunk_buffer(net, ws, i), dh,
+                                            grads + l->b);
         uint16_t *kept = kept_input(net, ws, i);
         if (i == 0) {
             const nerf__layer_part enc = {ws->enc_pos, Ep, Ep};

@@ -494,7 +494,8 @@ TEST(deterministic)
     const size_t n = 1500, cut = 701;
     float *pos = malloc(n * 3 * sizeof(float));
     float *dir = malloc(n * 3 * sizeof(float));
-    float *a = malloc(n * 4 * sizeof(float)), *b = malloc(n * 4 * sizeof(float));
+    float *a = malloc(n * 4 * sizeof(float));
+    float *b = malloc(n * 4 * sizeof(float));
     make_points(n, pos, dir);
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, a, a + 3 * n));
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, b, b + 3 * n));
