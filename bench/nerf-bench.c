@@ -18,9 +18,14 @@
  *  - peak resident memory of an 800x800 render, in a child process;
  *  - thread counts and the BLAS build.
  *
+ * With --matmul bf16 the models compute their products in bf16 through
+ * oneDNN (NERF_MATMUL_BF16); the bound stays the fp32 cblas_sgemm one, so
+ * the shares then say how far bf16 goes past what fp32 products allow.
+ *
  *   nerf-bench [--json] [--preset reference|tiny|fast|all] [--seconds S]
  *              [--threads N] [--workers W] [--size S] [--render-size S]
  *              [--rss-rows K] [--full] [--no-800] [--fast-warmup N]
+ *              [--matmul fp32|bf16]
  *
  * With --json, stdout holds exactly one JSON object and the table goes to
  * stderr.  Run `nerf-bench --help` for what each option does.
@@ -42,6 +47,7 @@
 
 #include "composite_packed.h"
 #include "cpu.h"
+#include "gemm_bf16.h"
 #include "hashgrid.h"
 #include "march.h"
 #include "model.h"
@@ -141,6 +147,8 @@ static void set_blas_threads(int n)
  * Renderer workers each call the BLAS, so one worker per core over a
  * single-threaded BLAS is the other way to use the cores. */
 static int render_blas_threads;
+/* nerf_matmul of every model the bench creates (--matmul). */
+static int bench_matmul = NERF_MATMUL_FP32;
 
 static const char *blas_config(void)
 {
@@ -397,6 +405,7 @@ static int preset_make(preset_setup *p, int id)
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, id);
+    mo.matmul = (uint32_t)bench_matmul;
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
     nerf_sampler_options_preset(&so, id);
@@ -701,6 +710,8 @@ typedef struct figures {
     /* memory */
     rss_result rss;
     bool rss_skipped;
+    /* bf16: oneDNN primitives the model created for everything above */
+    size_t bf16_primitives;
 } figures;
 
 static int measure_training(preset_setup *p, const nerf_dataset *ds,
@@ -1181,6 +1192,8 @@ static int measure(preset_setup *p, const nerf_dataset *ds, double budget,
     }
     nerf_trainer_destroy(kept);
     free(l);
+    f->bf16_primitives = p->model->bf16 ? nerf__bf16_primitives(p->model->bf16)
+                                        : 0;
     if (failed) {
         fprintf(stderr, "nerf-bench: %s: %s: %s\n", p->name, failed,
                 nerf_last_error());
@@ -1364,6 +1377,7 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
     cJSON_AddNumberToObject(o, "render_seconds_timed", f->render_seconds);
     cJSON_AddNumberToObject(o, "render_workers", f->render_workers);
     cJSON_AddNumberToObject(o, "render_blas_threads", f->render_blas_threads);
+    cJSON_AddNumberToObject(o, "bf16_primitives", (double)f->bf16_primitives);
 
     cJSON_AddNumberToObject(o, "flops_per_sample_forward", f->flops_sample_fw);
     if (p->march) {
@@ -1451,6 +1465,8 @@ static void print_json(const run_info *ri, const preset_setup *ps,
     cJSON_AddStringToObject(root, "tool", "nerf-bench");
     cJSON_AddStringToObject(root, "libnerf_version", nerf_version_string());
     cJSON_AddStringToObject(root, "build_info", nerf_build_info());
+    cJSON_AddStringToObject(root, "matmul",
+                            bench_matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
     const char *cfg = blas_config(), *core = blas_corename();
     const char *coretype = getenv("OPENBLAS_CORETYPE");
     if (cfg) {
@@ -1770,6 +1786,11 @@ static void c_bd_samples(char *b, size_t s, const preset_setup *p,
     }
     snprintf(b, s, "%zu, %d rounds", f->bd.samples, f->bd.rounds);
 }
+static void c_prims(char *b, size_t s, const preset_setup *p,
+                    const figures *f)
+{
+    snprintf(b, s, "%zu", f->bf16_primitives);
+}
 static void c_workers(char *b, size_t s, const preset_setup *p,
                       const figures *f)
 {
@@ -1813,6 +1834,14 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
             "training: one calling thread\n",
             ri->cores, ri->blas_threads,
             ri->threads_requested > 0 ? " (--threads)" : "");
+    if (bench_matmul == NERF_MATMUL_BF16) {
+        fprintf(out, "matmul: bf16 (oneDNN, cut over libnerf's %u "
+                "threads); the sgemm rows are fp32 cblas_sgemm, so a share "
+                "is bf16 rays/s over the fp32 bound\n",
+                nerf__parallel_threads());
+    } else {
+        fprintf(out, "matmul: fp32 (cblas_sgemm)\n");
+    }
     if (ri->load_start[0] >= 0.0) {
         fprintf(out,
                 "load average: %.2f %.2f %.2f at the start, %.2f %.2f "
@@ -1864,6 +1893,9 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "  GFLOP/s", c_render_gf, ps, fs, n);
     row(out, "  sgemm-bound rays/s", c_render_bound, ps, fs, n);
     row(out, "  render_sgemm_share", c_render_share, ps, fs, n);
+    if (bench_matmul == NERF_MATMUL_BF16) {
+        row(out, "oneDNN primitives (bf16)", c_prims, ps, fs, n);
+    }
     char label[64];
     snprintf(label, sizeof label, "peak RSS, %ux%u render", ri->render_side,
              ri->render_side);
@@ -1964,6 +1996,7 @@ static void usage(FILE *out, const char *argv0)
         "       [--seconds S] [--threads N] [--workers W] [--size S]\n"
         "       [--render-size S] [--rss-rows K] [--full] [--no-800]\n"
         "       [--fast-warmup N] [--data DIR [--downscale K]]\n"
+        "       [--matmul fp32|bf16]\n"
         "\n"
         "  --json          print one JSON object on stdout (the table goes\n"
         "                  to stderr)\n"
@@ -1991,7 +2024,10 @@ static void usage(FILE *out, const char *argv0)
         "  --fast-warmup N training steps of the fast preset before the\n"
         "                  timed ones (default %u: past the grid's warm-up\n"
         "                  refreshes, which end at step %u); its steps are\n"
-        "                  timed in whole cycles of %u, at least one\n",
+        "                  timed in whole cycles of %u, at least one\n"
+        "  --matmul M      the models' products: fp32 (default, cblas) or\n"
+        "                  bf16 (oneDNN; see nerf_matmul_supported); the\n"
+        "                  sgemm bound is fp32 either way\n",
         argv0, MIN_TRAIN_STEPS, FAST_WARMUP_STEPS, NERF__GRID_WARMUP,
         NERF__GRID_EVERY);
 }
@@ -2056,6 +2092,16 @@ int main(int argc, char **argv)
             ri.full = true;
         } else if (strcmp(a, "--no-800") == 0) {
             ri.no_rss = true;
+        } else if (strcmp(a, "--matmul") == 0 && has_value) {
+            const char *v = argv[++i];
+            if (strcmp(v, "fp32") == 0) {
+                bench_matmul = NERF_MATMUL_FP32;
+            } else if (strcmp(v, "bf16") == 0) {
+                bench_matmul = NERF_MATMUL_BF16;
+            } else {
+                usage(stderr, argv[0]);
+                return 2;
+            }
         } else if (strcmp(a, "--fast-warmup") == 0 && has_value) {
             int w = atoi(argv[++i]);
             if (w < 0) {
@@ -2091,6 +2137,15 @@ int main(int argc, char **argv)
                     ? (uint32_t)(ri.threads_requested / render_blas_threads)
                     : 1;
         }
+    }
+    if (!nerf_matmul_supported(bench_matmul)) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        o.matmul = (uint32_t)bench_matmul;
+        nerf_model *m = NULL;
+        nerf_model_create(&m, &o); /* fails, and says why */
+        fprintf(stderr, "nerf-bench: --matmul bf16: %s\n", nerf_last_error());
+        return 2;
     }
     ri.cores = nerf__cpu_count();
     ri.blas_threads = blas_threads();

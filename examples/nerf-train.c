@@ -16,6 +16,7 @@ static const char usage[] =
     "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
     "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
     "                  [--batch-samples N] [--random-background 0|1]\n"
+    "                  [--matmul fp32|bf16]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
     "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
@@ -38,6 +39,10 @@ static const char usage[] =
     "                (Blender scenes) against a random background colour, so\n"
     "                that empty space cannot pass for the background (default\n"
     "                1 for fast, 0 for the others)\n"
+    "  --matmul fp32|bf16  the network's matrix products: fp32 (default)\n"
+    "                or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
+    "                fp32); saved in MODEL, so --resume, nerf-render and\n"
+    "                nerf-eval keep it\n"
     "Ctrl-C stops after the current step and saves MODEL.\n";
 
 static volatile sig_atomic_t interrupted;
@@ -75,6 +80,7 @@ typedef struct args {
     double lr, seconds;
     int resume;
     int random_bg; /* -1: as the preset's model */
+    int matmul;    /* nerf_matmul; -1: not given (fp32) */
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -86,6 +92,7 @@ static int parse(int argc, char **argv, args *a)
     a->batch = 1024;
     a->every = 500;
     a->random_bg = -1;
+    a->matmul = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
@@ -126,6 +133,11 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
         } else if (strcmp(k, "--batch-samples") == 0) {
             bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
+        } else if (strcmp(k, "--matmul") == 0) {
+            a->matmul = strcmp(v, "fp32") == 0   ? NERF_MATMUL_FP32
+                        : strcmp(v, "bf16") == 0 ? NERF_MATMUL_BF16
+                                                 : -1;
+            bad = a->matmul < 0;
         } else if (strcmp(k, "--random-background") == 0) {
             uint64_t on = 0;
             bad = cli_uint(v, 0, 1, &on);
@@ -160,6 +172,14 @@ static int open_model(const args *a, const nerf_hooks *hooks, nerf_model **m)
         if (rc == NERF_OK) {
             fprintf(stderr, "nerf-train: resuming %s at step %llu\n", a->out,
                     (unsigned long long)nerf_model_step(*m));
+            nerf_model_options mo;
+            NERF_MODEL_OPTIONS_INIT(&mo);
+            nerf_model_get_options(*m, &mo);
+            if (a->matmul >= 0 && (uint32_t)a->matmul != mo.matmul) {
+                fprintf(stderr, "nerf-train: --matmul ignored: the model "
+                        "keeps the %s products it was saved with\n",
+                        mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
+            }
         }
         return rc;
     }
@@ -168,6 +188,7 @@ static int open_model(const args *a, const nerf_hooks *hooks, nerf_model **m)
     nerf_model_options_preset(&mo, a->preset);
     mo.seed = a->seed;
     mo.hooks = hooks;
+    mo.matmul = a->matmul < 0 ? NERF_MATMUL_FP32 : (uint32_t)a->matmul;
     int rc = nerf_model_create(m, &mo);
     if (rc == NERF_OK) {
         /* The paper's schedule: a tenfold exponential decay over the run. */

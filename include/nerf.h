@@ -216,6 +216,38 @@ typedef enum nerf_preset {
                                     (Mueller et al. 2022), one network. */
 } nerf_preset;
 
+/**
+ * How a model computes its matrix products (nerf_model_options.matmul).
+ * Either way the weights, their gradients, the optimiser state and
+ * checkpoints are fp32: the choice changes the arithmetic of the products,
+ * never what is stored.
+ */
+typedef enum nerf_matmul {
+    NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
+    NERF_MATMUL_BF16 = 1  /**< Both operands of every layer product rounded
+                               to bfloat16 (nearest even), products summed
+                               in fp32; bias and ReLU fused into the
+                               product.  Through oneDNN, on CPUs with
+                               AVX512-BF16: ask nerf_matmul_supported()
+                               first.  Several times the fp32 rate on
+                               wide layers (docs/performance.md); results
+                               differ from fp32 by the rounding (relative
+                               errors of order 1e-3). */
+} nerf_matmul;
+
+/**
+ * Whether models of nerf_matmul @p kind can be created here: 1 or 0.
+ * NERF_MATMUL_FP32 is always available.  NERF_MATMUL_BF16 needs a libnerf
+ * built with oneDNN (meson option bf16) and a CPU on which oneDNN runs
+ * bf16 natively (AVX512-BF16; the environment variable DNNL_MAX_CPU_ISA
+ * can hide it).  Unknown kinds give 0.
+ *
+ * The first call for NERF_MATMUL_BF16 creates a small oneDNN primitive to
+ * find out (a few milliseconds); later calls return the stored answer.
+ * Thread-safe.
+ */
+NERF_API int nerf_matmul_supported(int kind);
+
 /** Which of the model's two networks a call addresses. */
 typedef enum nerf_network {
     NERF_NETWORK_COARSE = 0,
@@ -275,7 +307,13 @@ typedef struct nerf_model_options {
                                    rgb layer, 1..8; default 1. */
     uint32_t density_activation; /**< nerf_density_activation; default
                                    RELU. */
-    uint32_t reserved1;       /**< Must be 0. */
+    /* Formerly reserved1, which had to be 0: old callers get fp32. */
+    uint32_t matmul;          /**< nerf_matmul: how the products are
+                                   computed; default NERF_MATMUL_FP32.
+                                   NERF_MATMUL_BF16 where
+                                   nerf_matmul_supported() says 0 makes
+                                   nerf_model_create() fail with
+                                   NERF_EINVAL.  Saved in checkpoints. */
 } nerf_model_options;
 
 /**
@@ -289,7 +327,7 @@ NERF_API int nerf_model_options_init(nerf_model_options *opts,
 
 /**
  * Overwrite the structural fields of an initialised @p opts with a named
- * preset; seed and hooks are kept.
+ * preset; seed, hooks and matmul are kept.
  * @return NERF_OK, or NERF_EINVAL for an unknown preset or bad struct.
  */
 NERF_API int nerf_model_options_preset(nerf_model_options *opts,
@@ -298,9 +336,10 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts,
 /**
  * Create a model with freshly initialised weights (deterministic for a given
  * seed; see docs/architecture.md for the scheme).
- * @return NERF_OK; NERF_EINVAL for out-of-range options; NERF_EVERSION for
- * an options struct from a newer header with non-zero unknown fields;
- * NERF_ENOMEM.
+ * @return NERF_OK; NERF_EINVAL for out-of-range options, or for
+ * NERF_MATMUL_BF16 where nerf_matmul_supported() says 0 (the message says
+ * why); NERF_EVERSION for an options struct from a newer header with
+ * non-zero unknown fields; NERF_ENOMEM.
  */
 NERF_API int nerf_model_create(nerf_model **out,
                                const nerf_model_options *opts);
@@ -393,7 +432,11 @@ NERF_API double nerf_model_learning_rate(const nerf_model *model);
 NERF_API int nerf_model_save(const nerf_model *model, const char *path);
 
 /**
- * Load a checkpoint written by nerf_model_save().
+ * Load a checkpoint written by nerf_model_save().  The model computes as it
+ * was saved, fp32 or bf16 (nerf_model_options.matmul), except that a bf16
+ * model loads computing in fp32 where nerf_matmul_supported() says bf16 is
+ * not available: its weights are fp32 either way, and a warning goes to
+ * the log.
  * @param hooks allocation and logging for the new model; NULL = defaults.
  * @return NERF_OK; NERF_EIO (cannot open or read); NERF_EFORMAT (not a
  * checkpoint, truncated or corrupted); NERF_EVERSION (written by a newer

@@ -7,10 +7,12 @@
 # Everything needed to build, test and run the examples, as Debian packages.
 # README.md lists the same packages for people who install them by hand.
 # libsdl2-dev builds examples/viewer; xvfb and xauth let its test open a
-# window without a display.
+# window without a display.  libdnnl-dev (oneDNN) is optional for the
+# library, which builds without it, but listed so that the tests cover the
+# bf16 products (meson option bf16).
 NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
                    meson ninja-build pkg-config python3-numpy
-                   libsdl2-dev xvfb xauth)
+                   libsdl2-dev xvfb xauth libdnnl-dev)
 
 # Options of build/release, shared by both scripts so that running one after
 # the other reuses the build instead of reconfiguring it back and forth.

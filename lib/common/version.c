@@ -18,5 +18,6 @@ NERF_API const char *nerf_build_info(void)
            "; libpng " NERF_CONFIG_PNG_VERSION
            "; zlib " NERF_CONFIG_ZLIB_VERSION
            "; cjson " NERF_CONFIG_CJSON_VERSION
+           "; bf16 " NERF_CONFIG_BF16
            "; " NERF_CONFIG_BUILDTYPE " build";
 }

@@ -7,6 +7,7 @@
 #define NERF_MLP_FUSED_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 /* y[i, :cols] = max(y[i, :cols] + b, 0) for n rows of stride ld. */
 void nerf__bias_relu(size_t n, size_t cols, float *y, size_t ld,
@@ -22,6 +23,19 @@ void nerf__bias_add(size_t n, size_t cols, float *y, size_t ld,
  */
 void nerf__relu_backward_bias(size_t n, size_t cols, const float *y,
                               size_t ldy, float *dy, size_t lddy, float *db);
+
+/*
+ * The same for a bf16 layer, whose products read only the rounded
+ * gradient: the masked dy goes to dyb [n, cols] (contiguous) rounded to
+ * bf16, and dy itself is left as it was.  partial is scratch for
+ * NERF__RELU_BF16_PARTIALS(n, cols) floats.
+ */
+#define NERF__RELU_BF16_ROWS 256
+#define NERF__RELU_BF16_PARTIALS(n, cols)                                    \
+    (((n) + NERF__RELU_BF16_ROWS - 1) / NERF__RELU_BF16_ROWS * (cols))
+void nerf__relu_backward_bias_bf16(size_t n, size_t cols, const float *y,
+                                   size_t ldy, const float *dy, size_t lddy,
+                                   float *db, uint16_t *dyb, float *partial);
 
 /* db[j] += sum_i dy[i, j]. */
 void nerf__bias_backward(size_t n, size_t cols, const float *dy, size_t ld,

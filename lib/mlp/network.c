@@ -4,8 +4,8 @@
 #include <string.h>
 
 #include "fused.h"
-#include "gemm.h"
 #include "hashgrid.h"
+#include "layer.h"
 #include "parallel.h"
 #include "rng.h"
 #include "sh.h"
@@ -129,6 +129,46 @@ static size_t round64(size_t floats)
     return (floats + 15) & ~(size_t)15; /* keep every buffer 64-byte aligned */
 }
 
+/* Layers in order: the trunk, the head, the colour branch and rgb. */
+static uint32_t layer_count(const nerf__network *net)
+{
+    return net->depth + 1 + (net->use_viewdirs ? net->view_depth + 1 : 0);
+}
+
+static const nerf__linear *layer_at(const nerf__network *net, uint32_t index)
+{
+    if (index < net->depth) {
+        return &net->trunk[index];
+    }
+    index -= net->depth;
+    if (index == 0) {
+        return &net->head;
+    }
+    return index - 1 < net->view_depth ? &net->view[index - 1] : &net->rgb;
+}
+
+/* Inputs of the layers before `index`, side by side. */
+static size_t input_columns(const nerf__network *net, uint32_t index)
+{
+    size_t k = 0;
+    for (uint32_t i = 0; i < index; i++) {
+        k += layer_at(net, i)->in;
+    }
+    return k;
+}
+
+/*
+ * A bf16 network that keeps its activations also keeps each layer's input
+ * as its forward product rounded it ([n, in], layer after layer), so that
+ * the weight gradient need not round it again: NULL otherwise.
+ */
+static uint16_t *kept_input(const nerf__network *net, nerf__workspace *ws,
+                            uint32_t index)
+{
+    return net->bf16 && ws->kept ? ws->kept + ws->n * input_columns(net, index)
+                                 : NULL;
+}
+
 static int reserve(const nerf__env *env, nerf__workspace *ws,
                    const nerf__network *net, size_t n, bool keep,
                    bool density_only)
@@ -141,7 +181,13 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     }
     size_t layers = keep ? net->depth : 2;
     size_t view_layers = density_only ? 0 : keep ? net->view_depth : 2;
-    size_t sizes[9] = {
+    /* bf16 storage, in floats (two values each). */
+    const bool bf16 = keep && net->bf16 != NULL;
+    size_t kept = bf16 ? (n * input_columns(net, layer_count(net)) + 1) / 2 : 0;
+    size_t grad16 = bf16 ? (n * grad_width(net) + 1) / 2 : 0;
+    size_t partials = bf16 ? NERF__RELU_BF16_PARTIALS(n, grad_width(net)) : 0;
+    enum { SLOTS = 12 };
+    size_t sizes[SLOTS] = {
         round64(n * net->pos_width),
         density_only ? 0 : round64(n * net->dir_width),
         keep && nerf__network_has_table(net) ? round64(n * 3) : 0,
@@ -151,9 +197,12 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         density_only ? 0 : round64(n * 3),
         keep ? round64(n * grad_width(net)) : 0,
         keep ? round64(n * grad_width(net)) : 0,
+        round64(kept),
+        round64(grad16),
+        round64(partials),
     };
     size_t total = 0;
-    for (int i = 0; i < 9; i++) {
+    for (int i = 0; i < SLOTS; i++) {
         total += sizes[i];
     }
     float *block = nerf__alloc(env, total * sizeof(float));
@@ -161,15 +210,20 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         return NERF_ENOMEM;
     }
     nerf__workspace_release(env, ws);
-    float **slots[9] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
-                        &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
-                        &ws->grad_b};
+    float *kept_at = NULL, *grad16_at = NULL;
+    float **slots[SLOTS] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
+                            &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
+                            &ws->grad_b, &kept_at, &grad16_at,
+                            &ws->partials};
     float *at = block;
-    for (int i = 0; i < 9; i++) {
+    for (int i = 0; i < SLOTS; i++) {
         *slots[i] = sizes[i] ? at : NULL;
         at += sizes[i];
     }
+    ws->kept = (uint16_t *)kept_at;
+    ws->grad_bf16 = (uint16_t *)grad16_at;
     ws->enc_pos = block; /* first slot: also the block to free */
+    ws->env = *env;
     ws->cap = n;
     ws->n = n;
     ws->keep = keep;
@@ -200,6 +254,7 @@ int nerf__workspace_reserve_density(const nerf__env *env, nerf__workspace *ws,
 void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws)
 {
     nerf__free(env, ws->enc_pos);
+    nerf__layer_scratch_free(ws->bf16);
     memset(ws, 0, sizeof *ws);
 }
 
@@ -381,63 +436,97 @@ static void output_rows(void *ctx, size_t begin, size_t end)
     }
 }
 
-void nerf__network_forward(const nerf__network *net, const float *params,
-                           nerf__workspace *ws, size_t n,
-                           const float *positions, const float *directions,
-                           float *rgb_out, float *sigma_out)
+static nerf__layer_ctx layer_ctx(const nerf__network *net, nerf__workspace *ws)
 {
-    const uint32_t W = net->width, Ep = net->pos_width;
-    ws->n = n;
-    encode_positions(net, params, ws, n, positions);
+    return (nerf__layer_ctx){net->bf16, &ws->bf16, &ws->env};
+}
 
+/* The trunk, from the encoded positions in ws->enc_pos; returns its last
+ * activation, [n, width]. */
+static int trunk_forward(const nerf__network *net, const float *params,
+                         nerf__workspace *ws, size_t n, const float **top)
+{
+    const nerf__layer_ctx c = layer_ctx(net, ws);
+    const uint32_t W = net->width, Ep = net->pos_width;
     const float *x = ws->enc_pos;
     size_t ldx = Ep;
     for (uint32_t i = 0; i < net->depth; i++) {
         const nerf__linear *l = &net->trunk[i];
         float *y = trunk_buffer(net, ws, i);
-        if (i > 0 && i == net->skip) {
-            /* Input is [gamma(x), h]: one product per column block. */
-            nerf__gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in,
-                               0.0f, y, W);
-            nerf__gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f,
-                               y, W);
-        } else {
-            nerf__gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f,
-                               y, W);
+        /* At the skip the input is [gamma(x), h]. */
+        const bool skip = i > 0 && i == net->skip;
+        const nerf__layer_part parts[2] = {
+            {skip ? ws->enc_pos : x, skip ? Ep : ldx, skip ? Ep : l->in},
+            {x, ldx, W},
+        };
+        int rc = nerf__layer_forward(&c, n, W, parts, skip ? 2 : 1,
+                                     params + l->w, l->in, params + l->b,
+                                     true, y, W, kept_input(net, ws, i));
+        if (rc != NERF_OK) {
+            return rc;
         }
-        nerf__bias_relu(n, W, y, W, params + l->b);
         x = y;
         ldx = W;
     }
+    *top = x;
+    return NERF_OK;
+}
+
+int nerf__network_forward(const nerf__network *net, const float *params,
+                          nerf__workspace *ws, size_t n,
+                          const float *positions, const float *directions,
+                          float *rgb_out, float *sigma_out)
+{
+    const nerf__layer_ctx c = layer_ctx(net, ws);
+    const uint32_t W = net->width;
+    ws->n = n;
+    encode_positions(net, params, ws, n, positions);
+    const float *x;
+    int rc = trunk_forward(net, params, ws, n, &x);
 
     const uint32_t HW = nerf__network_head_width(net);
-    nerf__gemm_forward(n, HW, W, x, ldx, params + net->head.w, W, 0.0f,
-                       ws->head, HW);
-    nerf__bias_add(n, HW, ws->head, HW, params + net->head.b);
-
-    if (net->use_viewdirs) {
+    const nerf__layer_part top = {x, W, W};
+    if (rc == NERF_OK) {
+        rc = nerf__layer_forward(&c, n, HW, &top, 1, params + net->head.w, W,
+                                 params + net->head.b, false, ws->head, HW,
+                                 kept_input(net, ws, net->depth));
+    }
+    if (rc == NERF_OK && net->use_viewdirs) {
         const nerf__linear *v0 = &net->view[0], *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
         const uint32_t F = nerf__network_feature_width(net);
         encode_directions(net, ws, n, directions);
         float *h = view_buffer(net, ws, 0);
-        nerf__gemm_forward(n, V, F, ws->head, HW, params + v0->w, v0->in, 0.0f,
-                           h, V);
-        nerf__gemm_forward(n, V, Ed, ws->enc_dir, Ed, params + v0->w + F,
-                           v0->in, 1.0f, h, V);
-        nerf__bias_relu(n, V, h, V, params + v0->b);
-        for (uint32_t k = 1; k < net->view_depth; k++) {
+        const nerf__layer_part in0[2] = {{ws->head, HW, F},
+                                         {ws->enc_dir, Ed, Ed}};
+        const uint32_t first = net->depth + 1; /* view[0]'s index */
+        rc = nerf__layer_forward(&c, n, V, in0, 2, params + v0->w, v0->in,
+                                 params + v0->b, true, h, V,
+                                 kept_input(net, ws, first));
+        for (uint32_t k = 1; k < net->view_depth && rc == NERF_OK; k++) {
             float *hk = view_buffer(net, ws, k);
-            nerf__gemm_forward(n, V, V, h, V, params + net->view[k].w, V, 0.0f,
-                               hk, V);
-            nerf__bias_relu(n, V, hk, V, params + net->view[k].b);
+            const nerf__layer_part in = {h, V, V};
+            rc = nerf__layer_forward(&c, n, V, &in, 1, params + net->view[k].w,
+                                     V, params + net->view[k].b, true, hk, V,
+                                     kept_input(net, ws, first + k));
             h = hk;
         }
-        nerf__gemm_forward(n, 3, V, h, V, params + r->w, V, 0.0f, ws->rgb, 3);
+        /* The rgb bias is added by the sigmoid pass (output_rows). */
+        const nerf__layer_part in = {h, V, V};
+        if (rc == NERF_OK) {
+            rc = nerf__layer_forward(&c, n, 3, &in, 1, params + r->w, V, NULL,
+                                     false, ws->rgb, 3,
+                                     kept_input(net, ws,
+                                                first + net->view_depth));
+        }
+    }
+    if (rc != NERF_OK) {
+        return rc;
     }
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
                   .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 60, output_rows, &j);
+    return NERF_OK;
 }
 
 /* Density from the head's one column, ws->head [n, 1]. */
@@ -453,38 +542,31 @@ static void density_rows(void *ctx, size_t begin, size_t end)
     }
 }
 
-void nerf__network_density(const nerf__network *net, const float *params,
-                           nerf__workspace *ws, size_t n,
-                           const float *positions, float *sigma_out)
+int nerf__network_density(const nerf__network *net, const float *params,
+                          nerf__workspace *ws, size_t n,
+                          const float *positions, float *sigma_out)
 {
-    const uint32_t W = net->width, Ep = net->pos_width;
+    const nerf__layer_ctx c = layer_ctx(net, ws);
+    const uint32_t W = net->width;
     ws->n = n;
     encode_positions(net, params, ws, n, positions);
-    const float *x = ws->enc_pos;
-    size_t ldx = Ep;
-    for (uint32_t i = 0; i < net->depth; i++) {
-        const nerf__linear *l = &net->trunk[i];
-        float *y = trunk_buffer(net, ws, i);
-        if (i > 0 && i == net->skip) {
-            nerf__gemm_forward(n, W, Ep, ws->enc_pos, Ep, params + l->w, l->in,
-                               0.0f, y, W);
-            nerf__gemm_forward(n, W, W, x, ldx, params + l->w + Ep, l->in, 1.0f,
-                               y, W);
-        } else {
-            nerf__gemm_forward(n, W, l->in, x, ldx, params + l->w, l->in, 0.0f,
-                               y, W);
-        }
-        nerf__bias_relu(n, W, y, W, params + l->b);
-        x = y;
-        ldx = W;
-    }
-    /* Only the density row of the head's weights. */
+    const float *x;
+    int rc = trunk_forward(net, params, ws, n, &x);
+    /* Only the density row of the head's weights; its bias is added by
+     * density_rows. */
     const size_t row = (size_t)nerf__network_sigma_col(net) * W;
-    nerf__gemm_forward(n, 1, W, x, ldx, params + net->head.w + row, W, 0.0f,
-                 ws->head, 1);
+    const nerf__layer_part top = {x, W, W};
+    if (rc == NERF_OK) {
+        rc = nerf__layer_forward(&c, n, 1, &top, 1, params + net->head.w + row,
+                                 W, NULL, false, ws->head, 1, NULL);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
     rows_job j = {.net = net, .params = params, .ws = ws,
                   .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 30, density_rows, &j);
+    return NERF_OK;
 }
 
 /* dz = d_rgb * rgb (1 - rgb): the sigmoid's backward, into rows of ld. */
@@ -547,72 +629,113 @@ static float *other(nerf__workspace *ws, const float *p)
     return p == ws->grad_a ? ws->grad_b : ws->grad_a;
 }
 
-void nerf__network_backward(const nerf__network *net, const float *params,
-                            float *grads, nerf__workspace *ws,
-                            const float *d_rgb, const float *d_sigma)
+/*
+ * The ReLU backward and bias gradient of a layer whose output was y, on
+ * its output gradient dy.  A bf16 network's products read the masked
+ * gradient only rounded: it comes back rounded (dy is then left as it
+ * was); fp32 networks get NULL and the masked gradient in dy.
+ */
+static const uint16_t *relu_backward(const nerf__network *net,
+                                     nerf__workspace *ws, size_t cols,
+                                     const float *y, float *dy, float *db)
 {
+    if (net->bf16 && ws->grad_bf16) {
+        nerf__relu_backward_bias_bf16(ws->n, cols, y, cols, dy, cols, db,
+                                      ws->grad_bf16, ws->partials);
+        return ws->grad_bf16;
+    }
+    nerf__relu_backward_bias(ws->n, cols, y, cols, dy, cols, db);
+    return NULL;
+}
+
+int nerf__network_backward(const nerf__network *net, const float *params,
+                           float *grads, nerf__workspace *ws,
+                           const float *d_rgb, const float *d_sigma)
+{
+    const nerf__layer_ctx c = layer_ctx(net, ws);
     const size_t n = ws->n;
     const uint32_t W = net->width, Ep = net->pos_width;
     const uint32_t HW = nerf__network_head_width(net);
     float *d_head = ws->grad_a;
+    int rc = NERF_OK;
 
     if (net->use_viewdirs) {
         const nerf__linear *r = &net->rgb;
         const uint32_t Ed = net->dir_width, V = net->view_width;
         const uint32_t F = nerf__network_feature_width(net);
+        const uint32_t first = net->depth + 1; /* view[0]'s index */
         float *dz = ws->grad_b; /* [n, 3] */
         sigmoid_backward(ws, d_rgb, dz, 3);
-        const float *h_top = view_buffer(net, ws, net->view_depth - 1);
+        const nerf__layer_part h_top = {
+            view_buffer(net, ws, net->view_depth - 1), V, V};
         nerf__bias_backward(n, 3, dz, 3, grads + r->b);
-        nerf__gemm_weight_grad(n, 3, V, dz, 3, h_top, V, grads + r->w, V);
         float *d_view = ws->grad_a; /* [n, V] */
-        nerf__gemm_input_grad(n, 3, V, dz, 3, params + r->w, V, d_view, V);
-        for (uint32_t k = net->view_depth; k-- > 1;) {
-            const nerf__linear *v = &net->view[k];
-            const float *h_in = view_buffer(net, ws, k - 1);
-            nerf__relu_backward_bias(n, V, view_buffer(net, ws, k), V, d_view,
-                                     V, grads + v->b);
-            nerf__gemm_weight_grad(n, V, V, d_view, V, h_in, V, grads + v->w,
-                                   V);
-            float *d_in = other(ws, d_view);
-            nerf__gemm_input_grad(n, V, V, d_view, V, params + v->w, V, d_in,
+        rc = nerf__layer_backward(&c, n, 3, dz, 3, NULL, &h_top, 1,
+                                  kept_input(net, ws, first + net->view_depth),
+                                  params + r->w, V, grads + r->w, 0, d_view,
                                   V);
+        for (uint32_t k = net->view_depth; k-- > 1 && rc == NERF_OK;) {
+            const nerf__linear *v = &net->view[k];
+            const nerf__layer_part h_in = {view_buffer(net, ws, k - 1), V, V};
+            const uint16_t *g16 = relu_backward(net, ws, V,
+                                                view_buffer(net, ws, k),
+                                                d_view, grads + v->b);
+            float *d_in = other(ws, d_view);
+            rc = nerf__layer_backward(&c, n, V, d_view, V, g16, &h_in, 1,
+                                      kept_input(net, ws, first + k),
+                                      params + v->w, V, grads + v->w, 0, d_in,
+                                      V);
             d_view = d_in;
         }
+        if (rc != NERF_OK) {
+            return rc;
+        }
         const nerf__linear *v0 = &net->view[0];
-        nerf__relu_backward_bias(n, V, view_buffer(net, ws, 0), V, d_view, V,
-                                 grads + v0->b);
-        nerf__gemm_weight_grad(n, V, F, d_view, V, ws->head, HW, grads + v0->w,
-                         v0->in);
-        nerf__gemm_weight_grad(n, V, Ed, d_view, V, ws->enc_dir, Ed,
-                         grads + v0->w + F, v0->in);
+        const uint16_t *g16 = relu_backward(net, ws, V, view_buffer(net, ws, 0),
+                                            d_view, grads + v0->b);
+        const nerf__layer_part in0[2] = {{ws->head, HW, F},
+                                         {ws->enc_dir, Ed, Ed}};
         d_head = other(ws, d_view);
-        nerf__gemm_input_grad(n, V, F, d_view, V, params + v0->w, v0->in,
-                              d_head, HW);
+        rc = nerf__layer_backward(&c, n, V, d_view, V, g16, in0, 2,
+                                  kept_input(net, ws, first), params + v0->w,
+                                  v0->in, grads + v0->w, 0, d_head, HW);
+        if (rc != NERF_OK) {
+            return rc;
+        }
         sigma_grad(net, ws, d_sigma, d_head);
     } else {
         sigmoid_backward(ws, d_rgb, d_head, 4);
         sigma_grad(net, ws, d_sigma, d_head);
     }
 
-    const float *h_last = trunk_buffer(net, ws, net->depth - 1);
+    const nerf__layer_part h_last = {trunk_buffer(net, ws, net->depth - 1), W,
+                                     W};
     nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
-    nerf__gemm_weight_grad(n, HW, W, d_head, HW, h_last, W, grads + net->head.w,
-                           W);
     float *dh = other(ws, d_head);
-    nerf__gemm_input_grad(n, HW, W, d_head, HW, params + net->head.w, W, dh, W);
+    rc = nerf__layer_backward(&c, n, HW, d_head, HW, NULL, &h_last, 1,
+                              kept_input(net, ws, net->depth),
+                              params + net->head.w, W, grads + net->head.w, 0,
+                              dh, W);
 
-    for (uint32_t i = net->depth; i-- > 0;) {
+    for (uint32_t i = net->depth; i-- > 0 && rc == NERF_OK;) {
         const nerf__linear *l = &net->trunk[i];
-        const float *y = trunk_buffer(net, ws, i);
-        nerf__relu_backward_bias(n, W, y, W, dh, W, grads + l->b);
+        const uint16_t *g16 = relu_backward(net, ws, W,
+                                            trunk_buffer(net, ws, i), dh,
+                                            grads + l->b);
+        uint16_t *kept = kept_input(net, ws, i);
         if (i == 0) {
-            nerf__gemm_weight_grad(n, W, l->in, dh, W, ws->enc_pos, Ep,
-                                   grads + l->w, l->in);
-            if (nerf__network_has_table(net)) {
-                float *d_enc = other(ws, dh);
-                nerf__gemm_input_grad(n, W, Ep, dh, W, params + l->w, l->in,
+            const nerf__layer_part enc = {ws->enc_pos, Ep, Ep};
+            if (!nerf__network_has_table(net)) {
+                rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
+                                          params + l->w, l->in, grads + l->w,
+                                          -1, NULL, 0);
+                break;
+            }
+            float *d_enc = other(ws, dh);
+            rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
+                                      params + l->w, l->in, grads + l->w, 0,
                                       d_enc, Ep);
+            if (rc == NERF_OK) {
                 table_job tj = {.hg = &net->hash, .in = ws->pos,
                                 .d_out = d_enc, .grad = grads + net->table,
                                 .n = n, .stride = Ep};
@@ -621,20 +744,18 @@ void nerf__network_backward(const nerf__network *net, const float *params,
             }
             break;
         }
-        const float *x = trunk_buffer(net, ws, i - 1);
-        size_t hidden_col = 0;
-        if (i == net->skip) {
-            nerf__gemm_weight_grad(n, W, Ep, dh, W, ws->enc_pos, Ep,
-                                   grads + l->w, l->in);
-            hidden_col = Ep;
-        }
-        nerf__gemm_weight_grad(n, W, W, dh, W, x, W, grads + l->w + hidden_col,
-                               l->in);
+        /* At the skip the input was [gamma(x), h]: the gradient goes on
+         * only through h, part 1. */
+        const bool skip = i == net->skip;
+        const nerf__layer_part x = {trunk_buffer(net, ws, i - 1), W, W};
+        const nerf__layer_part parts[2] = {{ws->enc_pos, Ep, Ep}, x};
         float *dx = other(ws, dh);
-        nerf__gemm_input_grad(n, W, W, dh, W, params + l->w + hidden_col, l->in,
-                              dx, W);
+        rc = nerf__layer_backward(&c, n, W, dh, W, g16, skip ? parts : &x,
+                                  skip ? 2 : 1, kept, params + l->w, l->in,
+                                  grads + l->w, skip ? 1 : 0, dx, W);
         dh = dx;
     }
+    return rc;
 }
 
 double nerf__network_flops_per_sample(const nerf__network *net)

@@ -25,6 +25,7 @@
 #include "encoding.h"
 #include "env.h"
 #include "hashgrid.h"
+#include "layer.h"
 
 #define NERF__MAX_DEPTH 32
 #define NERF__MAX_VIEW_DEPTH 8
@@ -67,6 +68,9 @@ typedef struct nerf__network {
     nerf__linear rgb;  /* view_width -> 3, sigmoid */
     size_t offset;     /* first parameter in the model's array */
     size_t count;      /* number of parameters, table included */
+    /* The model's bf16 backend (gemm_bf16.h), or NULL: products in fp32
+     * through cblas.  Set by the model after the layout. */
+    struct nerf__bf16 *bf16;
 } nerf__network;
 
 /*
@@ -133,6 +137,15 @@ typedef struct nerf__workspace {
     float *rgb;     /* [n, 3], after the sigmoid */
     float *grad_a;  /* [n, width + 1], gradient scratch */
     float *grad_b;  /* [n, width + 1] */
+    /* bf16 networks with keep: every layer's input as its forward product
+     * rounded it, and a rounded gradient ([n, width + 1]). */
+    uint16_t *kept;
+    uint16_t *grad_bf16;
+    float *partials;  /* the bias sums of nerf__relu_backward_bias_bf16 */
+    nerf__env env;  /* what reserved it, for the bf16 scratch */
+    /* The rounded operands of a bf16 network's products, created by its
+     * first product (layer.h). */
+    struct nerf__bf16_scratch *bf16;
 } nerf__workspace;
 
 int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
@@ -148,8 +161,11 @@ void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws);
  * be NULL when the network ignores them.  rgb_out [n, 3] receives the
  * sigmoid colours and sigma_out [n] the raw density (either may be NULL).
  * The workspace must have been reserved for n samples.
+ *
+ * These calls fail only for a bf16 network (NERF_ENOMEM, or NERF_ERROR if
+ * oneDNN fails), with a message; an fp32 network always gives NERF_OK.
  */
-void nerf__network_forward(const nerf__network *net, const float *params,
+int nerf__network_forward(const nerf__network *net, const float *params,
                            nerf__workspace *ws, size_t n,
                            const float *positions, const float *directions,
                            float *rgb_out, float *sigma_out);
@@ -162,7 +178,7 @@ void nerf__network_forward(const nerf__network *net, const float *params,
  * for n samples by either reserve call; the activations of its last
  * forward are overwritten.
  */
-void nerf__network_density(const nerf__network *net, const float *params,
+int nerf__network_density(const nerf__network *net, const float *params,
                            nerf__workspace *ws, size_t n,
                            const float *positions, float *sigma_out);
 
@@ -172,7 +188,7 @@ void nerf__network_density(const nerf__network *net, const float *params,
  * sigma [n]; either may be NULL for zero.  Gradients are added to grads
  * (same layout as params).
  */
-void nerf__network_backward(const nerf__network *net, const float *params,
+int nerf__network_backward(const nerf__network *net, const float *params,
                             float *grads, nerf__workspace *ws,
                             const float *d_rgb, const float *d_sigma);
 

@@ -15,6 +15,7 @@
 
 #include "byteorder.h"
 #include "file_io.h"
+#include "gemm_bf16.h"
 #include "model.h"
 #include "occupancy.h"
 
@@ -44,17 +45,23 @@
 /* Optional: hyperparameters added after 0.2's first release (weight
  * decay).  A reader that does not know it trains on without them. */
 #define TAG_TRAINING2 8u
+/* Optional: how the model computes its products (nerf_model_options.
+ * matmul), written for bf16 models only.  The weights are fp32 either way,
+ * so a reader that does not know it loads the model computing in fp32. */
+#define TAG_MATMUL 9u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 8
+#define N_SECTIONS 9
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
+#define MATMUL_INDEX 8
+#define MATMUL_SIZE 8u /* u32 matmul, u32 reserved */
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
 #define TRAINING_SIZE 64u /* 6 f64 hyperparameters, u64 step, u64 count */
 #define N_OPTION_U32 11
 #define OPTIONS2_SIZE 48u /* the 12 u32 fields appended in 0.2 */
-#define N_OPTION2_U32 12
+#define N_OPTION2_U32 11  /* and a reserved 0 */
 #define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
 #define TRAINING2_SIZE 8u /* f64 weight decay */
 
@@ -113,7 +120,6 @@ static const size_t option2_u32[N_OPTION2_U32] = {
     offsetof(nerf_model_options, geo_features),
     offsetof(nerf_model_options, view_depth),
     offsetof(nerf_model_options, density_activation),
-    offsetof(nerf_model_options, reserved1),
 };
 
 static void store_fields(unsigned char *p, const nerf_model_options *o,
@@ -148,7 +154,23 @@ static unsigned char *put_options2(unsigned char *p,
 {
     p = put_section(p, TAG_OPTIONS2, OPTIONS2_SIZE);
     store_fields(p, o, option2_u32, N_OPTION2_U32);
+    /* The struct's reserved1 here, which matmul replaced there: matmul
+     * has a section of its own (TAG_MATMUL) that old readers can skip. */
+    nerf__store_le32(p + 4 * N_OPTION2_U32, 0);
     return p + OPTIONS2_SIZE;
+}
+
+static size_t matmul_size(const nerf_model *m)
+{
+    return m->opts.matmul != NERF_MATMUL_FP32 ? SECTION_HEAD + MATMUL_SIZE : 0;
+}
+
+static unsigned char *put_matmul(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_MATMUL, MATMUL_SIZE);
+    nerf__store_le32(p, m->opts.matmul);
+    nerf__store_le32(p + 4, 0);
+    return p + MATMUL_SIZE;
 }
 
 static unsigned char *put_training(unsigned char *p, const nerf_model *m)
@@ -207,7 +229,7 @@ static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
            TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
-           TRAINING2_SIZE + occupancy_size(m);
+           TRAINING2_SIZE + occupancy_size(m) + matmul_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -220,7 +242,10 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     p = put_options2(p, &m->opts);
     p = put_training2(p, m);
     if (m->grid) {
-        put_occupancy(p, m);
+        p = put_occupancy(p, m);
+    }
+    if (matmul_size(m)) {
+        put_matmul(p, m);
     }
 }
 
@@ -440,7 +465,7 @@ typedef struct sections {
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
-    "training state (0.2)"};
+    "training state (0.2)", "matmul"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -448,7 +473,8 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS
                                       : tag == TAG_OCCUPANCY ||
-                                            tag == TAG_TRAINING2;
+                                            tag == TAG_TRAINING2 ||
+                                            tag == TAG_MATMUL;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -517,9 +543,46 @@ static void get_options2(const unsigned char *p, nerf_model_options *o)
     load_fields(p, o, option2_u32, N_OPTION2_U32);
 }
 
+/* The matmul section: what it holds, or why it is corrupt (NULL: fine). */
+static const char *get_matmul(const sections *s, nerf_model_options *o)
+{
+    const unsigned char *b = s->body[MATMUL_INDEX];
+    if (b == NULL) {
+        return NULL; /* fp32, as every file before the section */
+    }
+    if (s->len[MATMUL_INDEX] != MATMUL_SIZE || nerf__load_le32(b + 4) != 0) {
+        return "the matmul section has the wrong size or a non-zero reserved "
+               "field";
+    }
+    uint32_t v = nerf__load_le32(b);
+    if (v > NERF_MATMUL_BF16) {
+        return "the matmul section holds no known nerf_matmul";
+    }
+    o->matmul = v;
+    return NULL;
+}
+
+/*
+ * A checkpoint of a bf16 model holds fp32 weights like any other, so where
+ * bf16 products are not available it still loads, computing in fp32 (and
+ * saying so), rather than leaving its weights unusable on this machine.
+ */
+static void matmul_here(const nerf__env *env, const char *path,
+                        nerf_model_options *o)
+{
+    const char *why;
+    if (o->matmul == NERF_MATMUL_BF16 && !nerf__bf16_supported(&why)) {
+        nerf__log(env, NERF_LOG_WARN, "%s: the model was saved with bf16 "
+                  "products, which are not available here (%s): it computes "
+                  "in fp32", path, why);
+        o->matmul = NERF_MATMUL_FP32;
+    }
+}
+
 /* Options and sizes: everything that can be checked before allocating. */
-static int check_shapes(const char *path, const sections *s,
-                        nerf_model_options *o, uint64_t *n_params)
+static int check_shapes(const nerf__env *env, const char *path,
+                        const sections *s, nerf_model_options *o,
+                        uint64_t *n_params)
 {
     if (s->len[0] != OPTIONS_SIZE || s->len[1] != TRAINING_SIZE) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
@@ -538,7 +601,18 @@ static int check_shapes(const char *path, const sections *s,
     get_options(s->body[0], o);
     if (s->body[5] != NULL) {
         get_options2(s->body[5], o);
+        if (nerf__load_le32(s->body[5] + 4 * N_OPTION2_U32) != 0) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                               "reserved field of options (0.2) is not 0)",
+                               path);
+        }
     }
+    const char *bad = get_matmul(s, o);
+    if (bad) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s)", path,
+                           bad);
+    }
+    matmul_here(env, path, o);
     if (nerf__model_check_options(o) != NERF_OK) {
         char why[512];
         snprintf(why, sizeof why, "%s", nerf_last_error());
@@ -652,7 +726,7 @@ static int build_model(const nerf__env *env, const char *path,
     uint64_t n = 0;
     int rc = split_sections(env, path, payload, size, &s);
     if (rc == NERF_OK) {
-        rc = check_shapes(path, &s, &o, &n);
+        rc = check_shapes(env, path, &s, &o, &n);
     }
     nerf_model *m = NULL;
     if (rc == NERF_OK) {
@@ -676,6 +750,7 @@ static int build_model(const nerf__env *env, const char *path,
     get_floats(s.body[2], m->params, m->n_params);
     get_floats(s.body[3], m->adam_m, m->n_params);
     get_floats(s.body[4], m->adam_v, m->n_params);
+    nerf__model_weights_changed(m);
     *out = m;
     return NERF_OK;
 }

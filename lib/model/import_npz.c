@@ -266,6 +266,7 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
         nerf_model_destroy(m);
         return rc;
     }
+    nerf__model_weights_changed(m);
     nerf__log(&m->env, NERF_LOG_DEBUG, "%s: imported %zu parameters into %u "
               "network(s)", path, m->n_params, (unsigned)m->n_nets);
     *out = m;

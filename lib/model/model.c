@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "gemm_bf16.h"
 #include "occupancy.h"
 #include "options.h"
 
@@ -73,6 +74,7 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     }
     uint64_t seed = o.seed;
     const nerf_hooks *hooks = o.hooks;
+    const uint32_t matmul = o.matmul;
     switch (preset) {
     case NERF_PRESET_REFERENCE:
         reference_options(&o);
@@ -93,6 +95,7 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     }
     o.seed = seed;
     o.hooks = hooks;
+    o.matmul = matmul;
     size_t n = opts->struct_size < sizeof o ? opts->struct_size : sizeof o;
     memcpy((char *)opts + sizeof o.struct_size,
            (const char *)&o + sizeof o.struct_size, n - sizeof o.struct_size);
@@ -163,8 +166,8 @@ static const char *check_fast_fields(const nerf_model_options *o)
     if (o->density_activation > NERF_DENSITY_EXP) {
         return "density_activation is not a known nerf_density_activation";
     }
-    if (o->reserved1 != 0) {
-        return "reserved1 must be 0";
+    if (o->matmul > NERF_MATMUL_BF16) {
+        return "matmul is not a known nerf_matmul";
     }
     return NULL;
 }
@@ -202,7 +205,24 @@ int nerf__model_check_options(const nerf_model_options *o)
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_model_options: %s", what);
     }
+    const char *why;
+    if (o->matmul == NERF_MATMUL_BF16 && !nerf__bf16_supported(&why)) {
+        return nerf__error(NERF_EINVAL, "nerf_model_options: matmul = "
+                           "NERF_MATMUL_BF16, but bf16 products are not "
+                           "available: %s", why);
+    }
     return NERF_OK;
+}
+
+NERF_API int nerf_matmul_supported(int kind)
+{
+    if (kind == NERF_MATMUL_FP32) {
+        return 1;
+    }
+    if (kind == NERF_MATMUL_BF16) {
+        return nerf__bf16_supported(NULL);
+    }
+    return 0;
 }
 
 static void setup_network(nerf__network *net, const nerf_model_options *o,
@@ -239,6 +259,33 @@ size_t nerf__model_options_param_count(const nerf_model_options *o)
     return net.count * (o->use_fine ? 2u : 1u);
 }
 
+/* The bf16 backend over the networks' layers.  Each network's layers
+ * follow its hash table (if any), which products never read, so the table
+ * is not rounded. */
+static int bf16_setup(nerf_model *m)
+{
+    nerf__bf16_region regions[NERF__BF16_MAX_REGIONS];
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        const nerf__network *net = &m->nets[i];
+        regions[i].offset = net->trunk[0].w;
+        regions[i].count = net->offset + net->count - net->trunk[0].w;
+    }
+    int rc = nerf__bf16_create(&m->env, m->params, regions, (int)m->n_nets,
+                               &m->bf16);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        m->nets[i].bf16 = m->bf16;
+    }
+    return NERF_OK;
+}
+
+void nerf__model_weights_changed(nerf_model *m)
+{
+    nerf__bf16_weights_changed(m->bf16);
+}
+
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
                       const nerf__env *env)
 {
@@ -269,6 +316,13 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         if (*arrays[i] == NULL) {
             nerf_model_destroy(m);
             return NERF_ENOMEM;
+        }
+    }
+    if (opts->matmul == NERF_MATMUL_BF16) {
+        int rc = bf16_setup(m);
+        if (rc != NERF_OK) {
+            nerf_model_destroy(m);
+            return rc;
         }
     }
     if (opts->encoding == NERF_ENCODING_HASHGRID) {
@@ -324,6 +378,7 @@ NERF_API int nerf_model_create(nerf_model **out,
     for (uint32_t i = 0; i < m->n_nets; i++) {
         nerf__network_init(&m->nets[i], m->params, o.seed, 1000u * (i + 1));
     }
+    nerf__model_weights_changed(m);
     nerf__log(&m->env, NERF_LOG_DEBUG,
               "model: %u network(s), %zu parameters, depth %u, width %u",
               m->n_nets, m->n_params, o.depth, o.width);
@@ -341,6 +396,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->grads);
     nerf__free(&env, model->adam_m);
     nerf__free(&env, model->adam_v);
+    nerf__bf16_destroy(model->bf16);
     nerf__occupancy_destroy(model->grid);
     nerf__free(&env, model);
 }
@@ -408,15 +464,16 @@ NERF_API int nerf_model_query(const nerf_model *model, int network, size_t n,
     if (rc != NERF_OK) {
         return rc;
     }
-    for (size_t at = 0; at < n; at += block) {
+    for (size_t at = 0; at < n && rc == NERF_OK; at += block) {
         size_t k = n - at < block ? n - at : block;
-        nerf__network_forward(net, model->params, &ws, k, positions + 3 * at,
-                              directions ? directions + 3 * at : NULL,
-                              rgb_out ? rgb_out + 3 * at : NULL,
-                              sigma_out ? sigma_out + at : NULL);
+        rc = nerf__network_forward(net, model->params, &ws, k,
+                                   positions + 3 * at,
+                                   directions ? directions + 3 * at : NULL,
+                                   rgb_out ? rgb_out + 3 * at : NULL,
+                                   sigma_out ? sigma_out + at : NULL);
     }
     nerf__workspace_release(&model->env, &ws);
-    return NERF_OK;
+    return rc;
 }
 
 int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
@@ -429,9 +486,8 @@ int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
     if (rc != NERF_OK) {
         return rc;
     }
-    nerf__network_forward(net, m->params, ws, n, positions, directions,
-                          rgb_out, sigma_out);
-    return NERF_OK;
+    return nerf__network_forward(net, m->params, ws, n, positions, directions,
+                                 rgb_out, sigma_out);
 }
 
 int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
@@ -442,16 +498,16 @@ int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
     if (rc != NERF_OK) {
         return rc;
     }
-    nerf__network_density(net, m->params, ws, n, positions, sigma_out);
-    return NERF_OK;
+    return nerf__network_density(net, m->params, ws, n, positions,
+                                 sigma_out);
 }
 
-void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
-                          const float *d_rgb, const float *d_sigma)
+int nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
+                         const float *d_rgb, const float *d_sigma)
 {
     m->grads_dirty = true;
-    nerf__network_backward(&m->nets[network], m->params, m->grads, ws, d_rgb,
-                           d_sigma);
+    return nerf__network_backward(&m->nets[network], m->params, m->grads, ws,
+                                  d_rgb, d_sigma);
 }
 
 void nerf__model_zero_grad(nerf_model *m)
@@ -490,4 +546,5 @@ void nerf__model_adam_step(nerf_model *m)
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }
     m->grads_dirty = false;
+    nerf__model_weights_changed(m);
 }

@@ -36,6 +36,9 @@ struct nerf_model {
      * marching sampler skips empty space with (NULL otherwise).  Its EMA
      * and update counter are training state, saved in checkpoints. */
     struct nerf__occupancy *grid;
+    /* NERF_MATMUL_BF16: the rounded weights and oneDNN primitives that
+     * both networks' products use (mlp/gemm_bf16.h); NULL for fp32. */
+    struct nerf__bf16 *bf16;
 };
 
 /* Cells per axis of a model's occupancy grid. */
@@ -88,8 +91,15 @@ int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
                         size_t n, const float *positions, float *sigma_out);
 
 /* Accumulate the gradients of the forward held in ws into m->grads. */
-void nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
-                          const float *d_rgb, const float *d_sigma);
+int nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
+                         const float *d_rgb, const float *d_sigma);
+
+/*
+ * Every writer of m->params calls this after writing (the optimiser step,
+ * creation, loading, importing): a bf16 model rounds its weights again
+ * before its next product.  Cheap; nothing happens for an fp32 model.
+ */
+void nerf__model_weights_changed(nerf_model *m);
 
 void nerf__model_zero_grad(nerf_model *m);
 /* Zero the gradients unless they are known to be zero already. */

@@ -216,9 +216,9 @@ static int run_network(nerf__batch *b, const nerf__render_setup *s, int pass,
     if (rc != NERF_OK) {
         return rc;
     }
-    nerf__network_forward(&m->nets[net], m->params, ws, count, b->points,
-                          dirs, b->rgb[pass], b->sigma[pass]);
-    return NERF_OK;
+    return nerf__network_forward(&m->nets[net], m->params, ws, count,
+                                 b->points, dirs, b->rgb[pass],
+                                 b->sigma[pass]);
 }
 
 static bool has_noise(const nerf__render_setup *s, int pass)
@@ -404,10 +404,9 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
                            "did not keep its state for this model");
     }
     if (b->marched) {
-        nerf__render_march_backward(b, m, d_rgb ? d_rgb[0] : NULL,
-                                    d_depth ? d_depth[0] : NULL,
-                                    d_opacity ? d_opacity[0] : NULL);
-        return NERF_OK;
+        return nerf__render_march_backward(b, m, d_rgb ? d_rgb[0] : NULL,
+                                           d_depth ? d_depth[0] : NULL,
+                                           d_opacity ? d_opacity[0] : NULL);
     }
     for (uint32_t pass = 0; pass < b->n_pass; pass++) {
         const float *gr = d_rgb ? d_rgb[pass] : NULL;
@@ -420,8 +419,11 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
                        .d_opacity = go};
         nerf__parallel_for(b->n_rays, 60 * b->n_samples[pass],
                            composite_backward, &j);
-        nerf__model_backward(m, b->net[pass], &b->ws[pass], b->d_rgb,
-                             b->d_sigma);
+        int rc = nerf__model_backward(m, b->net[pass], &b->ws[pass],
+                                      b->d_rgb, b->d_sigma);
+        if (rc != NERF_OK) {
+            return rc;
+        }
     }
     return NERF_OK;
 }

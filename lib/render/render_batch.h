@@ -162,9 +162,9 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
                        size_t n_rays, const float *origins,
                        const float *directions,
                        const nerf__pass_out out[NERF__PASSES]);
-void nerf__render_march_backward(nerf__batch *b, nerf_model *m,
-                                 const float *d_rgb, const float *d_depth,
-                                 const float *d_opacity);
+int nerf__render_march_backward(nerf__batch *b, nerf_model *m,
+                                const float *d_rgb, const float *d_depth,
+                                const float *d_opacity);
 void nerf__render_march_release(nerf__batch *b);
 
 /* Check, at renderer or trainer creation, that the sampler can work with

@@ -229,8 +229,9 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
     } else {
         rc = nerf__workspace_reserve(&b->ws_env, ws, net, total, false);
         if (rc == NERF_OK) {
-            nerf__network_forward(net, m->params, ws, total, b->march_points,
-                                  dirs, b->m_rgb, b->m_sigma);
+            rc = nerf__network_forward(net, m->params, ws, total,
+                                       b->march_points, dirs, b->m_rgb,
+                                       b->m_sigma);
         }
     }
     if (rc == NERF_OK && s->march_zero_empty) {
@@ -449,14 +450,14 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
     return rc;
 }
 
-void nerf__render_march_backward(nerf__batch *b, nerf_model *m,
-                                 const float *d_rgb, const float *d_depth,
-                                 const float *d_opacity)
+int nerf__render_march_backward(nerf__batch *b, nerf_model *m,
+                                const float *d_rgb, const float *d_depth,
+                                const float *d_opacity)
 {
     if (b->march.total == 0 || (!d_rgb && !d_depth && !d_opacity)) {
-        return;
+        return NERF_OK;
     }
     nerf__composite_packed_backward(&b->packed, d_rgb, d_depth, d_opacity,
                                     b->m_d_rgb, b->m_d_sigma);
-    nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+    return nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
 }

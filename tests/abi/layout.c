@@ -50,7 +50,8 @@ FROZEN(nerf_model_options, bound, 92);
 FROZEN(nerf_model_options, geo_features, 96);
 FROZEN(nerf_model_options, view_depth, 100);
 FROZEN(nerf_model_options, density_activation, 104);
-FROZEN(nerf_model_options, reserved1, 108);
+/* matmul took the place of reserved1, which had to be 0 (fp32). */
+FROZEN(nerf_model_options, matmul, 108);
 SIZE(nerf_model_options, 112);
 
 FROZEN(nerf_scene_options, struct_size, 0);

@@ -478,6 +478,126 @@ TEST(occupancy_grid_section)
     forge_grid("sections as saved", NULL, NERF_OK, false);
 }
 
+/*
+ * nerf_model_options.matmul travels in an optional section of its own
+ * (tag 8: u32 matmul, u32 reserved), written for bf16 models only, so that
+ * readers that predate it load such a file computing in fp32.  A bf16
+ * checkpoint loads as bf16 where bf16 products are available, and as fp32,
+ * with a warning, where they are not (test_checkpoint_forged_no_bf16 runs
+ * this file with oneDNN's ISA capped below AVX512-BF16).  The options2
+ * slot that held reserved1 stays reserved.
+ */
+static uint32_t matmul_value, matmul_reserved;
+static size_t matmul_len;
+
+static void edit_add_matmul(payload *p)
+{
+    unsigned char body[12] = {0};
+    put32(body, matmul_value);
+    put32(body + 4, matmul_reserved);
+    add_section(p, 0x00000008u, body, matmul_len);
+}
+
+static void edit_options2_reserved(payload *p)
+{
+    put32(p->s[5].data + 11 * 4, 1);
+}
+
+static char warning[1024];
+
+static void keep_warning(int level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == NERF_LOG_WARN) {
+        snprintf(warning, sizeof warning, "%s", msg);
+    }
+}
+
+TEST(matmul_section)
+{
+    /* As saved: present for bf16 models only, as documented. */
+    if (nerf_matmul_supported(NERF_MATMUL_BF16)) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        nerf_model_options_preset(&o, NERF_PRESET_TINY);
+        o.matmul = NERF_MATMUL_BF16;
+        nerf_model *b = NULL;
+        char path[128];
+        path_in(path, sizeof path, "saved-bf16.ckpt");
+        CHECK_OK(nerf_model_create(&b, &o));
+        CHECK_OK(nerf_model_save(b, path));
+        nerf_model_destroy(b);
+        size_t size = 0;
+        unsigned char *file = slurp(path, &size);
+        payload p;
+        split_payload(file, size, &p);
+        CHECK_EQ_INT(p.n, 7);
+        if (p.n == 7) {
+            CHECK_EQ_INT(p.s[6].tag, 0x00000008u);
+            CHECK_EQ_INT(p.s[6].len, 8);
+            CHECK_EQ_INT(le32(p.s[6].data), NERF_MATMUL_BF16);
+            CHECK_EQ_INT(le32(p.s[5].data + 11 * 4), 0);
+        }
+        free_payload(&p);
+        free(file);
+    }
+
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    matmul_value = NERF_MATMUL_BF16;
+    matmul_reserved = 0;
+    matmul_len = 8;
+    edit_add_matmul(&p);
+    char path[128];
+    path_in(path, sizeof path, "bf16.ckpt");
+    write_payload(path, &p, NULL, 0);
+    nerf_hooks h;
+    NERF_HOOKS_INIT(&h);
+    h.log_cb = keep_warning;
+    h.log_level = NERF_LOG_WARN;
+    warning[0] = '\0';
+    nerf_model *m = NULL, *ref = trained_model(true);
+    CHECK_OK(nerf_model_load(&m, path, &h));
+    if (m && ref) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        CHECK_OK(nerf_model_get_options(m, &o));
+        CHECK(memcmp(m->params, ref->params, m->n_params * sizeof(float)) == 0);
+        if (nerf_matmul_supported(NERF_MATMUL_BF16)) {
+            CHECK_EQ_INT(o.matmul, NERF_MATMUL_BF16);
+            CHECK(m->bf16 != NULL);
+            CHECK(warning[0] == '\0');
+        } else {
+            CHECK_EQ_INT(o.matmul, NERF_MATMUL_FP32);
+            CHECK(m->bf16 == NULL);
+            CHECK(strstr(warning, path) != NULL);
+            CHECK(strstr(warning, "fp32") != NULL);
+            printf("  loaded as fp32: %s\n", warning);
+        }
+    }
+    nerf_model_destroy(m);
+    nerf_model_destroy(ref);
+    free_payload(&p);
+    free(file);
+
+    matmul_value = NERF_MATMUL_FP32; /* allowed, though never written */
+    forge("matmul section, fp32", edit_add_matmul, NERF_OK);
+    matmul_value = 2;
+    forge("matmul 2", edit_add_matmul, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "matmul") != NULL);
+    matmul_value = NERF_MATMUL_BF16;
+    matmul_reserved = 1;
+    forge("matmul reserved 1", edit_add_matmul, NERF_EFORMAT);
+    matmul_reserved = 0;
+    matmul_len = 12;
+    forge("matmul section of 12 bytes", edit_add_matmul, NERF_EFORMAT);
+    matmul_len = 8;
+    forge("options2 reserved 1", edit_options2_reserved, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "reserved") != NULL);
+}
+
 int main(void)
 {
     make_tmpdir();
@@ -485,6 +605,7 @@ int main(void)
     RUN(forged_payloads);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
+    RUN(matmul_section);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }

@@ -50,7 +50,8 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     ENCODING_SCALE_PI, NETWORK_COARSE, NETWORK_FINE,
                     PRESET_FAST, PRESET_REFERENCE, PRESET_TINY, Model,
                     ENCODING_HASHGRID, ENCODING_SPHERICAL_HARMONICS,
-                    DENSITY_RELU, DENSITY_EXP)
+                    DENSITY_RELU, DENSITY_EXP, MATMUL_BF16, MATMUL_FP32,
+                    matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
                      RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
@@ -83,13 +84,14 @@ __all__ = [
     "version", "version_number", "version_string", "build_info",
     "library_path", "status_string", "last_error", "clear_error",
     "param_bounds", "set_log_handler", "log_to_stderr", "log_stderr",
+    "matmul_supported",
     # Constants.
     "HAVE_NUMPY", "EXPECTED_MAJOR", "LOG_ERROR", "LOG_WARN", "LOG_INFO",
     "LOG_DEBUG", "PARAMS", "PARAM_LEARNING_RATE", "PARAM_LEARNING_RATE_FINAL",
     "PARAM_DECAY_STEPS", "PARAM_ADAM_BETA1", "PARAM_ADAM_BETA2",
     "PARAM_ADAM_EPS", "PARAM_WEIGHT_DECAY", "PRESET_REFERENCE", "PRESET_TINY", "PRESET_FAST",
     "ENCODING_HASHGRID", "ENCODING_SPHERICAL_HARMONICS", "DENSITY_RELU",
-    "DENSITY_EXP", "NETWORK_COARSE",
+    "DENSITY_EXP", "MATMUL_FP32", "MATMUL_BF16", "NETWORK_COARSE",
     "NETWORK_FINE", "ENCODING_FREQUENCY", "ENCODING_INCLUDE_INPUT",
     "ENCODING_SCALE_PI", "SAMPLE_TRAINING", "NOISE_AUTO",
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",

@@ -99,6 +99,7 @@ _PROTOTYPES = {
                         True),
     "nerf_model_import_npz": (c_int, [POINTER(ModelP), c_char_p,
                                       POINTER(ModelOptions)], True),
+    "nerf_matmul_supported": (c_int, [c_int], False),
     # Built-in scene.
     "nerf_scene_options_init": (c_int, [POINTER(SceneOptions), c_size_t],
                                 True),

@@ -31,6 +31,11 @@ DENSITY_EXP = 1
 ENCODING_INCLUDE_INPUT = 0x1
 ENCODING_SCALE_PI = 0x2
 
+# nerf_matmul: how a model computes its matrix products.
+MATMUL_FP32 = 0
+MATMUL_BF16 = 1
+MATMULS = {"fp32": MATMUL_FP32, "bf16": MATMUL_BF16}
+
 LogFn = Optional[Callable[[int, str], Any]]
 
 
@@ -56,13 +61,34 @@ def network_key(network: Union[str, int]) -> int:
     return int(network)
 
 
+def matmul_key(matmul: Union[str, int]) -> int:
+    """A nerf_matmul number from its name (``"fp32"``, ``"bf16"``)."""
+    if isinstance(matmul, str):
+        try:
+            return MATMULS[matmul]
+        except KeyError:
+            raise ValueError("unknown matmul %r (known: fp32, bf16)"
+                             % (matmul,)) from None
+    return int(matmul)
+
+
+def matmul_supported(matmul: Union[str, int]) -> bool:
+    """Whether models with these products can be created here
+    (``nerf_matmul_supported``): bf16 needs a libnerf built with oneDNN
+    and a CPU with AVX512-BF16."""
+    return bool(lib.nerf_matmul_supported(matmul_key(matmul)))
+
+
 def model_options(preset: Union[str, int, None] = None, seed: int = 0,
                   **fields: Any) -> ModelOptions:
-    """Options from the library's defaults, a preset, then ``fields``."""
+    """Options from the library's defaults, a preset, then ``fields``
+    (``matmul`` may be given by name: ``matmul="bf16"``)."""
     opts = ModelOptions()
     if preset is not None:
         lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
     opts.seed = int(seed)
+    if "matmul" in fields:
+        fields["matmul"] = matmul_key(fields["matmul"])
     opts.update(**fields)
     return opts
 

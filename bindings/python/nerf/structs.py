@@ -146,7 +146,8 @@ class ModelOptions(_Versioned):
         ("geo_features", c_uint32),
         ("view_depth", c_uint32),
         ("density_activation", c_uint32),
-        ("reserved1", c_uint32),
+        # nerf_matmul; formerly reserved1 (0 = fp32).
+        ("matmul", c_uint32),
     ]
 
 

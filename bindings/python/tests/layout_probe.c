@@ -84,7 +84,7 @@ static void structs(void)
     FIELD(nerf_model_options, geo_features);
     FIELD(nerf_model_options, view_depth);
     FIELD(nerf_model_options, density_activation);
-    FIELD(nerf_model_options, reserved1);
+    FIELD(nerf_model_options, matmul);
     end_struct();
 
     BEGIN(nerf_scene_options);
@@ -223,6 +223,8 @@ static void constants(void)
     CONST(NERF_ENCODING_SCALE_PI);
     CONST(NERF_PRESET_REFERENCE);
     CONST(NERF_PRESET_TINY);
+    CONST(NERF_MATMUL_FP32);
+    CONST(NERF_MATMUL_BF16);
     CONST(NERF_NETWORK_COARSE);
     CONST(NERF_NETWORK_FINE);
     CONST(NERF_PARAM_LEARNING_RATE);

@@ -138,6 +138,50 @@ class Query(TestCase):
                 m.query(pos, network="fine")
 
 
+class Matmul(TestCase):
+    """bf16 products (``matmul``), where this build and CPU have them."""
+
+    def test_query_and_options(self):
+        self.assertTrue(nerf.matmul_supported("fp32"))
+        self.assertTrue(nerf.matmul_supported(nerf.MATMUL_FP32))
+        self.assertFalse(nerf.matmul_supported(7))
+        with self.assertRaises(ValueError):
+            nerf.matmul_supported("fp16")
+        self.assertEqual(nerf.ModelOptions().matmul, nerf.MATMUL_FP32)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "matmul"):
+            nerf.Model(preset="tiny", matmul=5)
+
+    def test_bf16_model(self):
+        if not nerf.matmul_supported("bf16"):
+            # The refusal is what there is to test.
+            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                      "NERF_MATMUL_BF16"):
+                nerf.Model(preset="tiny", matmul="bf16")
+            self.skipTest("bf16 products are not available here: "
+                          + nerf.last_error())
+        pos, dirs = points(50)
+        path = os.path.join(_support.tmpdir(), "bf16.nerf")
+        with nerf.Model(preset="tiny", seed=2) as f, \
+                nerf.Model(preset="tiny", seed=2, matmul="bf16") as b:
+            self.assertEqual(b.options.matmul, nerf.MATMUL_BF16)
+            rgb_f, sigma_f = f.query(pos, dirs)
+            rgb_b, sigma_b = b.query(pos, dirs)
+            # Close (bf16 keeps 8 significant bits), but not the same.
+            diff = [abs(x - y) for x, y in zip(flat(rgb_b), flat(rgb_f))]
+            self.assertLess(max(diff), 0.01)
+            scale = max(abs(v) for v in flat(sigma_f))
+            diff_s = [abs(x - y) for x, y in zip(flat(sigma_b),
+                                                 flat(sigma_f))]
+            self.assertLess(max(diff_s), 0.05 * scale)
+            self.assertGreater(max(diff + diff_s), 0.0)
+            b.save(path)
+        with nerf.Model.load(path) as back:
+            self.assertEqual(back.options.matmul, nerf.MATMUL_BF16)
+            again, _ = back.query(pos, dirs)
+            self.assertEqual(flat(again), flat(rgb_b))
+
+
 class SaveLoad(TestCase):
     def test_round_trip(self):
         path = os.path.join(_support.tmpdir(), "model.nerf")

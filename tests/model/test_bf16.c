@@ -1,0 +1,726 @@
+/*
+ * bf16 products (NERF_MATMUL_BF16) against fp32 ones.
+ *
+ * Tolerances.  bf16 keeps 8 significant bits, so rounding an operand moves
+ * it by at most 2^-9 of itself, and a product of two rounded operands by
+ * about 2^-8 ~ 0.4%.  Summed over a layer's inputs with mixed signs that
+ * stays a relative error of a few tenths of a percent of the layer's output
+ * scale, and it compounds over the 10 layers of the reference network.
+ * The checks below therefore compare with the fp32 model relative to the
+ * scale of what is compared (its RMS): at most 2% for the outputs (fp32
+ * against fp32 computed in another order would agree to about 1e-6); for
+ * gradients see compare_gradients().  The measured errors are printed; on
+ * the development machine they are several times below these bounds.
+ * Each check also requires the bf16 result to differ from fp32 somewhere,
+ * so that a model silently computing in fp32 cannot pass.
+ *
+ * Without oneDNN, or where nerf_matmul_supported() says no, only the
+ * checks of that refusal run, and the program reports itself skipped.
+ */
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "../harness.h"
+#include "gemm_bf16.h"
+#include "model.h"
+#include "nerf.h"
+#include "nerf_config.h"
+
+#define OUT_TOL 0.02
+
+static int have_bf16;
+
+/* ---- helpers ------------------------------------------------------------ */
+
+static uint64_t rng_state = 88172645463325252u;
+
+static float uniform(float lo, float hi)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return lo + (hi - lo) * (float)((rng_state >> 40) / 16777216.0);
+}
+
+/* n points inside the scene's bound and unit directions. */
+static void make_points(size_t n, float *pos, float *dir)
+{
+    for (size_t i = 0; i < n; i++) {
+        float d[3], len = 0.0f;
+        for (int c = 0; c < 3; c++) {
+            pos[3 * i + c] = uniform(-1.2f, 1.2f);
+            d[c] = uniform(-1.0f, 1.0f);
+            len += d[c] * d[c];
+        }
+        len = sqrtf(len) + 1e-6f;
+        for (int c = 0; c < 3; c++) {
+            dir[3 * i + c] = d[c] / len;
+        }
+    }
+}
+
+static nerf_model *make_model(int preset, int matmul)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, preset);
+    o.seed = 7;
+    o.matmul = (uint32_t)matmul;
+    if (preset == NERF_PRESET_FAST) {
+        o.hash_log2_size = 14; /* a small table: tests need no more */
+    }
+    nerf_model *m = NULL;
+    int rc = nerf_model_create(&m, &o);
+    if (rc != NERF_OK) {
+        FAILF("nerf_model_create(preset %d, matmul %d): %s", preset, matmul,
+              nerf_last_error());
+    }
+    return m;
+}
+
+/* RMS of a - b relative to the RMS of b, and whether they differ at all. */
+static double rel_rms(const float *a, const float *b, size_t n, int *differ)
+{
+    double d2 = 0.0, b2 = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = (double)a[i] - b[i];
+        d2 += d * d;
+        b2 += (double)b[i] * b[i];
+        if (a[i] != b[i]) {
+            *differ = 1;
+        }
+    }
+    return b2 > 0.0 ? sqrt(d2 / b2) : sqrt(d2);
+}
+
+/* The fast preset makes a random hash table; its weights move the same
+ * way in both models, so only the products differ. */
+static void copy_params(nerf_model *to, const nerf_model *from)
+{
+    memcpy(to->params, from->params, from->n_params * sizeof(float));
+    nerf__model_weights_changed(to);
+}
+
+/* ---- what works without bf16 -------------------------------------------- */
+
+TEST(supported_query)
+{
+    CHECK_EQ_INT(nerf_matmul_supported(NERF_MATMUL_FP32), 1);
+    CHECK_EQ_INT(nerf_matmul_supported(2), 0);
+    CHECK_EQ_INT(nerf_matmul_supported(-1), 0);
+    CHECK_EQ_INT(nerf_matmul_supported(1000), 0);
+    int bf16 = nerf_matmul_supported(NERF_MATMUL_BF16);
+    CHECK(bf16 == 0 || bf16 == 1);
+    if (!NERF_HAVE_BF16) {
+        CHECK_EQ_INT(bf16, 0);
+    }
+    /* The answer is computed once. */
+    CHECK_EQ_INT(nerf_matmul_supported(NERF_MATMUL_BF16), bf16);
+    CHECK(strstr(nerf_build_info(), "bf16") != NULL);
+}
+
+TEST(options)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    CHECK_EQ_INT(o.matmul, NERF_MATMUL_FP32);
+    nerf_model_options_preset(&o, NERF_PRESET_TINY);
+    nerf_model *m = NULL;
+
+    o.matmul = 2;
+    CHECK_EQ_INT(nerf_model_create(&m, &o), NERF_EINVAL);
+    CHECK(m == NULL);
+    CHECK(strstr(nerf_last_error(), "matmul") != NULL);
+
+    /* Presets keep the choice. */
+    o.matmul = NERF_MATMUL_BF16;
+    CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_FAST));
+    CHECK_EQ_INT(o.matmul, NERF_MATMUL_BF16);
+    CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_TINY));
+
+    int rc = nerf_model_create(&m, &o);
+    if (have_bf16) {
+        CHECK_OK(rc);
+        nerf_model_options got;
+        NERF_MODEL_OPTIONS_INIT(&got);
+        CHECK_OK(nerf_model_get_options(m, &got));
+        CHECK_EQ_INT(got.matmul, NERF_MATMUL_BF16);
+    } else {
+        CHECK_EQ_INT(rc, NERF_EINVAL);
+        CHECK(m == NULL);
+        CHECK(strstr(nerf_last_error(), "NERF_MATMUL_BF16") != NULL);
+        printf("  bf16 refused: %s\n", nerf_last_error());
+    }
+    nerf_model_destroy(m);
+    m = NULL;
+
+    /* A caller built before the field existed passes a struct that ends
+     * before it: whatever follows in its memory is not read, and the
+     * model computes in fp32. */
+    o.matmul = NERF_MATMUL_BF16;
+    o.struct_size = offsetof(nerf_model_options, matmul);
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m) {
+        nerf_model_options got;
+        NERF_MODEL_OPTIONS_INIT(&got);
+        CHECK_OK(nerf_model_get_options(m, &got));
+        CHECK_EQ_INT(got.matmul, NERF_MATMUL_FP32);
+        CHECK(m->bf16 == NULL);
+        /* And it reads back only as much as it knows. */
+        got.matmul = 77;
+        got.struct_size = offsetof(nerf_model_options, matmul);
+        CHECK_OK(nerf_model_get_options(m, &got));
+        CHECK_EQ_INT(got.matmul, 77);
+    }
+    nerf_model_destroy(m);
+}
+
+TEST(fp32_checkpoint_loads_as_fp32)
+{
+    char dir[] = "/tmp/nerf-bf16-XXXXXX";
+    if (mkdtemp(dir) == NULL) {
+        FAILF("mkdtemp");
+        return;
+    }
+    char path[64];
+    snprintf(path, sizeof path, "%s/fp32.ckpt", dir);
+    nerf_model *m = make_model(NERF_PRESET_TINY, NERF_MATMUL_FP32), *l = NULL;
+    CHECK_OK(nerf_model_save(m, path));
+    CHECK_OK(nerf_model_load(&l, path, NULL));
+    if (l) {
+        nerf_model_options got;
+        NERF_MODEL_OPTIONS_INIT(&got);
+        CHECK_OK(nerf_model_get_options(l, &got));
+        CHECK_EQ_INT(got.matmul, NERF_MATMUL_FP32);
+        CHECK(l->bf16 == NULL);
+    }
+    nerf_model_destroy(l);
+    nerf_model_destroy(m);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* ---- bf16 against fp32 -------------------------------------------------- */
+
+#if NERF_HAVE_BF16
+static float bf16_value(uint16_t h)
+{
+    uint32_t u = (uint32_t)h << 16;
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+#endif
+
+TEST(rounding)
+{
+#if NERF_HAVE_BF16
+    /* Exact values, ties (to even), just above a tie, signs, extremes. */
+    const float in[] = {0.0f, -0.0f, 1.0f, -2.5f, 1.0f + 1.0f / 256,
+                        1.0f + 3.0f / 256, 1.0f + 1.0f / 256 + 1.0f / 65536,
+                        FLT_MAX, INFINITY, -INFINITY, 1e-40f};
+    const float want[] = {0.0f, -0.0f, 1.0f, -2.5f, 1.0f, 1.0f + 4.0f / 256,
+                          1.0f + 2.0f / 256, INFINITY, INFINITY, -INFINITY,
+                          bf16_value(0x0001)};
+    const size_t n = sizeof in / sizeof in[0];
+    uint16_t out[sizeof in / sizeof in[0]];
+    nerf__bf16_round(in, n, out);
+    for (size_t i = 0; i < n; i++) {
+        float got = bf16_value(out[i]);
+        if (memcmp(&got, &want[i], sizeof got) != 0) {
+            FAILF("round(%.9g) = %.9g, want %.9g", (double)in[i],
+                  (double)got, (double)want[i]);
+        }
+    }
+    float nan = NAN;
+    uint16_t h;
+    nerf__bf16_round(&nan, 1, &h);
+    CHECK(isnan(bf16_value(h)));
+    /* Against the definition, on random values: the nearest bf16. */
+    for (int i = 0; i < 100000; i++) {
+        float x = uniform(-1.0f, 1.0f) * powf(2.0f, uniform(-30.0f, 30.0f));
+        nerf__bf16_round(&x, 1, &h);
+        float r = bf16_value(h), up = bf16_value((uint16_t)(h + 1));
+        float down = bf16_value((uint16_t)(h - 1));
+        double e = fabs((double)r - x);
+        if (e > fabs((double)up - x) || e > fabs((double)down - x)) {
+            FAILF("round(%.9g) = %.9g is not the nearest", (double)x,
+                  (double)r);
+            break;
+        }
+    }
+#endif
+}
+
+static void compare_forward(int preset, const char *name)
+{
+    nerf_model *f = make_model(preset, NERF_MATMUL_FP32);
+    nerf_model *b = make_model(preset, NERF_MATMUL_BF16);
+    if (f == NULL || b == NULL) {
+        nerf_model_destroy(f);
+        nerf_model_destroy(b);
+        return;
+    }
+    copy_params(b, f);
+    const size_t n = 3001; /* odd: the last row runs padded */
+    float *pos = malloc(n * 3 * sizeof(float));
+    float *dir = malloc(n * 3 * sizeof(float));
+    float *rgb[2], *sigma[2];
+    for (int k = 0; k < 2; k++) {
+        rgb[k] = malloc(n * 3 * sizeof(float));
+        sigma[k] = malloc(n * sizeof(float));
+    }
+    make_points(n, pos, dir);
+    for (uint32_t net = 0; net < f->n_nets; net++) {
+        CHECK_OK(nerf_model_query(f, (int)net, n, pos, dir, rgb[0], sigma[0]));
+        CHECK_OK(nerf_model_query(b, (int)net, n, pos, dir, rgb[1], sigma[1]));
+        int differ = 0;
+        double e_rgb = rel_rms(rgb[1], rgb[0], 3 * n, &differ);
+        double e_sigma = rel_rms(sigma[1], sigma[0], n, &differ);
+        printf("  %s, network %u: relative RMS error rgb %.2e, sigma %.2e\n",
+               name, net, e_rgb, e_sigma);
+        CHECK(e_rgb <= OUT_TOL);
+        CHECK(e_sigma <= OUT_TOL);
+        CHECK(differ); /* bf16 really ran */
+    }
+    for (int k = 0; k < 2; k++) {
+        free(rgb[k]);
+        free(sigma[k]);
+    }
+    free(pos);
+    free(dir);
+    nerf_model_destroy(f);
+    nerf_model_destroy(b);
+}
+
+TEST(forward_matches_fp32)
+{
+    compare_forward(NERF_PRESET_REFERENCE, "reference");
+    compare_forward(NERF_PRESET_FAST, "fast");
+    compare_forward(NERF_PRESET_TINY, "tiny");
+}
+
+/* The layers of a network, in order: trunk, head, colour branch. */
+static int network_layers(const nerf__network *nw, nerf__linear *layers)
+{
+    int count = 0;
+    for (uint32_t i = 0; i < nw->depth; i++) {
+        layers[count++] = nw->trunk[i];
+    }
+    layers[count++] = nw->head;
+    if (nw->use_viewdirs) {
+        for (uint32_t k = 0; k < nw->view_depth; k++) {
+            layers[count++] = nw->view[k];
+        }
+        layers[count++] = nw->rgb;
+    }
+    return count;
+}
+
+/* Per layer (W and b) and for a hash table: relative RMS of g against
+ * want, at most tol, and not identical.  Returns the worst. */
+static double check_layers(const nerf__network *nw, const float *g,
+                           const float *want, double tol, const char *what)
+{
+    nerf__linear layers[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
+    int count = network_layers(nw, layers);
+    double worst = 0.0;
+    for (int l = 0; l < count; l++) {
+        size_t len = (size_t)layers[l].in * layers[l].out + layers[l].out;
+        int differ = 0;
+        double e = rel_rms(g + layers[l].w, want + layers[l].w, len, &differ);
+        worst = e > worst ? e : worst;
+        if (getenv("NERF_TEST_VERBOSE")) {
+            printf("    %s, layer %d: %.3g\n", what, l, e);
+        }
+        if (!(e <= tol) || !differ) {
+            FAILF("%s, layer %d: relative RMS error %.3g (tolerance %g, "
+                  "differ %d)", what, l, e, tol, differ);
+        }
+    }
+    if (nerf__network_has_table(nw)) {
+        int differ = 0;
+        double e = rel_rms(g + nw->table, want + nw->table, nw->hash.count,
+                           &differ);
+        worst = e > worst ? e : worst;
+        if (!(e <= tol) || !differ) {
+            FAILF("%s, hash table: relative RMS error %.3g", what, e);
+        }
+    }
+    return worst;
+}
+
+static double cosine(const float *a, const float *b, size_t n)
+{
+    double ab = 0.0, aa = 0.0, bb = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        ab += (double)a[i] * b[i];
+        aa += (double)a[i] * a[i];
+        bb += (double)b[i] * b[i];
+    }
+    return ab / sqrt(aa * bb + 1e-300);
+}
+
+/*
+ * Gradients, two ways.
+ *
+ * The backward products alone: one bf16 forward, then its backward once
+ * with bf16 products and once with fp32 ones, on the same activations.
+ * Each layer's gradient then differs only by the rounding of the backward
+ * products: BACKWARD_TOL.
+ *
+ * The whole chain: an fp32 and a bf16 model, each forward and backward,
+ * with the gradient of a loss that pulls every colour towards grey and
+ * every density up.  Here the forward's rounding moves some ReLU inputs
+ * across zero, and each unit that flips adds or drops a whole sample's
+ * term, so early layers differ more (several percent on the reference
+ * trunk's first layer): CHAIN_TOL per layer, and the whole gradient must
+ * point the same way (cosine above CHAIN_COSINE).
+ */
+#define BACKWARD_TOL 0.04
+#define CHAIN_TOL 0.10
+#define CHAIN_COSINE 0.995
+
+static void compare_gradients(int preset, const char *name)
+{
+    nerf_model *m[2] = {make_model(preset, NERF_MATMUL_FP32),
+                        make_model(preset, NERF_MATMUL_BF16)};
+    if (m[0] == NULL || m[1] == NULL) {
+        nerf_model_destroy(m[0]);
+        nerf_model_destroy(m[1]);
+        return;
+    }
+    copy_params(m[1], m[0]);
+    const size_t n = 2049, P = m[0]->n_params;
+    float *pos = malloc(n * 3 * sizeof(float));
+    float *dir = malloc(n * 3 * sizeof(float));
+    float *rgb = malloc(n * 3 * sizeof(float));
+    float *sigma = malloc(n * sizeof(float));
+    float *d_rgb = malloc(n * 3 * sizeof(float));
+    float *d_sigma = malloc(n * sizeof(float));
+    float *g_bf16 = malloc(P * sizeof(float));
+    make_points(n, pos, dir);
+
+    for (uint32_t net = 0; net < m[1]->n_nets; net++) {
+        nerf__workspace ws;
+        memset(&ws, 0, sizeof ws);
+        CHECK_OK(nerf__model_forward(m[1], (int)net, &ws, n, pos, dir, NULL,
+                                     NULL));
+        for (size_t i = 0; i < 3 * n; i++) {
+            d_rgb[i] = uniform(-1.0f, 1.0f);
+        }
+        for (size_t i = 0; i < n; i++) {
+            d_sigma[i] = uniform(-1.0f, 1.0f);
+        }
+        nerf__model_zero_grad(m[1]);
+        CHECK_OK(nerf__model_backward(m[1], (int)net, &ws, d_rgb, d_sigma));
+        memcpy(g_bf16, m[1]->grads, P * sizeof(float));
+        nerf__model_zero_grad(m[1]);
+        struct nerf__bf16 *keep = m[1]->nets[net].bf16;
+        m[1]->nets[net].bf16 = NULL; /* the same backward in fp32 */
+        CHECK_OK(nerf__model_backward(m[1], (int)net, &ws, d_rgb, d_sigma));
+        m[1]->nets[net].bf16 = keep;
+        nerf__workspace_release(&m[1]->env, &ws);
+        double worst = check_layers(&m[1]->nets[net], g_bf16, m[1]->grads,
+                                    BACKWARD_TOL, name);
+        printf("  %s, network %u: backward products, worst layer error "
+               "%.2e\n", name, net, worst);
+    }
+
+    for (int k = 0; k < 2; k++) {
+        nerf__model_zero_grad(m[k]);
+        for (uint32_t net = 0; net < m[k]->n_nets; net++) {
+            nerf__workspace ws;
+            memset(&ws, 0, sizeof ws);
+            CHECK_OK(nerf__model_forward(m[k], (int)net, &ws, n, pos, dir,
+                                         rgb, sigma));
+            for (size_t i = 0; i < 3 * n; i++) {
+                d_rgb[i] = 2.0f * (rgb[i] - 0.5f) / (float)n;
+            }
+            for (size_t i = 0; i < n; i++) {
+                d_sigma[i] = -1.0f / (float)n;
+            }
+            CHECK_OK(nerf__model_backward(m[k], (int)net, &ws, d_rgb,
+                                          d_sigma));
+            nerf__workspace_release(&m[k]->env, &ws);
+        }
+    }
+    for (uint32_t net = 0; net < m[0]->n_nets; net++) {
+        const nerf__network *nw = &m[0]->nets[net];
+        double worst = check_layers(nw, m[1]->grads, m[0]->grads, CHAIN_TOL,
+                                    name);
+        double c = cosine(m[1]->grads + nw->offset, m[0]->grads + nw->offset,
+                          nw->count);
+        printf("  %s, network %u: whole chain, worst layer error %.2e, "
+               "cosine %.6f\n", name, net, worst, c);
+        CHECK(c >= CHAIN_COSINE);
+    }
+    free(pos);
+    free(dir);
+    free(rgb);
+    free(sigma);
+    free(d_rgb);
+    free(d_sigma);
+    free(g_bf16);
+    nerf_model_destroy(m[0]);
+    nerf_model_destroy(m[1]);
+}
+
+TEST(gradients_match_fp32)
+{
+    compare_gradients(NERF_PRESET_REFERENCE, "reference");
+    compare_gradients(NERF_PRESET_FAST, "fast");
+    compare_gradients(NERF_PRESET_TINY, "tiny");
+}
+
+/*
+ * Repeating a forward and a backward gives the same bits, and a row's
+ * output does not depend on which rows share its call (so images do not
+ * depend on chunk sizes or thread counts).
+ */
+TEST(deterministic)
+{
+    nerf_model *m = make_model(NERF_PRESET_REFERENCE, NERF_MATMUL_BF16);
+    if (m == NULL) {
+        return;
+    }
+    const size_t n = 1500, cut = 701;
+    float *pos = malloc(n * 3 * sizeof(float));
+    float *dir = malloc(n * 3 * sizeof(float));
+    float *a = malloc(n * 4 * sizeof(float));
+    float *b = malloc(n * 4 * sizeof(float));
+    make_points(n, pos, dir);
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, a, a + 3 * n));
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, b, b + 3 * n));
+    CHECK(memcmp(a, b, n * 4 * sizeof(float)) == 0);
+    /* The same rows in two calls of other sizes (odd: padded rows). */
+    memset(b, 0, n * 4 * sizeof(float));
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, cut, pos, dir, b,
+                              b + 3 * n));
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n - cut, pos + 3 * cut,
+                              dir + 3 * cut, b + 3 * cut, b + 3 * n + cut));
+    CHECK(memcmp(a, b, n * 4 * sizeof(float)) == 0);
+    for (size_t i = 1; i < 5; i++) {
+        /* One row alone, too. */
+        float rgb[3], sigma;
+        CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, 1, pos + 3 * (i * 97),
+                                  dir + 3 * (i * 97), rgb, &sigma));
+        CHECK(memcmp(rgb, a + 3 * (i * 97), sizeof rgb) == 0);
+        CHECK(memcmp(&sigma, a + 3 * n + i * 97, sizeof sigma) == 0);
+    }
+    /* Gradients: twice the same. */
+    float *g = malloc(m->n_params * sizeof(float));
+    float *d_rgb = malloc(n * 3 * sizeof(float));
+    for (size_t i = 0; i < 3 * n; i++) {
+        d_rgb[i] = uniform(-1.0f, 1.0f);
+    }
+    for (int rep = 0; rep < 2; rep++) {
+        nerf__workspace ws;
+        memset(&ws, 0, sizeof ws);
+        nerf__model_zero_grad(m);
+        CHECK_OK(nerf__model_forward(m, 1, &ws, n, pos, dir, NULL, NULL));
+        CHECK_OK(nerf__model_backward(m, 1, &ws, d_rgb, NULL));
+        nerf__workspace_release(&m->env, &ws);
+        if (rep == 0) {
+            memcpy(g, m->grads, m->n_params * sizeof(float));
+        } else {
+            CHECK(memcmp(g, m->grads, m->n_params * sizeof(float)) == 0);
+        }
+    }
+    free(g);
+    free(d_rgb);
+    free(pos);
+    free(dir);
+    free(a);
+    free(b);
+    nerf_model_destroy(m);
+}
+
+/*
+ * The rounded weights are a cache: a product does not round them again,
+ * so a write the model was not told about goes unseen, and after an
+ * optimiser step (or nerf__model_weights_changed) the new weights count.
+ */
+TEST(weights_refresh_when_they_change)
+{
+    nerf_model *b = make_model(NERF_PRESET_TINY, NERF_MATMUL_BF16);
+    nerf_model *f = make_model(NERF_PRESET_TINY, NERF_MATMUL_FP32);
+    if (b == NULL || f == NULL) {
+        nerf_model_destroy(b);
+        nerf_model_destroy(f);
+        return;
+    }
+    enum { N = 257 };
+    float pos[3 * N], dir[3 * N], r0[4 * N], r1[4 * N], r2[4 * N];
+    make_points(N, pos, dir);
+    CHECK_OK(nerf_model_query(b, 0, N, pos, dir, r0, r0 + 3 * N));
+    /* Scale every layer's weights (not the biases, which the products
+     * read in fp32) behind the model's back. */
+    nerf__linear layers[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
+    int count = network_layers(&b->nets[0], layers);
+    for (int l = 0; l < count; l++) {
+        for (size_t i = 0; i < (size_t)layers[l].in * layers[l].out; i++) {
+            b->params[layers[l].w + i] *= 1.5f;
+        }
+    }
+    CHECK_OK(nerf_model_query(b, 0, N, pos, dir, r1, r1 + 3 * N));
+    CHECK(memcmp(r0, r1, sizeof r0) == 0);
+    nerf__model_weights_changed(b);
+    CHECK_OK(nerf_model_query(b, 0, N, pos, dir, r1, r1 + 3 * N));
+    CHECK(memcmp(r0, r1, sizeof r0) != 0);
+
+    /* An Adam step: the bf16 model follows its new weights, as an fp32
+     * model holding the same weights says. */
+    for (size_t i = 0; i < b->n_params; i++) {
+        b->grads[i] = uniform(-1.0f, 1.0f);
+    }
+    nerf__model_adam_step(b);
+    CHECK_OK(nerf_model_query(b, 0, N, pos, dir, r1, r1 + 3 * N));
+    memcpy(f->params, b->params, b->n_params * sizeof(float));
+    CHECK_OK(nerf_model_query(f, 0, N, pos, dir, r2, r2 + 3 * N));
+    int differ = 0;
+    double e = rel_rms(r1, r2, 4 * N, &differ);
+    printf("  after a step: relative RMS error against fp32 %.2e\n", e);
+    CHECK(e <= OUT_TOL && differ);
+    nerf_model_destroy(b);
+    nerf_model_destroy(f);
+}
+
+TEST(checkpoint_round_trip)
+{
+    char dir[] = "/tmp/nerf-bf16-XXXXXX";
+    if (mkdtemp(dir) == NULL) {
+        FAILF("mkdtemp");
+        return;
+    }
+    char path[64];
+    snprintf(path, sizeof path, "%s/bf16.ckpt", dir);
+    nerf_model *m = make_model(NERF_PRESET_FAST, NERF_MATMUL_BF16), *l = NULL;
+    if (m == NULL) {
+        rmdir(dir);
+        return;
+    }
+    for (size_t i = 0; i < m->n_params; i++) {
+        m->grads[i] = uniform(-1.0f, 1.0f);
+    }
+    nerf__model_adam_step(m);
+    CHECK_OK(nerf_model_save(m, path));
+    CHECK_OK(nerf_model_load(&l, path, NULL));
+    if (l) {
+        nerf_model_options got;
+        NERF_MODEL_OPTIONS_INIT(&got);
+        CHECK_OK(nerf_model_get_options(l, &got));
+        CHECK_EQ_INT(got.matmul, NERF_MATMUL_BF16);
+        CHECK(l->bf16 != NULL);
+        CHECK(memcmp(l->params, m->params, m->n_params * sizeof(float)) == 0);
+        enum { N = 333 };
+        float pos[3 * N], dirs[3 * N], a[4 * N], b[4 * N];
+        make_points(N, pos, dirs);
+        CHECK_OK(nerf_model_query(m, 0, N, pos, dirs, a, a + 3 * N));
+        CHECK_OK(nerf_model_query(l, 0, N, pos, dirs, b, b + 3 * N));
+        CHECK(memcmp(a, b, sizeof a) == 0);
+    }
+    nerf_model_destroy(l);
+    nerf_model_destroy(m);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* Several threads querying one bf16 model at once (the threading
+ * contract allows it) get what one thread gets. */
+typedef struct query_job {
+    const nerf_model *m;
+    size_t n;
+    const float *pos, *dir;
+    float *out;
+    int rc;
+} query_job;
+
+static void *query_thread(void *arg)
+{
+    query_job *j = arg;
+    for (int rep = 0; rep < 3 && j->rc == NERF_OK; rep++) {
+        j->rc = nerf_model_query(j->m, NERF_NETWORK_FINE, j->n, j->pos, j->dir,
+                                 j->out, j->out + 3 * j->n);
+    }
+    return NULL;
+}
+
+TEST(concurrent_queries)
+{
+    nerf_model *m = make_model(NERF_PRESET_TINY, NERF_MATMUL_BF16);
+    if (m == NULL) {
+        return;
+    }
+    enum { N = 2500, T = 3 };
+    float *pos = malloc(N * 3 * sizeof(float));
+    float *dir = malloc(N * 3 * sizeof(float));
+    float *want = malloc(N * 4 * sizeof(float));
+    make_points(N, pos, dir);
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, N, pos, dir, want,
+                              want + 3 * N));
+    query_job jobs[T];
+    pthread_t th[T];
+    for (int t = 0; t < T; t++) {
+        jobs[t] = (query_job){m, N, pos, dir, malloc(N * 4 * sizeof(float)),
+                              NERF_OK};
+        CHECK(pthread_create(&th[t], NULL, query_thread, &jobs[t]) == 0);
+    }
+    for (int t = 0; t < T; t++) {
+        pthread_join(th[t], NULL);
+        CHECK_EQ_INT(jobs[t].rc, NERF_OK);
+        CHECK(memcmp(jobs[t].out, want, N * 4 * sizeof(float)) == 0);
+        free(jobs[t].out);
+    }
+    free(pos);
+    free(dir);
+    free(want);
+    nerf_model_destroy(m);
+}
+
+/*
+ * With --unsupported (meson runs it so with oneDNN's ISA capped below
+ * AVX512-BF16), bf16 must be refused, and the refusal is the test.
+ */
+int main(int argc, char **argv)
+{
+    const int refusal = argc > 1 && strcmp(argv[1], "--unsupported") == 0;
+    have_bf16 = nerf_matmul_supported(NERF_MATMUL_BF16);
+    if (refusal && have_bf16) {
+        printf("FAIL: bf16 is still available (DNNL_MAX_CPU_ISA=%s)\n",
+               getenv("DNNL_MAX_CPU_ISA") ? getenv("DNNL_MAX_CPU_ISA")
+                                          : "(unset)");
+        return 1;
+    }
+    RUN(supported_query);
+    RUN(options);
+    RUN(fp32_checkpoint_loads_as_fp32);
+    if (refusal) {
+        HARNESS_EXIT();
+    }
+    if (!have_bf16) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        o.matmul = NERF_MATMUL_BF16;
+        nerf_model *m = NULL;
+        nerf_model_create(&m, &o);
+        printf("SKIP: bf16 products are not available, so only their "
+               "refusal was tested (%s)\n", nerf_last_error());
+        return harness_failed ? 1 : 77;
+    }
+    RUN(rounding);
+    RUN(forward_matches_fp32);
+    RUN(gradients_match_fp32);
+    RUN(deterministic);
+    RUN(weights_refresh_when_they_change);
+    RUN(checkpoint_round_trip);
+    RUN(concurrent_queries);
+    HARNESS_EXIT();
+}
