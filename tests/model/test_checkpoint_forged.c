@@ -480,7 +480,7 @@ TEST(occupancy_grid_section)
 
 /*
  * nerf_model_options.matmul travels in an optional section of its own
- * (tag 8: u32 matmul, u32 reserved), written for bf16 models only, so that
+ * (tag 9: u32 matmul, u32 reserved), written for bf16 models only, so that
  * readers that predate it load such a file computing in fp32.  A bf16
  * checkpoint loads as bf16 where bf16 products are available, and as fp32,
  * with a warning, where they are not (test_checkpoint_forged_no_bf16 runs
@@ -495,7 +495,7 @@ static void edit_add_matmul(payload *p)
     unsigned char body[12] = {0};
     put32(body, matmul_value);
     put32(body + 4, matmul_reserved);
-    add_section(p, 0x00000008u, body, matmul_len);
+    add_section(p, 0x00000009u, body, matmul_len);
 }
 
 static void edit_options2_reserved(payload *p)
@@ -531,11 +531,13 @@ TEST(matmul_section)
         unsigned char *file = slurp(path, &size);
         payload p;
         split_payload(file, size, &p);
-        CHECK_EQ_INT(p.n, 7);
-        if (p.n == 7) {
+        CHECK_EQ_INT(p.n, 8);
+        if (p.n == 8) {
+            /* After training2, the last section. */
             CHECK_EQ_INT(p.s[6].tag, 0x00000008u);
-            CHECK_EQ_INT(p.s[6].len, 8);
-            CHECK_EQ_INT(le32(p.s[6].data), NERF_MATMUL_BF16);
+            CHECK_EQ_INT(p.s[7].tag, 0x00000009u);
+            CHECK_EQ_INT(p.s[7].len, 8);
+            CHECK_EQ_INT(le32(p.s[7].data), NERF_MATMUL_BF16);
             CHECK_EQ_INT(le32(p.s[5].data + 11 * 4), 0);
         }
         free_payload(&p);
