@@ -24,37 +24,6 @@
 #define MIN_PSNR 21.0
 #define MAX_GAP 1.0
 
-static double test_psnr(nerf_model *m, nerf_sampler *s, nerf_dataset *test)
-{
-    nerf_renderer_options ro;
-    NERF_RENDERER_OPTIONS_INIT(&ro);
-    ro.white_background = 1;
-    nerf_renderer *r = NULL;
-    if (nerf_renderer_create(&r, m, s, &ro) != NERF_OK) {
-        return -1.0;
-    }
-    uint32_t w, h;
-    nerf_dataset_image_size(test, &w, &h);
-    float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
-    double sum = 0.0;
-    uint32_t n = nerf_dataset_count(test);
-    for (uint32_t i = 0; i < n; i++) {
-        nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        const float *truth;
-        double p = 0.0;
-        CHECK_OK(nerf_dataset_camera(test, i, &cam));
-        CHECK_OK(nerf_dataset_image(test, i, &truth));
-        CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
-                                            (size_t)w * h));
-        CHECK_OK(nerf_psnr(rgb, truth, (size_t)w * h * 3, &p));
-        sum += p;
-    }
-    free(rgb);
-    nerf_renderer_destroy(r);
-    return sum / n;
-}
-
 /* Train a tiny model with these products; its test PSNR, or -1. */
 static double train(fixture *fx, int matmul, double *train_psnr)
 {
@@ -87,7 +56,7 @@ static double train(fixture *fx, int matmul, double *train_psnr)
     st.struct_size = sizeof st;
     CHECK_OK(nerf_trainer_run(t, STEPS, &st));
     *train_psnr = st.psnr;
-    psnr = test_psnr(m, s, fx->test);
+    psnr = fixture_test_psnr(m, s, fx->test);
 done:
     nerf_trainer_destroy(t);
     nerf_model_destroy(m);

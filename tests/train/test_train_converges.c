@@ -23,37 +23,6 @@
 #define MIN_PSNR 21.0
 #define LEARNING_RATE 5e-3
 
-static double test_psnr(nerf_model *m, nerf_sampler *s, nerf_dataset *test)
-{
-    nerf_renderer_options ro;
-    NERF_RENDERER_OPTIONS_INIT(&ro);
-    ro.white_background = 1;
-    nerf_renderer *r = NULL;
-    if (nerf_renderer_create(&r, m, s, &ro) != NERF_OK) {
-        return -1.0;
-    }
-    uint32_t w, h;
-    nerf_dataset_image_size(test, &w, &h);
-    float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
-    double sum = 0.0;
-    uint32_t n = nerf_dataset_count(test);
-    for (uint32_t i = 0; i < n; i++) {
-        nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        const float *truth;
-        double p = 0.0;
-        CHECK_OK(nerf_dataset_camera(test, i, &cam));
-        CHECK_OK(nerf_dataset_image(test, i, &truth));
-        CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
-                                            (size_t)w * h));
-        CHECK_OK(nerf_psnr(rgb, truth, (size_t)w * h * 3, &p));
-        sum += p;
-    }
-    free(rgb);
-    nerf_renderer_destroy(r);
-    return sum / n;
-}
-
 TEST(tiny_preset_learns_the_builtin_scene)
 {
     fixture fx;
@@ -66,7 +35,7 @@ TEST(tiny_preset_learns_the_builtin_scene)
     const char *env_batch = getenv("NERF_TEST_BATCH");
     nerf_sampler *s = tiny_sampler(0);
     nerf_model *m = tiny_model(0);
-    double before = test_psnr(m, s, fx.test);
+    double before = fixture_test_psnr(m, s, fx.test);
     const char *env_lr = getenv("NERF_TEST_LR");
     double lr = env_lr ? atof(env_lr) : LEARNING_RATE;
     CHECK_OK(nerf_model_set_param(m, NERF_PARAM_LEARNING_RATE, lr));
@@ -81,7 +50,7 @@ TEST(tiny_preset_learns_the_builtin_scene)
     nerf_train_stats st;
     st.struct_size = sizeof st;
     CHECK_OK(nerf_trainer_run(t, (uint64_t)steps, &st));
-    double after = test_psnr(m, s, fx.test);
+    double after = fixture_test_psnr(m, s, fx.test);
     printf("  %d steps: train PSNR %.2f, test PSNR %.2f dB (untrained %.2f)\n",
            steps, st.psnr, after, before);
     CHECK(after >= MIN_PSNR);

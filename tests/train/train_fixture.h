@@ -5,6 +5,8 @@
 #ifndef NERF_TEST_TRAIN_FIXTURE_H
 #define NERF_TEST_TRAIN_FIXTURE_H
 
+#include <stdlib.h>
+
 #include "../data/data_fixtures.h"
 #include "../harness.h"
 #include "nerf.h"
@@ -38,6 +40,40 @@ static inline int fixture_open(fixture *f, uint32_t width, uint32_t n_train,
         rc = nerf_dataset_load(&f->test, f->dir, &dopt);
     }
     return rc;
+}
+
+/* Mean PSNR of a model's renders (on white) of the views of test; -1 if
+ * no renderer could be made. */
+static inline double fixture_test_psnr(nerf_model *m, nerf_sampler *s,
+                                       nerf_dataset *test)
+{
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    ro.white_background = 1;
+    nerf_renderer *r = NULL;
+    if (nerf_renderer_create(&r, m, s, &ro) != NERF_OK) {
+        return -1.0;
+    }
+    uint32_t w, h;
+    nerf_dataset_image_size(test, &w, &h);
+    float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
+    double sum = 0.0;
+    uint32_t n = nerf_dataset_count(test);
+    for (uint32_t i = 0; i < n; i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        const float *truth;
+        double p = 0.0;
+        CHECK_OK(nerf_dataset_camera(test, i, &cam));
+        CHECK_OK(nerf_dataset_image(test, i, &truth));
+        CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
+                                            (size_t)w * h));
+        CHECK_OK(nerf_psnr(rgb, truth, (size_t)w * h * 3, &p));
+        sum += p;
+    }
+    free(rgb);
+    nerf_renderer_destroy(r);
+    return sum / n;
 }
 
 static inline void fixture_close(fixture *f)
