@@ -5,11 +5,11 @@
 #include "parallel.h"
 
 /*
- * Forward passes split by rows.  Gradient passes that also sum over rows
- * split by columns instead: every bias gradient is then summed over the
- * rows in the same order whatever the thread count, so results never
- * depend on it.  Column ranges are whole 64-byte lines so that two threads
- * never write one cache line.
+ * Forward passes split by rows.  Gradient passes also sum over rows, and
+ * their sums must not depend on the thread count: the bias gradient
+ * splits by columns, each summed over all rows in order; the ReLU backward
+ * sums fixed row blocks (see below).  Column ranges are whole 64-byte
+ * lines so that two threads never write one cache line.
  */
 #define LINE 16
 
@@ -74,49 +74,48 @@ static void column_span(const fused_job *j, size_t begin, size_t end,
     *c1 = end * LINE < j->cols ? end * LINE : j->cols;
 }
 
-NERF__MULTIVERSION static void relu_backward_cols(void *ctx, size_t begin,
-                                                  size_t end)
+/*
+ * The ReLU backward goes through whole rows: cutting rows into column
+ * ranges, as the bias gradient below does, reads each row in pieces a row
+ * apart, which the hardware prefetchers follow badly (4 to 5 times slower
+ * for 256-wide layers here).  Its bias sums stay independent of the thread
+ * count another way: each fixed block of NERF__RELU_ROWS rows sums into its
+ * own partial, and the partials are added in block order.
+ */
+static void block_span(const fused_job *j, size_t block, size_t *r0,
+                       size_t *r1)
+{
+    *r0 = block * NERF__RELU_ROWS;
+    *r1 = *r0 + NERF__RELU_ROWS < j->n ? *r0 + NERF__RELU_ROWS : j->n;
+}
+
+NERF__MULTIVERSION static void relu_backward_rows(void *ctx, size_t block)
 {
     const fused_job *j = ctx;
-    size_t c0, c1;
-    column_span(j, begin, end, &c0, &c1);
-    float *restrict db = j->db;
-    for (size_t i = 0; i < j->n; i++) {
+    size_t r0, r1;
+    block_span(j, block, &r0, &r1);
+    float *restrict part = j->out + block * j->cols;
+    for (size_t c = 0; c < j->cols; c++) {
+        part[c] = 0.0f;
+    }
+    for (size_t i = r0; i < r1; i++) {
         const float *restrict yr = j->y + i * j->ldy;
         float *restrict dr = j->dy + i * j->lddy;
-        for (size_t c = c0; c < c1; c++) {
+        for (size_t c = 0; c < j->cols; c++) {
             float g = yr[c] > 0.0f ? dr[c] : 0.0f;
             dr[c] = g;
-            db[c] += g;
+            part[c] += g;
         }
     }
 }
 
-void nerf__relu_backward_bias(size_t n, size_t cols, const float *y,
-                              size_t ldy, float *dy, size_t lddy, float *db)
-{
-    fused_job j = {.cols = cols, .y = y, .ldy = ldy, .dy = dy, .lddy = lddy,
-                   .db = db, .n = n};
-    nerf__parallel_for((cols + LINE - 1) / LINE, 3 * LINE * n,
-                       relu_backward_cols, &j);
-}
-
-/*
- * The bf16 variant goes through whole rows: cutting rows into column
- * ranges, as the fp32 pass does, reads each row in pieces a row apart,
- * which the hardware prefetchers follow badly (4 to 5 times slower for
- * 256-wide layers here).  Its bias sums stay independent of the thread
- * count another way: each fixed block of rows sums into its own partial,
- * and the partials are added in block order.
- */
 #define CHUNK 256
 
 static NERF__BF16_WIDE void relu_backward_bf16_rows(void *ctx, size_t block)
 {
     const fused_job *j = ctx;
-    const size_t rows = NERF__RELU_BF16_ROWS;
-    const size_t r0 = block * rows;
-    const size_t r1 = r0 + rows < j->n ? r0 + rows : j->n;
+    size_t r0, r1;
+    block_span(j, block, &r0, &r1);
     float *restrict part = j->out + block * j->cols;
     float g[CHUNK];
     for (size_t c = 0; c < j->cols; c++) {
@@ -142,19 +141,38 @@ static NERF__BF16_WIDE void relu_backward_bf16_rows(void *ctx, size_t block)
     }
 }
 
-static void sum_partials_cols(void *ctx, size_t begin, size_t end)
+NERF__MULTIVERSION static void sum_partials_cols(void *ctx, size_t begin,
+                                                 size_t end)
 {
     const fused_job *j = ctx;
     size_t c0, c1;
     column_span(j, begin, end, &c0, &c1);
-    const size_t rows = NERF__RELU_BF16_ROWS;
-    const size_t blocks = (j->n + rows - 1) / rows;
+    const size_t blocks = (j->n + NERF__RELU_ROWS - 1) / NERF__RELU_ROWS;
     for (size_t b = 0; b < blocks; b++) {
         const float *p = j->out + b * j->cols;
         for (size_t c = c0; c < c1; c++) {
             j->db[c] += p[c];
         }
     }
+}
+
+/* Runs rows over fixed row blocks, then adds their partial sums to db. */
+static void relu_backward_blocks(fused_job *j,
+                                 void (*rows)(void *, size_t))
+{
+    const size_t blocks = (j->n + NERF__RELU_ROWS - 1) / NERF__RELU_ROWS;
+    nerf__parallel_blocks(blocks, 4 * NERF__RELU_ROWS * j->cols, rows, j);
+    nerf__parallel_for((j->cols + LINE - 1) / LINE, LINE * blocks,
+                       sum_partials_cols, j);
+}
+
+void nerf__relu_backward_bias(size_t n, size_t cols, const float *y,
+                              size_t ldy, float *dy, size_t lddy, float *db,
+                              float *partial)
+{
+    fused_job j = {.cols = cols, .y = y, .ldy = ldy, .dy = dy, .lddy = lddy,
+                   .db = db, .n = n, .out = partial};
+    relu_backward_blocks(&j, relu_backward_rows);
 }
 
 void nerf__relu_backward_bias_bf16(size_t n, size_t cols, const float *y,
@@ -164,11 +182,7 @@ void nerf__relu_backward_bias_bf16(size_t n, size_t cols, const float *y,
     fused_job j = {.cols = cols, .y = y, .ldy = ldy, .dy_in = dy,
                    .lddy = lddy, .db = db, .n = n, .dyb = dyb,
                    .out = partial};
-    const size_t blocks = (n + NERF__RELU_BF16_ROWS - 1) / NERF__RELU_BF16_ROWS;
-    nerf__parallel_blocks(blocks, 4 * NERF__RELU_BF16_ROWS * cols,
-                          relu_backward_bf16_rows, &j);
-    nerf__parallel_for((cols + LINE - 1) / LINE, LINE * blocks,
-                       sum_partials_cols, &j);
+    relu_backward_blocks(&j, relu_backward_bf16_rows);
 }
 
 NERF__MULTIVERSION static void bias_backward_cols(void *ctx, size_t begin,

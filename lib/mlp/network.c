@@ -185,7 +185,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     const bool bf16 = keep && net->bf16 != NULL;
     size_t kept = bf16 ? (n * input_columns(net, layer_count(net)) + 1) / 2 : 0;
     size_t grad16 = bf16 ? (n * grad_width(net) + 1) / 2 : 0;
-    size_t partials = bf16 ? NERF__RELU_BF16_PARTIALS(n, grad_width(net)) : 0;
+    size_t partials = keep ? NERF__RELU_PARTIALS(n, grad_width(net)) : 0;
     enum { SLOTS = 12 };
     size_t sizes[SLOTS] = {
         round64(n * net->pos_width),
@@ -644,7 +644,8 @@ static const uint16_t *relu_backward(const nerf__network *net,
                                       ws->grad_bf16, ws->partials);
         return ws->grad_bf16;
     }
-    nerf__relu_backward_bias(ws->n, cols, y, cols, dy, cols, db);
+    nerf__relu_backward_bias(ws->n, cols, y, cols, dy, cols, db,
+                             ws->partials);
     return NULL;
 }
 

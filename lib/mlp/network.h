@@ -141,7 +141,7 @@ typedef struct nerf__workspace {
      * rounded it, and a rounded gradient ([n, width + 1]). */
     uint16_t *kept;
     uint16_t *grad_bf16;
-    float *partials;  /* the bias sums of nerf__relu_backward_bias_bf16 */
+    float *partials;  /* the ReLU backward's bias sums by row block */
     nerf__env env;  /* what reserved it, for the bf16 scratch */
     /* The rounded operands of a bf16 network's products, created by its
      * first product (layer.h). */

@@ -98,31 +98,6 @@ static nerf_renderer *make_renderer(nerf_model *m, nerf_sampler *s)
     return r;
 }
 
-/* Mean test PSNR; the renders into rgb[n_test][w h 3] when it is set. */
-static double test_psnr(nerf_renderer *r, nerf_dataset *test, float *rgb)
-{
-    uint32_t w, h;
-    nerf_dataset_image_size(test, &w, &h);
-    const size_t px = (size_t)w * h;
-    float *own = rgb ? NULL : malloc(px * 3 * sizeof(float));
-    double sum = 0.0;
-    uint32_t n = nerf_dataset_count(test);
-    for (uint32_t i = 0; i < n; i++) {
-        nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        const float *truth;
-        double p = 0.0;
-        float *out = rgb ? rgb + i * px * 3 : own;
-        CHECK_OK(nerf_dataset_camera(test, i, &cam));
-        CHECK_OK(nerf_dataset_image(test, i, &truth));
-        CHECK_OK(nerf_renderer_render_image(r, &cam, out, NULL, NULL, px));
-        CHECK_OK(nerf_psnr(out, truth, px * 3, &p));
-        sum += p;
-    }
-    free(own);
-    return sum / n;
-}
-
 /* The trained model the later tests look at. */
 static fixture fx;
 static nerf_model *trained;
@@ -137,7 +112,7 @@ TEST(fast_preset_learns_the_builtin_scene)
     sampler = fast_sampler(0);
     trained = fast_model(0);
     nerf_renderer *r = make_renderer(trained, sampler);
-    double before = test_psnr(r, fx.test, NULL);
+    double before = fixture_renderer_psnr(r, fx.test, NULL);
     CHECK_OK(nerf_model_set_param(trained, NERF_PARAM_LEARNING_RATE, lr));
     CHECK_OK(nerf_model_set_param(trained, NERF_PARAM_LEARNING_RATE_FINAL,
                                   lr / 10));
@@ -162,7 +137,7 @@ TEST(fast_preset_learns_the_builtin_scene)
         train_time += now() - t0;
         done += n;
         if (curve > 0) {
-            double p = test_psnr(r, fx.test, NULL);
+            double p = fixture_renderer_psnr(r, fx.test, NULL);
             const nerf__occupancy *g = trained->grid;
             printf("  step %5d  %6.1f s  train %.2f  test %.2f dB  "
                    "samples/ray %.1f  occupied %.2f%%\n", done, train_time,
@@ -171,7 +146,7 @@ TEST(fast_preset_learns_the_builtin_scene)
         }
     }
     double t0 = now();
-    double after = test_psnr(r, fx.test, NULL);
+    double after = fixture_renderer_psnr(r, fx.test, NULL);
     double render_time = now() - t0;
     printf("  %d steps in %.1f s (%.1f steps/s, %.1f samples/ray): train "
            "PSNR %.2f, test PSNR %.2f dB (untrained %.2f); test views "
@@ -223,12 +198,12 @@ TEST(skipping_is_rendering_empty_cells_as_empty)
     float *skip = malloc(n * sizeof(float)), *zero = malloc(n * sizeof(float));
     float *all = malloc(n * sizeof(float));
     nerf_renderer *r = make_renderer(trained, sampler);
-    double p_skip = test_psnr(r, fx.test, skip);
+    double p_skip = fixture_renderer_psnr(r, fx.test, skip);
     r->march_everywhere = true;
     r->march_zero_empty = true;
-    test_psnr(r, fx.test, zero);
+    fixture_renderer_psnr(r, fx.test, zero);
     r->march_zero_empty = false;
-    double p_all = test_psnr(r, fx.test, all);
+    double p_all = fixture_renderer_psnr(r, fx.test, all);
     double mean_zero, mean_all;
     double worst_zero = diff(skip, zero, n, &mean_zero);
     double worst_all = diff(skip, all, n, &mean_all);

@@ -42,6 +42,33 @@ static inline int fixture_open(fixture *f, uint32_t width, uint32_t n_train,
     return rc;
 }
 
+/* Mean PSNR of a renderer's images of the views of test; the renders go
+ * to rgb[n_test][w h 3] when it is set. */
+static inline double fixture_renderer_psnr(nerf_renderer *r,
+                                           nerf_dataset *test, float *rgb)
+{
+    uint32_t w, h;
+    nerf_dataset_image_size(test, &w, &h);
+    const size_t px = (size_t)w * h;
+    float *own = rgb ? NULL : malloc(px * 3 * sizeof(float));
+    double sum = 0.0;
+    uint32_t n = nerf_dataset_count(test);
+    for (uint32_t i = 0; i < n; i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        const float *truth;
+        double p = 0.0;
+        float *out = rgb ? rgb + i * px * 3 : own;
+        CHECK_OK(nerf_dataset_camera(test, i, &cam));
+        CHECK_OK(nerf_dataset_image(test, i, &truth));
+        CHECK_OK(nerf_renderer_render_image(r, &cam, out, NULL, NULL, px));
+        CHECK_OK(nerf_psnr(out, truth, px * 3, &p));
+        sum += p;
+    }
+    free(own);
+    return sum / n;
+}
+
 /* Mean PSNR of a model's renders (on white) of the views of test; -1 if
  * no renderer could be made. */
 static inline double fixture_test_psnr(nerf_model *m, nerf_sampler *s,
@@ -54,26 +81,9 @@ static inline double fixture_test_psnr(nerf_model *m, nerf_sampler *s,
     if (nerf_renderer_create(&r, m, s, &ro) != NERF_OK) {
         return -1.0;
     }
-    uint32_t w, h;
-    nerf_dataset_image_size(test, &w, &h);
-    float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
-    double sum = 0.0;
-    uint32_t n = nerf_dataset_count(test);
-    for (uint32_t i = 0; i < n; i++) {
-        nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        const float *truth;
-        double p = 0.0;
-        CHECK_OK(nerf_dataset_camera(test, i, &cam));
-        CHECK_OK(nerf_dataset_image(test, i, &truth));
-        CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
-                                            (size_t)w * h));
-        CHECK_OK(nerf_psnr(rgb, truth, (size_t)w * h * 3, &p));
-        sum += p;
-    }
-    free(rgb);
+    double psnr = fixture_renderer_psnr(r, test, NULL);
     nerf_renderer_destroy(r);
-    return sum / n;
+    return psnr;
 }
 
 static inline void fixture_close(fixture *f)
