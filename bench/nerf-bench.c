@@ -1069,8 +1069,7 @@ static int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     }
 
     /* The refresh rule of the timed steps' regime. */
-    const size_t n_random =
-        step < NERF__GRID_WARMUP ? g->cells : g->cells / NERF__GRID_RANDOM_DIV;
+    const size_t n_random = nerf__grid_random_cells(step, g->cells);
     grid_ctx gc = {m, &t->density_ws};
     for (int i = 0; i < 2 && rc == NERF_OK; i++) {
         double a = now();
@@ -1954,7 +1953,8 @@ static void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "backward + SH; MLP = the network's forward + backward "
                 "less the encoding; compositing = march + points, "
                 "composite forward + backward; optimiser = Adam (which "
-                "zeroes the gradients as it reads them); grid refresh = one refresh / %u.  The "
+                "zeroes the gradients as it reads them); grid refresh = "
+                "one refresh / %u.  The "
                 "rest of the step (ray drawing, loss, direction copies) is "
                 "the gap to 100%%.\n",
                 NERF__GRID_EVERY);

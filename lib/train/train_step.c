@@ -60,9 +60,7 @@ int nerf__trainer_update_grid(nerf_trainer *t)
     /* The update's random draws are keyed by the model's seed (the grid's)
      * and the grid's update count, both in checkpoints, so a resumed run
      * refreshes the grid as the unbroken one did. */
-    size_t n_random = m->step < NERF__GRID_WARMUP
-                          ? g->cells
-                          : g->cells / NERF__GRID_RANDOM_DIV;
+    size_t n_random = nerf__grid_random_cells(m->step, g->cells);
     int rc = nerf__occupancy_update(g, grid_density, t, n_random);
     if (rc != NERF_OK) {
         return rc;

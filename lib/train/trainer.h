@@ -60,6 +60,13 @@ struct nerf_trainer {
 #define NERF__GRID_WARMUP 256u
 #define NERF__GRID_RANDOM_DIV 16u
 
+/* Cells of `cells` an update at `step` evaluates at random besides the
+ * occupied ones: the rule above, for the trainer and its benchmark. */
+static inline size_t nerf__grid_random_cells(uint64_t step, size_t cells)
+{
+    return step < NERF__GRID_WARMUP ? cells : cells / NERF__GRID_RANDOM_DIV;
+}
+
 /* Fill the trainer's rays and targets (and with random_bg their
  * backgrounds) for step `step`. */
 void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step);
