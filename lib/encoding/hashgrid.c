@@ -166,9 +166,9 @@ typedef struct tile {
  * comparison so that the compiler can use the SIMD min and max, whose
  * handling of NaN (the second operand wins) sends NaN to 0.
  */
-static ALWAYS_INLINE void load_positions(const nerf__hashgrid *hg, size_t m,
-                           const float *restrict in, size_t in_stride,
-                           tile *restrict t)
+static ALWAYS_INLINE void load_positions(const nerf__hashgrid *hg,
+                                         size_t m, const float *restrict in,
+                                         size_t in_stride, tile *restrict t)
 {
     for (int a = 0; a < 3; a++) {
         const float lo = hg->bound_min[a], inv = hg->inv_extent[a];
@@ -214,8 +214,8 @@ static inline void weights(tile *restrict t, size_t s, float fx, float fy,
 }
 
 /* Corner entries and weights at level l of the m positions in t->u. */
-static ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l, size_t m,
-                    tile *restrict t)
+static ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l,
+                                  size_t m, tile *restrict t)
 {
     const float N = (float)hg->resolution[l];
     const int32_t last = (int32_t)hg->resolution[l] - 1;
@@ -314,8 +314,9 @@ static ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
     }
 }
 
-static ALWAYS_INLINE void gather_any(const tile *t, size_t m, const float *table, uint32_t F,
-                       float *out, size_t out_stride)
+static ALWAYS_INLINE void gather_any(const tile *t, size_t m,
+                                     const float *table, uint32_t F,
+                                     float *out, size_t out_stride)
 {
     switch (F) {
     case 1: gather(t, m, table, 1, out, out_stride); break;
@@ -326,8 +327,9 @@ static ALWAYS_INLINE void gather_any(const tile *t, size_t m, const float *table
     }
 }
 
-static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad, uint32_t F,
-                        const float *d, size_t d_stride)
+static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad,
+                                      uint32_t F, const float *d,
+                                      size_t d_stride)
 {
     switch (F) {
     case 1: scatter(t, m, grad, 1, d, d_stride); break;
