@@ -1,12 +1,14 @@
-#include "encoding.h"
-
+/* The frequency (positional) encoding of the paper. */
 #include <math.h>
+#include <string.h>
 
+#include "encoding.h"
 #include "nerf.h"
+#include "parallel.h"
 
-uint32_t nerf__encoding_width(const nerf__encoding *enc)
+uint32_t nerf__frequency_width(const nerf__frequency *f)
 {
-    return enc->dims * ((enc->include_input ? 1u : 0u) + 2u * enc->frequencies);
+    return f->dims * ((f->include_input ? 1u : 0u) + 2u * f->frequencies);
 }
 
 /*
@@ -17,7 +19,7 @@ uint32_t nerf__encoding_width(const nerf__encoding *enc)
  * below float resolution, whereas a float recurrence would lose about
  * three digits.
  */
-void nerf__encoding_forward(const nerf__encoding *enc, size_t n,
+void nerf__frequency_encode(const nerf__frequency *enc, size_t n,
                             const float *in, size_t in_stride, float *out,
                             size_t out_stride)
 {
@@ -49,4 +51,51 @@ void nerf__encoding_forward(const nerf__encoding *enc, size_t n,
             }
         }
     }
+}
+
+/* ---- as an encoding ----------------------------------------------------- */
+
+static uint32_t width(const nerf__encoding *e)
+{
+    return nerf__frequency_width(&e->u.freq);
+}
+
+static size_t no_params(const nerf__encoding *e)
+{
+    (void)e;
+    return 0;
+}
+
+typedef struct rows_job {
+    const nerf__frequency *f;
+    const float *in;
+    float *out;
+    size_t out_stride;
+} rows_job;
+
+static void encode_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    nerf__frequency_encode(j->f, end - begin, j->in + 3 * begin, 3,
+                           j->out + begin * j->out_stride, j->out_stride);
+}
+
+static void forward(const nerf__encoding *e, const float *params, size_t n,
+                    const float *in, float *out, size_t out_stride)
+{
+    (void)params;
+    rows_job j = {&e->u.freq, in, out, out_stride};
+    nerf__parallel_for(n, 4 * out_stride, encode_rows, &j);
+}
+
+static const nerf__encoding_ops frequency_ops = {
+    .width = width, .params = no_params, .forward = forward};
+
+void nerf__encoding_frequency(nerf__encoding *e, uint32_t frequencies,
+                              bool include_input, bool scale_pi)
+{
+    memset(e, 0, sizeof *e);
+    e->kind = NERF_ENCODING_FREQUENCY;
+    e->ops = &frequency_ops;
+    e->u.freq = (nerf__frequency){3, frequencies, include_input, scale_pi};
 }

@@ -1,6 +1,11 @@
 #include "sh.h"
 
 #include <math.h>
+#include <string.h>
+
+#include "encoding.h"
+#include "nerf.h"
+#include "parallel.h"
 
 /*
  * Each constant is K_l^|m| (times sqrt 2 when m != 0) with
@@ -78,4 +83,50 @@ void nerf__sh_forward(uint32_t degree, size_t n, const float *in,
         y[14] = SH_C3E * z * (x2 - y2);
         y[15] = SH_C3A * x * (3.0f * y2 - x2);
     }
+}
+
+/* ---- as an encoding ----------------------------------------------------- */
+
+static uint32_t width(const nerf__encoding *e)
+{
+    return nerf__sh_width(e->u.sh_degree);
+}
+
+static size_t no_params(const nerf__encoding *e)
+{
+    (void)e;
+    return 0;
+}
+
+typedef struct rows_job {
+    uint32_t degree;
+    const float *in;
+    float *out;
+    size_t out_stride;
+} rows_job;
+
+static void encode_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    nerf__sh_forward(j->degree, end - begin, j->in + 3 * begin, 3,
+                     j->out + begin * j->out_stride, j->out_stride);
+}
+
+static void forward(const nerf__encoding *e, const float *params, size_t n,
+                    const float *in, float *out, size_t out_stride)
+{
+    (void)params;
+    rows_job j = {e->u.sh_degree, in, out, out_stride};
+    nerf__parallel_for(n, 40, encode_rows, &j);
+}
+
+static const nerf__encoding_ops sh_ops = {
+    .width = width, .params = no_params, .forward = forward};
+
+void nerf__encoding_sh(nerf__encoding *e, uint32_t degree)
+{
+    memset(e, 0, sizeof *e);
+    e->kind = NERF_ENCODING_SPHERICAL_HARMONICS;
+    e->ops = &sh_ops;
+    e->u.sh_degree = degree;
 }

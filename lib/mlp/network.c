@@ -4,11 +4,9 @@
 #include <string.h>
 
 #include "fused.h"
-#include "hashgrid.h"
 #include "layer.h"
 #include "parallel.h"
 #include "rng.h"
-#include "sh.h"
 
 static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
 {
@@ -17,32 +15,18 @@ static nerf__linear place(uint32_t in, uint32_t out, size_t *offset)
     return l;
 }
 
-static uint32_t dir_width(const nerf__network *net)
-{
-    if (!net->use_viewdirs) {
-        return 0;
-    }
-    if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
-        return nerf__sh_width(net->sh_degree);
-    }
-    return nerf__encoding_width(&net->dir_enc);
-}
-
 void nerf__network_layout(nerf__network *net, size_t offset)
 {
-    net->dir_width = dir_width(net);
+    net->dir_width =
+        net->use_viewdirs ? nerf__encoding_width(&net->dir_enc) : 0;
+    net->pos_width = nerf__encoding_width(&net->pos_enc);
     net->offset = offset;
     size_t at = offset;
-    if (nerf__network_has_table(net)) {
-        /* The table comes first: the layers after it are what weight
-         * decay applies to. */
-        net->pos_width = nerf__hashgrid_width(&net->hash);
-        net->table = at;
-        at += net->hash.count;
-    } else {
-        net->pos_width = nerf__encoding_width(&net->pos_enc);
-        net->table = 0;
-    }
+    /* The encoding's parameters come first: the layers after them are
+     * what weight decay applies to. */
+    const size_t enc = nerf__encoding_params(&net->pos_enc);
+    net->pos_params = enc ? at : 0;
+    at += enc;
     if (net->view_depth < 1) {
         net->view_depth = 1;
     }
@@ -101,8 +85,8 @@ void nerf__network_init(const nerf__network *net, float *params,
                         stream_base + NERF__MAX_DEPTH + 2 + k);
         }
     }
-    if (nerf__network_has_table(net)) {
-        nerf__hashgrid_init(&net->hash, params + net->table, seed,
+    if (nerf__encoding_params(&net->pos_enc)) {
+        nerf__encoding_init(&net->pos_enc, params + net->pos_params, seed,
                             stream_base + 2 * NERF__MAX_DEPTH);
     }
 }
@@ -118,8 +102,8 @@ static size_t grad_width(const nerf__network *net)
     if (nerf__network_head_width(net) > g) {
         g = nerf__network_head_width(net);
     }
-    if (nerf__network_has_table(net) && net->pos_width > g) {
-        g = net->pos_width; /* the table's gradient input */
+    if (nerf__encoding_params(&net->pos_enc) && net->pos_width > g) {
+        g = net->pos_width; /* the encoding's gradient input */
     }
     return g;
 }
@@ -190,7 +174,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     size_t sizes[SLOTS] = {
         round64(n * net->pos_width),
         density_only ? 0 : round64(n * net->dir_width),
-        keep && nerf__network_has_table(net) ? round64(n * 3) : 0,
+        keep && nerf__encoding_params(&net->pos_enc) ? round64(n * 3) : 0,
         round64(layers * n * net->width),
         round64(n * nerf__network_head_width(net)),
         round64(view_layers * n * net->view_width),
@@ -271,81 +255,22 @@ typedef struct rows_job {
     const nerf__network *net;
     const float *params;
     nerf__workspace *ws;
-    const nerf__encoding *enc;
-    const float *in;
-    float *out;
-    size_t out_stride;
     float *rgb_out, *sigma_out;
     const float *d_rgb, *d_sigma;
-    const float *pos; /* positions, for a table's bound */
+    const float *pos; /* positions, for the space's domain */
     float *dz;
     size_t ld;
 } rows_job;
-
-static void encode_rows(void *ctx, size_t begin, size_t end)
-{
-    const rows_job *j = ctx;
-    nerf__encoding_forward(j->enc, end - begin, j->in + 3 * begin, 3,
-                           j->out + begin * j->out_stride, j->out_stride);
-}
-
-static void encode(const nerf__encoding *enc, size_t n, const float *in,
-                   float *out, size_t out_stride)
-{
-    rows_job j = {.enc = enc, .in = in, .out = out, .out_stride = out_stride};
-    nerf__parallel_for(n, 4 * out_stride, encode_rows, &j);
-}
-
-static void encode_sh_rows(void *ctx, size_t begin, size_t end)
-{
-    const rows_job *j = ctx;
-    nerf__sh_forward(j->net->sh_degree, end - begin, j->in + 3 * begin, 3,
-                     j->out + begin * j->out_stride, j->out_stride);
-}
-
-/* The hash grid over the pool: forward by ranges of samples, backward by
- * levels (each level's table is written by one thread, in sample order, so
- * the gradients do not depend on the split). */
-typedef struct table_job {
-    const nerf__hashgrid *hg;
-    const float *table, *in, *d_out;
-    float *out, *grad;
-    size_t n, stride;
-} table_job;
-
-static void table_forward_rows(void *ctx, size_t begin, size_t end)
-{
-    const table_job *j = ctx;
-    nerf__hashgrid_forward_range(j->hg, j->table, begin, end, j->in, 3,
-                                 j->out, j->stride);
-}
-
-/* Coarse levels are dense and cheap, fine ones hashed and slow: blocks
- * pair them (0, L-1, 1, L-2, ...) so that contiguous ranges of blocks cost
- * about the same. */
-static void table_backward_level(void *ctx, size_t block)
-{
-    const table_job *j = ctx;
-    const uint32_t L = j->hg->levels;
-    uint32_t level = block % 2 ? L - 1 - (uint32_t)(block / 2)
-                               : (uint32_t)(block / 2);
-    nerf__hashgrid_backward_level(j->hg, level, j->n, j->in, 3, j->d_out,
-                                  j->stride, j->grad);
-}
 
 static void encode_positions(const nerf__network *net, const float *params,
                              nerf__workspace *ws, size_t n,
                              const float *positions)
 {
-    if (!nerf__network_has_table(net)) {
-        encode(&net->pos_enc, n, positions, ws->enc_pos, net->pos_width);
-        return;
-    }
-    table_job j = {.hg = &net->hash, .table = params + net->table,
-                   .in = positions, .out = ws->enc_pos,
-                   .stride = net->pos_width};
-    nerf__parallel_for(n, 200 * net->hash.levels, table_forward_rows, &j);
-    if (ws->pos) {
+    const nerf__encoding *e = &net->pos_enc;
+    const bool trained = nerf__encoding_params(e) > 0;
+    nerf__encoding_forward(e, trained ? params + net->pos_params : NULL, n,
+                           positions, ws->enc_pos, net->pos_width);
+    if (trained && ws->pos) {
         memcpy(ws->pos, positions, n * 3 * sizeof(float));
     }
 }
@@ -353,13 +278,8 @@ static void encode_positions(const nerf__network *net, const float *params,
 static void encode_directions(const nerf__network *net, nerf__workspace *ws,
                               size_t n, const float *directions)
 {
-    if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
-        rows_job j = {.net = net, .in = directions, .out = ws->enc_dir,
-                      .out_stride = net->dir_width};
-        nerf__parallel_for(n, 40, encode_sh_rows, &j);
-    } else {
-        encode(&net->dir_enc, n, directions, ws->enc_dir, net->dir_width);
-    }
+    nerf__encoding_forward(&net->dir_enc, NULL, n, directions, ws->enc_dir,
+                           net->dir_width);
 }
 
 static float *trunk_buffer(const nerf__network *net, nerf__workspace *ws,
@@ -381,24 +301,11 @@ static float exp_density(float x)
     return expf(x < NERF__EXP_DENSITY_MAX ? x : NERF__EXP_DENSITY_MAX);
 }
 
-/*
- * A hash grid has nothing to say outside its bound (it would repeat the
- * faces' values along every ray leaving the box), so space there is empty:
- * density 0, and no gradient reaches the logit.
- */
+/* Outside the space's domain there is nothing (space.h): density 0, and
+ * no gradient reaches the logit. */
 static bool outside(const nerf__network *net, const float *pos, size_t i)
 {
-    if (!nerf__network_has_table(net)) {
-        return false;
-    }
-    const nerf__hashgrid *hg = &net->hash;
-    const float *p = pos + 3 * i;
-    for (int a = 0; a < 3; a++) {
-        if (!(p[a] >= hg->bound_min[a] && p[a] <= hg->bound_max[a])) {
-            return true;
-        }
-    }
-    return false;
+    return !nerf__space_contains(&net->space, pos + 3 * i);
 }
 
 /* The sigmoid on rgb, and the outputs copied out of the workspace. */
@@ -726,7 +633,8 @@ int nerf__network_backward(const nerf__network *net, const float *params,
         uint16_t *kept = kept_input(net, ws, i);
         if (i == 0) {
             const nerf__layer_part enc = {ws->enc_pos, Ep, Ep};
-            if (!nerf__network_has_table(net)) {
+            const nerf__encoding *e = &net->pos_enc;
+            if (nerf__encoding_params(e) == 0) {
                 rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
                                           params + l->w, l->in, grads + l->w,
                                           -1, NULL, 0);
@@ -737,11 +645,8 @@ int nerf__network_backward(const nerf__network *net, const float *params,
                                       params + l->w, l->in, grads + l->w, 0,
                                       d_enc, Ep);
             if (rc == NERF_OK) {
-                table_job tj = {.hg = &net->hash, .in = ws->pos,
-                                .d_out = d_enc, .grad = grads + net->table,
-                                .n = n, .stride = Ep};
-                nerf__parallel_blocks(net->hash.levels, 200 * n,
-                                      table_backward_level, &tj);
+                nerf__encoding_backward(e, n, ws->pos, d_enc, Ep,
+                                        grads + net->pos_params);
             }
             break;
         }

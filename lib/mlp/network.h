@@ -24,8 +24,8 @@
 
 #include "encoding.h"
 #include "env.h"
-#include "hashgrid.h"
 #include "layer.h"
+#include "space.h"
 
 #define NERF__MAX_DEPTH 32
 #define NERF__MAX_VIEW_DEPTH 8
@@ -40,13 +40,12 @@ typedef struct nerf__linear {
 } nerf__linear;
 
 typedef struct nerf__network {
-    /* pos_enc.kind and dir_enc.kind say which encoding each input uses:
-     * NERF_ENCODING_FREQUENCY (pos_enc/dir_enc hold its settings),
-     * NERF_ENCODING_HASHGRID (hash) or NERF_ENCODING_SPHERICAL_HARMONICS
-     * (sh_degree). */
+    /* The encodings of positions and directions, run through their ops
+     * (encoding.h); the network never asks which kinds they are. */
     nerf__encoding pos_enc, dir_enc;
-    nerf__hashgrid hash;
-    uint32_t sh_degree;
+    /* Where positions must lie to hold density (space.h): samples outside
+     * the domain get density 0 and no density gradient. */
+    nerf__space space;
     uint32_t pos_width, dir_width; /* encoded widths */
     uint32_t depth, width, skip, view_width, view_depth;
     /* 0: the reference head, a width-wide feature plus sigma.  G > 0: a
@@ -55,7 +54,9 @@ typedef struct nerf__network {
     uint32_t geo_features;
     bool use_viewdirs;
     bool exp_density; /* sigma = exp(x) rather than raw x (ReLU later) */
-    size_t table;     /* offset of the hash table in the parameter array */
+    /* Offset of the position encoding's parameters (a hash grid's table)
+     * in the parameter array; 0 if it has none. */
+    size_t pos_params;
     nerf__linear trunk[NERF__MAX_DEPTH];
     /* With view directions and no geo_features: rows [0, width) are the
      * feature layer, row width is sigma (the reference's feature_linear
@@ -103,11 +104,6 @@ static inline uint32_t nerf__network_sigma_col(const nerf__network *net)
     return net->geo_features ? 0 : net->width;
 }
 
-static inline bool nerf__network_has_table(const nerf__network *net)
-{
-    return net->pos_enc.kind == NERF_ENCODING_HASHGRID;
-}
-
 /*
  * PyTorch's default nn.Linear initialisation (uniform in +-1/sqrt(in) for
  * weights and biases), the one the reference port trains with.  Each layer
@@ -130,7 +126,8 @@ typedef struct nerf__workspace {
     bool density_only; /* no direction, colour branch or rgb buffers */
     float *enc_pos; /* [n, pos_width] */
     float *enc_dir; /* [n, dir_width] */
-    float *pos;     /* [n, 3], the positions, kept for a table's backward */
+    float *pos;     /* [n, 3], the positions, kept for the backward of an
+                     * encoding with parameters */
     float *trunk;   /* [depth or 2][n, width], after ReLU */
     float *head;    /* [n, head_width] */
     float *view;    /* [view_depth][n, view_width], after ReLU */

@@ -102,7 +102,23 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     return NERF_OK;
 }
 
-static void hash_setup(nerf__hashgrid *hg, const nerf_model_options *o)
+/*
+ * The space a model's networks work in: a hash-grid model's grids cover
+ * the cube of half-side `bound`, and nothing outside it has density; the
+ * frequency encoding reads world coordinates anywhere.
+ */
+static void model_space(const nerf_model_options *o, nerf__space *space)
+{
+    if (o->encoding == NERF_ENCODING_HASHGRID) {
+        nerf__space_cube(space, o->bound);
+    } else {
+        nerf__space_world(space);
+    }
+}
+
+/* A hash grid laid over the space's box. */
+static void hash_setup(nerf__hashgrid *hg, const nerf_model_options *o,
+                       const nerf__space *space)
 {
     memset(hg, 0, sizeof *hg);
     hg->levels = o->hash_levels;
@@ -111,8 +127,8 @@ static void hash_setup(nerf__hashgrid *hg, const nerf_model_options *o)
     hg->min_resolution = o->hash_min_resolution;
     hg->max_resolution = o->hash_max_resolution;
     for (int c = 0; c < 3; c++) {
-        hg->bound_min[c] = -o->bound;
-        hg->bound_max[c] = o->bound;
+        hg->bound_min[c] = space->lo[c];
+        hg->bound_max[c] = space->hi[c];
     }
 }
 
@@ -233,13 +249,20 @@ static void setup_network(nerf__network *net, const nerf_model_options *o,
     bool pi = (o->encoding_flags & NERF_ENCODING_SCALE_PI) != 0;
     const uint32_t dir = o->dir_encoding ? o->dir_encoding
                                          : NERF_ENCODING_FREQUENCY;
-    net->pos_enc = (nerf__encoding){o->encoding, 3, o->pos_frequencies, raw, pi};
-    net->dir_enc = (nerf__encoding){dir, 3, o->dir_frequencies, raw, pi};
-    net->sh_degree = o->sh_degree;
+    model_space(o, &net->space);
     if (o->encoding == NERF_ENCODING_HASHGRID) {
-        hash_setup(&net->hash, o);
+        nerf__hashgrid hg;
+        hash_setup(&hg, o, &net->space);
         /* Checked by nerf__model_check_options(), so it cannot fail. */
-        (void)nerf__hashgrid_layout(&net->hash);
+        (void)nerf__hashgrid_layout(&hg);
+        nerf__encoding_hashgrid(&net->pos_enc, &hg);
+    } else {
+        nerf__encoding_frequency(&net->pos_enc, o->pos_frequencies, raw, pi);
+    }
+    if (dir == NERF_ENCODING_SPHERICAL_HARMONICS) {
+        nerf__encoding_sh(&net->dir_enc, o->sh_degree);
+    } else {
+        nerf__encoding_frequency(&net->dir_enc, o->dir_frequencies, raw, pi);
     }
     net->depth = o->depth;
     net->width = o->width;
@@ -326,12 +349,11 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         }
     }
     if (opts->encoding == NERF_ENCODING_HASHGRID) {
-        /* The grid covers the hash grid's bound: outside it the model has
-         * no density, so there is nothing to march. */
-        const float lo[3] = {-opts->bound, -opts->bound, -opts->bound};
-        const float hi[3] = {opts->bound, opts->bound, opts->bound};
+        /* The grid covers the space's box: outside it the model has no
+         * density, so there is nothing to march. */
+        const nerf__space *space = &m->nets[0].space;
         nerf__occupancy_options go;
-        nerf__occupancy_defaults(&go, lo, hi);
+        nerf__occupancy_defaults(&go, space->lo, space->hi);
         go.resolution = NERF__MODEL_GRID_RESOLUTION;
         go.seed = opts->seed;
         int rc = nerf__occupancy_create(env, &go, &m->grid);
@@ -490,6 +512,41 @@ int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
                                  rgb_out, sigma_out);
 }
 
+int nerf__model_evaluate(const nerf_model *m, int network,
+                         nerf__workspace *ws, size_t n,
+                         const float *positions, const float *directions,
+                         float *rgb_out, float *sigma_out)
+{
+    const nerf__network *net = &m->nets[network];
+    int rc = nerf__workspace_reserve(&m->env, ws, net, n, false);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    return nerf__network_forward(net, m->params, ws, n, positions, directions,
+                                 rgb_out, sigma_out);
+}
+
+int nerf__model_reserve(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, bool keep)
+{
+    return nerf__workspace_reserve(&m->env, ws, &m->nets[network], n, keep);
+}
+
+const nerf__env *nerf__model_env(const nerf_model *m)
+{
+    return &m->env;
+}
+
+bool nerf__model_uses_viewdirs(const nerf_model *m)
+{
+    return m->nets[0].use_viewdirs;
+}
+
+const nerf__occupancy *nerf__model_grid(const nerf_model *m)
+{
+    return m->grid;
+}
+
 int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
                         size_t n, const float *positions, float *sigma_out)
 {
@@ -538,10 +595,12 @@ void nerf__model_adam_step(nerf_model *m)
     for (uint32_t i = 0; i < m->n_nets; i++) {
         const nerf__network *net = &m->nets[i];
         size_t layers = net->offset;
-        if (nerf__network_has_table(net)) {
-            /* The table comes first in a network's slice. */
-            layers = net->table + net->hash.count;
-            adam_range(m, lr, net->table, layers, NERF__ADAM_SPARSE);
+        const size_t enc = nerf__encoding_params(&net->pos_enc);
+        if (enc) {
+            /* The encoding's parameters (a hash table) come first in a
+             * network's slice; a step touches few of their entries. */
+            layers = net->pos_params + enc;
+            adam_range(m, lr, net->pos_params, layers, NERF__ADAM_SPARSE);
         }
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }

@@ -11,8 +11,8 @@
 #include "env.h"
 #include "network.h"
 
-/* lib/render/occupancy.h: a self-contained structure over common, which
- * the model owns and the render code marches through. */
+/* lib/occupancy/occupancy.h: the grid a hash-grid model owns and the
+ * samplers below the renderer march through. */
 struct nerf__occupancy;
 
 struct nerf_model {
@@ -89,6 +89,33 @@ int nerf__model_forward(const nerf_model *m, int network, nerf__workspace *ws,
  */
 int nerf__model_density(const nerf_model *m, int network, nerf__workspace *ws,
                         size_t n, const float *positions, float *sigma_out);
+
+/*
+ * Forward n samples for rendering: no activations kept, ws sized for n
+ * samples exactly (it grows if needed, and keeps its memory otherwise).
+ */
+int nerf__model_evaluate(const nerf_model *m, int network,
+                         nerf__workspace *ws, size_t n,
+                         const float *positions, const float *directions,
+                         float *rgb_out, float *sigma_out);
+
+/*
+ * Grow ws to hold at least n samples of network `network` (with keep, the
+ * activations that nerf__model_backward() needs), for callers whose batch
+ * sizes vary and that reserve with headroom.
+ */
+int nerf__model_reserve(const nerf_model *m, int network, nerf__workspace *ws,
+                        size_t n, bool keep);
+
+/* The allocator and log sink the model's workspaces are sized with; a
+ * caller that outlives the model keeps a copy to release them. */
+const nerf__env *nerf__model_env(const nerf_model *m);
+
+/* Whether the networks take view directions (both or neither do). */
+bool nerf__model_uses_viewdirs(const nerf_model *m);
+
+/* The occupancy grid of a hash-grid model; NULL for the others. */
+const struct nerf__occupancy *nerf__model_grid(const nerf_model *m);
 
 /* Accumulate the gradients of the forward held in ws into m->grads. */
 int nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,

@@ -29,7 +29,7 @@ void nerf__batch_release(nerf__batch *b)
 int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
                             const char *fn)
 {
-    if (nerf__sampler_marches(s) && m->grid == NULL) {
+    if (nerf__sampler_marches(s) && nerf__model_grid(m) == NULL) {
         return nerf__error(NERF_EINVAL, "%s: the sampler marches "
                            "(march_steps = %u) through an occupancy grid, "
                            "which only hash-grid models have (encoding "
@@ -202,7 +202,7 @@ static int run_network(nerf__batch *b, const nerf__render_setup *s, int pass,
 {
     const nerf_model *m = s->model;
     const int net = b->net[pass];
-    const float *dirs = m->nets[net].use_viewdirs ? b->dirs : NULL;
+    const float *dirs = nerf__model_uses_viewdirs(m) ? b->dirs : NULL;
     if (s->keep) {
         /* The model sizes the workspace and keeps every activation. */
         return nerf__model_forward(m, net, &b->ws[pass], count, b->points,
@@ -210,15 +210,8 @@ static int run_network(nerf__batch *b, const nerf__render_setup *s, int pass,
     }
     /* Evaluation needs no activations after the pass: one lean workspace
      * serves both passes. */
-    nerf__workspace *ws = &b->ws[0];
-    int rc = nerf__workspace_reserve(&b->ws_env, ws, &m->nets[net], count,
-                                     false);
-    if (rc != NERF_OK) {
-        return rc;
-    }
-    return nerf__network_forward(&m->nets[net], m->params, ws, count,
-                                 b->points, dirs, b->rgb[pass],
-                                 b->sigma[pass]);
+    return nerf__model_evaluate(m, net, &b->ws[0], count, b->points, dirs,
+                                b->rgb[pass], b->sigma[pass]);
 }
 
 static bool has_noise(const nerf__render_setup *s, int pass)
@@ -305,7 +298,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     b->marched = false;
     b->n_rays = 0;
     b->n_evaluated = 0;
-    if (march && m->grid == NULL) {
+    if (march && nerf__model_grid(m) == NULL) {
         return nerf__error(NERF_EINVAL, "render: the sampler marches through "
                            "an occupancy grid, which this model has not");
     }
@@ -325,7 +318,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
         for (int p = 0; p < NERF__PASSES; p++) {
             nerf__workspace_release(&b->ws_env, &b->ws[p]);
         }
-        b->ws_env = m->env;
+        b->ws_env = *nerf__model_env(m);
         b->model = m;
     }
     b->n_rays = n_rays;
@@ -349,7 +342,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     }
     batch_job j = {.b = b, .s = s, .o = origins, .d = directions,
                    .random = s->training && so->perturb,
-                   .with_dirs = m->nets[0].use_viewdirs};
+                   .with_dirs = nerf__model_uses_viewdirs(m)};
     /* Rough operations per ray of each loop, to decide whether it is worth
      * waking the pool. */
     nerf__parallel_for(n_rays, 32, prepare_rays, &j);

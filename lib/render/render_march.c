@@ -200,7 +200,6 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
                     const march_job *j, bool keep)
 {
     const nerf_model *m = s->model;
-    const nerf__network *net = &m->nets[0];
     const size_t total = b->march.total, n = j->rays->n;
     int rc = reserve_packed(b, total, keep);
     if (rc != NERF_OK || total == 0) {
@@ -209,7 +208,7 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
     nerf__march_points(j->rays, b->march.offsets, b->march.t,
                        b->march_points);
     const float *dirs = NULL;
-    if (net->use_viewdirs) {
+    if (nerf__model_uses_viewdirs(m)) {
         nerf__parallel_for(n, 6 * (total / n + 1), sample_dirs, (void *)j);
         dirs = b->m_dirs;
     }
@@ -217,8 +216,7 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
      * batch to batch do not reallocate every time. */
     nerf__workspace *ws = &b->ws[0];
     if (total > ws->cap || (keep && !ws->keep)) {
-        rc = nerf__workspace_reserve(&b->ws_env, ws, net,
-                                     with_headroom(total), keep);
+        rc = nerf__model_reserve(m, 0, ws, with_headroom(total), keep);
         if (rc != NERF_OK) {
             return rc;
         }
@@ -227,16 +225,12 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
         rc = nerf__model_forward(m, 0, ws, total, b->march_points, dirs,
                                  b->m_rgb, b->m_sigma);
     } else {
-        rc = nerf__workspace_reserve(&b->ws_env, ws, net, total, false);
-        if (rc == NERF_OK) {
-            rc = nerf__network_forward(net, m->params, ws, total,
-                                       b->march_points, dirs, b->m_rgb,
-                                       b->m_sigma);
-        }
+        rc = nerf__model_evaluate(m, 0, ws, total, b->march_points, dirs,
+                                  b->m_rgb, b->m_sigma);
     }
     if (rc == NERF_OK && s->march_zero_empty) {
         march_job z = *j;
-        z.g = m->grid;
+        z.g = nerf__model_grid(m);
         nerf__parallel_for(total, 20, zero_empty, &z);
     }
     b->n_evaluated += total;
@@ -267,7 +261,7 @@ static size_t cut_to_budget(nerf__march_samples *ms, size_t budget)
 static int march_whole(nerf__batch *b, const nerf__render_setup *s,
                        const nerf__march_rays *all, const nerf__pass_out *out)
 {
-    const nerf__occupancy *g = s->model->grid;
+    const nerf__occupancy *g = nerf__model_grid(s->model);
     nerf__march_options mo;
     march_options(s, g, &mo);
     int rc = nerf__march_run(g, &mo, all, &b->march);
@@ -348,7 +342,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
                         const nerf__march_rays *all, const nerf__pass_out *out)
 {
     const size_t n = all->n;
-    const nerf__occupancy *g = s->model->grid;
+    const nerf__occupancy *g = nerf__model_grid(s->model);
     int rc = reserve_rays(b, n);
     if (rc != NERF_OK) {
         return rc;

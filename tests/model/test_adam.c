@@ -100,8 +100,8 @@ TEST(model_regions)
     CHECK_OK(nerf_model_get_param(m, NERF_PARAM_WEIGHT_DECAY, &wd));
     CHECK_NEAR(wd, 1e-6, 1e-18);
     const nerf__network *net = &m->nets[0];
-    const size_t table = net->table, layers = net->table + net->hash.count;
-    CHECK(net->hash.count > 2 && layers < m->n_params);
+    const size_t table = net->pos_params, layers = net->pos_params + net->pos_enc.u.hash.count;
+    CHECK(net->pos_enc.u.hash.count > 2 && layers < m->n_params);
     float *before = malloc(m->n_params * sizeof(float));
     if (before == NULL) {
         nerf_model_destroy(m);

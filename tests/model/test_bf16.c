@@ -345,9 +345,9 @@ static double check_layers(const nerf__network *nw, const float *g,
                   "differ %d)", what, l, e, tol, differ);
         }
     }
-    if (nerf__network_has_table(nw)) {
+    if ((nw->pos_enc.kind == NERF_ENCODING_HASHGRID)) {
         int differ = 0;
-        double e = rel_rms(g + nw->table, want + nw->table, nw->hash.count,
+        double e = rel_rms(g + nw->pos_params, want + nw->pos_params, nw->pos_enc.u.hash.count,
                            &differ);
         worst = e > worst ? e : worst;
         if (!(e <= tol) || !differ) {

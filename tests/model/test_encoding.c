@@ -1,4 +1,5 @@
-/* Frequency encoding against its closed form, in both forms. */
+/* Frequency encoding against its closed form, in both forms, through the
+ * encoding interface the network uses. */
 #include <math.h>
 #include <string.h>
 
@@ -11,7 +12,8 @@ static const float inputs[4][3] = {
     {-4.0f, 6.0f, 2.5f}};
 
 /* Closed form in double: element j of the encoding of x. */
-static double closed_form(const nerf__encoding *e, const float *x, uint32_t j)
+static double closed_form(const nerf__frequency *e, const float *x,
+                          uint32_t j)
 {
     uint32_t d = e->dims;
     if (e->include_input) {
@@ -27,17 +29,19 @@ static double closed_form(const nerf__encoding *e, const float *x, uint32_t j)
 
 static void check_form(bool include_input, bool scale_pi, uint32_t L)
 {
-    nerf__encoding e = {NERF_ENCODING_FREQUENCY, 3, L, include_input, scale_pi};
+    nerf__encoding e;
+    nerf__encoding_frequency(&e, L, include_input, scale_pi);
     uint32_t w = nerf__encoding_width(&e);
     CHECK_EQ_INT(w, 3 * ((include_input ? 1 : 0) + 2 * L));
+    CHECK_EQ_INT(nerf__encoding_params(&e), 0);
     float out[4 * 200];
     /* A stride wider than the width: the encoder must not touch the gap. */
     size_t stride = w + 5;
     memset(out, 0x7f, sizeof out);
-    nerf__encoding_forward(&e, 4, &inputs[0][0], 3, out, stride);
+    nerf__encoding_forward(&e, NULL, 4, &inputs[0][0], out, stride);
     for (int i = 0; i < 4; i++) {
         for (uint32_t j = 0; j < w; j++) {
-            double want = closed_form(&e, inputs[i], j);
+            double want = closed_form(&e.u.freq, inputs[i], j);
             /* The argument is rounded to float precision relative to
              * 2^k |x|, so allow an error proportional to it. */
             double tol = 2e-6 + 4e-7 * ldexp(fabs(inputs[i][j % 3]) + 1.0, (int)(j / 6));
@@ -69,23 +73,25 @@ TEST(paper_form)
 
 TEST(no_encoding_is_raw_input)
 {
-    nerf__encoding e = {NERF_ENCODING_FREQUENCY, 3, 0, true, false};
+    nerf__encoding e;
+    nerf__encoding_frequency(&e, 0, true, false);
     CHECK_EQ_INT(nerf__encoding_width(&e), 3);
     float out[12];
-    nerf__encoding_forward(&e, 4, &inputs[0][0], 3, out, 3);
+    nerf__encoding_forward(&e, NULL, 4, &inputs[0][0], out, 3);
     CHECK(memcmp(out, inputs, sizeof out) == 0);
 }
 
 TEST(forms_differ_as_they_should)
 {
-    nerf__encoding ref = {NERF_ENCODING_FREQUENCY, 3, 10, true, false};
-    nerf__encoding paper = {NERF_ENCODING_FREQUENCY, 3, 10, false, true};
+    nerf__encoding ref, paper;
+    nerf__encoding_frequency(&ref, 10, true, false);
+    nerf__encoding_frequency(&paper, 10, false, true);
     CHECK_EQ_INT(nerf__encoding_width(&ref), 63);
     CHECK_EQ_INT(nerf__encoding_width(&paper), 60);
     float a[63], b[60];
     const float x[3] = {0.3f, -0.2f, 0.1f};
-    nerf__encoding_forward(&ref, 1, x, 3, a, 63);
-    nerf__encoding_forward(&paper, 1, x, 3, b, 60);
+    nerf__encoding_forward(&ref, NULL, 1, x, a, 63);
+    nerf__encoding_forward(&paper, NULL, 1, x, b, 60);
     /* Reference k-th block is sin(2^k x); paper's is sin(2^k pi x). */
     CHECK_NEAR(a[3], sin(0.3), 1e-6);
     CHECK_NEAR(b[0], sin(M_PI * 0.3), 1e-6);

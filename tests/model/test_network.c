@@ -17,7 +17,7 @@
 #define N 12
 #define MAXW 512
 
-static double enc_value(const nerf__encoding *e, const float *x, uint32_t j)
+static double enc_value(const nerf__frequency *e, const float *x, uint32_t j)
 {
     if (e->include_input) {
         if (j < 3) {
@@ -36,7 +36,7 @@ static double enc_value(const nerf__encoding *e, const float *x, uint32_t j)
 static void hash_value(const nerf__network *net, const double *P,
                        const float *x, double *out)
 {
-    const nerf__hashgrid *hg = &net->hash;
+    const nerf__hashgrid *hg = &net->pos_enc.u.hash;
     const uint32_t F = hg->features;
     for (uint32_t l = 0; l < hg->levels; l++) {
         const double res = hg->resolution[l];
@@ -61,7 +61,7 @@ static void hash_value(const nerf__network *net, const double *P,
                        (bz ? frac[2] : 1 - frac[2]);
             uint32_t e = nerf__hashgrid_index(hg, l, cell[0] + bx,
                                               cell[1] + by, cell[2] + bz);
-            const double *t = P + net->table + hg->offset[l] + (size_t)e * F;
+            const double *t = P + net->pos_params + hg->offset[l] + (size_t)e * F;
             for (uint32_t f = 0; f < F; f++) {
                 out[l * F + f] += w * t[f];
             }
@@ -73,23 +73,23 @@ static void encode_dir(const nerf__network *net, const float *d, double *ed)
 {
     if (net->dir_enc.kind == NERF_ENCODING_SPHERICAL_HARMONICS) {
         float v[16];
-        nerf__sh_forward(net->sh_degree, 1, d, 3, v, 16);
+        nerf__sh_forward(net->dir_enc.u.sh_degree, 1, d, 3, v, 16);
         for (uint32_t j = 0; j < net->dir_width; j++) {
             ed[j] = v[j];
         }
         return;
     }
     for (uint32_t j = 0; j < net->dir_width; j++) {
-        ed[j] = enc_value(&net->dir_enc, d, j);
+        ed[j] = enc_value(&net->dir_enc.u.freq, d, j);
     }
 }
 
 /* The activated density; a hash-grid network has none outside its bound. */
 static double density(const nerf__network *net, double x, const float *p)
 {
-    if (nerf__network_has_table(net)) {
+    if ((net->pos_enc.kind == NERF_ENCODING_HASHGRID)) {
         for (int a = 0; a < 3; a++) {
-            if (p[a] < net->hash.bound_min[a] || p[a] > net->hash.bound_max[a]) {
+            if (p[a] < net->pos_enc.u.hash.bound_min[a] || p[a] > net->pos_enc.u.hash.bound_max[a]) {
                 return 0.0;
             }
         }
@@ -114,11 +114,11 @@ static void ref_forward(const nerf__network *net, const double *P,
                         double *sigma)
 {
     double ex[MAXW], ed[MAXW], h[MAXW], in[MAXW], out[MAXW];
-    if (nerf__network_has_table(net)) {
+    if ((net->pos_enc.kind == NERF_ENCODING_HASHGRID)) {
         hash_value(net, P, x, ex);
     } else {
         for (uint32_t j = 0; j < net->pos_width; j++) {
-            ex[j] = enc_value(&net->pos_enc, x, j);
+            ex[j] = enc_value(&net->pos_enc.u.freq, x, j);
         }
     }
     memcpy(h, ex, net->pos_width * sizeof(double));

@@ -37,8 +37,8 @@
  * threads at once, but not while an update, rebuild, reset or restore
  * writes it.
  */
-#ifndef NERF_RENDER_OCCUPANCY_H
-#define NERF_RENDER_OCCUPANCY_H
+#ifndef NERF_OCCUPANCY_OCCUPANCY_H
+#define NERF_OCCUPANCY_OCCUPANCY_H
 
 #include <stdbool.h>
 #include <stddef.h>

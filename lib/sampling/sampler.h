@@ -3,8 +3,8 @@
  * batch renderer runs: stratified placement along a ray and hierarchical
  * placement by inverse transform of the coarse weights.
  */
-#ifndef NERF_RENDER_SAMPLER_H
-#define NERF_RENDER_SAMPLER_H
+#ifndef NERF_SAMPLING_SAMPLER_H
+#define NERF_SAMPLING_SAMPLER_H
 
 #include <stdbool.h>
 #include <stddef.h>

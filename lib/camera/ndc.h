@@ -4,8 +4,8 @@
  * down -z, with its near plane at z = -near, becomes a cube in which depth
  * runs from 0 (the near plane) to 1 (infinity).
  */
-#ifndef NERF_RENDER_NDC_H
-#define NERF_RENDER_NDC_H
+#ifndef NERF_CAMERA_NDC_H
+#define NERF_CAMERA_NDC_H
 
 #include <stddef.h>
 

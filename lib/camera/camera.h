@@ -1,6 +1,6 @@
 /* Cameras: validation of the public struct and ray generation. */
-#ifndef NERF_RENDER_CAMERA_H
-#define NERF_RENDER_CAMERA_H
+#ifndef NERF_CAMERA_CAMERA_H
+#define NERF_CAMERA_CAMERA_H
 
 #include <stddef.h>
 

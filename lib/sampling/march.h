@@ -34,8 +34,8 @@
  * thread pool by rays.  No memory is allocated except by
  * nerf__march_run(), which grows a reusable buffer.
  */
-#ifndef NERF_RENDER_MARCH_H
-#define NERF_RENDER_MARCH_H
+#ifndef NERF_SAMPLING_MARCH_H
+#define NERF_SAMPLING_MARCH_H
 
 #include <stdbool.h>
 #include <stddef.h>
