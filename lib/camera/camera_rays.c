@@ -9,7 +9,7 @@
 
 #define MAX_SIDE 65536u
 
-static void default_camera(nerf_camera *c)
+static void camera_defaults(nerf_camera *c)
 {
     memset(c, 0, sizeof *c);
     c->struct_size = sizeof *c;
@@ -19,7 +19,7 @@ static void default_camera(nerf_camera *c)
 NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size)
 {
     nerf_camera d;
-    default_camera(&d);
+    camera_defaults(&d);
     return nerf__options_init(camera, struct_size, &d, sizeof d,
                               "nerf_camera");
 }
@@ -29,7 +29,7 @@ int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn)
     if (in == NULL) {
         return nerf__error(NERF_EINVAL, "%s: camera is NULL", fn);
     }
-    default_camera(out);
+    camera_defaults(out);
     int rc = nerf__options_read(out, sizeof *out, in, "nerf_camera");
     if (rc != NERF_OK) {
         return nerf__error_prefix(rc, fn);

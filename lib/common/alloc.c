@@ -73,3 +73,27 @@ void nerf__free(const nerf__env *env, void *ptr)
     void (*fn)(void *, void *) = env && env->free ? env->free : default_free;
     fn(((void **)ptr)[-1], env ? env->alloc_user : NULL);
 }
+
+static size_t line_round(size_t bytes)
+{
+    return (bytes + 63) & ~(size_t)63;
+}
+
+size_t nerf__carve_size(const size_t *bytes, size_t count)
+{
+    size_t total = 0;
+    for (size_t i = 0; i < count; i++) {
+        total += line_round(bytes[i]);
+    }
+    return total;
+}
+
+void *nerf__carve(unsigned char **at, size_t bytes)
+{
+    if (bytes == 0) {
+        return NULL;
+    }
+    void *p = *at;
+    *at += line_round(bytes);
+    return p;
+}

@@ -33,6 +33,16 @@ void *nerf__alloc(const nerf__env *env, size_t size);
 void *nerf__calloc(const nerf__env *env, size_t count, size_t size);
 void nerf__free(const nerf__env *env, void *ptr);
 
+/*
+ * One allocation carved into arrays, each starting on a 64-byte line as
+ * the block does: nerf__carve_size() is the block's size for `count`
+ * arrays of bytes[i] bytes, and nerf__carve() hands out the next array
+ * from the cursor *at (NULL for an empty one, which takes no room).
+ * Callers bound the sizes so that the sum cannot wrap.
+ */
+size_t nerf__carve_size(const size_t *bytes, size_t count);
+void *nerf__carve(unsigned char **at, size_t bytes);
+
 /* Multiply sizes; returns 0 and sets *out on success, -1 on overflow. */
 int nerf__mul_size(size_t a, size_t b, size_t *out);
 

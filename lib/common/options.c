@@ -61,3 +61,17 @@ int nerf__options_read(void *dst, size_t own_size, const void *src,
     memcpy(dst, &own32, sizeof own32);
     return NERF_OK;
 }
+
+int nerf__options_open(void *dst, size_t own_size, const void *src,
+                       const char *name, int (*check)(const void *opts),
+                       const nerf_hooks *const *hooks, nerf__env *env)
+{
+    int rc = src ? nerf__options_read(dst, own_size, src, name) : NERF_OK;
+    if (rc == NERF_OK && check) {
+        rc = check(dst);
+    }
+    if (rc == NERF_OK) {
+        rc = nerf__env_from_hooks(env, *hooks);
+    }
+    return rc;
+}

@@ -10,6 +10,8 @@
 
 #include <stddef.h>
 
+#include "env.h"
+
 /*
  * Write defaults (own_size bytes) into the caller's struct, truncated to
  * struct_size, and set its struct_size.  name is used in error messages.
@@ -24,5 +26,15 @@ int nerf__options_init(void *opts, size_t struct_size, const void *defaults,
  */
 int nerf__options_read(void *dst, size_t own_size, const void *src,
                        const char *name);
+
+/*
+ * What every nerf_*_create() does first with its options, in this order:
+ * overlay the caller's struct src (NULL: keep the defaults in dst), check
+ * the result (check may be NULL), and take the environment from the hooks
+ * the result names (*hooks, a field of dst).  Returns the first failure.
+ */
+int nerf__options_open(void *dst, size_t own_size, const void *src,
+                       const char *name, int (*check)(const void *opts),
+                       const nerf_hooks *const *hooks, nerf__env *env);
 
 #endif

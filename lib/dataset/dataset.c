@@ -15,7 +15,7 @@
 /* Downscale factors beyond this leave nothing of any real image. */
 #define MAX_DOWNSCALE 256u
 
-static void default_options(nerf_dataset_options *o)
+static void dataset_defaults(nerf_dataset_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -31,14 +31,14 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
                                        size_t struct_size)
 {
     nerf_dataset_options d;
-    default_options(&d);
+    dataset_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_dataset_options");
 }
 
 static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
 {
-    default_options(o);
+    dataset_defaults(o);
     if (in == NULL) {
         return NERF_OK;
     }

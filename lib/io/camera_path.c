@@ -39,7 +39,7 @@ typedef struct path_ctx {
     nerf_camera_path_options o;
 } path_ctx;
 
-static void default_options(nerf_camera_path_options *o)
+static void camera_path_defaults(nerf_camera_path_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -49,7 +49,7 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
                                            size_t struct_size)
 {
     nerf_camera_path_options d;
-    default_options(&d);
+    camera_path_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_camera_path_options");
 }
@@ -57,7 +57,7 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
 static int read_options(nerf_camera_path_options *o,
                         const nerf_camera_path_options *in)
 {
-    default_options(o);
+    camera_path_defaults(o);
     if (in == NULL) {
         return NERF_OK;
     }

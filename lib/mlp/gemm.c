@@ -20,7 +20,7 @@ int nerf__blas_threads(void)
 
 /* Split only over a one-thread BLAS: on a threaded one, our workers'
  * calls would each wake the BLAS's threads and oversubscribe the cores. */
-static int split(void)
+static int split_over_pool(void)
 {
     return nerf__blas_threads() == 1 && nerf__parallel_threads() > 1;
 }
@@ -49,7 +49,7 @@ void nerf__gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
                         float *y, size_t ldy)
 {
     product p = {out, in, n, x, w, ldx, ldw, beta, y, ldy};
-    if (split()) {
+    if (split_over_pool()) {
         nerf__parallel_for(n, 2 * (size_t)out * in, forward_rows, &p);
     } else {
         forward_rows(&p, 0, n);
@@ -70,7 +70,7 @@ void nerf__gemm_input_grad(size_t n, uint32_t out, uint32_t in, const float *dy,
                            size_t lddx)
 {
     product p = {out, in, n, dy, w, lddy, ldw, 0.0f, dx, lddx};
-    if (split()) {
+    if (split_over_pool()) {
         nerf__parallel_for(n, 2 * (size_t)out * in, input_grad_rows, &p);
     } else {
         input_grad_rows(&p, 0, n);
@@ -101,7 +101,7 @@ void nerf__gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
                             size_t ldx, float *dw, size_t lddw)
 {
     product p = {out, in, n, dy, x, lddy, ldx, 1.0f, dw, lddw};
-    if (!split()) {
+    if (!split_over_pool()) {
         weight_grad_rows(&p, 0, out);
     } else if (out >= in) {
         nerf__parallel_for(out, 2 * n * in, weight_grad_rows, &p);

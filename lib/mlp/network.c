@@ -108,11 +108,6 @@ static size_t grad_width(const nerf__network *net)
     return g;
 }
 
-static size_t round64(size_t floats)
-{
-    return (floats + 15) & ~(size_t)15; /* keep every buffer 64-byte aligned */
-}
-
 /* Layers in order: the trunk, the head, the colour branch and rgb. */
 static uint32_t layer_count(const nerf__network *net)
 {
@@ -171,25 +166,24 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     size_t grad16 = bf16 ? (n * grad_width(net) + 1) / 2 : 0;
     size_t partials = keep ? NERF__RELU_PARTIALS(n, grad_width(net)) : 0;
     enum { SLOTS = 12 };
-    size_t sizes[SLOTS] = {
-        round64(n * net->pos_width),
-        density_only ? 0 : round64(n * net->dir_width),
-        keep && nerf__encoding_params(&net->pos_enc) ? round64(n * 3) : 0,
-        round64(layers * n * net->width),
-        round64(n * nerf__network_head_width(net)),
-        round64(view_layers * n * net->view_width),
-        density_only ? 0 : round64(n * 3),
-        keep ? round64(n * grad_width(net)) : 0,
-        keep ? round64(n * grad_width(net)) : 0,
-        round64(kept),
-        round64(grad16),
-        round64(partials),
+    size_t bytes[SLOTS] = { /* in floats, made bytes below */
+        n * net->pos_width,
+        density_only ? 0 : n * net->dir_width,
+        keep && nerf__encoding_params(&net->pos_enc) ? n * 3 : 0,
+        layers * n * net->width,
+        n * nerf__network_head_width(net),
+        view_layers * n * net->view_width,
+        density_only ? 0 : n * 3,
+        keep ? n * grad_width(net) : 0,
+        keep ? n * grad_width(net) : 0,
+        kept,
+        grad16,
+        partials,
     };
-    size_t total = 0;
     for (int i = 0; i < SLOTS; i++) {
-        total += sizes[i];
+        bytes[i] *= sizeof(float);
     }
-    float *block = nerf__alloc(env, total * sizeof(float));
+    unsigned char *block = nerf__alloc(env, nerf__carve_size(bytes, SLOTS));
     if (block == NULL) {
         return NERF_ENOMEM;
     }
@@ -199,14 +193,13 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
                             &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
                             &ws->grad_b, &kept_at, &grad16_at,
                             &ws->partials};
-    float *at = block;
+    unsigned char *at = block;
     for (int i = 0; i < SLOTS; i++) {
-        *slots[i] = sizes[i] ? at : NULL;
-        at += sizes[i];
+        *slots[i] = nerf__carve(&at, bytes[i]);
     }
     ws->kept = (uint16_t *)kept_at;
     ws->grad_bf16 = (uint16_t *)grad16_at;
-    ws->enc_pos = block; /* first slot: also the block to free */
+    ws->enc_pos = (float *)block; /* first slot: also the block to free */
     ws->env = *env;
     ws->cap = n;
     ws->n = n;
@@ -531,7 +524,7 @@ static void sigma_grad(const nerf__network *net, nerf__workspace *ws,
 }
 
 /* The buffer of the two gradient scratch buffers that p is not. */
-static float *other(nerf__workspace *ws, const float *p)
+static float *spare_grad(nerf__workspace *ws, const float *p)
 {
     return p == ws->grad_a ? ws->grad_b : ws->grad_a;
 }
@@ -588,7 +581,7 @@ int nerf__network_backward(const nerf__network *net, const float *params,
             const uint16_t *g16 = relu_backward(net, ws, V,
                                                 view_buffer(net, ws, k),
                                                 d_view, grads + v->b);
-            float *d_in = other(ws, d_view);
+            float *d_in = spare_grad(ws, d_view);
             rc = nerf__layer_backward(&c, n, V, d_view, V, g16, &h_in, 1,
                                       kept_input(net, ws, first + k),
                                       params + v->w, V, grads + v->w, 0, d_in,
@@ -603,7 +596,7 @@ int nerf__network_backward(const nerf__network *net, const float *params,
                                             d_view, grads + v0->b);
         const nerf__layer_part in0[2] = {{ws->head, HW, F},
                                          {ws->enc_dir, Ed, Ed}};
-        d_head = other(ws, d_view);
+        d_head = spare_grad(ws, d_view);
         rc = nerf__layer_backward(&c, n, V, d_view, V, g16, in0, 2,
                                   kept_input(net, ws, first), params + v0->w,
                                   v0->in, grads + v0->w, 0, d_head, HW);
@@ -619,7 +612,7 @@ int nerf__network_backward(const nerf__network *net, const float *params,
     const nerf__layer_part h_last = {trunk_buffer(net, ws, net->depth - 1), W,
                                      W};
     nerf__bias_backward(n, HW, d_head, HW, grads + net->head.b);
-    float *dh = other(ws, d_head);
+    float *dh = spare_grad(ws, d_head);
     rc = nerf__layer_backward(&c, n, HW, d_head, HW, NULL, &h_last, 1,
                               kept_input(net, ws, net->depth),
                               params + net->head.w, W, grads + net->head.w, 0,
@@ -640,7 +633,7 @@ int nerf__network_backward(const nerf__network *net, const float *params,
                                           -1, NULL, 0);
                 break;
             }
-            float *d_enc = other(ws, dh);
+            float *d_enc = spare_grad(ws, dh);
             rc = nerf__layer_backward(&c, n, W, dh, W, g16, &enc, 1, kept,
                                       params + l->w, l->in, grads + l->w, 0,
                                       d_enc, Ep);
@@ -655,7 +648,7 @@ int nerf__network_backward(const nerf__network *net, const float *params,
         const bool skip = i == net->skip;
         const nerf__layer_part x = {trunk_buffer(net, ws, i - 1), W, W};
         const nerf__layer_part parts[2] = {{ws->enc_pos, Ep, Ep}, x};
-        float *dx = other(ws, dh);
+        float *dx = spare_grad(ws, dh);
         rc = nerf__layer_backward(&c, n, W, dh, W, g16, skip ? parts : &x,
                                   skip ? 2 : 1, kept, params + l->w, l->in,
                                   grads + l->w, skip ? 1 : 0, dx, W);

@@ -11,7 +11,8 @@
  * for the reference network) while keeping each sgemm large. */
 #define QUERY_BLOCK 4096
 
-static void reference_options(nerf_model_options *o)
+/* The defaults are the reference preset: the paper's network. */
+static void model_defaults(nerf_model_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -42,7 +43,7 @@ static void reference_options(nerf_model_options *o)
  * spherical harmonics. */
 static void fast_options(nerf_model_options *o)
 {
-    reference_options(o);
+    model_defaults(o);
     o->encoding = NERF_ENCODING_HASHGRID;
     o->dir_encoding = NERF_ENCODING_SPHERICAL_HARMONICS;
     o->depth = 1;
@@ -59,7 +60,7 @@ NERF_API int nerf_model_options_init(nerf_model_options *opts,
                                      size_t struct_size)
 {
     nerf_model_options d;
-    reference_options(&d);
+    model_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_model_options");
 }
@@ -67,7 +68,7 @@ NERF_API int nerf_model_options_init(nerf_model_options *opts,
 NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
 {
     nerf_model_options o;
-    reference_options(&o);
+    model_defaults(&o);
     int rc = nerf__options_read(&o, sizeof o, opts, "nerf_model_options");
     if (rc != NERF_OK) {
         return rc;
@@ -77,10 +78,10 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     const uint32_t matmul = o.matmul;
     switch (preset) {
     case NERF_PRESET_REFERENCE:
-        reference_options(&o);
+        model_defaults(&o);
         break;
     case NERF_PRESET_TINY:
-        reference_options(&o);
+        model_defaults(&o);
         o.depth = 4;
         o.width = 64;
         o.skip_layer = 2;
@@ -369,7 +370,7 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
 /* Read a caller's options struct over the defaults and validate it. */
 static int read_options(nerf_model_options *o, const nerf_model_options *in)
 {
-    reference_options(o);
+    model_defaults(o);
     int rc = nerf__options_read(o, sizeof *o, in, "nerf_model_options");
     if (rc == NERF_OK) {
         rc = nerf__model_check_options(o);

@@ -49,11 +49,6 @@ void nerf__occupancy_defaults(nerf__occupancy_options *o, const float lo[3],
     o->chunk = (size_t)1 << 16;
 }
 
-static size_t round64(size_t bytes)
-{
-    return (bytes + 63) & ~(size_t)63;
-}
-
 int nerf__occupancy_create(const nerf__env *env,
                            const nerf__occupancy_options *o,
                            nerf__occupancy **out)
@@ -99,27 +94,26 @@ int nerf__occupancy_create(const nerf__env *env,
         chunk * sizeof(float), blocks * sizeof(double),
         coarse_words * sizeof(uint64_t),
     };
-    size_t total = 0;
-    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
-        total += round64(sizes[i]);
-    }
-    unsigned char *mem = nerf__alloc(env, total);
+    const size_t count = sizeof sizes / sizeof sizes[0];
+    unsigned char *mem = nerf__alloc(env, nerf__carve_size(sizes, count));
     if (mem == NULL) {
         return NERF_ENOMEM;
     }
     nerf__occupancy *g = (nerf__occupancy *)mem;
     memset(g, 0, sizeof *g);
-    unsigned char *p = mem + round64(sizes[0]);
-    void **slots[] = {
-        NULL, (void **)&g->ema, (void **)&g->bits, (void **)&g->sel,
-        (void **)&g->chunk_cells, (void **)&g->chunk_xyz,
-        (void **)&g->chunk_sigma, (void **)&g->block_sum,
-        (void **)&g->coarse,
-    };
-    for (size_t i = 1; i < sizeof sizes / sizeof sizes[0]; i++) {
-        *slots[i] = p;
-        p += round64(sizes[i]);
+    unsigned char *p = mem;
+    void *at[sizeof sizes / sizeof sizes[0]];
+    for (size_t i = 0; i < count; i++) {
+        at[i] = nerf__carve(&p, sizes[i]);
     }
+    g->ema = at[1];
+    g->bits = at[2];
+    g->sel = at[3];
+    g->chunk_cells = at[4];
+    g->chunk_xyz = at[5];
+    g->chunk_sigma = at[6];
+    g->block_sum = at[7];
+    g->coarse = at[8];
     g->env = *env;
     g->opts = *o;
     g->opts.chunk = chunk;

@@ -40,11 +40,6 @@ int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
     return NERF_OK;
 }
 
-static size_t round16(size_t floats)
-{
-    return (floats + 15) & ~(size_t)15; /* keep each array 64-byte aligned */
-}
-
 /* Size the per-ray and per-sample arrays; workspaces are sized later. */
 static int reserve(nerf__batch *b, size_t n, uint32_t n_c, uint32_t n_f,
                    bool keep)
@@ -66,27 +61,26 @@ static int reserve(nerf__batch *b, size_t n, uint32_t n_c, uint32_t n_f,
         &b->rgb[0], &b->rgb[1], &b->sigma[0], &b->sigma[1],
         &b->points, &b->dirs, &b->scratch, &b->d_rgb, &b->d_sigma,
     };
-    const size_t sizes[] = {
+    size_t bytes[] = {
         3 * n, 3 * n, 3 * n, n,
         n * s0, n * s1, n * s0, n * s1,
         3 * n * s0, 3 * n * s1, n * s0, n * s1,
         3 * n * s1, 3 * n * s1, n * nerf__sample_fine_scratch(n_c, n_f),
         keep ? 3 * n * s1 : 0, keep ? n * s1 : 0,
     };
-    const size_t count = sizeof sizes / sizeof sizes[0];
-    size_t total = 0;
+    const size_t count = sizeof bytes / sizeof bytes[0];
     for (size_t i = 0; i < count; i++) {
-        total += round16(sizes[i]);
+        bytes[i] *= sizeof(float);
     }
-    float *block = nerf__alloc(&b->env, total * sizeof(float));
+    unsigned char *block = nerf__alloc(&b->env,
+                                       nerf__carve_size(bytes, count));
     if (block == NULL) {
         return NERF_ENOMEM;
     }
     nerf__free(&b->env, b->block);
     b->block = block;
     for (size_t i = 0; i < count; i++) {
-        *slots[i] = sizes[i] ? block : NULL;
-        block += round16(sizes[i]);
+        *slots[i] = nerf__carve(&block, bytes[i]);
     }
     b->cap_rays = n;
     b->cap_c = n_c;

@@ -35,11 +35,6 @@ static size_t with_headroom(size_t n)
     return n + n / 8 + 64;
 }
 
-static size_t round16(size_t floats)
-{
-    return (floats + 15) & ~(size_t)15;
-}
-
 void nerf__render_march_release(nerf__batch *b)
 {
     nerf__march_samples_release(&b->march);
@@ -65,22 +60,19 @@ static int reserve_packed(nerf__batch *b, size_t n, bool keep)
     }
     float **slots[] = {&b->march_points, &b->m_dirs, &b->m_rgb, &b->m_sigma,
                        &b->m_d_rgb, &b->m_d_sigma};
-    const size_t sizes[] = {3 * cap, 3 * cap, 3 * cap, cap,
-                            keep ? 3 * cap : 0, keep ? cap : 0};
-    const size_t count = sizeof sizes / sizeof sizes[0];
-    size_t total = 0;
-    for (size_t i = 0; i < count; i++) {
-        total += round16(sizes[i]);
-    }
-    float *block = nerf__alloc(&b->env, total * sizeof(float));
+    const size_t f = sizeof(float);
+    const size_t bytes[] = {3 * cap * f, 3 * cap * f, 3 * cap * f, cap * f,
+                            keep ? 3 * cap * f : 0, keep ? cap * f : 0};
+    const size_t count = sizeof bytes / sizeof bytes[0];
+    unsigned char *block = nerf__alloc(&b->env,
+                                       nerf__carve_size(bytes, count));
     if (block == NULL) {
         return NERF_ENOMEM;
     }
     nerf__free(&b->env, b->packed_block);
     b->packed_block = block;
     for (size_t i = 0; i < count; i++) {
-        *slots[i] = sizes[i] ? block : NULL;
-        block += round16(sizes[i]);
+        *slots[i] = nerf__carve(&block, bytes[i]);
     }
     b->cap_packed = cap;
     b->cap_packed_keep = keep;
@@ -99,11 +91,7 @@ static int reserve_rays(nerf__batch *b, size_t n)
         3 * n * sizeof(float), 3 * n * sizeof(float), 3 * n * sizeof(float),
     };
     enum { N_ARRAYS = sizeof bytes / sizeof bytes[0] };
-    size_t total = 0;
-    for (size_t i = 0; i < N_ARRAYS; i++) {
-        total += (bytes[i] + 63) & ~(size_t)63;
-    }
-    unsigned char *p = nerf__alloc(&b->env, total);
+    unsigned char *p = nerf__alloc(&b->env, nerf__carve_size(bytes, N_ARRAYS));
     if (p == NULL) {
         return NERF_ENOMEM;
     }
@@ -111,8 +99,7 @@ static int reserve_rays(nerf__batch *b, size_t n)
     b->march_block = p;
     void *at[N_ARRAYS];
     for (size_t i = 0; i < N_ARRAYS; i++) {
-        at[i] = p;
-        p += (bytes[i] + 63) & ~(size_t)63;
+        at[i] = nerf__carve(&p, bytes[i]);
     }
     b->m_state = at[0];
     b->m_first = at[1];

@@ -27,7 +27,7 @@ static uint32_t auto_threads(void)
     return t ? t : 1;
 }
 
-static void default_options(nerf_renderer_options *o)
+static void renderer_defaults(nerf_renderer_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -39,13 +39,14 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
                                         size_t struct_size)
 {
     nerf_renderer_options d;
-    default_options(&d);
+    renderer_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_renderer_options");
 }
 
-static int check_options(const nerf_renderer_options *o)
+static int check_options(const void *opts)
 {
+    const nerf_renderer_options *o = opts;
     const char *what = NULL;
     if (o->white_background > 1) {
         what = "white_background must be 0 or 1";
@@ -79,17 +80,12 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
                            "sampler must not be NULL");
     }
     nerf_renderer_options o;
-    default_options(&o);
-    int rc = nerf__render_check_pair(model, sampler, "nerf_renderer_create");
-    if (opts && rc == NERF_OK) {
-        rc = nerf__options_read(&o, sizeof o, opts, "nerf_renderer_options");
-    }
-    if (rc == NERF_OK) {
-        rc = check_options(&o);
-    }
+    renderer_defaults(&o);
     nerf__env env;
+    int rc = nerf__render_check_pair(model, sampler, "nerf_renderer_create");
     if (rc == NERF_OK) {
-        rc = nerf__env_from_hooks(&env, o.hooks);
+        rc = nerf__options_open(&o, sizeof o, opts, "nerf_renderer_options",
+                                check_options, &o.hooks, &env);
     }
     if (rc != NERF_OK) {
         return rc;

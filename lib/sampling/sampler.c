@@ -13,7 +13,7 @@
 #define MAX_MARCH_SAMPLES 65536u
 #define DEFAULT_MARCH_SAMPLES 1024u
 
-static void default_options(nerf_sampler_options *o)
+static void sampler_defaults(nerf_sampler_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -29,7 +29,7 @@ NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
                                        size_t struct_size)
 {
     nerf_sampler_options d;
-    default_options(&d);
+    sampler_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_sampler_options");
 }
@@ -38,7 +38,7 @@ NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
                                          int preset)
 {
     nerf_sampler_options o;
-    default_options(&o);
+    sampler_defaults(&o);
     int rc = nerf__options_read(&o, sizeof o, opts, "nerf_sampler_options");
     if (rc != NERF_OK) {
         return rc;
@@ -79,8 +79,9 @@ static bool finite_nonneg(float v)
     return isfinite(v) && v >= 0.0f;
 }
 
-static int check_options(const nerf_sampler_options *o)
+static int check_options(const void *opts)
 {
+    const nerf_sampler_options *o = opts;
     const char *what = NULL;
     bool frustum_zero = o->ndc_focal == 0.0f && o->ndc_width == 0 &&
                         o->ndc_height == 0;
@@ -130,18 +131,10 @@ NERF_API int nerf_sampler_create(nerf_sampler **out,
     }
     *out = NULL;
     nerf_sampler_options o;
-    default_options(&o);
-    int rc = NERF_OK;
-    if (opts) {
-        rc = nerf__options_read(&o, sizeof o, opts, "nerf_sampler_options");
-    }
-    if (rc == NERF_OK) {
-        rc = check_options(&o);
-    }
+    sampler_defaults(&o);
     nerf__env env;
-    if (rc == NERF_OK) {
-        rc = nerf__env_from_hooks(&env, o.hooks);
-    }
+    int rc = nerf__options_open(&o, sizeof o, opts, "nerf_sampler_options",
+                                check_options, &o.hooks, &env);
     if (rc != NERF_OK) {
         return rc;
     }

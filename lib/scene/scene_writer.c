@@ -28,7 +28,7 @@
 #define FAR 6.0f
 #define PI 3.14159265358979323846
 
-static void defaults(nerf_scene_options *o)
+static void scene_defaults(nerf_scene_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -44,7 +44,7 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
                                      size_t struct_size)
 {
     nerf_scene_options d;
-    defaults(&d);
+    scene_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_scene_options");
 }
@@ -238,7 +238,7 @@ static int write_split(const char *dir, int split, uint32_t n,
 NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
 {
     nerf_scene_options o;
-    defaults(&o);
+    scene_defaults(&o);
     if (dir == NULL) {
         return nerf__error(NERF_EINVAL, "nerf_scene_write: dir is NULL");
     }

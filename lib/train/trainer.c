@@ -8,7 +8,7 @@
 #include "dataset.h"
 #include "options.h"
 
-static void defaults(nerf_trainer_options *o)
+static void trainer_defaults(nerf_trainer_options *o)
 {
     memset(o, 0, sizeof *o);
     o->struct_size = sizeof *o;
@@ -23,13 +23,14 @@ NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
                                        size_t struct_size)
 {
     nerf_trainer_options d;
-    defaults(&d);
+    trainer_defaults(&d);
     return nerf__options_init(opts, struct_size, &d, sizeof d,
                               "nerf_trainer_options");
 }
 
-static int check_options(const nerf_trainer_options *o)
+static int check_options(const void *opts)
 {
+    const nerf_trainer_options *o = opts;
     const char *what = NULL;
     if (o->batch_rays < 1 || o->batch_rays > (1u << 20)) {
         what = "batch_rays must be 1..1048576";
@@ -139,17 +140,10 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     }
     *out = NULL;
     nerf_trainer_options o;
-    defaults(&o);
-    int rc = opts ? nerf__options_read(&o, sizeof o, opts,
-                                       "nerf_trainer_options")
-                  : NERF_OK;
-    if (rc == NERF_OK) {
-        rc = check_options(&o);
-    }
+    trainer_defaults(&o);
     nerf__env env;
-    if (rc == NERF_OK) {
-        rc = nerf__env_from_hooks(&env, o.hooks);
-    }
+    int rc = nerf__options_open(&o, sizeof o, opts, "nerf_trainer_options",
+                                check_options, &o.hooks, &env);
     if (rc != NERF_OK) {
         return rc;
     }
