@@ -188,16 +188,19 @@ typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
-    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
-                                       only; its tables are trained).  The
-                                       model then also owns an occupancy
-                                       grid (128^3 cells over the bound)
-                                       for ray-marching samplers. */
-    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
-                                       (directions only). */
+    NERF_ENCODING_HASHGRID = 2,   /**< Since 0.2.  Multiresolution hash
+                                       grid (positions only; its tables
+                                       are trained).  The model then also
+                                       owns an occupancy grid (128^3
+                                       cells over the bound) for
+                                       ray-marching samplers. */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Since 0.2.  Real
+                                       spherical harmonics (directions
+                                       only). */
 } nerf_encoding_kind;
 
-/** Activation turning the network's density output into sigma. */
+/** Activation turning the network's density output into sigma (since
+ * 0.2). */
 typedef enum nerf_density_activation {
     NERF_DENSITY_RELU = 0, /**< The paper's: ReLU, applied when rendering. */
     NERF_DENSITY_EXP = 1   /**< exp, truncated at exp(15) (hash-grid
@@ -212,15 +215,16 @@ typedef enum nerf_density_activation {
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
     NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
-    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and small MLPs
-                                    (Mueller et al. 2022), one network. */
+    NERF_PRESET_FAST = 3       /**< Since 0.2.  Hash-grid encoding and
+                                    small MLPs (Mueller et al. 2022), one
+                                    network. */
 } nerf_preset;
 
 /**
- * How a model computes its matrix products (nerf_model_options.matmul).
- * Either way the weights, their gradients, the optimiser state and
- * checkpoints are fp32: the choice changes the arithmetic of the products,
- * never what is stored.
+ * How a model computes its matrix products (nerf_model_options.matmul;
+ * since 0.2).  Either way the weights, their gradients, the optimiser
+ * state and checkpoints are fp32: the choice changes the arithmetic of the
+ * products, never what is stored.
  */
 typedef enum nerf_matmul {
     NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
@@ -244,7 +248,7 @@ typedef enum nerf_matmul {
  *
  * The first call for NERF_MATMUL_BF16 creates a small oneDNN primitive to
  * find out (a few milliseconds); later calls return the stored answer.
- * Thread-safe.
+ * Thread-safe.  Since 0.2 (symbol version NERF_0.2).
  */
 NERF_API int nerf_matmul_supported(int kind);
 
@@ -1316,8 +1320,8 @@ typedef struct nerf_trainer_options {
     uint32_t reserved0;       /**< Must be 0. */
     const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2.  Zero-filled by an older caller, which gives 0.1's
-     * behaviour. */
+    /* Since 0.2.  Zero-filled by an older caller, which gives the
+     * behaviour from before these fields. */
     uint32_t batch_samples;   /**< 0 (default): every step takes batch_rays
                                    rays.  N > 0: a step takes rays, of the
                                    batch_rays it draws, until their samples
