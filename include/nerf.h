@@ -1387,9 +1387,10 @@ typedef struct nerf_train_stats {
  *
  * With a marching sampler (march_steps > 0) the trainer also keeps the
  * model's occupancy grid current: every 16 steps, from step 0, it samples
- * the model's density in every cell (the first 256 steps) or in the
- * occupied cells and a random quarter of the others (later), keyed by the
- * model's seed and the grid's update count, both saved in checkpoints.
+ * the model's density in every cell (for the first 256 steps), then in
+ * the occupied cells and a random sixteenth of the others (each drawn
+ * with probability 1/16), keyed by the model's seed and the grid's update
+ * count, both saved in checkpoints.
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid);
