@@ -38,8 +38,12 @@ extern "C" {
  * Conventions, in brief (the full text is docs/api-conventions.md):
  *  - Every fallible call returns an int status: NERF_OK (0) or a negative
  *    nerf_status.  On failure, nerf_last_error() explains what failed.
- *  - Objects handed back through a `**out` argument belong to the caller and
- *    are released with the matching *_destroy(), which accepts NULL.
+ *  - Handles handed back through a `**out` argument belong to the caller
+ *    and are released with the matching *_destroy(), which accepts NULL.
+ *  - Arguments go: the handle or struct the call acts on (or, for a
+ *    function that creates a handle, its `**out`) first, then inputs, then
+ *    out-parameters.  The one exception: the render_image calls take their
+ *    pixel_capacity after their output buffers.
  *  - Options structs start with `struct_size`; fill them with the matching
  *    *_init() (or its NERF_*_INIT macro) and change only what you need.
  *    Fields are only ever appended, so binaries built against an older
