@@ -48,6 +48,12 @@ extern "C" {
  *    *_init() (or its NERF_*_INIT macro) and change only what you need.
  *    Fields are only ever appended, so binaries built against an older
  *    header keep working.
+ *  - NERF_*_INIT(p) is the function call *_init(p, sizeof *p), not a
+ *    constant initializer: it runs when reached, fills *p in place and
+ *    returns the status.  Use it inside a function, as a statement or as
+ *    in `int rc = NERF_HOOKS_INIT(&hooks);`.  It cannot be a struct's
+ *    initializer, nor fill a static or file-scope struct at compile time:
+ *    call it before the struct's first use.
  *  - The library never prints to stdout, never exits and never aborts.
  */
 
@@ -172,6 +178,15 @@ typedef struct nerf_hooks {
  * too small to hold struct_size itself.
  */
 NERF_API int nerf_hooks_init(nerf_hooks *hooks, size_t struct_size);
+
+/**
+ * nerf_hooks_init(h, sizeof *h): a function call, evaluated at run time,
+ * that returns the status.  Not a constant initializer: it cannot stand in
+ * a declaration's initializer or fill a static or file-scope struct at
+ * compile time.  Every NERF_*_INIT macro below is the same kind of call:
+ * the defaults belong to the library a program runs with, not to the
+ * header it was compiled with.
+ */
 #define NERF_HOOKS_INIT(h) nerf_hooks_init((h), sizeof *(h))
 
 /* ------------------------------------------------------------------------ */
@@ -331,6 +346,7 @@ typedef struct nerf_model_options {
  */
 NERF_API int nerf_model_options_init(nerf_model_options *opts,
                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_MODEL_OPTIONS_INIT(o) nerf_model_options_init((o), sizeof *(o))
 
 /**
@@ -489,6 +505,7 @@ typedef struct nerf_scene_options {
  */
 NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
 
 /**
@@ -553,6 +570,7 @@ typedef struct nerf_camera {
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
  */
 NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
 
 /**
@@ -636,6 +654,7 @@ typedef struct nerf_camera_path_options {
  */
 NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
                                            size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
     nerf_camera_path_options_init((o), sizeof *(o))
 
@@ -761,6 +780,7 @@ typedef struct nerf_sampler_options {
  */
 NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
 
 /**
@@ -914,6 +934,7 @@ typedef struct nerf_renderer_options {
  */
 NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
                                         size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
 
 /**
@@ -1178,6 +1199,7 @@ typedef struct nerf_dataset_options {
  */
 NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_DATASET_OPTIONS_INIT(o) \
     nerf_dataset_options_init((o), sizeof *(o))
 
@@ -1353,6 +1375,7 @@ typedef struct nerf_trainer_options {
  */
 NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_TRAINER_OPTIONS_INIT(o) nerf_trainer_options_init((o), sizeof *(o))
 
 /**
