@@ -38,12 +38,22 @@ extern "C" {
  * Conventions, in brief (the full text is docs/api-conventions.md):
  *  - Every fallible call returns an int status: NERF_OK (0) or a negative
  *    nerf_status.  On failure, nerf_last_error() explains what failed.
- *  - Objects handed back through a `**out` argument belong to the caller and
- *    are released with the matching *_destroy(), which accepts NULL.
+ *  - Handles handed back through a `**out` argument belong to the caller
+ *    and are released with the matching *_destroy(), which accepts NULL.
+ *  - Arguments go: the handle or struct the call acts on (or, for a
+ *    function that creates a handle, its `**out`) first, then inputs, then
+ *    out-parameters.  The one exception: the render_image calls take their
+ *    pixel_capacity after their output buffers.
  *  - Options structs start with `struct_size`; fill them with the matching
  *    *_init() (or its NERF_*_INIT macro) and change only what you need.
  *    Fields are only ever appended, so binaries built against an older
  *    header keep working.
+ *  - NERF_*_INIT(p) is the function call *_init(p, sizeof *p), not a
+ *    constant initializer: it runs when reached, fills *p in place and
+ *    returns the status.  Use it inside a function, as a statement or as
+ *    in `int rc = NERF_HOOKS_INIT(&hooks);`.  It cannot be a struct's
+ *    initializer, nor fill a static or file-scope struct at compile time:
+ *    call it before the struct's first use.
  *  - The library never prints to stdout, never exits and never aborts.
  */
 
@@ -168,6 +178,15 @@ typedef struct nerf_hooks {
  * too small to hold struct_size itself.
  */
 NERF_API int nerf_hooks_init(nerf_hooks *hooks, size_t struct_size);
+
+/**
+ * nerf_hooks_init(h, sizeof *h): a function call, evaluated at run time,
+ * that returns the status.  Not a constant initializer: it cannot stand in
+ * a declaration's initializer or fill a static or file-scope struct at
+ * compile time.  Every NERF_*_INIT macro below is the same kind of call:
+ * the defaults belong to the library a program runs with, not to the
+ * header it was compiled with.
+ */
 #define NERF_HOOKS_INIT(h) nerf_hooks_init((h), sizeof *(h))
 
 /* ------------------------------------------------------------------------ */
@@ -188,16 +207,19 @@ typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
-    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
-                                       only; its tables are trained).  The
-                                       model then also owns an occupancy
-                                       grid (128^3 cells over the bound)
-                                       for ray-marching samplers. */
-    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
-                                       (directions only). */
+    NERF_ENCODING_HASHGRID = 2,   /**< Since 0.2.  Multiresolution hash
+                                       grid (positions only; its tables
+                                       are trained).  The model then also
+                                       owns an occupancy grid (128^3
+                                       cells over the bound) for
+                                       ray-marching samplers. */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Since 0.2.  Real
+                                       spherical harmonics (directions
+                                       only). */
 } nerf_encoding_kind;
 
-/** Activation turning the network's density output into sigma. */
+/** Activation turning the network's density output into sigma (since
+ * 0.2). */
 typedef enum nerf_density_activation {
     NERF_DENSITY_RELU = 0, /**< The paper's: ReLU, applied when rendering. */
     NERF_DENSITY_EXP = 1   /**< exp, truncated at exp(15) (hash-grid
@@ -212,15 +234,16 @@ typedef enum nerf_density_activation {
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
     NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
-    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and small MLPs
-                                    (Mueller et al. 2022), one network. */
+    NERF_PRESET_FAST = 3       /**< Since 0.2.  Hash-grid encoding and
+                                    small MLPs (Mueller et al. 2022), one
+                                    network. */
 } nerf_preset;
 
 /**
- * How a model computes its matrix products (nerf_model_options.matmul).
- * Either way the weights, their gradients, the optimiser state and
- * checkpoints are fp32: the choice changes the arithmetic of the products,
- * never what is stored.
+ * How a model computes its matrix products (nerf_model_options.matmul;
+ * since 0.2).  Either way the weights, their gradients, the optimiser
+ * state and checkpoints are fp32: the choice changes the arithmetic of the
+ * products, never what is stored.
  */
 typedef enum nerf_matmul {
     NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
@@ -244,7 +267,7 @@ typedef enum nerf_matmul {
  *
  * The first call for NERF_MATMUL_BF16 creates a small oneDNN primitive to
  * find out (a few milliseconds); later calls return the stored answer.
- * Thread-safe.
+ * Thread-safe.  Since 0.2 (symbol version NERF_0.2).
  */
 NERF_API int nerf_matmul_supported(int kind);
 
@@ -323,6 +346,7 @@ typedef struct nerf_model_options {
  */
 NERF_API int nerf_model_options_init(nerf_model_options *opts,
                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_MODEL_OPTIONS_INIT(o) nerf_model_options_init((o), sizeof *(o))
 
 /**
@@ -481,6 +505,7 @@ typedef struct nerf_scene_options {
  */
 NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
 
 /**
@@ -545,6 +570,7 @@ typedef struct nerf_camera {
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
  */
 NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
 
 /**
@@ -628,6 +654,7 @@ typedef struct nerf_camera_path_options {
  */
 NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
                                            size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
     nerf_camera_path_options_init((o), sizeof *(o))
 
@@ -753,6 +780,7 @@ typedef struct nerf_sampler_options {
  */
 NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
 
 /**
@@ -906,6 +934,7 @@ typedef struct nerf_renderer_options {
  */
 NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
                                         size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
 
 /**
@@ -1170,6 +1199,7 @@ typedef struct nerf_dataset_options {
  */
 NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_DATASET_OPTIONS_INIT(o) \
     nerf_dataset_options_init((o), sizeof *(o))
 
@@ -1316,8 +1346,8 @@ typedef struct nerf_trainer_options {
     uint32_t reserved0;       /**< Must be 0. */
     const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2.  Zero-filled by an older caller, which gives 0.1's
-     * behaviour. */
+    /* Since 0.2.  Zero-filled by an older caller, which gives the
+     * behaviour from before these fields. */
     uint32_t batch_samples;   /**< 0 (default): every step takes batch_rays
                                    rays.  N > 0: a step takes rays, of the
                                    batch_rays it draws, until their samples
@@ -1345,6 +1375,7 @@ typedef struct nerf_trainer_options {
  */
 NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_TRAINER_OPTIONS_INIT(o) nerf_trainer_options_init((o), sizeof *(o))
 
 /**
@@ -1383,9 +1414,10 @@ typedef struct nerf_train_stats {
  *
  * With a marching sampler (march_steps > 0) the trainer also keeps the
  * model's occupancy grid current: every 16 steps, from step 0, it samples
- * the model's density in every cell (the first 256 steps) or in the
- * occupied cells and a random quarter of the others (later), keyed by the
- * model's seed and the grid's update count, both saved in checkpoints.
+ * the model's density in every cell (for the first 256 steps), then in
+ * the occupied cells and a random sixteenth of the others (each drawn
+ * with probability 1/16), keyed by the model's seed and the grid's update
+ * count, both saved in checkpoints.
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid);

@@ -40,7 +40,8 @@ LogFn = Optional[Callable[[int, str], Any]]
 
 
 def preset_key(preset: Union[str, int]) -> int:
-    """A preset number from its name (``"tiny"``, ``"reference"``)."""
+    """A preset number from its name (``"reference"``, ``"tiny"``,
+    ``"fast"``)."""
     if isinstance(preset, str):
         try:
             return PRESETS[preset]
@@ -123,7 +124,7 @@ class Model(_handle.Handle):
                *, log: LogFn = None, log_level: Optional[int] = None,
                **options: Any) -> "Model":
         """A model with fresh weights: the library's defaults (the paper's
-        networks), then ``preset`` ("tiny" or "reference"), then
+        networks), then ``preset`` ("reference", "tiny" or "fast"), then
         ``options`` (fields of :class:`nerf.ModelOptions`)."""
         return cls(preset, seed, log=log, log_level=log_level, **options)
 

@@ -26,7 +26,7 @@ class Sampler(_handle.Handle):
 
     ``Sampler(preset="tiny", seed=0, t_near=2, t_far=6, ...)``: the
     library's defaults (the reference setup for Blender scenes), then
-    ``preset``'s sample counts, then the keyword fields of
+    ``preset``'s sampling settings, then the keyword fields of
     :class:`nerf.SamplerOptions`.  See :meth:`for_dataset` for a sampler
     matching a dataset's bounds and NDC setting.
     """
