@@ -331,8 +331,9 @@ def graph(tree, layers, top_down=True):
     for i, f in enumerate(order):
         n = tree.folder_lines(f)
         files = tree.folder_files(f)
-        size = "%d file%s, %s line%s" % (files, "" if files == 1 else "s",
-                                          thousands(n), "" if n == 1 else "s")
+        # Files, not lines: the picture changes with the structure, not
+        # with every edit.
+        size = "%d file%s" % (files, "" if files == 1 else "s")
         if 5 * n > total:
             size += " [over 1/5]"
             notes.add("over")
@@ -364,9 +365,9 @@ def graph(tree, layers, top_down=True):
             out.extend(box_text("includes from no other folder"))
     out.append(box_rule())
     out.append("")
-    out.append("%s lines of C under lib/ in %d folders; no folder may hold "
-               "more than a fifth (%s lines)."
-               % (thousands(total), len(tree.folders), thousands(total // 5)))
+    out.append("%d folders under lib/; no folder may hold more than a "
+               "fifth of the library's lines (`layers.py check` counts "
+               "them)." % len(tree.folders))
     absent = [f for f in layers.names if f not in tree.folders]
     if absent:
         out.append("Listed in lib/layers.txt but not under lib/: %s."

@@ -42,7 +42,7 @@
 /* Optional: a reader that does not know it loads the model with a fresh
  * grid, which training refills within a few updates. */
 #define TAG_OCCUPANCY 7u
-/* Optional: hyperparameters added after 0.2's first release (weight
+/* Optional: hyperparameters added after the options section (weight
  * decay).  A reader that does not know it trains on without them. */
 #define TAG_TRAINING2 8u
 /* Optional: how the model computes its products (nerf_model_options.

@@ -1,6 +1,6 @@
 /*
  * Sample placement along one ray.  The stratified and hierarchical rules
- * follow the reference implementation (see DESIGN.md section 2), including
+ * follow the reference implementation (docs/architecture.md), including
  * its float formulas, so that fed the same uniforms it gives the same
  * depths up to rounding.
  */
