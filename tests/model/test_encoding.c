@@ -6,6 +6,7 @@
 #include "../harness.h"
 #include "encoding.h"
 #include "nerf.h"
+#include "sh.h"
 
 static const float inputs[4][3] = {
     {0.0f, 0.5f, -0.25f}, {1.5f, -1.5f, 0.75f}, {3.1f, -2.2f, 0.001f},
@@ -98,11 +99,72 @@ TEST(forms_differ_as_they_should)
     CHECK(fabs(a[3] - b[0]) > 0.1);
 }
 
+/*
+ * The hash grid behind the interface gives what its own functions give:
+ * the same forward, and a backward that adds the per-level gradients.
+ */
+TEST(hashgrid_through_the_interface)
+{
+    const float lo[3] = {-1.5f, -1.5f, -1.5f}, hi[3] = {1.5f, 1.5f, 1.5f};
+    nerf__hashgrid hg;
+    CHECK_OK(nerf__hashgrid_defaults(&hg, lo, hi));
+    hg.levels = 4;
+    hg.log2_table = 10;
+    hg.max_resolution = 64;
+    CHECK_OK(nerf__hashgrid_layout(&hg));
+    nerf__encoding e;
+    nerf__encoding_hashgrid(&e, &hg);
+    const uint32_t w = nerf__encoding_width(&e);
+    const size_t np = nerf__encoding_params(&e);
+    CHECK_EQ_INT(w, 8);
+    CHECK(np == hg.count);
+    float *table = calloc(np, sizeof(float));
+    float *g1 = calloc(np, sizeof(float)), *g2 = calloc(np, sizeof(float));
+    if (table == NULL || g1 == NULL || g2 == NULL) {
+        FAILF("out of memory");
+        free(table), free(g1), free(g2);
+        return;
+    }
+    nerf__encoding_init(&e, table, 7, 100);
+    float a[4 * 8], b[4 * 8], d[4 * 8];
+    nerf__encoding_forward(&e, table, 4, &inputs[0][0], a, 8);
+    nerf__hashgrid_forward_range(&hg, table, 0, 4, &inputs[0][0], 3, b, 8);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    for (int i = 0; i < 32; i++) {
+        d[i] = 0.25f * (float)(i % 7) - 0.5f;
+    }
+    nerf__encoding_backward(&e, 4, &inputs[0][0], d, 8, g1);
+    for (uint32_t l = 0; l < hg.levels; l++) {
+        nerf__hashgrid_backward_level(&hg, l, 4, &inputs[0][0], 3, d, 8, g2);
+    }
+    CHECK(memcmp(g1, g2, np * sizeof(float)) == 0);
+    size_t touched = 0;
+    for (size_t k = 0; k < np; k++) {
+        touched += g1[k] != 0.0f;
+    }
+    CHECK(touched > 0);
+    free(table), free(g1), free(g2);
+}
+
+TEST(sh_through_the_interface)
+{
+    nerf__encoding e;
+    nerf__encoding_sh(&e, 4);
+    CHECK_EQ_INT(nerf__encoding_width(&e), 16);
+    CHECK_EQ_INT(nerf__encoding_params(&e), 0);
+    float a[4 * 16], b[4 * 16];
+    nerf__encoding_forward(&e, NULL, 4, &inputs[0][0], a, 16);
+    nerf__sh_forward(4, 4, &inputs[0][0], 3, b, 16);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+}
+
 int main(void)
 {
     RUN(reference_form);
     RUN(paper_form);
     RUN(no_encoding_is_raw_input);
     RUN(forms_differ_as_they_should);
+    RUN(hashgrid_through_the_interface);
+    RUN(sh_through_the_interface);
     HARNESS_EXIT();
 }
