@@ -110,6 +110,20 @@ static inline void nerf__encoding_backward(const nerf__encoding *e, size_t n,
 }
 
 /*
+ * Ops without parameters are built from a function that encodes rows on
+ * the calling thread: this runs it over the thread pool by ranges of
+ * samples (grain: rough operations per sample, for the pool's decision to
+ * wake its threads).
+ */
+typedef void (*nerf__encode_rows_fn)(const nerf__encoding *e, size_t n,
+                                     const float *in, float *out,
+                                     size_t out_stride);
+void nerf__encoding_by_rows(const nerf__encoding *e, nerf__encode_rows_fn fn,
+                            size_t grain, size_t n, const float *in,
+                            float *out, size_t out_stride);
+size_t nerf__encoding_no_params(const nerf__encoding *e);
+
+/*
  * The frequency encoding of n samples of f->dims floats each (rows of in,
  * stride in_stride) into rows of out (stride out_stride), on the calling
  * thread.  The order is the reference implementation's: the raw input if

@@ -4,7 +4,6 @@
 
 #include "encoding.h"
 #include "nerf.h"
-#include "parallel.h"
 
 uint32_t nerf__frequency_width(const nerf__frequency *f)
 {
@@ -60,36 +59,22 @@ static uint32_t width(const nerf__encoding *e)
     return nerf__frequency_width(&e->u.freq);
 }
 
-static size_t no_params(const nerf__encoding *e)
+static void encode_rows(const nerf__encoding *e, size_t n, const float *in,
+                        float *out, size_t out_stride)
 {
-    (void)e;
-    return 0;
-}
-
-typedef struct rows_job {
-    const nerf__frequency *f;
-    const float *in;
-    float *out;
-    size_t out_stride;
-} rows_job;
-
-static void encode_rows(void *ctx, size_t begin, size_t end)
-{
-    const rows_job *j = ctx;
-    nerf__frequency_encode(j->f, end - begin, j->in + 3 * begin, 3,
-                           j->out + begin * j->out_stride, j->out_stride);
+    nerf__frequency_encode(&e->u.freq, n, in, 3, out, out_stride);
 }
 
 static void forward(const nerf__encoding *e, const float *params, size_t n,
                     const float *in, float *out, size_t out_stride)
 {
     (void)params;
-    rows_job j = {&e->u.freq, in, out, out_stride};
-    nerf__parallel_for(n, 4 * out_stride, encode_rows, &j);
+    nerf__encoding_by_rows(e, encode_rows, 4 * out_stride, n, in, out,
+                           out_stride);
 }
 
 static const nerf__encoding_ops frequency_ops = {
-    .width = width, .params = no_params, .forward = forward};
+    .width = width, .params = nerf__encoding_no_params, .forward = forward};
 
 void nerf__encoding_frequency(nerf__encoding *e, uint32_t frequencies,
                               bool include_input, bool scale_pi)

@@ -5,7 +5,6 @@
 
 #include "encoding.h"
 #include "nerf.h"
-#include "parallel.h"
 
 /*
  * Each constant is K_l^|m| (times sqrt 2 when m != 0) with
@@ -92,36 +91,21 @@ static uint32_t width(const nerf__encoding *e)
     return nerf__sh_width(e->u.sh_degree);
 }
 
-static size_t no_params(const nerf__encoding *e)
+static void encode_rows(const nerf__encoding *e, size_t n, const float *in,
+                        float *out, size_t out_stride)
 {
-    (void)e;
-    return 0;
-}
-
-typedef struct rows_job {
-    uint32_t degree;
-    const float *in;
-    float *out;
-    size_t out_stride;
-} rows_job;
-
-static void encode_rows(void *ctx, size_t begin, size_t end)
-{
-    const rows_job *j = ctx;
-    nerf__sh_forward(j->degree, end - begin, j->in + 3 * begin, 3,
-                     j->out + begin * j->out_stride, j->out_stride);
+    nerf__sh_forward(e->u.sh_degree, n, in, 3, out, out_stride);
 }
 
 static void forward(const nerf__encoding *e, const float *params, size_t n,
                     const float *in, float *out, size_t out_stride)
 {
     (void)params;
-    rows_job j = {e->u.sh_degree, in, out, out_stride};
-    nerf__parallel_for(n, 40, encode_rows, &j);
+    nerf__encoding_by_rows(e, encode_rows, 40, n, in, out, out_stride);
 }
 
 static const nerf__encoding_ops sh_ops = {
-    .width = width, .params = no_params, .forward = forward};
+    .width = width, .params = nerf__encoding_no_params, .forward = forward};
 
 void nerf__encoding_sh(nerf__encoding *e, uint32_t degree)
 {
