@@ -169,8 +169,32 @@ static bool isa_has_bf16(void)
     return ((unsigned)dnnl_get_effective_cpu_isa() & need) == need;
 }
 
+/*
+ * AMX tiles round a bf16 dot product differently from AVX512-BF16, and
+ * oneDNN picks one or the other per product shape (often by the row
+ * count), so with AMX a row's result would depend on the size of the
+ * piece it fell in, and images on chunk sizes and thread counts.  Capping
+ * oneDNN's ISA is process-wide and only possible before its first use:
+ * when the caller used oneDNN first and AMX is on, bf16 is refused rather
+ * than non-deterministic.
+ */
+static bool cap_isa(void)
+{
+    if (dnnl_set_max_cpu_isa(dnnl_cpu_isa_avx512_core_bf16) == dnnl_success) {
+        return true;
+    }
+    const unsigned amx = dnnl_cpu_isa_avx512_core_amx;
+    return ((unsigned)dnnl_get_effective_cpu_isa() & amx) != amx;
+}
+
 static void check_support(void)
 {
+    if (!cap_isa()) {
+        global.why = "oneDNN was in use before libnerf and runs AMX kernels, "
+                     "whose rounding depends on the product shape (set "
+                     "ONEDNN_MAX_CPU_ISA=AVX512_CORE_BF16)";
+        return;
+    }
     /* Without native bf16 oneDNN emulates it, slower than fp32: that is
      * not what anyone asking for bf16 wants. */
     if (!isa_has_bf16()) {
