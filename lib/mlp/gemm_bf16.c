@@ -34,6 +34,7 @@
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "bf16.h"
@@ -180,7 +181,13 @@ static bool isa_has_bf16(void)
  */
 static bool cap_isa(void)
 {
-    if (dnnl_set_max_cpu_isa(dnnl_cpu_isa_avx512_core_bf16) == dnnl_success) {
+    /* oneDNN's call overrides its variables; a cap the user chose stays. */
+    const char *chosen = getenv("ONEDNN_MAX_CPU_ISA");
+    if (chosen == NULL || chosen[0] == '\0') {
+        chosen = getenv("DNNL_MAX_CPU_ISA");
+    }
+    if ((chosen == NULL || chosen[0] == '\0') &&
+        dnnl_set_max_cpu_isa(dnnl_cpu_isa_avx512_core_bf16) == dnnl_success) {
         return true;
     }
     const unsigned amx = dnnl_cpu_isa_avx512_core_amx;
@@ -190,9 +197,10 @@ static bool cap_isa(void)
 static void check_support(void)
 {
     if (!cap_isa()) {
-        global.why = "oneDNN was in use before libnerf and runs AMX kernels, "
-                     "whose rounding depends on the product shape (set "
-                     "ONEDNN_MAX_CPU_ISA=AVX512_CORE_BF16)";
+        global.why = "oneDNN runs AMX kernels (ONEDNN_MAX_CPU_ISA allows "
+                     "them, or oneDNN was in use before libnerf), whose "
+                     "rounding depends on the product shape; set "
+                     "ONEDNN_MAX_CPU_ISA=AVX512_CORE_BF16";
         return;
     }
     /* Without native bf16 oneDNN emulates it, slower than fp32: that is
