@@ -28,12 +28,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "cpu.h"
-#include "gemm.h"
-#include "gemm_bf16.h"
-#include "layer.h"
-#include "model.h"
-#include "parallel.h"
+#include "nerf.h"
+#include "nerf_internal.h"
 
 #define WIDTH 256
 

@@ -17,11 +17,8 @@
 #include <sys/mman.h>
 #include <time.h>
 
-#include "env.h"
-#include "hashgrid.h"
 #include "nerf.h"
-#include "rng.h"
-#include "sh.h"
+#include "nerf_internal.h"
 
 static double clock_s(clockid_t id)
 {

@@ -14,12 +14,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "composite_packed.h"
-#include "env.h"
-#include "march.h"
-#include "occupancy.h"
-#include "parallel.h"
-#include "rng.h"
+#include "nerf.h"
+#include "nerf_internal.h"
 
 static double clock_s(clockid_t id)
 {
@@ -234,8 +230,8 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < 3 * n; i++) {
         b.d_out[i] = 0.1f;
     }
-    printf("%zu rays, step %.5f (1024 across the diagonal), jittered\n", n,
-           (double)b.o.step);
+    printf("%zu rays, step %.5f (%u across the diagonal), jittered\n", n,
+           (double)b.o.step, NERF__MARCH_STEPS_DEFAULT);
     for (int skip = 1; skip >= 0; skip--) {
         b.o.skip_empty = skip;
         timing tc = best_time(run_count, &b, seconds / 2);

@@ -11,7 +11,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "model.h"
+#include "nerf.h"
+#include "nerf_internal.h"
 
 static double now(void)
 {

@@ -35,8 +35,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "cpu.h"
-#include "renderer.h"
+#include "nerf.h"
+#include "nerf_internal.h"
 
 static double now(void)
 {
@@ -77,18 +77,21 @@ static void release(setup *st)
     nerf_model_destroy(st->m);
 }
 
-/* A Blender-like view: 4 units from the origin, 0.69 rad field of view. */
+/* A Blender-like view: as far from the origin and as wide as the built-in
+ * scene's cameras. */
 static void camera(nerf_camera *c, uint32_t side)
 {
     NERF_CAMERA_INIT(c);
     c->width = c->height = side;
-    c->fx = c->fy = 0.5f * (float)side / tanf(0.5f * 0.6911112f);
+    c->fx = c->fy =
+        0.5f * (float)side / tanf(0.5f * (float)NERF__SCENE_CAMERA_ANGLE_X);
     c->cx = c->cy = 0.5f * (float)side;
-    /* Looking at the origin from (0, -4, 2)/|.| * 4, world z up. */
+    /* Looking at the origin from (0, -2, 1)/|.| * radius, world z up. */
     const float e = 1.0f / sqrtf(5.0f);
+    const float r = (float)NERF__SCENE_CAMERA_RADIUS;
     const float pose[12] = {1, 0, 0, 0,
-                            0, e, -2 * e, -8 * e,
-                            0, 2 * e, e, 4 * e};
+                            0, e, -2 * e, -2 * r * e,
+                            0, 2 * e, e, r * e};
     memcpy(c->c2w, pose, sizeof pose);
 }
 

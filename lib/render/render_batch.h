@@ -167,6 +167,20 @@ int nerf__render_march_backward(nerf__batch *b, nerf_model *m,
                                 const float *d_opacity);
 void nerf__render_march_release(nerf__batch *b);
 
+/*
+ * What the marching path hands the marcher for setup s: its settings for
+ * the sampler and grid g (training jitters, and skips empty cells unless
+ * march_everywhere), and the n_rays rays with the sampler's bounds and
+ * s's ray numbering.  Exposed so that a benchmark replays a step's march
+ * with the step's own settings.
+ */
+void nerf__render_march_options(const nerf__render_setup *s,
+                                const nerf__occupancy *g,
+                                nerf__march_options *mo);
+nerf__march_rays nerf__render_march_rays(const nerf__render_setup *s,
+                                         size_t n_rays, const float *origins,
+                                         const float *directions);
+
 /* Check, at renderer or trainer creation, that the sampler can work with
  * the model (a marching sampler needs the model's occupancy grid). */
 int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,

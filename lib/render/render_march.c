@@ -113,9 +113,9 @@ static int reserve_rays(nerf__batch *b, size_t n)
     return NERF_OK;
 }
 
-/* The marcher's settings for this sampler and grid. */
-static void march_options(const nerf__render_setup *s,
-                          const nerf__occupancy *g, nerf__march_options *mo)
+void nerf__render_march_options(const nerf__render_setup *s,
+                                const nerf__occupancy *g,
+                                nerf__march_options *mo)
 {
     const nerf_sampler_options *so = &s->sampler->opts;
     nerf__march_defaults(mo, g);
@@ -126,7 +126,7 @@ static void march_options(const nerf__render_setup *s,
      * every other per-ray draw; the trainer's rays are numbered across
      * steps, so each step draws afresh. */
     mo->jitter = s->training && so->perturb;
-    mo->seed = so->seed + UINT64_C(0xd1b54a32d192ed03) * NERF__STREAM_MARCH;
+    mo->seed = nerf__stream_seed(so->seed, NERF__STREAM_MARCH);
     mo->iteration = 0;
 }
 
@@ -250,7 +250,7 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
 {
     const nerf__occupancy *g = nerf__model_grid(s->model);
     nerf__march_options mo;
-    march_options(s, g, &mo);
+    nerf__render_march_options(s, g, &mo);
     int rc = nerf__march_run(g, &mo, all, &b->march);
     /* The rays kept: a prefix, so their draws are the same as without a
      * budget. */
@@ -335,7 +335,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         return rc;
     }
     nerf__march_options mo;
-    march_options(s, g, &mo);
+    nerf__render_march_options(s, g, &mo);
     march_job j = {.b = b, .viewdir = b->m_view,
                    .max_samples = mo.max_samples};
     size_t n_active = n;
@@ -404,22 +404,30 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
     return NERF_OK;
 }
 
+nerf__march_rays nerf__render_march_rays(const nerf__render_setup *s,
+                                         size_t n_rays, const float *origins,
+                                         const float *directions)
+{
+    const nerf_sampler_options *so = &s->sampler->opts;
+    return (nerf__march_rays){
+        .n = n_rays, .origins = origins, .dirs = directions,
+        .near_all = so->t_near, .far_all = so->t_far,
+        .first_ray = s->first_ray};
+}
+
 int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
                        size_t n_rays, const float *origins,
                        const float *directions,
                        const nerf__pass_out out[NERF__PASSES])
 {
-    const nerf_sampler_options *so = &s->sampler->opts;
     b->bg[0] = b->bg[1] = b->bg[2] = 1.0f;
     b->march.n_rays = b->march.total = 0;
     if (n_rays == 0) {
         b->kept = s->keep;
         return NERF_OK;
     }
-    nerf__march_rays rays = {
-        .n = n_rays, .origins = origins, .dirs = directions,
-        .near_all = so->t_near, .far_all = so->t_far,
-        .first_ray = s->first_ray};
+    nerf__march_rays rays =
+        nerf__render_march_rays(s, n_rays, origins, directions);
     march_job j = {.b = b, .rays = &rays};
     nerf__parallel_for(n_rays, 32, view_dirs, &j);
     const nerf__pass_out *o = out ? &out[0] : NULL;

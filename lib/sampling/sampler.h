@@ -46,11 +46,18 @@ static inline int nerf__sampler_last_pass(const nerf_sampler *s)
     return !nerf__sampler_marches(s) && s->opts.n_fine > 0 ? 1 : 0;
 }
 
+/* The seed of one purpose's streams, one stream per ray; the marcher,
+ * which draws its own offsets, is given this for NERF__STREAM_MARCH. */
+static inline uint64_t nerf__stream_seed(uint64_t seed, uint32_t purpose)
+{
+    return seed + UINT64_C(0xd1b54a32d192ed03) * purpose;
+}
+
 /* The generator of one purpose for one ray. */
 static inline nerf__rng nerf__ray_rng(uint64_t seed, uint32_t purpose,
                                       uint64_t ray)
 {
-    return nerf__rng_make(seed + UINT64_C(0xd1b54a32d192ed03) * purpose, ray);
+    return nerf__rng_make(nerf__stream_seed(seed, purpose), ray);
 }
 
 /*

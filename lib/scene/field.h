@@ -9,6 +9,12 @@
 /* Every solid lies inside this sphere about the origin. */
 #define NERF__SCENE_RADIUS 1.6f
 
+/* The cameras of the built-in dataset (scene_writer.c) are this far from
+ * the origin, looking at it, with the lego scene's horizontal field of
+ * view (radians), so that the built-in scene frames alike. */
+#define NERF__SCENE_CAMERA_RADIUS 4.0
+#define NERF__SCENE_CAMERA_ANGLE_X 0.6911112070083618
+
 /* Density at x, and the colour there (rgb may be NULL). */
 float nerf__scene_field(const float x[3], float rgb[3]);
 

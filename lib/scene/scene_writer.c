@@ -21,9 +21,6 @@
 #include "png_io.h"
 #include "rng.h"
 
-/* The lego scene's field of view, so the built-in scene frames alike. */
-#define CAMERA_ANGLE_X 0.6911112070083618
-#define CAMERA_RADIUS 4.0
 #define NEAR 2.0f
 #define FAR 6.0f
 #define PI 3.14159265358979323846
@@ -51,9 +48,9 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
 
 static void position(double azimuth, double elevation, double p[3])
 {
-    p[0] = CAMERA_RADIUS * cos(elevation) * cos(azimuth);
-    p[1] = CAMERA_RADIUS * cos(elevation) * sin(azimuth);
-    p[2] = CAMERA_RADIUS * sin(elevation);
+    p[0] = NERF__SCENE_CAMERA_RADIUS * cos(elevation) * cos(azimuth);
+    p[1] = NERF__SCENE_CAMERA_RADIUS * cos(elevation) * sin(azimuth);
+    p[2] = NERF__SCENE_CAMERA_RADIUS * sin(elevation);
 }
 
 /*
@@ -200,14 +197,15 @@ static int write_split(const char *dir, int split, uint32_t n,
         cJSON_Delete(frames);
         return nerf__error(NERF_ENOMEM, "%s: out of memory building JSON", dir);
     }
-    cJSON_AddNumberToObject(root, "camera_angle_x", CAMERA_ANGLE_X);
+    cJSON_AddNumberToObject(root, "camera_angle_x", NERF__SCENE_CAMERA_ANGLE_X);
     cJSON_AddItemToObject(root, "frames", frames);
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
         NERF_CAMERA_INIT(&cam);
         cam.width = o->width;
         cam.height = o->height;
-        cam.fx = cam.fy = (float)(0.5 * o->width / tan(0.5 * CAMERA_ANGLE_X));
+        cam.fx = cam.fy = (float)(0.5 * o->width /
+                                  tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
         cam.cx = 0.5f * (float)o->width;
         cam.cy = 0.5f * (float)o->height;
         place_camera(split, i, n, o->seed, &cam);

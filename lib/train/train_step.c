@@ -43,8 +43,8 @@ static void fill_stats(nerf_train_stats *out, const nerf_train_stats *s)
     }
 }
 
-/* The occupancy grid's density source: the model's density-only pass. */
-static int grid_density(void *ctx, size_t n, const float *xyz, float *sigma)
+int nerf__trainer_grid_density(void *ctx, size_t n, const float *xyz,
+                               float *sigma)
 {
     nerf_trainer *t = ctx;
     return nerf__model_density(t->model, 0, &t->density_ws, n, xyz, sigma);
@@ -61,7 +61,8 @@ int nerf__trainer_update_grid(nerf_trainer *t)
      * and the grid's update count, both in checkpoints, so a resumed run
      * refreshes the grid as the unbroken one did. */
     size_t n_random = nerf__grid_random_cells(m->step, g->cells);
-    int rc = nerf__occupancy_update(g, grid_density, t, n_random);
+    int rc = nerf__occupancy_update(g, nerf__trainer_grid_density, t,
+                                    n_random);
     if (rc != NERF_OK) {
         return rc;
     }

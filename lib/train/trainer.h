@@ -75,4 +75,10 @@ void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step);
  * model's current step (nothing between updates). */
 int nerf__trainer_update_grid(nerf_trainer *t);
 
+/* The density source of those refreshes (a nerf__density_fn whose ctx is
+ * the trainer): the model's density-only pass on the trainer's density
+ * workspace. */
+int nerf__trainer_grid_density(void *ctx, size_t n, const float *xyz,
+                               float *sigma);
+
 #endif

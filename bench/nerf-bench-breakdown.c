@@ -1,0 +1,186 @@
+/*
+ * Where a training step of a marching preset (fast) goes: encoding, MLP,
+ * compositing, optimiser and occupancy-grid refresh.  The library has no
+ * timers in its loops, which would cost every user time in every step;
+ * instead its building blocks are timed here one at a time, each called
+ * as the step calls it, on the packed samples of the trainer's last step
+ * (nerf-bench.h says more).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nerf-bench.h"
+
+/*
+ * Time the blocks of the trainer's last step in rounds until `budget`
+ * seconds (at least three), then two grid refreshes.  Everything here
+ * writes the model (gradients, Adam, the grid): it runs after every other
+ * measurement of the preset.
+ */
+int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
+{
+    nerf_model *m = t->model;
+    nerf__batch *b = &t->batch;
+    const nerf__network *net = &m->nets[0];
+    nerf__occupancy *g = m->grid;
+    memset(bd, 0, sizeof *bd);
+    if (!b->marched || !b->kept || b->march.total == 0 || g == NULL ||
+        net->pos_enc.kind != NERF_ENCODING_HASHGRID || !net->use_viewdirs ||
+        net->dir_enc.kind != NERF_ENCODING_SPHERICAL_HARMONICS) {
+        return -1;
+    }
+    const size_t n = b->march.total, B = b->n_rays;
+    const uint64_t step = m->step; /* the Adam rounds below advance it */
+    bd->rays = B;
+    bd->samples = n;
+
+    /* The step's march: the settings and rays the marching path makes of
+     * the trainer's setup, which still numbers the step's rays. */
+    nerf__march_options mo;
+    nerf__render_march_options(&t->setup, g, &mo);
+    nerf__march_rays rays =
+        nerf__render_march_rays(&t->setup, B, t->origins, t->directions);
+    nerf__march_samples ms;
+    nerf__march_samples_init(&ms, &m->env);
+    int rc = nerf__march_run(g, &mo, &rays, &ms);
+    const size_t n_march = ms.total > n ? ms.total : n;
+    float *points = malloc(3 * n_march * sizeof(float));
+    float *enc = malloc(n * net->pos_width * sizeof(float));
+    float *d_enc = malloc(n * net->pos_width * sizeof(float));
+    float *sh = malloc(n * net->dir_width * sizeof(float));
+    float *rgb = malloc(3 * B * sizeof(float));
+    if (rc != NERF_OK || !points || !enc || !d_enc || !sh || !rgb) {
+        rc = -1;
+        goto done;
+    }
+    const bool same =
+        ms.total == n &&
+        memcmp(ms.offsets, b->march.offsets, (B + 1) * sizeof(size_t)) == 0 &&
+        memcmp(ms.t, b->march.t, n * sizeof(float)) == 0;
+    for (size_t i = 0; i < n * net->pos_width; i++) {
+        d_enc[i] = 1e-3f * (float)(i % 7);
+    }
+    nerf__packed_out po = {.rgb = rgb};
+
+    /* Round 0 is untimed: it faults in the bench's own buffers, which the
+     * step has long had. */
+    double t0 = now();
+    for (int round = 0;; round++) {
+        if (round == 1) {
+            memset(bd, 0, sizeof *bd);
+            bd->rays = B;
+            bd->samples = n;
+            bd->same_samples = same;
+            t0 = now();
+        } else if (round > 1 && now() - t0 >= budget && bd->rounds >= 3) {
+            break;
+        }
+        double a = now();
+        rc = nerf__march_run(g, &mo, &rays, &ms);
+        if (rc != NERF_OK) {
+            goto done;
+        }
+        nerf__march_points(&rays, ms.offsets, ms.t, points);
+        double c = now();
+        bd->march += c - a;
+        a = c;
+        /* The encodings as the network runs them, on their own. */
+        nerf__encoding_forward(&net->pos_enc, m->params + net->pos_params, n,
+                               b->march_points, enc, net->pos_width);
+        c = now();
+        bd->hash_fw += c - a;
+        a = c;
+        nerf__encoding_backward(&net->pos_enc, n, b->march_points, d_enc,
+                                net->pos_width, m->grads + net->pos_params);
+        c = now();
+        bd->hash_bw += c - a;
+        a = c;
+        nerf__encoding_forward(&net->dir_enc, NULL, n, b->m_dirs, sh,
+                               net->dir_width);
+        c = now();
+        bd->sh_fw += c - a;
+        /* The step itself, block by block. */
+        a = c;
+        /* As the step: a no-op after an Adam step, which zeroes them. */
+        nerf__model_clear_grad(m);
+        c = now();
+        bd->zero_grad += c - a;
+        a = c;
+        rc = nerf__model_forward(m, 0, &b->ws[0], n, b->march_points,
+                                 b->m_dirs, b->m_rgb, b->m_sigma);
+        if (rc != NERF_OK) {
+            goto done;
+        }
+        c = now();
+        bd->net_fw += c - a;
+        a = c;
+        nerf__composite_packed(&b->packed, &po);
+        c = now();
+        bd->composite_fw += c - a;
+        a = c;
+        nerf__composite_packed_backward(&b->packed, t->d_rgb[0], NULL, NULL,
+                                        b->m_d_rgb, b->m_d_sigma);
+        c = now();
+        bd->composite_bw += c - a;
+        a = c;
+        nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+        c = now();
+        bd->net_bw += c - a;
+        a = c;
+        nerf__model_adam_step(m);
+        c = now();
+        bd->adam += c - a;
+        bd->rounds += round > 0;
+    }
+
+    /* The refresh rule of the timed steps' regime. */
+    const size_t n_random = nerf__grid_random_cells(step, g->cells);
+    for (int i = 0; i < 2 && rc == NERF_OK; i++) {
+        double a = now();
+        rc = nerf__occupancy_update(g, nerf__trainer_grid_density, t,
+                                    n_random);
+        bd->grid_update += now() - a;
+        bd->grid_updates++;
+        bd->grid_cells_evaluated += g->evaluated;
+    }
+    if (rc != NERF_OK) {
+        goto done;
+    }
+    const double r = bd->rounds;
+    bd->march /= r;
+    bd->hash_fw /= r;
+    bd->hash_bw /= r;
+    bd->sh_fw /= r;
+    bd->zero_grad /= r;
+    bd->net_fw /= r;
+    bd->composite_fw /= r;
+    bd->composite_bw /= r;
+    bd->net_bw /= r;
+    bd->adam /= r;
+    bd->grid_update /= bd->grid_updates;
+    bd->grid_cells_evaluated /= (size_t)bd->grid_updates;
+    bd->ok = true;
+done:
+    nerf__march_samples_release(&ms);
+    free(points);
+    free(enc);
+    free(d_enc);
+    free(sh);
+    free(rgb);
+    return rc == NERF_OK ? 0 : -1;
+}
+
+step_shares shares_of(const step_breakdown *b)
+{
+    step_shares s;
+    s.encoding = b->hash_fw + b->hash_bw + b->sh_fw;
+    /* The network's own calls encode first: what remains is the products
+     * and the element-wise passes between them. */
+    s.mlp = fmax(0.0, b->net_fw + b->net_bw - s.encoding);
+    s.compositing = b->march + b->composite_fw + b->composite_bw;
+    s.optimiser = b->zero_grad + b->adam;
+    s.grid = b->grid_update / NERF__GRID_EVERY;
+    s.sum = s.encoding + s.mlp + s.compositing + s.optimiser + s.grid;
+    return s;
+}
