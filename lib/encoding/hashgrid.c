@@ -340,11 +340,15 @@ static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad,
     }
 }
 
+/*
+ * The multiversioned loops are static, behind plain entry points: clang
+ * (14 at least) emits a target_clones function's resolver only in its own
+ * file, so a call from another file would not link.
+ */
 NERF__MULTIVERSION
-void nerf__hashgrid_forward_range(const nerf__hashgrid *hg, const float *table,
-                                  size_t begin, size_t end, const float *in,
-                                  size_t in_stride, float *out,
-                                  size_t out_stride)
+static void forward_range(const nerf__hashgrid *hg, const float *table,
+                          size_t begin, size_t end, const float *in,
+                          size_t in_stride, float *out, size_t out_stride)
 {
     tile t;
     const uint32_t F = hg->features;
@@ -370,10 +374,9 @@ void nerf__hashgrid_forward_range(const nerf__hashgrid *hg, const float *table,
  * into each entry is fixed by the samples alone.
  */
 NERF__MULTIVERSION
-void nerf__hashgrid_backward_level(const nerf__hashgrid *hg, uint32_t level,
-                                   size_t n, const float *in, size_t in_stride,
-                                   const float *d_out, size_t d_stride,
-                                   float *grad)
+static void backward_level(const nerf__hashgrid *hg, uint32_t level, size_t n,
+                           const float *in, size_t in_stride,
+                           const float *d_out, size_t d_stride, float *grad)
 {
     tile t;
     const uint32_t F = hg->features;
@@ -385,6 +388,22 @@ void nerf__hashgrid_backward_level(const nerf__hashgrid *hg, uint32_t level,
         scatter_any(&t, m, gl, F, d_out + s0 * d_stride + (size_t)level * F,
                     d_stride);
     }
+}
+
+void nerf__hashgrid_forward_range(const nerf__hashgrid *hg, const float *table,
+                                  size_t begin, size_t end, const float *in,
+                                  size_t in_stride, float *out,
+                                  size_t out_stride)
+{
+    forward_range(hg, table, begin, end, in, in_stride, out, out_stride);
+}
+
+void nerf__hashgrid_backward_level(const nerf__hashgrid *hg, uint32_t level,
+                                   size_t n, const float *in, size_t in_stride,
+                                   const float *d_out, size_t d_stride,
+                                   float *grad)
+{
+    backward_level(hg, level, n, in, in_stride, d_out, d_stride, grad);
 }
 
 /* ---- threads ------------------------------------------------------------ */
