@@ -10,9 +10,12 @@
 # window without a display.  libdnnl-dev (oneDNN) is optional for the
 # library, which builds without it, but listed so that the tests cover the
 # bf16 products (meson option bf16).
+# clang builds the library a second time (a C library must build with
+# both compilers) and, with libclang-rt-dev's libFuzzer, the fuzz targets.
 NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
                    meson ninja-build pkg-config python3-numpy
-                   libsdl2-dev xvfb xauth libdnnl-dev)
+                   libsdl2-dev xvfb xauth libdnnl-dev
+                   clang libclang-rt-dev)
 
 # Options of build/release, shared by both scripts so that running one after
 # the other reuses the build instead of reconfiguring it back and forth.

@@ -3,9 +3,9 @@
 # libnerf's test command: ./scripts/test.sh [meson test arguments...]
 #
 # Installs missing Debian packages (as root; otherwise prints the apt-get
-# line), builds build/release and runs the test suite there, then builds
-# build/sanitize (AddressSanitizer + UndefinedBehaviorSanitizer) and runs the
-# suite again.  Extra arguments go to both `meson test` runs, for example
+# line), builds build/release and runs the test suite there, then the same
+# with clang in build/clang, then builds build/sanitize (AddressSanitizer +
+# UndefinedBehaviorSanitizer, gcc) and runs the suite again.  Extra arguments go to both `meson test` runs, for example
 # `./scripts/test.sh --suite abi`.
 #
 # The last line of output is always "N passed, N failed, N skipped", summed
@@ -119,6 +119,11 @@ if ! nerf_ensure_packages; then
 fi
 
 run_suite release build/release -- "${NERF_RELEASE_OPTIONS[@]}" --
+
+# The same suites built by clang: macOS, FreeBSD and Android toolchains
+# are clang, and it warns about other things than gcc does.
+run_suite clang build/clang -- --native-file scripts/native/clang.ini \
+  "${NERF_RELEASE_OPTIONS[@]}" --
 
 # Sanitized code runs slower, hence the longer timeouts.  Leak checking is on
 # so a missing free fails the test that leaked.
