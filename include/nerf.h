@@ -1419,10 +1419,15 @@ typedef struct nerf_train_stats {
  * with probability 1/16), keyed by the model's seed and the grid's update
  * count, both saved in checkpoints.
  *
+ * A checkpoint_path is tried at once: a temporary file is created beside
+ * it and removed, so that a path that cannot be written fails here, not
+ * at the first save.
+ *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOMEM.
+ * NERF_EIO (checkpoint_path cannot be written: a missing folder, a path
+ * through a regular file, a folder, no permission); NERF_EVERSION
+ * (options from a newer header setting unknown fields); NERF_ENOMEM.
  */
 NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
                                  const nerf_dataset *dataset,
@@ -1453,7 +1458,9 @@ NERF_API int nerf_trainer_step(nerf_trainer *trainer,
  * @param stats_out NULL, or the figures of the last step taken.
  * @return as nerf_trainer_step(); NERF_ECANCELLED when the callback or
  * nerf_trainer_cancel() stopped the run (after a whole step); NERF_EIO
- * when a checkpoint cannot be written.
+ * when a checkpoint cannot be written, also when the run was cancelled and
+ * its final save failed (the file at checkpoint_path is then the last
+ * checkpoint that was written whole, or absent).
  */
 NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
                               nerf_train_stats *stats_out);
