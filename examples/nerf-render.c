@@ -36,13 +36,17 @@ static const char usage[] =
     "                else the file's w and h, else 100x100.  Intrinsics:\n"
     "                --focal (pixels) or --fov (horizontal, degrees), else\n"
     "                the file's, else --fov 39.6 (as --path orbit).  With\n"
-    "                --data, the scene gives bounds, background and NDC.\n";
+    "                --data, the scene gives bounds, background and NDC.\n"
+    "  --near T --far T  the range of depths sampled along each ray, given\n"
+    "                together, 0 <= T_near < T_far (NDC depths within [0, 1]\n"
+    "                for an LLFF scene); default the scene's, else 2 and 6\n";
 
 typedef struct args {
     const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
     int depth, size_given;
+    int bounds_given; /* 1: --near, 2: --far */
 } args;
 
 /* The lego scene's horizontal field of view, in radians: --path orbit's,
@@ -101,8 +105,10 @@ static int parse(int argc, char **argv, args *a)
             a->size_given |= 2;
         } else if (strcmp(k, "--near") == 0) {
             bad = cli_double(v, &a->near);
+            a->bounds_given |= 1;
         } else if (strcmp(k, "--far") == 0) {
             bad = cli_double(v, &a->far);
+            a->bounds_given |= 2;
         } else {
             fprintf(stderr, "nerf-render: unknown argument '%s'\n", k);
             bad = 1;
@@ -137,6 +143,22 @@ static int parse(int argc, char **argv, args *a)
     if (a->poses && a->size_given && a->size_given != 3) {
         fprintf(stderr, "nerf-render: with --poses, give --width and "
                         "--height together\n");
+        return -1;
+    }
+    /* One bound alone would leave the other to a default that may not fit
+     * it; a wrong pair would be sampled backwards. */
+    if (a->bounds_given && a->bounds_given != 3) {
+        fprintf(stderr, "nerf-render: give --near and --far together\n");
+        return -1;
+    }
+    if (a->bounds_given && !(a->near >= 0.0)) {
+        fprintf(stderr, "nerf-render: --near must be at least 0 (got %g)\n",
+                a->near);
+        return -1;
+    }
+    if (a->bounds_given && !(a->near < a->far)) {
+        fprintf(stderr, "nerf-render: --near must be less than --far (got "
+                        "--near %g --far %g)\n", a->near, a->far);
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
@@ -210,58 +232,139 @@ static void depth_to_grey(float *depth, const float *opacity, size_t n,
     }
 }
 
+/* A failure already described on stderr (not a libnerf status). */
+#define REPORTED 1
+
+/* The renderer's reports, within an image, onto the bar of all views. */
+typedef struct render_progress {
+    progress bar;
+    uint64_t before; /* pixels of the views already rendered */
+} render_progress;
+
+static int on_render_progress(const nerf_progress *p, void *user)
+{
+    render_progress *rp = user;
+    progress_update(&rp->bar, rp->before + p->done, "pixels");
+    return 0;
+}
+
+/*
+ * The output buffers, sized for the largest view and allocated before
+ * anything is rendered, so that an image that cannot be held is refused
+ * at once, with its size, rather than after the views before it.
+ */
+typedef struct outputs {
+    float *rgb, *depth, *opacity;
+    size_t capacity; /* pixels */
+} outputs;
+
+static int alloc_outputs(outputs *o, size_t pixels, uint32_t w, uint32_t h,
+                         int depth)
+{
+    memset(o, 0, sizeof *o);
+    size_t floats = depth ? 5 : 3; /* rgb, and depth and opacity */
+    if (pixels > SIZE_MAX / floats / sizeof(float)) {
+        fprintf(stderr, "nerf-render: a %ux%u image is more than this "
+                        "machine can address\n", (unsigned)w, (unsigned)h);
+        return -1;
+    }
+    o->capacity = pixels;
+    o->rgb = malloc(pixels * 3 * sizeof(float));
+    if (depth) {
+        o->depth = malloc(pixels * sizeof(float));
+        o->opacity = malloc(pixels * sizeof(float));
+    }
+    if (o->rgb == NULL || (depth && (o->depth == NULL || o->opacity == NULL))) {
+        size_t bytes = pixels * floats * sizeof(float);
+        fprintf(stderr, "nerf-render: cannot allocate %zu bytes (%.1f GiB) "
+                        "for the output of a %ux%u image\n", bytes,
+                (double)bytes / (1u << 30), (unsigned)w, (unsigned)h);
+        return -1;
+    }
+    return 0;
+}
+
+static void free_outputs(outputs *o)
+{
+    free(o->rgb);
+    free(o->depth);
+    free(o->opacity);
+}
+
+static int write_view(const args *a, const nerf_camera *cam, uint32_t i,
+                      const outputs *o, float near, float far)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/r_%03u.png", a->out, i);
+    int rc = nerf_image_write_png(path, cam->width, cam->height, 3, o->rgb);
+    if (rc == NERF_OK && a->depth) {
+        snprintf(path, sizeof path, "%s/opacity_%03u.png", a->out, i);
+        rc = nerf_image_write_png(path, cam->width, cam->height, 1,
+                                  o->opacity);
+        depth_to_grey(o->depth, o->opacity,
+                      (size_t)cam->width * cam->height, near, far);
+        snprintf(path, sizeof path, "%s/depth_%03u.png", a->out, i);
+        if (rc == NERF_OK) {
+            rc = nerf_image_write_png(path, cam->width, cam->height, 1,
+                                      o->depth);
+        }
+    }
+    return rc;
+}
+
 static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
                       const nerf_camera_path *cp, float near, float far)
 {
     uint32_t n = cp        ? nerf_camera_path_count(cp)
                  : a->path ? (uint32_t)a->frames
                            : nerf_dataset_count(ds);
-    progress bar;
-    progress_begin(&bar, "nerf-render", n);
+    /* Every view's size first: the bar counts pixels, and the buffers
+     * hold the largest view. */
+    uint64_t total = 0;
+    size_t largest = 0;
+    uint32_t lw = 0, lh = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        nerf_camera cam;
+        int rc = view_camera(a, ds, cp, i, n, &cam);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        size_t pixels = (size_t)cam.width * cam.height;
+        total += pixels;
+        if (pixels > largest) {
+            largest = pixels;
+            lw = cam.width;
+            lh = cam.height;
+        }
+    }
+    outputs o;
+    if (alloc_outputs(&o, largest, lw, lh, a->depth) != 0) {
+        free_outputs(&o);
+        return REPORTED;
+    }
+    render_progress rp;
+    rp.before = 0;
+    progress_begin(&rp.bar, "nerf-render", total);
+    nerf_renderer_set_progress(r, on_render_progress, &rp);
     int rc = NERF_OK;
-    float *rgb = NULL, *depth = NULL, *opacity = NULL;
-    size_t cap = 0;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
         rc = view_camera(a, ds, cp, i, n, &cam);
-        size_t pixels = (size_t)cam.width * cam.height;
-        if (rc == NERF_OK && pixels > cap) {
-            free(rgb);
-            free(depth);
-            free(opacity);
-            cap = pixels;
-            rgb = malloc(cap * 3 * sizeof(float));
-            depth = malloc(cap * sizeof(float));
-            opacity = malloc(cap * sizeof(float));
-            if (!rgb || !depth || !opacity) {
-                fprintf(stderr, "nerf-render: out of memory\n");
-                rc = NERF_ENOMEM;
-            }
+        if (rc == NERF_OK) {
+            rc = nerf_renderer_render_image(r, &cam, o.rgb, o.depth,
+                                            o.opacity, o.capacity);
         }
         if (rc == NERF_OK) {
-            rc = nerf_renderer_render_image(r, &cam, rgb, depth, opacity, cap);
+            rc = write_view(a, &cam, i, &o, near, far);
         }
-        char path[4200];
-        if (rc == NERF_OK) {
-            snprintf(path, sizeof path, "%s/r_%03u.png", a->out, i);
-            rc = nerf_image_write_png(path, cam.width, cam.height, 3, rgb);
-        }
-        if (rc == NERF_OK && a->depth) {
-            snprintf(path, sizeof path, "%s/opacity_%03u.png", a->out, i);
-            rc = nerf_image_write_png(path, cam.width, cam.height, 1, opacity);
-            depth_to_grey(depth, opacity, pixels, near, far);
-            snprintf(path, sizeof path, "%s/depth_%03u.png", a->out, i);
-            if (rc == NERF_OK) {
-                rc = nerf_image_write_png(path, cam.width, cam.height, 1, depth);
-            }
-        }
-        progress_update(&bar, i + 1, NULL);
+        rp.before += (uint64_t)cam.width * cam.height;
     }
-    free(rgb);
-    free(depth);
-    free(opacity);
+    free_outputs(&o);
     if (rc == NERF_OK) {
-        progress_end(&bar, a->out);
+        char note[4200];
+        snprintf(note, sizeof note, "%u view%s in %s", (unsigned)n,
+                 n == 1 ? "" : "s", a->out);
+        progress_end(&rp.bar, note);
     }
     return rc;
 }
@@ -320,7 +423,7 @@ int main(int argc, char **argv)
     if (rc == NERF_OK) {
         rc = render_all(&a, r, ds, cp, near, far);
     }
-    if (rc != NERF_OK) {
+    if (rc != NERF_OK && rc != REPORTED) {
         cli_report("nerf-render", rc);
     }
     nerf_renderer_destroy(r);

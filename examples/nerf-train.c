@@ -43,7 +43,10 @@ static const char usage[] =
     "                or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
     "                fp32); saved in MODEL, so --resume, nerf-render and\n"
     "                nerf-eval keep it\n"
-    "Ctrl-C stops after the current step and saves MODEL.\n";
+    "Ctrl-C stops after the current step and saves MODEL.\n"
+    "MODEL is tried before training (a file is created beside it and\n"
+    "removed); a save that fails leaves the last good MODEL in place, says\n"
+    "so and makes the status 1.\n";
 
 static volatile sig_atomic_t interrupted;
 
@@ -278,11 +281,22 @@ int main(int argc, char **argv)
     memset(&stats, 0, sizeof stats);
     stats.struct_size = sizeof stats;
     rc = todo ? nerf_trainer_run(t, todo, &stats) : NERF_OK;
-    char note[128];
-    snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, saved %s)",
-             (unsigned long long)nerf_model_step(m), stats.psnr, a.out);
+    /* The run ends with a save whatever stopped it; EIO means a save
+     * failed (nerf_trainer_run() lets it outrank a cancellation), and
+     * another error may have come before it: only OK and a cancellation
+     * are sure to be on disk. */
+    int saved = rc == NERF_OK || rc == NERF_ECANCELLED;
+    char note[4200];
+    snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s %s)",
+             (unsigned long long)nerf_model_step(m), stats.psnr,
+             saved ? "saved" : "NOT saved to", a.out);
     progress_end(&st.bar, note);
-    if (rc == NERF_ECANCELLED && st.out_of_time && !interrupted) {
+    if (rc == NERF_EIO) {
+        cli_report("nerf-train", rc);
+        fprintf(stderr, "nerf-train: the save failed: %s keeps the last "
+                "checkpoint written whole, if any; steps since are lost\n",
+                a.out);
+    } else if (rc == NERF_ECANCELLED && st.out_of_time && !interrupted) {
         fprintf(stderr, "nerf-train: stopped after %.0f s as asked; resume "
                 "with --resume\n", a.seconds);
         rc = NERF_OK;

@@ -688,9 +688,10 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
  * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
  * or malformed file, npy dtype, order or shape not listed above, no
  * frames or more than 100000, missing field, NaN or infinite values,
- * bottom row not [0, 0, 0, 1], degenerate rotation, focal not positive,
- * w or h not a positive whole number); NERF_ENOMEM.  Messages name the
- * file and the problem.
+ * bottom row not [0, 0, 0, 1], entries beyond 1e6, degenerate rotation,
+ * focal under 1e-3 pixels: docs/formats.md, "Camera sanity"; w or h not a
+ * positive whole number); NERF_ENOMEM.  Messages name the file, the frame
+ * (with its file_path when it has one) and the problem.
  * Reentrant: separate loads may run on separate threads.
  */
 NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
@@ -1234,7 +1235,9 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
  * (malformed JSON, missing field, matrix of the wrong shape, NaN or
- * infinite values, zero or negative focal, near >= far, npy of the wrong
+ * infinite values, entries beyond 1e6, a degenerate rotation, a focal
+ * under 1e-3 pixels, near >= far (docs/formats.md, "Camera sanity"; the
+ * message names the frame and its file_path), npy of the wrong
  * dtype, order or shape, corrupt PNG, images of different sizes, image
  * count not matching the poses, no frames left); NERF_ENOMEM.  Messages name the file and
  * the problem.  On failure *out is NULL.
@@ -1419,10 +1422,15 @@ typedef struct nerf_train_stats {
  * with probability 1/16), keyed by the model's seed and the grid's update
  * count, both saved in checkpoints.
  *
+ * A checkpoint_path is tried at once: a temporary file is created beside
+ * it and removed, so that a path that cannot be written fails here, not
+ * at the first save.
+ *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOMEM.
+ * NERF_EIO (checkpoint_path cannot be written: a missing folder, a path
+ * through a regular file, a folder, no permission); NERF_EVERSION
+ * (options from a newer header setting unknown fields); NERF_ENOMEM.
  */
 NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
                                  const nerf_dataset *dataset,
@@ -1453,7 +1461,9 @@ NERF_API int nerf_trainer_step(nerf_trainer *trainer,
  * @param stats_out NULL, or the figures of the last step taken.
  * @return as nerf_trainer_step(); NERF_ECANCELLED when the callback or
  * nerf_trainer_cancel() stopped the run (after a whole step); NERF_EIO
- * when a checkpoint cannot be written.
+ * when a checkpoint cannot be written, also when the run was cancelled and
+ * its final save failed (the file at checkpoint_path is then the last
+ * checkpoint that was written whole, or absent).
  */
 NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
                               nerf_train_stats *stats_out);

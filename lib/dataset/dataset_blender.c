@@ -16,6 +16,7 @@
 
 typedef struct frame {
     uint32_t index;  /* position in the file's frames list */
+    char name[224];  /* for messages: index and file_path */
     char *path;
     double c2w[12];
     nerf__intrinsics in;
@@ -82,8 +83,9 @@ static int parse_frames(blender_ctx *b, const cJSON *root,
             continue;
         }
         frame *f = &b->frames[b->n_frames];
-        char where[32];
-        snprintf(where, sizeof where, "frame %u: ", (unsigned)idx);
+        nerf__transforms_frame_name(fr, idx, f->name, sizeof f->name);
+        char where[256];
+        snprintf(where, sizeof where, "%s: ", f->name);
         f->index = idx;
         f->in = top;
         rc = cJSON_IsObject(fr) ? NERF_OK
@@ -94,7 +96,8 @@ static int parse_frames(blender_ctx *b, const cJSON *root,
                                                   &f->in);
         }
         if (rc == NERF_OK) {
-            rc = nerf__transforms_read_matrix(b->json_path, fr, idx, f->c2w);
+            rc = nerf__transforms_read_matrix(b->json_path, fr, f->name,
+                                              f->c2w);
         }
         if (rc == NERF_OK) {
             rc = frame_path(b, fr, idx, &f->path);
@@ -113,12 +116,12 @@ static int resolve_intrinsics(const blender_ctx *b, const frame *f,
 {
     const nerf__intrinsics *in = &f->in;
     if ((!isnan(in->w) && in->w != w) || (!isnan(in->h) && in->h != h)) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: w x h is %gx%g but "
-                           "%s is %ux%u", b->json_path, (unsigned)f->index,
+        return nerf__error(NERF_EFORMAT, "%s: %s: w x h is %gx%g but "
+                           "%s is %ux%u", b->json_path, f->name,
                            in->w, in->h, f->path, (unsigned)w, (unsigned)h);
     }
     double k[4];
-    int rc = nerf__transforms_focal(b->json_path, f->index, in, w, h, k);
+    int rc = nerf__transforms_focal(b->json_path, f->name, in, w, h, k);
     if (rc != NERF_OK) {
         return rc;
     }

@@ -11,8 +11,12 @@
 #include "file_io.h"
 #include "llff_poses.h"
 #include "npy.h"
+#include "transforms.h"
 
 #define NPY_MAX_BYTES (64u << 20)
+/* The least near bound: the poses are scaled by 1 / (0.75 near), which
+ * must keep them finite. */
+#define NERF__LLFF_MIN_NEAR 1e-6
 /* More rows than any capture; stops a bogus shape from driving allocation. */
 #define MAX_VIEWS 100000u
 
@@ -68,37 +72,51 @@ static int read_rows(llff_ctx *c)
     return rc;
 }
 
-static double det3_stride5(const double *m)
-{
-    return m[0] * (m[6] * m[12] - m[7] * m[11]) -
-           m[1] * (m[5] * m[12] - m[7] * m[10]) +
-           m[2] * (m[5] * m[11] - m[6] * m[10]);
-}
-
+/*
+ * Every row, against the limits of a usable camera (lib/io/transforms.h),
+ * named by its index and, once the folder has been listed, its image.
+ */
 static int check_rows(const llff_ctx *c)
 {
     for (size_t i = 0; i < c->n; i++) {
         const double *r = c->rows + NERF__LLFF_ROW * i;
+        char name[300];
+        if (c->n_names == c->n) {
+            snprintf(name, sizeof name, "row %zu (image %.256s)", i,
+                     c->names[i]);
+        } else {
+            snprintf(name, sizeof name, "row %zu", i);
+        }
         for (int k = 0; k < NERF__LLFF_ROW; k++) {
             if (!isfinite(r[k])) {
-                return nerf__error(NERF_EFORMAT, "%s: row %zu holds a "
-                                   "non-finite value (column %d)",
-                                   c->npy_path, i, k);
+                return nerf__error(NERF_EFORMAT, "%s: %s holds a non-finite "
+                                   "value (column %d)", c->npy_path, name, k);
+            }
+            if (!(fabs(r[k]) <= NERF__CAMERA_MAX_ABS)) {
+                return nerf__error(NERF_EFORMAT, "%s: %s: has an entry of "
+                                   "magnitude %g, beyond the %g a camera may "
+                                   "have (column %d)", c->npy_path, name,
+                                   fabs(r[k]), NERF__CAMERA_MAX_ABS, k);
             }
         }
-        if (!(r[4] > 0.0 && r[9] > 0.0 && r[14] > 0.0)) {
-            return nerf__error(NERF_EFORMAT, "%s: row %zu: height %g, width "
-                               "%g and focal %g must be positive",
-                               c->npy_path, i, r[4], r[9], r[14]);
+        if (!(r[4] >= 1.0 && r[9] >= 1.0 && r[14] >= NERF__FOCAL_MIN)) {
+            return nerf__error(NERF_EFORMAT, "%s: %s: height %g, width %g "
+                               "and focal %g must be positive (at least 1, 1 "
+                               "and %g)", c->npy_path, name, r[4], r[9],
+                               r[14], NERF__FOCAL_MIN);
         }
-        if (!(r[15] > 0.0 && r[16] > r[15])) {
-            return nerf__error(NERF_EFORMAT, "%s: row %zu: bounds near %g, "
-                               "far %g (need 0 < near < far)", c->npy_path,
-                               i, r[15], r[16]);
+        if (!(r[15] >= NERF__LLFF_MIN_NEAR && r[16] > r[15])) {
+            return nerf__error(NERF_EFORMAT, "%s: %s: bounds near %g, far %g "
+                               "(need %g <= near < far)", c->npy_path, name,
+                               r[15], r[16], NERF__LLFF_MIN_NEAR);
         }
-        if (fabs(det3_stride5(r)) < 1e-9) {
-            return nerf__error(NERF_EFORMAT, "%s: row %zu: degenerate "
-                               "rotation", c->npy_path, i);
+        double c2w[12];
+        nerf__llff_row_pose(r, c2w);
+        char text[160];
+        const char *why = nerf__pose_problem(c2w, NULL, text, sizeof text);
+        if (why != NULL) {
+            return nerf__error(NERF_EFORMAT, "%s: %s: %s", c->npy_path, name,
+                               why);
         }
     }
     return NERF_OK;
@@ -306,13 +324,14 @@ static int load(llff_ctx *c, const nerf__dataset_config *cfg)
 {
     int rc = read_rows(c);
     if (rc == NERF_OK) {
-        rc = check_rows(c);
-    }
-    if (rc == NERF_OK) {
         rc = find_image_dir(c, cfg->downscale);
     }
     if (rc == NERF_OK) {
         rc = list_images(c);
+    }
+    /* After the listing, so that a bad row names its image too. */
+    if (rc == NERF_OK) {
+        rc = check_rows(c);
     }
     if (rc == NERF_OK) {
         rc = prepare_poses(c);

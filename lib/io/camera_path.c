@@ -88,7 +88,7 @@ static int read_options(nerf_camera_path_options *o,
 }
 
 /* The file's image size of a frame, if it gives one: *w = *h = 0 if not. */
-static int file_size(const path_ctx *c, size_t idx,
+static int file_size(const path_ctx *c, const char *name,
                      const nerf__intrinsics *in, uint32_t *w, uint32_t *h)
 {
     *w = *h = 0;
@@ -96,16 +96,16 @@ static int file_size(const path_ctx *c, size_t idx,
         return NERF_OK;
     }
     if (isnan(in->w) || isnan(in->h)) {
-        return nerf__error(NERF_EFORMAT, "%s: %s %zu: gives %s but not %s",
-                           c->path, c->unit, idx, isnan(in->w) ? "h" : "w",
+        return nerf__error(NERF_EFORMAT, "%s: %s: gives %s but not %s",
+                           c->path, name, isnan(in->w) ? "h" : "w",
                            isnan(in->w) ? "w" : "h");
     }
     double v[2] = {in->w, in->h};
     for (int i = 0; i < 2; i++) {
         if (!(v[i] >= 1.0 && v[i] <= MAX_SIDE && v[i] == floor(v[i]))) {
-            return nerf__error(NERF_EFORMAT, "%s: %s %zu: %c %g is not a "
+            return nerf__error(NERF_EFORMAT, "%s: %s: %c %g is not a "
                                "whole number of pixels in 1..65536", c->path,
-                               c->unit, idx, i ? 'h' : 'w', v[i]);
+                               name, i ? 'h' : 'w', v[i]);
         }
     }
     *w = (uint32_t)in->w;
@@ -128,14 +128,14 @@ static bool option_focal(const path_ctx *c, uint32_t w, uint32_t h,
 }
 
 /*
- * Camera idx from its pose and, for a JSON frame, its intrinsics (NULL for
+ * Camera `name` from its pose and, for a JSON frame, its intrinsics (NULL for
  * a .npy pose, which has none).
  */
-static int make_camera(const path_ctx *c, size_t idx, const double *c2w,
+static int make_camera(const path_ctx *c, const char *name, const double *c2w,
                        const nerf__intrinsics *in, nerf_camera *cam)
 {
     uint32_t fw, fh;
-    int rc = file_size(c, idx, in, &fw, &fh);
+    int rc = file_size(c, name, in, &fw, &fh);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -148,9 +148,9 @@ static int make_camera(const path_ctx *c, size_t idx, const double *c2w,
                            "image size: set width and height", c->path);
     }
     if (w == 0) {
-        return nerf__error(NERF_EINVAL, "%s: %s %zu: the file gives no image "
+        return nerf__error(NERF_EINVAL, "%s: %s: the file gives no image "
                            "size (w, h): set width and height", c->path,
-                           c->unit, idx);
+                           name);
     }
     double k[4];
     bool file_focal = in && (!isnan(in->fl_x) || !isnan(in->angle_x));
@@ -163,7 +163,7 @@ static int make_camera(const path_ctx *c, size_t idx, const double *c2w,
         /* The file's intrinsics are in pixels of its own image size when
          * it gives one; rescaling them keeps the field of view. */
         double rw = fw > 0 ? fw : w, rh = fh > 0 ? fh : h;
-        rc = nerf__transforms_focal(c->path, (uint32_t)idx, in, rw, rh, k);
+        rc = nerf__transforms_focal(c->path, name, in, rw, rh, k);
         if (rc != NERF_OK) {
             return rc;
         }
@@ -181,9 +181,8 @@ static int make_camera(const path_ctx *c, size_t idx, const double *c2w,
         fits = fits && isfinite(cam->c2w[i]);
     }
     if (!fits) {
-        return nerf__error(NERF_EFORMAT, "%s: %s %zu: the matrix has a value "
-                           "beyond the range of float", c->path, c->unit,
-                           idx);
+        return nerf__error(NERF_EFORMAT, "%s: %s: the matrix has a value "
+                           "beyond the range of float", c->path, name);
     }
     cam->fx = (float)k[0];
     cam->fy = (float)k[1];
@@ -191,9 +190,9 @@ static int make_camera(const path_ctx *c, size_t idx, const double *c2w,
     cam->cy = (float)k[3];
     if (!(isfinite(cam->fx) && cam->fx > 0.0f && isfinite(cam->fy) &&
           cam->fy > 0.0f && isfinite(cam->cx) && isfinite(cam->cy))) {
-        return nerf__error(NERF_EFORMAT, "%s: %s %zu: focal %g x %g or "
+        return nerf__error(NERF_EFORMAT, "%s: %s: focal %g x %g or "
                            "principal point (%g, %g) out of range", c->path,
-                           c->unit, idx, k[0], k[1], k[2], k[3]);
+                           name, k[0], k[1], k[2], k[3]);
     }
     return NERF_OK;
 }
@@ -247,12 +246,14 @@ static int load_npy(path_ctx *c, const unsigned char *buf, size_t size)
     }
     for (size_t i = 0; i < n && rc == NERF_OK; i++) {
         const double *m = v + i * per;
-        const char *why = nerf__pose_problem(m, per == 16 ? m + 12 : NULL);
+        char text[160], name[32];
+        const char *why = nerf__pose_problem(m, per == 16 ? m + 12 : NULL,
+                                             text, sizeof text);
+        snprintf(name, sizeof name, "pose %zu", i);
         if (why != NULL) {
-            rc = nerf__error(NERF_EFORMAT, "%s: pose %zu %s", c->path, i,
-                             why);
+            rc = nerf__error(NERF_EFORMAT, "%s: %s %s", c->path, name, why);
         } else {
-            rc = make_camera(c, i, m, NULL, &c->cp->cameras[i]);
+            rc = make_camera(c, name, m, NULL, &c->cp->cameras[i]);
         }
     }
     if (rc == NERF_OK) {
@@ -278,8 +279,9 @@ static int load_json(path_ctx *c, const unsigned char *buf, size_t size)
     uint32_t idx = 0;
     for (const cJSON *fr = frames ? frames->child : NULL;
          fr && rc == NERF_OK; fr = fr->next, idx++) {
-        char where[32];
-        snprintf(where, sizeof where, "frame %u: ", (unsigned)idx);
+        char name[224], where[256];
+        nerf__transforms_frame_name(fr, idx, name, sizeof name);
+        snprintf(where, sizeof where, "%s: ", name);
         nerf__intrinsics in = top;
         double c2w[12];
         rc = cJSON_IsObject(fr) ? NERF_OK
@@ -289,10 +291,10 @@ static int load_json(path_ctx *c, const unsigned char *buf, size_t size)
             rc = nerf__transforms_read_intrinsics(c->path, fr, where, &in);
         }
         if (rc == NERF_OK) {
-            rc = nerf__transforms_read_matrix(c->path, fr, idx, c2w);
+            rc = nerf__transforms_read_matrix(c->path, fr, name, c2w);
         }
         if (rc == NERF_OK) {
-            rc = make_camera(c, idx, c2w, &in, &c->cp->cameras[idx]);
+            rc = make_camera(c, name, c2w, &in, &c->cp->cameras[idx]);
         }
     }
     if (rc == NERF_OK) {

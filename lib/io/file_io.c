@@ -1,9 +1,13 @@
 #include "file_io.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -160,16 +164,125 @@ static void sync_parent(const char *path, char *scratch)
     }
 }
 
-int nerf__file_write_atomic(const nerf__env *env, const char *path,
-                            const nerf__span *parts, size_t n_parts)
+/* A new temporary name beside path, "path.tmp.<pid>.<n>"; NULL if out of
+ * memory.  nerf__file_remove_stale_temps() knows this pattern. */
+static char *temp_name(const nerf__env *env, const char *path)
 {
-    size_t len = strlen(path);
-    char *temp = nerf__alloc(env, len + 64);
+    size_t size = strlen(path) + 64;
+    char *temp = nerf__alloc(env, size);
+    if (temp != NULL) {
+        unsigned n = atomic_fetch_add(&temp_counter, 1u);
+        snprintf(temp, size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
+    }
+    return temp;
+}
+
+int nerf__file_check_writable(const nerf__env *env, const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        return nerf__error(NERF_EIO, "%s: cannot be written: it is a folder",
+                           path);
+    }
+    char *temp = temp_name(env, path);
     if (temp == NULL) {
         return NERF_ENOMEM;
     }
-    unsigned n = atomic_fetch_add(&temp_counter, 1u);
-    snprintf(temp, len + 64, "%s.tmp.%ld.%u", path, (long)getpid(), n);
+    int rc = NERF_OK;
+    int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) {
+        rc = io_error(path, "cannot be written: cannot create a temporary "
+                      "file beside it", errno);
+    } else {
+        close(fd);
+        unlink(temp);
+    }
+    nerf__free(env, temp);
+    return rc;
+}
+
+/* The folder of path into scratch (as large as path), and its last part. */
+static const char *split_path(const char *path, char *scratch,
+                              const char **base)
+{
+    strcpy(scratch, path);
+    char *slash = strrchr(scratch, '/');
+    if (slash == NULL) {
+        *base = path;
+        return ".";
+    }
+    *base = path + (slash - scratch) + 1;
+    if (slash == scratch) {
+        return "/";
+    }
+    *slash = '\0';
+    return scratch;
+}
+
+/* Digits only, at least one; the value, or -1 when not or too large. */
+static long parse_digits(const char *s, size_t n)
+{
+    if (n == 0 || n > 9) {
+        return -1;
+    }
+    long v = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9') {
+            return -1;
+        }
+        v = 10 * v + (s[i] - '0');
+    }
+    return v;
+}
+
+/* The pid of name if it is base.tmp.<pid>.<n>, else -1. */
+static long temp_owner(const char *name, const char *base)
+{
+    size_t bn = strlen(base);
+    if (strncmp(name, base, bn) != 0 || strncmp(name + bn, ".tmp.", 5) != 0) {
+        return -1;
+    }
+    const char *pid = name + bn + 5;
+    const char *dot = strchr(pid, '.');
+    if (dot == NULL || parse_digits(dot + 1, strlen(dot + 1)) < 0) {
+        return -1;
+    }
+    return parse_digits(pid, (size_t)(dot - pid));
+}
+
+unsigned nerf__file_remove_stale_temps(const nerf__env *env, const char *path)
+{
+    char *scratch = nerf__alloc(env, strlen(path) + 1);
+    if (scratch == NULL) {
+        return 0; /* best effort: the save itself does not need this */
+    }
+    const char *base;
+    const char *dir = split_path(path, scratch, &base);
+    unsigned removed = 0;
+    DIR *d = base[0] ? opendir(dir) : NULL;
+    for (struct dirent *e = d ? readdir(d) : NULL; e; e = readdir(d)) {
+        long pid = temp_owner(e->d_name, base);
+        /* Only a writer that no longer runs: kill(pid, 0) fails with
+         * ESRCH.  A pid reused since keeps its file, which is safe. */
+        if (pid > 0 && pid != (long)getpid() && kill((pid_t)pid, 0) != 0 &&
+            errno == ESRCH && unlinkat(dirfd(d), e->d_name, 0) == 0) {
+            removed++;
+        }
+    }
+    if (d) {
+        closedir(d);
+    }
+    nerf__free(env, scratch);
+    return removed;
+}
+
+int nerf__file_write_atomic(const nerf__env *env, const char *path,
+                            const nerf__span *parts, size_t n_parts)
+{
+    char *temp = temp_name(env, path);
+    if (temp == NULL) {
+        return NERF_ENOMEM;
+    }
     int rc = NERF_OK;
     int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0) {

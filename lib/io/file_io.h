@@ -38,4 +38,25 @@ typedef struct nerf__span {
 int nerf__file_write_atomic(const nerf__env *env, const char *path,
                             const nerf__span *parts, size_t n_parts);
 
+/*
+ * Whether nerf__file_write_atomic(path) can create its temporary file:
+ * creates one and removes it again, so that a path through a missing
+ * folder, a regular file or a folder without write permission is found
+ * before work that ends in a save, not by the save.  (A full disk or a
+ * quota can still make the save fail.)
+ * Returns NERF_OK; NERF_EIO naming path and the reason; NERF_ENOMEM.
+ */
+int nerf__file_check_writable(const nerf__env *env, const char *path);
+
+/*
+ * Remove the temporary files that writers of path killed before they
+ * could clean up (kill -9, a crash) left beside it: names
+ * "path.tmp.<pid>.<n>" exactly, whose pid is not a live process (kill(pid,
+ * 0) reports ESRCH), never this process's own.  Best effort; returns how
+ * many it removed.  The pid test assumes writers on this machine: on a
+ * folder shared over the network, another host's live writer would look
+ * dead, so call this only where one writer owns path (checkpoints).
+ */
+unsigned nerf__file_remove_stale_temps(const nerf__env *env, const char *path);
+
 #endif

@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "error.h"
 #include "file_io.h"
@@ -62,6 +63,54 @@ static int get_number(const char *path, const cJSON *obj, const char *key,
     return NERF_OK;
 }
 
+void nerf__transforms_frame_name(const cJSON *frame, uint32_t idx, char *buf,
+                                 size_t size)
+{
+    const cJSON *fp = cJSON_IsObject(frame)
+                          ? cJSON_GetObjectItemCaseSensitive(frame, "file_path")
+                          : NULL;
+    if (cJSON_IsString(fp) && fp->valuestring[0] != '\0') {
+        snprintf(buf, size, "frame %u (%.200s)", (unsigned)idx,
+                 fp->valuestring);
+    } else {
+        snprintf(buf, size, "frame %u", (unsigned)idx);
+    }
+}
+
+/* The intrinsics obj gave, against the limits of transforms.h. */
+static int check_intrinsics(const char *path, const char *where,
+                            const nerf__intrinsics *in)
+{
+    const double angles[2] = {in->angle_x, in->angle_y};
+    for (int i = 0; i < 2; i++) {
+        if (!isnan(angles[i]) && !(angles[i] > 0.0 && angles[i] < PI_D)) {
+            return nerf__error(NERF_EFORMAT, "%s: %scamera_angle_%c %g is not "
+                               "in (0, pi)", path, where, i ? 'y' : 'x',
+                               angles[i]);
+        }
+    }
+    const double focals[2] = {in->fl_x, in->fl_y};
+    for (int i = 0; i < 2; i++) {
+        if (!isnan(focals[i]) && !(focals[i] >= NERF__FOCAL_MIN &&
+                                   focals[i] <= NERF__CAMERA_MAX_ABS)) {
+            return nerf__error(NERF_EFORMAT, "%s: %sfocal length must be "
+                               "positive, within [%g, %g] pixels (fl_%c %g)",
+                               path, where, NERF__FOCAL_MIN,
+                               NERF__CAMERA_MAX_ABS, i ? 'y' : 'x',
+                               focals[i]);
+        }
+    }
+    const double centre[2] = {in->cx, in->cy};
+    for (int i = 0; i < 2; i++) {
+        if (!isnan(centre[i]) && !(fabs(centre[i]) <= NERF__CAMERA_MAX_ABS)) {
+            return nerf__error(NERF_EFORMAT, "%s: %sc%c %g is beyond +-%g",
+                               path, where, i ? 'y' : 'x', centre[i],
+                               NERF__CAMERA_MAX_ABS);
+        }
+    }
+    return NERF_OK;
+}
+
 int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
                                      const char *where, nerf__intrinsics *in)
 {
@@ -75,7 +124,7 @@ int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
             return rc;
         }
     }
-    return NERF_OK;
+    return check_intrinsics(path, where, in);
 }
 
 int nerf__transforms_top(const char *path, const cJSON *root,
@@ -107,11 +156,20 @@ static double det3(const double *m, size_t stride)
            r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]);
 }
 
-const char *nerf__pose_problem(const double c2w[12], const double *last)
+const char *nerf__pose_problem(const double c2w[12], const double *last,
+                               char *buf, size_t size)
 {
     for (int k = 0; k < 16; k++) {
         if (!isfinite(k < 12 ? c2w[k] : last ? last[k - 12] : 0.0)) {
             return "has a NaN or infinite value";
+        }
+    }
+    for (int k = 0; k < 12; k++) {
+        if (!(fabs(c2w[k]) <= NERF__CAMERA_MAX_ABS)) {
+            snprintf(buf, size, "has an entry of magnitude %g, beyond the "
+                     "%g a pose may have", fabs(c2w[k]),
+                     NERF__CAMERA_MAX_ABS);
+            return buf;
         }
     }
     static const double homogeneous[4] = {0.0, 0.0, 0.0, 1.0};
@@ -122,66 +180,82 @@ const char *nerf__pose_problem(const double c2w[12], const double *last)
             return "has a last row other than [0, 0, 0, 1]";
         }
     }
-    if (fabs(det3(c2w, 4)) < 1e-9) {
-        return "has a degenerate rotation";
+    /* The rotation's columns turn pixel directions into rays: a column
+     * of (nearly) no length, or three in (nearly) one plane, collapse
+     * the image onto a line. */
+    double product = 1.0;
+    for (int c = 0; c < 3; c++) {
+        double n = sqrt(c2w[c] * c2w[c] + c2w[4 + c] * c2w[4 + c] +
+                        c2w[8 + c] * c2w[8 + c]);
+        if (!(n >= NERF__POSE_MIN_COLUMN)) {
+            snprintf(buf, size, "has a degenerate rotation (column %d has "
+                     "length %g, under %g)", c, n, NERF__POSE_MIN_COLUMN);
+            return buf;
+        }
+        product *= n;
+    }
+    if (!(fabs(det3(c2w, 4)) >= NERF__POSE_MIN_DET_RATIO * product)) {
+        snprintf(buf, size, "has a degenerate rotation (its columns are "
+                 "(nearly) in one plane: |det| %g for lengths whose product "
+                 "is %g)", fabs(det3(c2w, 4)), product);
+        return buf;
     }
     return NULL;
 }
 
 /* transform_matrix: 4 rows (or the top 3) of 4 finite numbers. */
 int nerf__transforms_read_matrix(const char *path, const cJSON *frame,
-                                 uint32_t idx, double c2w[12])
+                                 const char *name, double c2w[12])
 {
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(frame,
                                                       "transform_matrix");
     if (m == NULL) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
-                           "'transform_matrix'", path, (unsigned)idx);
+        return nerf__error(NERF_EFORMAT, "%s: %s: missing field "
+                           "'transform_matrix'", path, name);
     }
     int rows = cJSON_IsArray(m) ? cJSON_GetArraySize(m) : -1;
     if (rows != 3 && rows != 4) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
+        return nerf__error(NERF_EFORMAT, "%s: %s: transform_matrix "
                            "must be a list of 4 rows of 4 numbers", path,
-                           (unsigned)idx);
+                           name);
     }
     double last[4] = {0.0, 0.0, 0.0, 1.0};
     for (int r = 0; r < rows; r++) {
         const cJSON *row = cJSON_GetArrayItem(m, r);
         if (!cJSON_IsArray(row) || cJSON_GetArraySize(row) != 4) {
-            return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix "
+            return nerf__error(NERF_EFORMAT, "%s: %s: transform_matrix "
                                "row %d is not a list of 4 numbers", path,
-                               (unsigned)idx, r);
+                               name, r);
         }
         for (int c = 0; c < 4; c++) {
             const cJSON *v = cJSON_GetArrayItem(row, c);
             if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) {
-                return nerf__error(NERF_EFORMAT, "%s: frame %u: "
+                return nerf__error(NERF_EFORMAT, "%s: %s: "
                                    "transform_matrix[%d][%d] is not a finite "
-                                   "number", path, (unsigned)idx, r, c);
+                                   "number", path, name, r, c);
             }
             double *dst = r < 3 ? &c2w[r * 4 + c] : &last[c];
             *dst = v->valuedouble;
         }
     }
-    const char *why = nerf__pose_problem(c2w, last);
+    char text[160];
+    const char *why = nerf__pose_problem(c2w, last, text, sizeof text);
     if (why != NULL) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: transform_matrix %s",
-                           path, (unsigned)idx, why);
+        return nerf__error(NERF_EFORMAT, "%s: %s: transform_matrix %s",
+                           path, name, why);
     }
     return NERF_OK;
 }
 
-int nerf__transforms_focal(const char *path, uint32_t idx,
+int nerf__transforms_focal(const char *path, const char *name,
                            const nerf__intrinsics *in, double w, double h,
                            double out[4])
 {
-    double angles[2] = {in->angle_x, in->angle_y};
-    for (int i = 0; i < 2; i++) {
-        if (!isnan(angles[i]) && !(angles[i] > 0.0 && angles[i] < PI_D)) {
-            return nerf__error(NERF_EFORMAT, "%s: frame %u: camera_angle_%c "
-                               "%g is not in (0, pi)", path, (unsigned)idx,
-                               i ? 'y' : 'x', angles[i]);
-        }
+    char where[256];
+    snprintf(where, sizeof where, "%s: ", name);
+    int rc = check_intrinsics(path, where, in);
+    if (rc != NERF_OK) {
+        return rc;
     }
     double fx, fy;
     if (!isnan(in->fl_x)) {
@@ -189,9 +263,8 @@ int nerf__transforms_focal(const char *path, uint32_t idx,
     } else if (!isnan(in->angle_x)) {
         fx = 0.5 * w / tan(0.5 * in->angle_x);
     } else {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: missing field "
-                           "'camera_angle_x' (or 'fl_x')", path,
-                           (unsigned)idx);
+        return nerf__error(NERF_EFORMAT, "%s: %s: missing field "
+                           "'camera_angle_x' (or 'fl_x')", path, name);
     }
     if (!isnan(in->fl_y)) {
         fy = in->fl_y;
@@ -200,10 +273,13 @@ int nerf__transforms_focal(const char *path, uint32_t idx,
     } else {
         fy = fx;
     }
-    if (!(fx > 0.0) || !(fy > 0.0)) {
-        return nerf__error(NERF_EFORMAT, "%s: frame %u: focal length must be "
-                           "positive (fx %g, fy %g)", path, (unsigned)idx, fx,
-                           fy);
+    /* Also from an angle: near pi, the focal goes to 0. */
+    if (!(fx >= NERF__FOCAL_MIN && fx <= NERF__CAMERA_MAX_ABS) ||
+        !(fy >= NERF__FOCAL_MIN && fy <= NERF__CAMERA_MAX_ABS)) {
+        return nerf__error(NERF_EFORMAT, "%s: %s: focal length must be "
+                           "positive, within [%g, %g] pixels (fx %g, fy %g)",
+                           path, name, NERF__FOCAL_MIN, NERF__CAMERA_MAX_ABS,
+                           fx, fy);
     }
     out[0] = fx;
     out[1] = fy;

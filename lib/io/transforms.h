@@ -16,6 +16,20 @@
 /* Generous: a transforms file lists one small object per frame. */
 #define NERF__TRANSFORMS_MAX_BYTES (64u << 20)
 
+/*
+ * What a usable camera looks like, beyond being finite (docs/formats.md,
+ * "Camera sanity"): every entry of a pose and every intrinsic within
+ * +-1e6 (scene units or pixels: a million times any scene's size, so only
+ * garbage is refused); each column of the rotation part at least 1e-3
+ * long, and the three not (nearly) coplanar: |det R| at least 1e-3 times
+ * the product of their lengths (1 for a rotation); a focal length of at
+ * least 1e-3 pixels (a field of view just short of 180 degrees).
+ */
+#define NERF__CAMERA_MAX_ABS 1e6
+#define NERF__POSE_MIN_COLUMN 1e-3
+#define NERF__POSE_MIN_DET_RATIO 1e-3
+#define NERF__FOCAL_MIN 1e-3
+
 /* Intrinsics fields, at top level or per frame; NAN when absent. */
 typedef struct nerf__intrinsics {
     double angle_x, angle_y, fl_x, fl_y, cx, cy, w, h;
@@ -43,29 +57,41 @@ int nerf__transforms_top(const char *path, const cJSON *root,
                          nerf__intrinsics *top, const cJSON **frames_out);
 
 /*
- * Overlay the intrinsics fields present in obj onto *in.  where prefixes
+ * How messages name frame idx: "frame 3", and its file_path when it has
+ * one, "frame 3 (./train/r_3)" (cut short if long).
+ */
+void nerf__transforms_frame_name(const cJSON *frame, uint32_t idx, char *buf,
+                                 size_t size);
+
+/*
+ * Overlay the intrinsics fields present in obj onto *in, refusing values
+ * no camera has (angles outside (0, pi), focal lengths below
+ * NERF__FOCAL_MIN, anything beyond NERF__CAMERA_MAX_ABS).  where prefixes
  * field names in messages ("frame 3: ", or "" at top level).
  */
 int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
                                      const char *where, nerf__intrinsics *in);
 
-/* Frame idx's transform_matrix as a validated 3x4 row-major c2w. */
+/* A frame's transform_matrix as a validated 3x4 row-major c2w; name is
+ * the frame's (nerf__transforms_frame_name()). */
 int nerf__transforms_read_matrix(const char *path, const cJSON *frame,
-                                 uint32_t idx, double c2w[12]);
+                                 const char *name, double c2w[12]);
 
 /*
  * Focal lengths and principal point, {fx, fy, cx, cy}, of frame idx for an
  * image of w x h pixels: fl_x, else camera_angle_x; fl_y, else
  * camera_angle_y, else fx; cx, cy default to the centre.
  */
-int nerf__transforms_focal(const char *path, uint32_t idx,
+int nerf__transforms_focal(const char *path, const char *name,
                            const nerf__intrinsics *in, double w, double h,
                            double out[4]);
 
 /*
- * Why a camera-to-world pose cannot be used, or NULL if it can: c2w is its
- * top 3x4 (row-major), last its bottom row or NULL when it has none.
+ * Why a camera-to-world pose cannot be used ("has a NaN ...", written into
+ * buf), or NULL if it can: c2w is its top 3x4 (row-major), last its bottom
+ * row or NULL when it has none.  The limits are those above.
  */
-const char *nerf__pose_problem(const double c2w[12], const double *last);
+const char *nerf__pose_problem(const double c2w[12], const double *last,
+                               char *buf, size_t size);
 
 #endif

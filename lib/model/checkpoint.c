@@ -309,6 +309,13 @@ static int write_checkpoint(const nerf_model *m, const char *path,
     put_header(header, &hd);
     const nerf__span parts[2] = {{header, sizeof header},
                                  {packed, packed_size}};
+    /* Saves killed mid-write (kill -9) leave their temporary files; a
+     * checkpoint is saved again and again, so this is where they go. */
+    unsigned stale = nerf__file_remove_stale_temps(&m->env, path);
+    if (stale > 0) {
+        nerf__log(&m->env, NERF_LOG_INFO, "%s: removed %u temporary file(s) "
+                  "left by saves that did not finish", path, stale);
+    }
     rc = nerf__file_write_atomic(&m->env, path, parts, 2);
     nerf__free(&m->env, packed);
     if (rc == NERF_OK) {

@@ -211,7 +211,13 @@ NERF_API int nerf_trainer_run(nerf_trainer *t, uint64_t n_steps,
     if (t->checkpoint_path && s.step > 0 &&
         (t->opts.checkpoint_every == 0 || s.step % t->opts.checkpoint_every)) {
         int save_rc = save_checkpoint(t);
-        rc = rc == NERF_OK ? save_rc : rc;
+        /* A failed save outranks a cancellation: the caller asked for the
+         * stop, but must learn that the steps since the last checkpoint
+         * are not on disk. */
+        if (save_rc != NERF_OK &&
+            (rc == NERF_OK || rc == NERF_ECANCELLED)) {
+            rc = save_rc;
+        }
     }
     return rc;
 }

@@ -6,6 +6,7 @@
 
 #include "camera.h"
 #include "dataset.h"
+#include "file_io.h"
 #include "options.h"
 
 static void trainer_defaults(nerf_trainer_options *o)
@@ -189,6 +190,10 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     if (rc == NERF_OK && o.checkpoint_path) {
         t->checkpoint_path = copy_string(&env, o.checkpoint_path);
         rc = t->checkpoint_path ? NERF_OK : NERF_ENOMEM;
+    }
+    if (rc == NERF_OK && o.checkpoint_path) {
+        /* Now, not at the first save, maybe hours of training later. */
+        rc = nerf__file_check_writable(&env, o.checkpoint_path);
     }
     if (rc != NERF_OK) {
         nerf_trainer_destroy(t);

@@ -509,7 +509,7 @@ TEST(bad_json)
     expect_failure("\"camera_angle_x\"", "\"camera_angle_z\"", NERF_EFORMAT,
                    "missing field 'camera_angle_x'");
     expect_failure("\"transform_matrix\"", "\"transform\"", NERF_EFORMAT,
-                   "frame 0: missing field 'transform_matrix'");
+                   "frame 0 (./train/r_0): missing field 'transform_matrix'");
     expect_failure("\"file_path\"", "\"path\"", NERF_EFORMAT,
                    "missing field 'file_path'");
     expect_failure("[0, 0, 0, 1]", "[0, 0, 0]", NERF_EFORMAT,
@@ -529,6 +529,20 @@ TEST(bad_json)
     expect_failure("0.6911112070083618", "\"wide\"", NERF_EFORMAT,
                    "'camera_angle_x' is not a finite number");
     expect_failure("[[1", "[[0", NERF_EFORMAT, "degenerate rotation");
+    /* Finite but absurd values, named with the frame's file_path. */
+    expect_failure("[1, ", "[1e308, ", NERF_EFORMAT,
+                   "frame 0 (./train/r_0): transform_matrix has an entry of "
+                   "magnitude 1e+308");
+    expect_failure("[[1", "[[1e-9", NERF_EFORMAT,
+                   "frame 0 (./train/r_0): transform_matrix has a degenerate "
+                   "rotation (column 0");
+    expect_failure("0.6911112070083618", "0.69, \"fl_x\": 1e-9", NERF_EFORMAT,
+                   "focal length must be positive");
+    expect_failure("\"rotation\"", "\"fl_x\": 1e-9, \"rotation\"",
+                   NERF_EFORMAT, "frame 0 (./train/r_0): focal length must "
+                   "be positive, within [0.001, 1e+06] pixels (fl_x 1e-09)");
+    expect_failure("0.6911112070083618", "3.14159265358979", NERF_EFORMAT,
+                   "frame 0 (./train/r_0): focal length must be positive");
 }
 
 TEST(bad_images)

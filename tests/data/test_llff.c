@@ -338,16 +338,39 @@ TEST(bad_npy)
     memcpy(bad, rows, sizeof bad);
     bad[17 * 3 + 7] = NAN;
     expect_failure(bad, "<f8", "False", "(9, 17)", full,
-                   "row 3 holds a non-finite value");
+                   "row 3 (image IMG_4029.png) holds a non-finite value");
     memcpy(bad, rows, sizeof bad);
     bad[17 * 5 + 16] = bad[17 * 5 + 15];
-    expect_failure(bad, "<f8", "False", "(9, 17)", full, "row 5: bounds");
+    expect_failure(bad, "<f8", "False", "(9, 17)", full,
+                   "row 5 (image IMG_4031.png): bounds");
     memcpy(bad, rows, sizeof bad);
     bad[17 * 2 + 14] = 0.0;
     expect_failure(bad, "<f8", "False", "(9, 17)", full, "focal 0");
     memcpy(bad, rows, sizeof bad);
     bad[17 * 0 + 14] = -20.0;
     expect_failure(bad, "<f8", "False", "(9, 17)", full, "must be positive");
+    /* Finite but absurd: a translation of 1e308, a focal of (nearly)
+     * zero, a rotation column of (nearly) zero length.  Each names the
+     * row and its image (sorted names: row 1 is IMG_4027.png). */
+    memcpy(bad, rows, sizeof bad);
+    bad[17 * 1 + 3] = 1e308;
+    expect_failure(bad, "<f8", "False", "(9, 17)", full,
+                   "row 1 (image IMG_4027.png): has an entry of magnitude "
+                   "1e+308");
+    memcpy(bad, rows, sizeof bad);
+    bad[17 * 1 + 8] = -2e6; /* the far bound */
+    expect_failure(bad, "<f8", "False", "(9, 17)", full, "beyond");
+    memcpy(bad, rows, sizeof bad);
+    bad[17 * 2 + 14] = 1e-9;
+    expect_failure(bad, "<f8", "False", "(9, 17)", full,
+                   "row 2 (image IMG_4028.png): height 12, width 16 and "
+                   "focal 1e-09");
+    memcpy(bad, rows, sizeof bad);
+    for (int r = 0; r < 3; r++) {
+        bad[17 * 4 + 5 * r + 1] *= 1e-9;
+    }
+    expect_failure(bad, "<f8", "False", "(9, 17)", full,
+                   "row 4 (image IMG_4030.png): has a degenerate rotation");
 }
 
 TEST(bad_images)

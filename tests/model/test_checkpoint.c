@@ -4,6 +4,7 @@
  */
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 
 #include "../harness.h"
 #include "ckpt_fixture.h"
@@ -248,6 +249,84 @@ TEST(failed_save_keeps_the_old_checkpoint)
     nerf_model_destroy(other);
 }
 
+static bool exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/*
+ * A save killed mid-write (kill -9) leaves path.tmp.<pid>.<n>: the next
+ * save of path removes those of dead pids, and nothing else.
+ */
+TEST(stale_temp_files_are_removed)
+{
+    char dir[160], path[200], name[260];
+    path_in(dir, sizeof dir, "stale");
+    mkdir(dir, 0755);
+    snprintf(path, sizeof path, "%s/model.ckpt", dir);
+    /* A pid that surely belongs to no process: a child that has exited
+     * and been reaped. */
+    pid_t dead = fork();
+    if (dead == 0) {
+        _exit(0);
+    }
+    CHECK(dead > 0);
+    waitpid(dead, NULL, 0);
+    static const char *const gone[] = {"model.ckpt.tmp.%ld.0",
+                                       "model.ckpt.tmp.%ld.17"};
+    static const char *const kept[] = {
+        "model.ckpt.tmp.%ld.x",   /* not the library's pattern */
+        "model.ckpt.tmp.%ld",     /* nor this */
+        "other.ckpt.tmp.%ld.0",   /* another file's */
+        "xmodel.ckpt.tmp.%ld.0",  /* another file's */
+    };
+    for (size_t i = 0; i < 2; i++) {
+        char base[64];
+        snprintf(base, sizeof base, gone[i], (long)dead);
+        snprintf(name, sizeof name, "%s/%s", dir, base);
+        spit(name, "x", 1);
+    }
+    for (size_t i = 0; i < sizeof kept / sizeof kept[0]; i++) {
+        char base[64];
+        snprintf(base, sizeof base, kept[i], (long)dead);
+        snprintf(name, sizeof name, "%s/%s", dir, base);
+        spit(name, "x", 1);
+    }
+    /* A live writer's (our own pid, and pid 1) stays. */
+    char live[2][260];
+    snprintf(live[0], sizeof live[0], "%s.tmp.%ld.5", path, (long)getpid());
+    snprintf(live[1], sizeof live[1], "%s.tmp.1.0", path);
+    spit(live[0], "x", 1);
+    spit(live[1], "x", 1);
+
+    nerf_model *m = trained_model(false);
+    CHECK_OK(nerf_model_save(m, path));
+    for (size_t i = 0; i < 2; i++) {
+        char base[64];
+        snprintf(base, sizeof base, gone[i], (long)dead);
+        snprintf(name, sizeof name, "%s/%s", dir, base);
+        if (exists(name)) {
+            FAILF("%s was not removed", name);
+        }
+    }
+    for (size_t i = 0; i < sizeof kept / sizeof kept[0]; i++) {
+        char base[64];
+        snprintf(base, sizeof base, kept[i], (long)dead);
+        snprintf(name, sizeof name, "%s/%s", dir, base);
+        if (!exists(name)) {
+            FAILF("%s was removed", name);
+        }
+        unlink(name);
+    }
+    CHECK(exists(live[0]) && exists(live[1]));
+    unlink(live[0]);
+    unlink(live[1]);
+    unlink(path);
+    rmdir(dir);
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     make_tmpdir();
@@ -260,6 +339,7 @@ int main(void)
     RUN(missing_and_unreadable_paths);
     RUN(save_into_missing_directory);
     RUN(failed_save_keeps_the_old_checkpoint);
+    RUN(stale_temp_files_are_removed);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }

@@ -226,8 +226,11 @@ TEST(npy_bad)
     write_edited("row.npy", 16 + 14, 0.5);
     expect_failure("row.npy", &o, NERF_EFORMAT, "[0, 0, 0, 1]");
     write_edited("huge.npy", 3, 1e300);
-    expect_failure("huge.npy", &o, NERF_EFORMAT, "pose 0: the matrix has a "
-                   "value beyond the range of float");
+    expect_failure("huge.npy", &o, NERF_EFORMAT, "pose 0 has an entry of "
+                   "magnitude 1e+300, beyond");
+    write_edited("far.npy", 16 + 7, -2e6);
+    expect_failure("far.npy", &o, NERF_EFORMAT, "pose 1 has an entry of "
+                   "magnitude 2e+06, beyond");
     double flat[2 * 16];
     pose(0, flat);
     pose(1, flat + 16);
@@ -273,8 +276,8 @@ TEST(json_blender)
     nerf_camera_path_options o;
     /* No size in the file, none in the options. */
     expect_failure("transforms_test.json", NULL, NERF_EINVAL,
-                   "frame 0: the file gives no image size (w, h): set width "
-                   "and height");
+                   "frame 0 (./test/r_0): the file gives no image size "
+                   "(w, h): set width and height");
     opts(&o, 100, 80, 0.0f, 0.0f);
     nerf_camera_path *cp = load("transforms_test.json", &o);
     CHECK_EQ_INT(nerf_camera_path_count(cp), 3);
@@ -432,6 +435,16 @@ TEST(json_bad)
                         "'fl_x')");
     expect_json_failure("{\"fl_x\": 20", "{\"fl_x\": -20", NERF_EFORMAT,
                         "frame 1: focal length must be positive");
+    expect_json_failure("{\"fl_x\": 20", "{\"fl_x\": 1e-9", NERF_EFORMAT,
+                        "frame 1: focal length must be positive");
+    expect_json_failure("[0, 0, 1, 4]", "[0, 0, 1e308, 4]", NERF_EFORMAT,
+                        "frame 0: transform_matrix has an entry of magnitude "
+                        "1e+308");
+    expect_json_failure("{\"transform_matrix\": [[1, 0, 0, 0]",
+                        "{\"file_path\": \"views/v0.png\", "
+                        "\"transform_matrix\": [[1e-9, 0, 0, 0]",
+                        NERF_EFORMAT, "frame 0 (views/v0.png): "
+                        "transform_matrix has a degenerate rotation");
     expect_json_failure("{\"fl_x\": 40", "{\"fl_x\": \"40\"", NERF_EFORMAT,
                         "field 'fl_x' is not a finite number");
     expect_json_failure("\"w\": 64,", "", NERF_EFORMAT,
@@ -443,7 +456,7 @@ TEST(json_bad)
     expect_json_failure("\"fl_x\": 40", "\"camera_angle_x\": 4", NERF_EFORMAT,
                         "camera_angle_x 4 is not in (0, pi)");
     expect_json_failure("\"fl_x\": 20", "\"fl_x\": 1e300", NERF_EFORMAT,
-                        "frame 1: focal 1e+300");
+                        "frame 1: focal length must be positive, within");
     expect_json_failure("{\"fl_x\": 20", "3, {\"fl_x\": 20", NERF_EFORMAT,
                         "frame 1: not a JSON object");
     fx_write_text(dir, "list.json", "[1, 2]");

@@ -43,6 +43,17 @@ TEST(options_and_presets)
     o.t_near = 6.0f;
     CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
     CHECK(s == NULL);
+    /* Bounds that are backwards, negative or not finite. */
+    const float bad[][2] = {{6.0f, 2.0f}, {-1.0f, 2.0f}, {2.0f, INFINITY},
+                            {NAN, 6.0f}, {2.0f, NAN}, {-INFINITY, 6.0f}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        o.t_near = bad[i][0];
+        o.t_far = bad[i][1];
+        CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
+        CHECK(s == NULL);
+        CHECK(strstr(nerf_last_error(), "0 <= t_near < t_far") != NULL);
+    }
+    o.t_far = 6.0f;
     o.t_near = 0.0f;
     o.lindisp = 1;
     CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);

@@ -1,6 +1,10 @@
 /* The trainer: determinism, exact resume, checkpoints, cancellation and
  * allocation failures. */
+#include <dirent.h>
+#include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "../fail_alloc.h"
 #include "model.h"
@@ -216,12 +220,134 @@ TEST(run_progress_cancel_and_checkpoints)
     CHECK_OK(nerf_model_load(&saved, path, NULL));
     CHECK_EQ_INT(nerf_model_step(saved), 2);
     nerf_model_destroy(saved);
-    /* A checkpoint path in a missing folder fails the run with EIO. */
     nerf_trainer_destroy(t);
-    o.checkpoint_path = "/nonexistent-dir-for-nerf/run.nerf";
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+/* A checkpoint path that cannot be written is refused by create, naming
+ * it, before any training. */
+static void expect_unwritable(nerf_model *m, nerf_sampler *s,
+                              const char *path, const char *why)
+{
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.checkpoint_path = path;
+    nerf_trainer *t = (nerf_trainer *)&o;
+    int rc = nerf_trainer_create(&t, m, fx.train, s, &o);
+    if (rc != NERF_EIO || t != NULL ||
+        strstr(nerf_last_error(), path) == NULL ||
+        strstr(nerf_last_error(), why) == NULL) {
+        FAILF("%s: status %d, '%s' (want EIO and '%s')", path, rc,
+              nerf_last_error(), why);
+    }
+    if (rc == NERF_OK) {
+        nerf_trainer_destroy(t);
+    }
+}
+
+TEST(unwritable_checkpoint_path)
+{
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(4);
+    char path[700], file[600], inner[720];
+    snprintf(path, sizeof path, "%s/no-such-folder/run.nerf", fx.dir);
+    expect_unwritable(m, s, path, "No such file or directory");
+    snprintf(file, sizeof file, "%s/a-file", fx.dir);
+    FILE *f = fopen(file, "w");
+    CHECK(f != NULL);
+    if (f) {
+        fclose(f);
+    }
+    snprintf(path, sizeof path, "%s/run.nerf", file);
+    expect_unwritable(m, s, path, "Not a directory");
+    unlink(file);
+    expect_unwritable(m, s, fx.dir, "it is a folder");
+    if (geteuid() == 0) {
+        printf("  (skipped a read-only folder: root writes into any)\n");
+    } else {
+        snprintf(path, sizeof path, "%s/read-only", fx.dir);
+        mkdir(path, 0555);
+        snprintf(inner, sizeof inner, "%s/run.nerf", path);
+        expect_unwritable(m, s, inner, "Permission denied");
+        rmdir(path);
+    }
+    /* The check leaves nothing behind, and a good path still works. */
+    snprintf(path, sizeof path, "%s/ok.nerf", fx.dir);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.checkpoint_path = path;
+    nerf_trainer *t = NULL;
     CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
-    CHECK_EQ_INT(nerf_trainer_run(t, 1, NULL), NERF_EIO);
+    CHECK(access(path, F_OK) != 0);
+    DIR *d = opendir(fx.dir);
+    for (struct dirent *e = d ? readdir(d) : NULL; e; e = readdir(d)) {
+        if (strstr(e->d_name, ".tmp.") != NULL) {
+            FAILF("left behind: %s", e->d_name);
+        }
+    }
+    if (d) {
+        closedir(d);
+    }
     nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+/* Takes the checkpoint's folder away after step 4 and stops the run. */
+typedef struct swap_dir {
+    const char *dir, *moved;
+} swap_dir;
+
+static int swap_after_four(const nerf_progress *p, void *user)
+{
+    const swap_dir *sw = user;
+    if (p->done < 4) {
+        return 0;
+    }
+    /* A regular file where the folder was: the final save cannot create
+     * its temporary file, whoever runs the test. */
+    if (rename(sw->dir, sw->moved) == 0) {
+        FILE *f = fopen(sw->dir, "w");
+        if (f) {
+            fclose(f);
+        }
+    }
+    return 1;
+}
+
+/* A run stopped by its callback whose final save fails reports the save
+ * (EIO), not the cancellation; the last good checkpoint stays. */
+TEST(failed_final_save_is_reported)
+{
+    char dir[600], moved[620], path[700], kept[700];
+    snprintf(dir, sizeof dir, "%s/ckpt", fx.dir);
+    snprintf(moved, sizeof moved, "%s/ckpt-moved", fx.dir);
+    snprintf(path, sizeof path, "%s/run.nerf", dir);
+    snprintf(kept, sizeof kept, "%s/run.nerf", moved);
+    mkdir(dir, 0755);
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(4);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 32;
+    o.checkpoint_every = 3;
+    o.checkpoint_path = path;
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    swap_dir sw = {dir, moved};
+    CHECK_OK(nerf_trainer_set_progress(t, swap_after_four, &sw));
+    CHECK_EQ_INT(nerf_trainer_run(t, 10, NULL), NERF_EIO);
+    CHECK(strstr(nerf_last_error(), path) != NULL);
+    CHECK_EQ_INT(nerf_model_step(m), 4);
+    nerf_model *saved = NULL;
+    CHECK_OK(nerf_model_load(&saved, kept, NULL));
+    CHECK_EQ_INT(nerf_model_step(saved), 3);
+    nerf_model_destroy(saved);
+    nerf_trainer_destroy(t);
+    unlink(dir);
+    unlink(kept);
+    rmdir(moved);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
 }
@@ -330,6 +456,8 @@ int main(void)
     RUN(fast_resume_is_bit_identical);
     RUN(marching_needs_a_grid);
     RUN(run_progress_cancel_and_checkpoints);
+    RUN(unwritable_checkpoint_path);
+    RUN(failed_final_save_is_reported);
     RUN(bad_arguments);
     RUN(batch_samples_without_marching);
     RUN(allocation_failures);
