@@ -9,12 +9,14 @@
 # libsdl2-dev builds examples/viewer; xvfb and xauth let its test open a
 # window without a display.  libdnnl-dev (oneDNN) is optional for the
 # library, which builds without it, but listed so that the tests cover the
-# bf16 products (meson option bf16).
-# clang builds the library a second time (a C library must build with
-# both compilers) and, with libclang-rt-dev's libFuzzer, the fuzz targets.
+# bf16 products (meson option bf16).  abigail-tools (abidw, abidiff) lets the
+# abi suite compare the ABI with tests/abi/libnerf.abi; without it that test
+# is skipped.  clang builds the library a second time (a C library must
+# build with both compilers) and, with libclang-rt-dev's libFuzzer, the fuzz
+# targets.
 NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
                    meson ninja-build pkg-config python3-numpy
-                   libsdl2-dev xvfb xauth libdnnl-dev
+                   libsdl2-dev xvfb xauth libdnnl-dev abigail-tools
                    clang libclang-rt-dev)
 
 # Options of build/release, shared by both scripts so that running one after

@@ -1,0 +1,21 @@
+/*
+ * The enums of nerf.h, for tests/abi/abi-check.sh.  Functions take enum
+ * values as int (docs/api-conventions.md), so the library's debug
+ * information never mentions the enums and abidiff on libnerf.so alone
+ * cannot see a renumbered status code or preset.  One variable of each
+ * enum type makes the enum part of this module's ABI instead; the check
+ * fails when nerf.h declares an enum this list lacks.
+ */
+#include <nerf.h>
+
+nerf_status nerf_abi_status;
+nerf_log_level nerf_abi_log_level;
+nerf_encoding_kind nerf_abi_encoding_kind;
+nerf_density_activation nerf_abi_density_activation;
+nerf_preset nerf_abi_preset;
+nerf_matmul nerf_abi_matmul;
+nerf_network nerf_abi_network;
+nerf_param nerf_abi_param;
+nerf_progress_kind nerf_abi_progress_kind;
+nerf_split nerf_abi_split;
+nerf_dataset_format nerf_abi_dataset_format;
