@@ -18,8 +18,9 @@
  * freed memory on purpose, and its leak check is the stronger test there.
  *
  * Bounded in time: SOAK_ITERATIONS cycles or SOAK_SECONDS, whichever
- * comes first; NERF_SOAK_ITERATIONS and NERF_SOAK_SECONDS override both
- * for a longer run by hand.
+ * comes first, but at least SOAK_MIN_ITERATIONS cycles (unless
+ * NERF_SOAK_ITERATIONS asks for fewer); NERF_SOAK_ITERATIONS and
+ * NERF_SOAK_SECONDS override both bounds for a longer run by hand.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -45,7 +46,9 @@
 #define SOAK_ITERATIONS 3000
 #define SOAK_SECONDS 3.0
 #define SOAK_WARMUP 32
-/* Enough fewer cycles than this and the run says too little to pass. */
+/* Cycles run however long they take, so that a slow (sanitized) or busy
+ * machine still tests enough of them rather than failing for want of
+ * time. */
 #define SOAK_MIN_ITERATIONS 200
 #define SOAK_RSS_TOLERANCE_KB 2048L
 /* Models held at once by the check that a leak shows. */
@@ -236,7 +239,8 @@ TEST(soak)
     const long rss0 = rss_kb();
     const double t0 = now();
     long n = 0;
-    while (n < max_iter && now() - t0 < seconds) {
+    while (n < max_iter &&
+           (n < SOAK_MIN_ITERATIONS || now() - t0 < seconds)) {
         if (!checked_cycle(i)) {
             return;
         }
@@ -250,10 +254,6 @@ TEST(soak)
            n, elapsed, 1e3 * elapsed / (double)(n ? n : 1), SOAK_WARMUP,
            rss0, rss1, rss1 - rss0, SOAK_RSS_TOLERANCE_KB,
            SOAK_ASAN ? ", not applied under ASan" : "");
-    if (n < SOAK_MIN_ITERATIONS && n < max_iter) {
-        FAILF("only %ld cycles in %.1f s: too few to judge; the machine is "
-              "too slow or busy (raise NERF_SOAK_SECONDS)", n, seconds);
-    }
     if (rss0 < 0 || rss1 < 0) {
         printf("  no VmRSS in /proc/self/status: memory not compared\n");
     } else if (!SOAK_ASAN && rss1 - rss0 > SOAK_RSS_TOLERANCE_KB) {
