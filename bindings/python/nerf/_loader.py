@@ -34,7 +34,8 @@ from pathlib import Path
 from typing import Any, List, Optional, Tuple
 
 try:
-    from . import _config  # written by meson install; absent in the source tree
+    # Written by meson install; absent in the source tree.
+    from . import _config
 except ImportError:
     _config = None
 

@@ -181,7 +181,7 @@ def clean_env():
     return {k: v for k, v in os.environ.items() if k not in drop}
 
 
-def install(args, scratch, stage):
+def install(args, stage):
     cmd = [args.meson, "install", "-C", args.build, "--destdir", str(stage)]
     # meson test builds only what the tests it runs need: a fresh build may
     # lack programs install wants.  Only then let install build them (the
@@ -243,11 +243,15 @@ def check_c(args, scratch, stage):
     # point its absolute variables into the stage (as tests/abi/pkgconfig.sh
     # does; PKG_CONFIG_SYSROOT_DIR would move the system paths of the
     # libraries it requires too).
+    original = pcs[0].read_text()
+    if "prefix=%s\n" % args.prefix not in original:
+        raise Failed("%s does not name the prefix %s:\n%s"
+                     % (pcs[0], args.prefix, original))
     pcdir = scratch / "pc"
     pcdir.mkdir()
     text = re.sub(r"^([A-Za-z_][A-Za-z0-9_]*)=/",
                   lambda m: "%s=%s/" % (m.group(1), stage),
-                  pcs[0].read_text(), flags=re.M)
+                  original, flags=re.M)
     (pcdir / "nerf.pc").write_text(text)
     env = clean_env()
     env["PKG_CONFIG_PATH"] = str(pcdir)
@@ -295,7 +299,7 @@ def main():
     shutil.rmtree(scratch, ignore_errors=True)
     stage.mkdir(parents=True)
     try:
-        install(args, scratch, stage)
+        install(args, stage)
         check_files(args, stage)
         if skip_python:
             print("python side skipped: " + skip_python)
