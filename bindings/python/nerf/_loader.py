@@ -5,11 +5,18 @@ Search order:
 1. ``NERF_LIBRARY``: a path to the shared library.  When it is set, nothing
    else is tried, so a wrong value fails loudly instead of silently picking
    up another copy.
-2. The installed library: ``libnerf.so.0`` through the dynamic loader's
+2. For a package installed by ``meson install``: the library installed
+   with it.  ``meson install`` writes ``nerf/_config.py`` with the
+   configured library directory and package directory; the library is
+   looked for first where the first lies relative to this package's actual
+   place (so a tree staged with ``--destdir``, or moved as a whole, still
+   finds its own copy), then at the configured path itself.
+3. The installed library: ``libnerf.so.0`` through the dynamic loader's
    search path, then whatever ``ctypes.util.find_library("nerf")`` finds.
-3. A build tree next to this source tree: ``build/release/lib``,
-   ``build/lib``, then any other ``build*/lib`` or ``build*/*/lib``
-   directory of the repository holding ``bindings/python``.
+4. Only for the package in the source tree (no ``_config.py``): a build
+   tree next to it: ``build/release/lib``, ``build/lib``, then any other
+   ``build*/lib`` or ``build*/*/lib`` directory of the repository holding
+   ``bindings/python``.
 
 The library's major version must be the one this binding was written for
 (:data:`EXPECTED_MAJOR`); anything else is refused at import time, since
@@ -24,7 +31,13 @@ import ctypes.util
 import os
 import sys
 from pathlib import Path
-from typing import List, Tuple
+from typing import Any, List, Optional, Tuple
+
+try:
+    # Written by meson install; absent in the source tree.
+    from . import _config
+except ImportError:
+    _config = None
 
 #: The major version of libnerf this binding speaks to.
 EXPECTED_MAJOR = 0
@@ -46,6 +59,29 @@ def _platform_names() -> List[str]:
         if sys.platform.startswith(prefix):
             return names
     return _SONAMES["linux"]
+
+
+def _installed_candidates(config: Any = None,
+                          here: Optional[Path] = None) -> List[Path]:
+    """Where the library installed with this package should be.
+
+    Args:
+        config: the generated ``_config`` module (or anything with
+            ``LIBDIR`` and ``PACKAGE_DIR``); ``None`` for this package's.
+        here: the package's actual directory; ``None`` for this one's.
+    """
+    config = config if config is not None else _config
+    if config is None:
+        return []
+    # As imported, not resolved: the layout the install made is what counts.
+    if here is None:
+        here = Path(os.path.abspath(__file__)).parent
+    libdir = Path(config.LIBDIR)
+    relative = os.path.relpath(config.LIBDIR, config.PACKAGE_DIR)
+    dirs = [Path(os.path.normpath(here / relative))]
+    if libdir not in dirs:
+        dirs.append(libdir)
+    return [d / name for d in dirs for name in _platform_names()]
 
 
 def _build_tree_candidates() -> List[Path]:
@@ -86,7 +122,10 @@ def find_and_load() -> Tuple[ctypes.CDLL, str]:
     found = ctypes.util.find_library("nerf")
     if found and found not in names:
         names.append(found)
-    candidates = names + [str(p) for p in _build_tree_candidates()]
+    installed = [str(p) for p in _installed_candidates() if p.exists()]
+    build_tree = ([] if _config is not None else
+                  [str(p) for p in _build_tree_candidates()])
+    candidates = installed + names + build_tree
     for candidate in candidates:
         tried.append(candidate)
         try:

@@ -92,6 +92,25 @@ class Search(TestCase):
                             path.parent.parent.parent.name.startswith("build"))
             self.assertTrue(str(path).startswith(str(root)))
 
+    def test_installed_candidates(self):
+        class Config:
+            LIBDIR = "/opt/p/lib/x86_64-linux-gnu"
+            PACKAGE_DIR = "/opt/p/lib/python3.11/dist-packages/nerf"
+        first = _loader._platform_names()[0]
+        # Installed where configured: one place, the configured one.
+        got = _loader._installed_candidates(Config, Path(Config.PACKAGE_DIR))
+        self.assertEqual(got[0], Path(Config.LIBDIR) / first)
+        self.assertEqual({p.parent for p in got}, {Path(Config.LIBDIR)})
+        # Staged (--destdir) or moved with its prefix: the library at the
+        # same relative place first, then the configured one.
+        here = Path("/stage" + Config.PACKAGE_DIR)
+        got = _loader._installed_candidates(Config, here)
+        self.assertEqual(got[0], Path("/stage" + Config.LIBDIR) / first)
+        self.assertEqual(got[-1].parent, Path(Config.LIBDIR))
+        # The source tree's package has no _config.py: nothing installed.
+        self.assertIsNone(_loader._config)
+        self.assertEqual(_loader._installed_candidates(), [])
+
     def test_loaded_library(self):
         self.assertEqual(nerf.library_path(), os.environ["NERF_LIBRARY"])
 
