@@ -19,6 +19,10 @@
 #
 # Emulated floating point is 50 to 200 times slower than native, so test
 # timeouts are multiplied (NERF_CROSS_TIMEOUT_MULTIPLIER, default 5).
+# OpenBLAS runs on one thread (OPENBLAS_NUM_THREADS=1 unless set): its
+# idle workers spin, which under emulation takes the two cores from the
+# work; libnerf then spreads the products over its own workers instead
+# (lib/mlp/gemm.h), as it does for any application that sets this.
 # NERF_CROSS_JOBS (default: the number of processors) sets the build's and
 # the tests' parallelism.
 #
@@ -35,6 +39,8 @@ build=build/aarch64
 cross_file=scripts/cross/aarch64-linux-gnu.ini
 jobs=${NERF_CROSS_JOBS:-$(nproc 2>/dev/null || echo 2)}
 multiplier=${NERF_CROSS_TIMEOUT_MULTIPLIER:-5}
+OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
+export OPENBLAS_NUM_THREADS
 
 # The build machine's tools, then the host machine's libraries: libc6-dev
 # for the dynamic loader qemu runs the programs with, the rest as in
