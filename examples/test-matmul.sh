@@ -1,4 +1,5 @@
 #!/bin/sh
+# shellcheck disable=SC2086 # $wrap is empty or a command to split
 # nerf-train --matmul: a bf16 model trained for a few steps, resumed (the
 # checkpoint keeps bf16 whatever --matmul says), evaluated where bf16 runs
 # and where it does not (oneDNN capped below AVX512-BF16: it loads as fp32,
@@ -8,6 +9,9 @@
 #   test-matmul.sh NERF-SCENE NERF-TRAIN NERF-EVAL
 set -eu
 scene=$1 train=$2 eval=$3
+# In a cross build meson names the cross file's exe_wrapper (qemu-user,
+# say) that runs the programs; natively it is unset and they run as is.
+wrap=${MESON_EXE_WRAPPER:-}
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-matmul.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -17,10 +21,10 @@ fail() {
   exit 1
 }
 
-"$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+$wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
   --test 2 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
 
-if ! "$train" --data "$work/scene" --out "$work/m.nerf" --steps 3 \
+if ! $wrap "$train" --data "$work/scene" --out "$work/m.nerf" --steps 3 \
      --batch 64 --matmul bf16 2>"$work/train.log"; then
   if grep -q "bf16 products are not available" "$work/train.log"; then
     echo "SKIP: $(grep 'not available' "$work/train.log")"
@@ -30,18 +34,18 @@ if ! "$train" --data "$work/scene" --out "$work/m.nerf" --steps 3 \
   fail "nerf-train --matmul bf16"
 fi
 
-"$train" --data "$work/scene" --out "$work/m.nerf" --steps 4 --batch 64 \
+$wrap "$train" --data "$work/scene" --out "$work/m.nerf" --steps 4 --batch 64 \
   --matmul fp32 --resume 2>"$work/resume.log" ||
   { cat "$work/resume.log"; fail "nerf-train --resume"; }
 grep -q "keeps the bf16 products" "$work/resume.log" ||
   { cat "$work/resume.log"; fail "--resume did not say it keeps bf16"; }
 
-"$eval" --model "$work/m.nerf" --data "$work/scene" >"$work/bf16.txt" \
+$wrap "$eval" --model "$work/m.nerf" --data "$work/scene" >"$work/bf16.txt" \
   2>"$work/eval.log" || { cat "$work/eval.log"; fail "nerf-eval"; }
 if grep -q "computes in fp32" "$work/eval.log"; then
   fail "nerf-eval fell back to fp32 where bf16 runs"
 fi
-DNNL_MAX_CPU_ISA=AVX2 "$eval" --model "$work/m.nerf" --data "$work/scene" \
+DNNL_MAX_CPU_ISA=AVX2 $wrap "$eval" --model "$work/m.nerf" --data "$work/scene" \
   >"$work/fp32.txt" 2>"$work/eval32.log" ||
   { cat "$work/eval32.log"; fail "nerf-eval, bf16 capped"; }
 grep -q "computes in fp32" "$work/eval32.log" ||
@@ -53,7 +57,7 @@ p32=$(awk '/^mean/ { print $3 }' "$work/fp32.txt")
 awk -v a="$p16" -v b="$p32" 'BEGIN { d = a - b; if (d < 0) d = -d;
   exit !(a != "" && d < 0.1) }' || fail "PSNR bf16 $p16 against fp32 $p32"
 
-if "$train" --data "$work/scene" --out "$work/x.nerf" --matmul fp16 \
+if $wrap "$train" --data "$work/scene" --out "$work/x.nerf" --matmul fp16 \
      2>"$work/bad.log"; then
   fail "--matmul fp16 accepted"
 fi

@@ -1,4 +1,5 @@
 #!/bin/sh
+# shellcheck disable=SC2086 # $wrap is empty or a command to split
 # nerf-render --poses on a tiny model trained here for two steps: the
 # scene's own transforms_test.json (with and without a size of its own), a
 # .npy camera path written byte by byte, and files it must refuse.
@@ -6,13 +7,16 @@
 #   test-render-poses.sh NERF-SCENE NERF-TRAIN NERF-RENDER
 set -eu
 scene=$1 train=$2 render=$3
+# In a cross build meson names the cross file's exe_wrapper (qemu-user,
+# say) that runs the programs; natively it is unset and they run as is.
+wrap=${MESON_EXE_WRAPPER:-}
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-render-poses.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
-"$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+$wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
   --test 2 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
-"$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
+$wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
   --batch 64 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
 
 fail() {
@@ -32,7 +36,7 @@ expect_png() {
 run() {
   name=$1
   shift
-  "$render" --model "$work/model.nerf" --out "$work/$name" "$@" \
+  $wrap "$render" --model "$work/model.nerf" --out "$work/$name" "$@" \
     2>"$work/$name.log" || { cat "$work/$name.log"; fail "nerf-render $*"; }
 }
 
@@ -84,7 +88,7 @@ expect_png "$work/npy-focal/r_001.png" 8 8
 refuse() {
   what=$1
   shift
-  if "$render" --model "$work/model.nerf" --out "$work/bad" "$@" \
+  if $wrap "$render" --model "$work/model.nerf" --out "$work/bad" "$@" \
     2>"$work/bad.log"; then
     fail "nerf-render accepted $what"
   fi
@@ -97,11 +101,11 @@ refuse empty.json --poses "$work/empty.json" --width 8 --height 8
 refuse missing.json --poses "$work/missing.json"
 # Usage errors exit 2.
 status=0
-"$render" --model "$work/model.nerf" --out "$work/bad" --poses \
+$wrap "$render" --model "$work/model.nerf" --out "$work/bad" --poses \
   "$work/path.npy" --width 8 2>/dev/null || status=$?
 [ "$status" -eq 2 ] || fail "--width without --height: status $status"
 status=0
-"$render" --model "$work/model.nerf" --out "$work/bad" --path orbit \
+$wrap "$render" --model "$work/model.nerf" --out "$work/bad" --path orbit \
   --poses "$work/path.npy" 2>/dev/null || status=$?
 [ "$status" -eq 2 ] || fail "--path with --poses: status $status"
 echo "ok   nerf-render --poses"

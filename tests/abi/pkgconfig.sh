@@ -1,7 +1,7 @@
 #!/bin/sh
 # Build against an installed libnerf the way users do, through pkg-config.
 #
-#   pkgconfig.sh BUILD_DIR VERSION CXX_EXAMPLE SANITIZE
+#   pkgconfig.sh BUILD_DIR VERSION CXX_EXAMPLE SANITIZE [WRAPPER...]
 #
 # The build is installed with --destdir into BUILD_DIR/abi-pkgconfig; then
 # a C99 program (-pedantic -Werror) is compiled and linked with the flags
@@ -10,8 +10,14 @@
 # and link the same way.  SANITIZE is meson's b_sanitize: a sanitized
 # libnerf needs its runtime in the programs too.  Skipped (77) without
 # pkg-config, meson or a C or C++ compiler.
+#
+# In a cross build tests/abi/meson.build sets CC and CXX to the cross
+# compilers and PKG_CONFIG_LIBDIR to the host machine's .pc files, and
+# passes as WRAPPER the command that runs host programs (qemu-user); the C
+# program is run through it.
 set -eu
 build=$1 version=$2 cxx_example=$3 sanitize=$4
+shift 4
 cc=${CC:-cc}
 cxx=${CXX:-c++}
 meson=${MESON:-meson}
@@ -78,12 +84,15 @@ C
   "$scratch/version.c" -o "$scratch/version" $libs
 
 # Only the staged copy may be found: not the build's, not an installed one.
-printed=$(LD_LIBRARY_PATH=$libdir "$scratch/version")
+printed=$(LD_LIBRARY_PATH=$libdir "$@" "$scratch/version")
 if [ "$printed" != "$version" ]; then
   echo "the C program printed '$printed', expected '$version'"
   exit 1
 fi
-if command -v ldd >/dev/null 2>&1; then
+if [ $# -gt 0 ]; then
+  # The build machine's ldd cannot read a program of another machine.
+  echo "cross build: not checking with ldd where libnerf was loaded from"
+elif command -v ldd >/dev/null 2>&1; then
   loaded=$(LD_LIBRARY_PATH=$libdir ldd "$scratch/version" | grep libnerf)
   case $loaded in
     *"$libdir"/*) ;;

@@ -232,8 +232,13 @@ static void check_network(const nerf_model_options *o, int network)
     /* Every parameter of this network; parameters of the other network
      * must get no gradient at all. */
     double gmax = 0.0;
+    /* Not fmax: GCC 12 for aarch64 crashes (internal compiler error)
+     * vectorising an fmax reduction over widened floats. */
     for (size_t i = net->offset; i < net->offset + net->count; i++) {
-        gmax = fmax(gmax, fabs(m->grads[i]));
+        const double g = fabs(m->grads[i]);
+        if (g > gmax) {
+            gmax = g;
+        }
     }
     CHECK(gmax > 0.0);
     int bad = 0;
