@@ -5,11 +5,14 @@
 # Installs missing Debian packages (as root; otherwise prints the apt-get
 # line), builds build/release and runs the test suite there, then the same
 # with clang in build/clang, then builds build/sanitize (AddressSanitizer +
-# UndefinedBehaviorSanitizer, gcc) and runs the suite again.  Extra arguments go to both `meson test` runs, for example
+# UndefinedBehaviorSanitizer, gcc) and runs the suite again, and last
+# cross-builds the abi, model and render suites for aarch64 and runs them
+# under qemu-user (scripts/cross-aarch64.sh; NERF_TEST_CROSS=0 skips it).
+# Extra arguments go to every `meson test` run, for example
 # `./scripts/test.sh --suite abi`.
 #
 # The last line of output is always "N passed, N failed, N skipped", summed
-# over both runs; the exit status is non-zero if a build or a test failed.
+# over all runs; the exit status is non-zero if a build or a test failed.
 # .ci/run relies on both.
 
 set -eu
@@ -110,6 +113,7 @@ run_suite() {
   return 0
 }
 
+user_args=("$@")
 test_args=("$@")
 
 if ! nerf_ensure_packages; then
@@ -133,6 +137,23 @@ run_suite sanitize build/sanitize -- \
   -Dbuildtype=debugoptimized --werror -- \
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+# The fast suites cross-built for aarch64 and run under qemu-user: they
+# prove that the x86-only code (target_clones, AVX2 rounding, oneDNN) falls
+# back cleanly.  On x86-64 hosts only; NERF_TEST_CROSS=0 leaves it out.
+if [ "${NERF_TEST_CROSS:-1}" != 0 ] && [ "$(uname -m)" = x86_64 ]; then
+  echo "== aarch64: scripts/cross-aarch64.sh"
+  cross_log=build/aarch64/meson-logs/testlog.json
+  rm -f "$cross_log"
+  cross_rc=0
+  ./scripts/cross-aarch64.sh ${user_args[@]+"${user_args[@]}"} || cross_rc=$?
+  before=$failed
+  count_results "$cross_log"
+  if [ "$cross_rc" -ne 0 ] && [ "$failed" -eq "$before" ]; then
+    echo "== aarch64: failed before its tests ran (status $cross_rc)"
+    failed=$((failed + 1))
+  fi
+fi
 
 if [ $((passed + failed + skipped)) -eq 0 ]; then
   echo "warning: no tests ran (check the arguments given to meson test)" >&2
