@@ -5,6 +5,9 @@
 #   test-render-bad-args.sh NERF-SCENE NERF-TRAIN NERF-RENDER
 set -eu
 scene=$1 train=$2 render=$3
+# In a cross build meson names the exe_wrapper (qemu-user) that runs the
+# programs; natively it is unset.
+wrap=${MESON_EXE_WRAPPER:-}
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-render-bad.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -14,9 +17,9 @@ fail() {
   exit 1
 }
 
-"$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+$wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
   --test 1 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
-"$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
+$wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
   --batch 64 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
 
 # usage WORDS ARGS...: nerf-render exits 2 with WORDS in its message and
@@ -25,7 +28,7 @@ usage() {
   words=$1
   shift
   status=0
-  "$render" --model "$work/model.nerf" --out "$work/bad" --path orbit \
+  $wrap "$render" --model "$work/model.nerf" --out "$work/bad" --path orbit \
     --frames 1 --width 8 --height 8 "$@" 2>"$work/bad.log" || status=$?
   [ "$status" -eq 2 ] || { cat "$work/bad.log"; fail "$* : status $status"; }
   grep -q -- "$words" "$work/bad.log" || { cat "$work/bad.log"; fail "$*"; }
@@ -41,14 +44,14 @@ usage "bad value 'nan' for --near" --near nan --far 6
 usage "bad value '1e999' for --far" --near 2 --far 1e999
 
 # Good bounds still render.
-"$render" --model "$work/model.nerf" --out "$work/ok" --path orbit \
+$wrap "$render" --model "$work/model.nerf" --out "$work/ok" --path orbit \
   --frames 1 --width 8 --height 8 --near 1 --far 5 2>"$work/ok.log" ||
   { cat "$work/ok.log"; fail "--near 1 --far 5"; }
 [ -f "$work/ok/r_000.png" ] || fail "--near 1 --far 5 wrote no image"
 
 # Progress within the one image: without a terminal the first report is a
 # line as soon as the first chunk of rays is done.
-"$render" --model "$work/model.nerf" --out "$work/progress" --path orbit \
+$wrap "$render" --model "$work/model.nerf" --out "$work/progress" --path orbit \
   --frames 1 --width 64 --height 64 2>"$work/progress.log" ||
   { cat "$work/progress.log"; fail "64x64 render"; }
 awk -F'[ /]' '/^nerf-render: [0-9]+\/[0-9]+ / && $2 < $3 { ok = 1 }
@@ -58,6 +61,13 @@ awk -F'[ /]' '/^nerf-render: [0-9]+\/[0-9]+ / && $2 < $3 { ok = 1 }
 # An output that cannot be allocated is refused, with its size, before
 # rendering: 16384 x 16384 x 3 floats are 3 GiB, more than a 2 GiB address
 # space holds.  A sanitizer's shadow memory does not fit in that limit.
+# An emulator needs address space of its own, so the case is left out
+# there.
+if [ -n "$wrap" ]; then
+  echo "skip the huge output under $wrap (the emulator needs the address space)"
+  echo "ok   nerf-render bad arguments"
+  exit 0
+fi
 status=0
 (ulimit -v 2097152 && exec "$render" --model "$work/model.nerf" \
   --out "$work/huge" --path orbit --frames 1 --width 16384 \
