@@ -3,12 +3,16 @@
 # libnerf's test command: ./scripts/test.sh [meson test arguments...]
 #
 # Installs missing Debian packages (as root; otherwise prints the apt-get
-# line), builds build/release and runs the test suite there, then the same
-# with clang in build/clang, then builds build/sanitize (AddressSanitizer +
-# UndefinedBehaviorSanitizer, gcc) and runs the suite again, and last
-# cross-builds the abi, model and render suites for aarch64 and runs them
-# under qemu-user (scripts/cross-aarch64.sh; NERF_TEST_CROSS=0 skips it).
-# Extra arguments go to every `meson test` run, for example
+# line), then builds and tests, each build with --werror:
+#   build/release   gcc, the test suites;
+#   build/clang     the same with clang;
+#   build/sanitize  gcc with AddressSanitizer + UndefinedBehaviorSanitizer;
+#   build/fuzz      clang + libFuzzer: each fuzz target replays its corpus,
+#                   then fuzzes for a few seconds (NERF_TEST_FUZZ=0: not);
+#   build/aarch64   the abi, model and render suites cross-built for arm64
+#                   and run under qemu-user (scripts/cross-aarch64.sh;
+#                   NERF_TEST_CROSS=0: not).
+# Extra arguments go to the `meson test` runs of the suites, for example
 # `./scripts/test.sh --suite abi`.
 #
 # The last line of output is always "N passed, N failed, N skipped", summed
@@ -137,6 +141,37 @@ run_suite sanitize build/sanitize -- \
   -Dbuildtype=debugoptimized --werror -- \
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+# The fuzz targets (clang, libFuzzer; tests/fuzz/README.md): each replays
+# its committed corpus once, then fuzzes for a few seconds.  Only the
+# fuzz suites run here: the build's other tests are the clang run's.
+if [ "${NERF_TEST_FUZZ:-1}" = 0 ]; then
+  :
+elif echo "== fuzz: configure build/fuzz" &&
+     ! nerf_configure build/fuzz --native-file scripts/native/clang.ini \
+     --werror -Dfuzz=true -Dexamples=false -Dbench=false -Dviewer=disabled; then
+  echo "== fuzz: meson setup failed (see build/fuzz/meson-logs/meson-log.txt)"
+  failed=$((failed + 1))
+elif ! meson compile -C build/fuzz; then
+  echo "== fuzz: build failed"
+  failed=$((failed + 1))
+else
+  for setup in replay fuzz; do
+    echo "== fuzz: $setup"
+    fuzz_log=build/fuzz/meson-logs/testlog-$setup.json
+    rm -f "$fuzz_log"
+    fuzz_rc=0
+    before=$failed
+    meson test -C build/fuzz --setup "$setup" --print-errorlogs \
+      --suite "$([ "$setup" = replay ] && echo fuzz-replay || echo fuzz)" \
+      || fuzz_rc=$?
+    count_results "$fuzz_log"
+    if [ "$fuzz_rc" -ne 0 ] && [ "$failed" -eq "$before" ]; then
+      echo "== fuzz: meson test exited with status $fuzz_rc"
+      failed=$((failed + 1))
+    fi
+  done
+fi
 
 # The fast suites cross-built for aarch64 and run under qemu-user: they
 # prove that the x86-only code (target_clones, AVX2 rounding, oneDNN) falls
