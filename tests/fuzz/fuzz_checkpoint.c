@@ -2,12 +2,16 @@
  * libFuzzer target for the checkpoint parser (nerf__checkpoint_parse, the
  * part of nerf_model_load after the file is read).
  *
- * The first input byte picks what the rest is:
- *   even: a whole checkpoint file, header and zlib stream as stored;
- *   odd:  the decompressed payload (the tagged sections), which this target
- *         compresses and wraps in a header with correct CRCs.
- * Without the second form nearly every mutation would die at a CRC check
- * and the section parser behind it would never be reached.
+ * The first input byte picks what the rest is (its two low bits):
+ *   0: a whole checkpoint file, header and zlib stream as stored;
+ *   2: the same, but this target first writes the correct CRCs into the
+ *      header (of the header, of the zlib stream and, when the stream
+ *      inflates to the size the header gives, of the payload), so that
+ *      mutated header fields and streams get past the CRC checks;
+ *   1, 3: the decompressed payload (the tagged sections), which this
+ *      target compresses and wraps in a header with correct CRCs.
+ * Without the last two forms nearly every mutation would die at a CRC
+ * check and the section parser behind it would never be reached.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -62,6 +66,48 @@ static unsigned char *wrap(const uint8_t *payload, size_t n, size_t *out_size)
     return file;
 }
 
+static uint32_t get32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+           (uint32_t)p[3] << 24;
+}
+
+static uint64_t get64(const unsigned char *p)
+{
+    return get32(p) | (uint64_t)get32(p + 4) << 32;
+}
+
+/* Mode 2: the CRCs a writer would have stored, wherever they fit. */
+static void fix_crcs(unsigned char *file, size_t n)
+{
+    if (n < 20) {
+        return;
+    }
+    uint32_t hsize = get32(file + 12);
+    if (hsize < 20 || hsize > 4096 || hsize % 4 != 0 || hsize > n) {
+        return;
+    }
+    if (hsize >= HEADER_SIZE) {
+        uint64_t plain = get64(file + 16), packed = get64(file + 24);
+        if (packed <= n - HEADER_SIZE) {
+            const unsigned char *z = file + HEADER_SIZE;
+            le32(file + 32, (uint32_t)crc32_z(0L, z, (size_t)packed));
+            /* The parser refuses more than this expansion anyway. */
+            if (plain <= (uint64_t)1032 * packed && plain <= (64u << 20)) {
+                unsigned char *out = malloc(plain ? (size_t)plain : 1);
+                uLongf out_n = (uLongf)plain;
+                uLong in_n = (uLong)packed;
+                if (out && uncompress2(out, &out_n, z, &in_n) == Z_OK &&
+                    out_n == plain) {
+                    le32(file + 36, (uint32_t)crc32_z(0L, out, out_n));
+                }
+                free(out);
+            }
+        }
+    }
+    le32(file + hsize - 4, (uint32_t)crc32_z(0L, file, hsize - 4));
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size == 0) {
@@ -78,6 +124,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         file = malloc(n ? n : 1);
         if (file) {
             memcpy(file, data + 1, n);
+            if (data[0] & 2) {
+                fix_crcs(file, n);
+            }
         }
     }
     if (file == NULL) {
