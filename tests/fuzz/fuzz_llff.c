@@ -13,6 +13,7 @@
  * The eight folders are written once, at start-up; each input only
  * replaces the poses file of the one it picks.
  */
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,19 +99,35 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort();
     }
     if (ds != NULL) {
-        /* Every camera a trainer or renderer would ask for must exist. */
+        /* Every camera a trainer would ask for must exist and be usable:
+         * finite, with a positive focal. */
         for (uint32_t i = 0; i < nerf_dataset_count(ds); i++) {
             nerf_camera cam;
             NERF_CAMERA_INIT(&cam);
-            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK) {
+            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK ||
+                !(isfinite(cam.fx) && cam.fx > 0.0f) ||
+                !(isfinite(cam.fy) && cam.fy > 0.0f) ||
+                !isfinite(cam.cx) || !isfinite(cam.cy)) {
                 abort();
             }
+            for (int k = 0; k < 12; k++) {
+                if (!isfinite(cam.c2w[k])) {
+                    abort();
+                }
+            }
         }
-        /* The spiral may refuse extreme poses, but must not crash. */
+        /* So must the spiral path's, which renders of the scene use. */
         for (uint32_t i = 0; i < 3; i++) {
             nerf_camera cam;
             NERF_CAMERA_INIT(&cam);
-            (void)nerf_dataset_spiral_camera(ds, i, 3, &cam);
+            if (nerf_dataset_spiral_camera(ds, i, 3, &cam) != NERF_OK) {
+                abort();
+            }
+            for (int k = 0; k < 12; k++) {
+                if (!isfinite(cam.c2w[k])) {
+                    abort();
+                }
+            }
         }
     }
     nerf_dataset_destroy(ds);
