@@ -8,10 +8,16 @@
  *      header (of the header, of the zlib stream and, when the stream
  *      inflates to the size the header gives, of the payload), so that
  *      mutated header fields and streams get past the CRC checks;
- *   1, 3: the decompressed payload (the tagged sections), which this
- *      target compresses and wraps in a header with correct CRCs.
- * Without the last two forms nearly every mutation would die at a CRC
- * check and the section parser behind it would never be reached.
+ *   1: the decompressed payload (the tagged sections), which this target
+ *      compresses and wraps in a header with correct CRCs;
+ *   3: the payload in a compact form that this target expands, then wraps
+ *      as for 1: each section is u32 tag, u64 length, u16 count and count
+ *      bytes, the rest of its length being the last 4 of them repeated
+ *      (zeros when fewer are given); payloads are capped at 16 MB.
+ * Without the last three forms nearly every mutation would die at a CRC
+ * check and the section parser behind it would never be reached; the last
+ * one lets a few bytes stand for the large sections (weights of a hash
+ * grid, the 8 MB occupancy grid) and their contents.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -23,6 +29,7 @@
 #include "model.h"
 
 #define HEADER_SIZE 48
+#define EXPAND_CAP ((size_t)16 << 20)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -108,6 +115,52 @@ static void fix_crcs(unsigned char *file, size_t n)
     le32(file + hsize - 4, (uint32_t)crc32_z(0L, file, hsize - 4));
 }
 
+/* Mode 3: the payload the compact form in[0..n) stands for (malloc'd),
+ * or NULL if it would pass EXPAND_CAP.  A cut-off tail is kept as is. */
+static unsigned char *expand(const uint8_t *in, size_t n, size_t *out_n)
+{
+    size_t total = 0, at = 0;
+    while (at + 14 <= n) {
+        uint64_t len = get64(in + at + 4);
+        size_t given = (size_t)in[at + 12] | (size_t)in[at + 13] << 8;
+        if (given > n - at - 14 || total > EXPAND_CAP - 12 ||
+            len > EXPAND_CAP - 12 - total) {
+            break;
+        }
+        total += 12 + (size_t)len;
+        at += 14 + given;
+    }
+    if (n - at > EXPAND_CAP - total) {
+        return NULL;
+    }
+    unsigned char *out = malloc(total + (n - at) + 1);
+    if (out == NULL) {
+        return NULL;
+    }
+    size_t o = 0;
+    at = 0;
+    while (at + 14 <= n) {
+        uint64_t len = get64(in + at + 4);
+        size_t given = (size_t)in[at + 12] | (size_t)in[at + 13] << 8;
+        if (given > n - at - 14 || o > EXPAND_CAP - 12 ||
+            len > EXPAND_CAP - 12 - o) {
+            break;
+        }
+        memcpy(out + o, in + at, 12);
+        o += 12;
+        size_t take = given < len ? given : (size_t)len;
+        memcpy(out + o, in + at + 14, take);
+        for (size_t i = take; i < len; i++) {
+            out[o + i] = take >= 4 ? out[o + take - 4 + (i - take) % 4] : 0;
+        }
+        o += (size_t)len;
+        at += 14 + given;
+    }
+    memcpy(out + o, in + at, n - at);
+    *out_n = o + (n - at);
+    return out;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size == 0) {
@@ -117,7 +170,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     nerf__env_default(&env);
     unsigned char *file = NULL;
     size_t n = size - 1;
-    if (data[0] & 1) {
+    if ((data[0] & 3) == 3) {
+        size_t plain_n = 0;
+        unsigned char *plain = expand(data + 1, size - 1, &plain_n);
+        if (plain != NULL) {
+            file = wrap(plain, plain_n, &n);
+            free(plain);
+        }
+    } else if (data[0] & 1) {
         file = wrap(data + 1, size - 1, &n);
     } else {
         /* An exact-size copy, so that ASan sees any read past the end. */

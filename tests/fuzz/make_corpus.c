@@ -155,9 +155,28 @@ static void filter_sections(const unsigned char *payload, size_t n,
 }
 
 /*
- * Checkpoint seeds, for the target's three modes: raw files (byte 0),
- * files whose CRCs the target recomputes (byte 2) and payloads the target
- * wraps (byte 1), in the forms a reader meets: format 1 (no options2 or
+ * fuzz_checkpoint's compact form of a payload (mode 3): each section with
+ * at most max_given bytes of its body, the target repeating the last 4.
+ */
+static void compact_of(const unsigned char *payload, size_t n,
+                       size_t max_given, bytes *out)
+{
+    for (size_t at = 0; at + 12 <= n;) {
+        size_t len = (size_t)get_le32(payload + at + 4) |
+                     (size_t)get_le32(payload + at + 8) << 32;
+        size_t given = len < max_given ? len : max_given;
+        put(out, payload + at, 12);
+        put_le(out, given, 2);
+        put(out, payload + at + 12, given);
+        at += 12 + len;
+    }
+}
+
+/*
+ * Checkpoint seeds, for the target's four modes: raw files (byte 0),
+ * files whose CRCs the target recomputes (byte 2), payloads the target
+ * wraps (byte 1) and compact payloads it expands first (byte 3), in the
+ * forms a reader meets: format 1 (no options2 or
  * training2 section), format 2, a bf16 model's matmul section, an
  * optional section it must skip, and a hash-grid model with its occupancy
  * grid.
@@ -212,6 +231,12 @@ static void checkpoint_seeds(void)
     o.use_fine = 0;
     file = checkpoint_of(&o, &n);
     save_with("checkpoint", "raw_hashgrid.bin", 0, file, n);
+    payload = payload_of(file, n, &plain_n);
+    b = (bytes){0};
+    compact_of(payload, plain_n, 64, &b);
+    save_with("checkpoint", "compact_hashgrid.bin", 3, b.p, b.n);
+    free(b.p);
+    free(payload);
     free(file);
 }
 
