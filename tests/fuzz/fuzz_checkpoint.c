@@ -55,8 +55,10 @@ static unsigned char *wrap(const uint8_t *payload, size_t n, size_t *out_size)
     if (file == NULL) {
         return NULL;
     }
-    if (compress2(file + HEADER_SIZE, &packed, payload, (uLong)n, 1) !=
-        Z_OK) {
+    /* Stored blocks: the parser inflates them all the same, and deflating
+     * megabytes of expanded sections would dominate the run time. */
+    if (compress2(file + HEADER_SIZE, &packed, payload, (uLong)n,
+                  Z_NO_COMPRESSION) != Z_OK) {
         free(file);
         return NULL;
     }
@@ -150,8 +152,16 @@ static unsigned char *expand(const uint8_t *in, size_t n, size_t *out_n)
         o += 12;
         size_t take = given < len ? given : (size_t)len;
         memcpy(out + o, in + at + 14, take);
-        for (size_t i = take; i < len; i++) {
-            out[o + i] = take >= 4 ? out[o + take - 4 + (i - take) % 4] : 0;
+        if (take < 4) {
+            memset(out + o + take, 0, (size_t)len - take);
+        } else {
+            /* The last 4 bytes, then copies of all repeated so far. */
+            size_t done = 4, rest = (size_t)len - take;
+            while (done < rest + 4) {
+                size_t k = done < rest + 4 - done ? done : rest + 4 - done;
+                memcpy(out + o + take - 4 + done, out + o + take - 4, k);
+                done += k;
+            }
         }
         o += (size_t)len;
         at += 14 + given;
