@@ -177,6 +177,25 @@ static char *temp_name(const nerf__env *env, const char *path)
     return temp;
 }
 
+/* Create a new temporary file beside path; on failure, the error names
+ * path with `what` and the reason, and *temp is NULL. */
+static int open_temp(const nerf__env *env, const char *path,
+                     const char *what, char **temp, int *fd)
+{
+    *temp = temp_name(env, path);
+    if (*temp == NULL) {
+        return NERF_ENOMEM;
+    }
+    *fd = open(*temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (*fd < 0) {
+        int rc = io_error(path, what, errno);
+        nerf__free(env, *temp);
+        *temp = NULL;
+        return rc;
+    }
+    return NERF_OK;
+}
+
 int nerf__file_check_writable(const nerf__env *env, const char *path)
 {
     struct stat st;
@@ -184,20 +203,15 @@ int nerf__file_check_writable(const nerf__env *env, const char *path)
         return nerf__error(NERF_EIO, "%s: cannot be written: it is a folder",
                            path);
     }
-    char *temp = temp_name(env, path);
-    if (temp == NULL) {
-        return NERF_ENOMEM;
-    }
-    int rc = NERF_OK;
-    int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0) {
-        rc = io_error(path, "cannot be written: cannot create a temporary "
-                      "file beside it", errno);
-    } else {
+    char *temp;
+    int fd;
+    int rc = open_temp(env, path, "cannot be written: cannot create a "
+                       "temporary file beside it", &temp, &fd);
+    if (rc == NERF_OK) {
         close(fd);
         unlink(temp);
+        nerf__free(env, temp);
     }
-    nerf__free(env, temp);
     return rc;
 }
 
@@ -279,27 +293,24 @@ unsigned nerf__file_remove_stale_temps(const nerf__env *env, const char *path)
 int nerf__file_write_atomic(const nerf__env *env, const char *path,
                             const nerf__span *parts, size_t n_parts)
 {
-    char *temp = temp_name(env, path);
-    if (temp == NULL) {
-        return NERF_ENOMEM;
+    char *temp;
+    int fd;
+    int rc = open_temp(env, path, "cannot create a temporary file beside it",
+                       &temp, &fd);
+    if (rc != NERF_OK) {
+        return rc;
     }
-    int rc = NERF_OK;
-    int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0) {
-        rc = io_error(path, "cannot create a temporary file beside it", errno);
+    const char *what;
+    int err = fill_temp(fd, parts, n_parts, &what);
+    if (err == 0 && rename(temp, path) != 0) {
+        what = "cannot rename the temporary file over it";
+        err = errno;
+    }
+    if (err != 0) {
+        rc = io_error(path, what, err);
+        unlink(temp);
     } else {
-        const char *what;
-        int err = fill_temp(fd, parts, n_parts, &what);
-        if (err == 0 && rename(temp, path) != 0) {
-            what = "cannot rename the temporary file over it";
-            err = errno;
-        }
-        if (err != 0) {
-            rc = io_error(path, what, err);
-            unlink(temp);
-        } else {
-            sync_parent(path, temp);
-        }
+        sync_parent(path, temp);
     }
     nerf__free(env, temp);
     return rc;
