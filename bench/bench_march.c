@@ -250,7 +250,7 @@ int main(int argc, char **argv)
     b.o.skip_empty = true;
     run_march(&b);
     float *xyz = malloc(3 * (b.total + 1) * sizeof(float));
-    nerf__march_points(&b.rays, b.offsets, b.t, xyz);
+    nerf__march_points(&b.o, &b.rays, b.offsets, b.t, xyz);
     ball_density(&scene, b.total, xyz, b.sigma);
     for (size_t i = 0; i < 3 * b.total; i++) {
         b.rgb[i] = 0.5f;

@@ -81,7 +81,7 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
         if (rc != NERF_OK) {
             goto done;
         }
-        nerf__march_points(&rays, ms.offsets, ms.t, points);
+        nerf__march_points(&mo, &rays, ms.offsets, ms.t, points);
         double c = now();
         bd->march += c - a;
         a = c;

@@ -1,4 +1,4 @@
-/* nerf-train: train a NeRF on a Blender or LLFF scene. */
+/* nerf-train: train a NeRF on a Blender, LLFF or COLMAP scene. */
 #include <nerf.h>
 
 #include <signal.h>
@@ -16,7 +16,7 @@ static const char usage[] =
     "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
     "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
     "                  [--batch-samples N] [--random-background 0|1]\n"
-    "                  [--matmul fp32|bf16]\n"
+    "                  [--matmul fp32|bf16] [--space auto|box|ndc|unbounded]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
     "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
@@ -43,6 +43,11 @@ static const char usage[] =
     "                or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
     "                fp32); saved in MODEL, so --resume, nerf-render and\n"
     "                nerf-eval keep it\n"
+    "  --space S     where the fast preset's grids lie: box (a bounded\n"
+    "                scene), ndc (forward-facing), unbounded (all-round with\n"
+    "                a far background: space beyond a central cube is\n"
+    "                contracted); default auto, the dataset's (LLFF: ndc,\n"
+    "                COLMAP or aabb_scale > 1: unbounded, else box)\n"
     "Ctrl-C stops after the current step and saves MODEL.\n"
     "MODEL is tried before training (a file is created beside it and\n"
     "removed); a save that fails leaves the last good MODEL in place, says\n"
@@ -84,6 +89,7 @@ typedef struct args {
     int resume;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (fp32) */
+    int space;     /* nerf_space; -1: the dataset's */
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -96,6 +102,7 @@ static int parse(int argc, char **argv, args *a)
     a->every = 500;
     a->random_bg = -1;
     a->matmul = -1;
+    a->space = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
@@ -141,6 +148,13 @@ static int parse(int argc, char **argv, args *a)
                         : strcmp(v, "bf16") == 0 ? NERF_MATMUL_BF16
                                                  : -1;
             bad = a->matmul < 0;
+        } else if (strcmp(k, "--space") == 0) {
+            a->space = strcmp(v, "auto") == 0        ? -1
+                       : strcmp(v, "box") == 0       ? NERF_SPACE_BOX
+                       : strcmp(v, "ndc") == 0       ? NERF_SPACE_NDC
+                       : strcmp(v, "unbounded") == 0 ? NERF_SPACE_UNBOUNDED
+                                                     : -2;
+            bad = a->space == -2;
         } else if (strcmp(k, "--random-background") == 0) {
             uint64_t on = 0;
             bad = cli_uint(v, 0, 1, &on);
@@ -168,7 +182,8 @@ static int parse(int argc, char **argv, args *a)
     return 0;
 }
 
-static int open_model(const args *a, const nerf_hooks *hooks, nerf_model **m)
+static int open_model(const args *a, const nerf_hooks *hooks,
+                      const nerf_dataset *ds, nerf_model **m)
 {
     if (a->resume && access(a->out, F_OK) == 0) {
         int rc = nerf_model_load(m, a->out, hooks);
@@ -192,6 +207,15 @@ static int open_model(const args *a, const nerf_hooks *hooks, nerf_model **m)
     mo.seed = a->seed;
     mo.hooks = hooks;
     mo.matmul = a->matmul < 0 ? NERF_MATMUL_FP32 : (uint32_t)a->matmul;
+    if (mo.encoding == NERF_ENCODING_HASHGRID) {
+        int rc = setup_model_space(&mo, ds, a->space, "nerf-train");
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    } else if (a->space > 0) {
+        fprintf(stderr, "nerf-train: --space applies to the fast preset's "
+                "grids; this preset reads coordinates anywhere\n");
+    }
     int rc = nerf_model_create(m, &mo);
     if (rc == NERF_OK) {
         /* The paper's schedule: a tenfold exponential decay over the run. */
@@ -229,7 +253,7 @@ int main(int argc, char **argv)
     nerf_trainer *t = NULL;
     int rc = nerf_dataset_load(&ds, a.data, &dopt);
     if (rc == NERF_OK) {
-        rc = open_model(&a, &hooks, &m);
+        rc = open_model(&a, &hooks, ds, &m);
     }
     if (rc == NERF_OK) {
         rc = setup_sampler(&s, m, ds, 0, 0, 0.0f, 0.0f, a.seed);
@@ -262,11 +286,13 @@ int main(int argc, char **argv)
         rc = nerf_trainer_create(&t, m, ds, s, &to);
     }
     if (rc != NERF_OK) {
-        cli_report("nerf-train", rc);
+        if (rc != SETUP_USAGE) {
+            cli_report("nerf-train", rc);
+        }
         nerf_dataset_destroy(ds);
         nerf_model_destroy(m);
         nerf_sampler_destroy(s);
-        return 1;
+        return rc == SETUP_USAGE ? 2 : 1;
     }
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);

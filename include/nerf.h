@@ -259,6 +259,29 @@ typedef enum nerf_matmul {
 } nerf_matmul;
 
 /**
+ * Since 0.3: where a hash-grid model's grids lie (nerf_model_options.space).
+ * The frequency encoding of the reference networks reads coordinates
+ * anywhere and takes BOX (its only value) whatever the scene.
+ */
+typedef enum nerf_space {
+    NERF_SPACE_BOX = 0,      /**< The cube [-bound, bound]^3 of world space;
+                                  nothing outside it (Blender scenes). */
+    NERF_SPACE_NDC = 1,      /**< Forward-facing scenes: the grids lie over
+                                  normalised device coordinates, x and y in
+                                  [-bound, bound], z (NDC depth) in
+                                  [-1, 1].  Needs a sampler with ndc = 1,
+                                  which warps the rays first. */
+    NERF_SPACE_UNBOUNDED = 2 /**< 360-degree captures with a far
+                                  background: the cube [-bound, bound]^3 as
+                                  it is, and all of space outside it
+                                  contracted into [-2 bound, 2 bound]^3
+                                  (mip-NeRF 360's contraction in the
+                                  max-norm, docs/formats.md).  Marching
+                                  spaces samples evenly in the contracted
+                                  space, so the far field costs few. */
+} nerf_space;
+
+/**
  * Whether models of nerf_matmul @p kind can be created here: 1 or 0.
  * NERF_MATMUL_FP32 is always available.  NERF_MATMUL_BF16 needs a libnerf
  * built with oneDNN (meson option bf16) and a CPU on which oneDNN runs
@@ -337,6 +360,9 @@ typedef struct nerf_model_options {
                                    nerf_matmul_supported() says 0 makes
                                    nerf_model_create() fail with
                                    NERF_EINVAL.  Saved in checkpoints. */
+    /* Since 0.3.  Zero-filled by an older caller: BOX, as before. */
+    uint32_t space;           /**< nerf_space of a hash-grid model; default
+                                   BOX.  Saved in checkpoints. */
 } nerf_model_options;
 
 /**
@@ -1299,6 +1325,19 @@ NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
  * NDC frustum is that of nerf_dataset_camera(): its fx, width and height.
  */
 NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
+
+/**
+ * Since 0.3: the scene space a hash-grid model of this dataset should use
+ * (nerf_model_options.space and bound): NDC for forward-facing (LLFF)
+ * scenes with bound 1.5 (NDC x and y within [-1.5, 1.5]); UNBOUNDED for
+ * scenes that extend far beyond their centre (a COLMAP model, a transforms
+ * file with aabb_scale > 1), with the half side of the central cube the
+ * loader placed the scene's centre in; BOX with bound 1.5 otherwise (the
+ * Blender scenes).
+ * @return NERF_OK or NERF_EINVAL (NULL pointer).
+ */
+NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
+                                float *bound_out);
 
 /**
  * Camera @p index of @p n_views along the reference implementation's

@@ -1,5 +1,6 @@
 #include "scene_setup.h"
 
+#include <stdio.h>
 #include <string.h>
 
 int setup_model_preset(const nerf_model *model)
@@ -21,6 +22,40 @@ int setup_model_preset(const nerf_model *model)
         }
     }
     return 0;
+}
+
+int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
+                      int space, const char *program)
+{
+    uint32_t want = NERF_SPACE_BOX;
+    float bound = mo->bound;
+    if (dataset) {
+        int rc = nerf_dataset_space(dataset, &want, &bound);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    if (space >= 0 && (uint32_t)space != want &&
+        (space == NERF_SPACE_NDC || want == NERF_SPACE_NDC)) {
+        /* A forward-facing dataset's bounds are NDC depths, and NDC
+         * needs them. */
+        fprintf(stderr, "%s: --space %s: the dataset is %sforward-facing, and "
+                "NDC is for exactly those scenes\n", program,
+                space == NERF_SPACE_NDC ? "ndc"
+                : space == NERF_SPACE_BOX ? "box" : "unbounded",
+                want == NERF_SPACE_NDC ? "" : "not ");
+        return SETUP_USAGE;
+    }
+    if (space >= 0 && (uint32_t)space != want) {
+        /* The dataset's bound is for its own space; another one keeps
+         * the preset's, except that a contraction's central cube is the
+         * scene's. */
+        want = (uint32_t)space;
+        bound = want == NERF_SPACE_UNBOUNDED && dataset ? bound : mo->bound;
+    }
+    mo->space = want;
+    mo->bound = bound;
+    return NERF_OK;
 }
 
 int setup_sampler(nerf_sampler **out, const nerf_model *model,

@@ -11,6 +11,17 @@
 int setup_model_preset(const nerf_model *model);
 
 /*
+ * The scene space of a hash-grid model for dataset (NULL: BOX): its space
+ * and bound, or space (a nerf_space; -1: the dataset's) if given.  NDC
+ * suits exactly the forward-facing datasets: asking for it on another, or
+ * for another space on one, prints why (as program) and returns
+ * SETUP_USAGE, a usage error rather than a nerf status.
+ */
+#define SETUP_USAGE (-1000)
+int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
+                      int space, const char *program);
+
+/*
  * A sampler for rendering or training model on dataset (which may be NULL:
  * then a Blender-like scene with near 2, far 6 is assumed).  The sample
  * counts follow the model's preset (the reference ones otherwise; a

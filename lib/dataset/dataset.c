@@ -269,6 +269,28 @@ NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds)
     return ds ? ds->ndc : 0;
 }
 
+NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
+                                float *bound_out)
+{
+    if (ds == NULL || space_out == NULL || bound_out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_dataset_space: NULL argument");
+    }
+    if (ds->ndc) {
+        /* NDC x and y are within [-1, 1] for the reference frustum; the
+         * other cameras of a capture see a little past it. */
+        *space_out = NERF_SPACE_NDC;
+        *bound_out = 1.5f;
+    } else if (ds->unbounded_inner > 0.0) {
+        *space_out = NERF_SPACE_UNBOUNDED;
+        *bound_out = (float)ds->unbounded_inner;
+    } else {
+        /* The Blender scenes' bound, which the fast preset has. */
+        *space_out = NERF_SPACE_BOX;
+        *bound_out = 1.5f;
+    }
+    return NERF_OK;
+}
+
 NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
                                         uint32_t index, uint32_t n_views,
                                         nerf_camera *out)

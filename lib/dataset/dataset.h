@@ -64,6 +64,11 @@ struct nerf_dataset {
     double scene_scale;    /* LLFF: factor applied to positions and bounds */
     double scene_radius;   /* Blender: largest camera distance from the
                               origin; 0 when unknown */
+    /* > 0: an unbounded scene (nerf_dataset_space() says UNBOUNDED), whose
+     * central part lies within the cube of this half side (world units):
+     * the loader decides (a COLMAP model, a transforms file with
+     * aabb_scale > 1). */
+    double unbounded_inner;
     int white_background;  /* images with alpha were composited on white,
                               so renders of this scene should be too */
     int has_spiral;

@@ -49,12 +49,17 @@
  * matmul), written for bf16 models only.  The weights are fp32 either way,
  * so a reader that does not know it loads the model computing in fp32. */
 #define TAG_MATMUL 9u
+/* Required, written only for models whose space is not BOX: a reader that
+ * does not know the section would lay the grids over the wrong space. */
+#define TAG_SPACE (TAG_REQUIRED | 10u)
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 9
+#define N_SECTIONS 10
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
 #define MATMUL_SIZE 8u /* u32 matmul, u32 reserved */
+#define SPACE_INDEX 9
+#define SPACE_SIZE 8u /* u32 space, u32 reserved */
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
@@ -173,6 +178,19 @@ static unsigned char *put_matmul(unsigned char *p, const nerf_model *m)
     return p + MATMUL_SIZE;
 }
 
+static size_t space_size(const nerf_model *m)
+{
+    return m->opts.space != NERF_SPACE_BOX ? SECTION_HEAD + SPACE_SIZE : 0;
+}
+
+static unsigned char *put_space(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_SPACE, SPACE_SIZE);
+    nerf__store_le32(p, m->opts.space);
+    nerf__store_le32(p + 4, 0);
+    return p + SPACE_SIZE;
+}
+
 static unsigned char *put_training(unsigned char *p, const nerf_model *m)
 {
     const nerf__adam *a = &m->adam;
@@ -229,7 +247,8 @@ static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
            TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
-           TRAINING2_SIZE + occupancy_size(m) + matmul_size(m);
+           TRAINING2_SIZE + occupancy_size(m) + matmul_size(m) +
+           space_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -245,7 +264,10 @@ static void build_payload(const nerf_model *m, unsigned char *p)
         p = put_occupancy(p, m);
     }
     if (matmul_size(m)) {
-        put_matmul(p, m);
+        p = put_matmul(p, m);
+    }
+    if (space_size(m)) {
+        put_space(p, m);
     }
 }
 
@@ -472,13 +494,14 @@ typedef struct sections {
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
-    "training state (0.2)", "matmul"};
+    "training state (0.2)", "matmul", "space"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
 {
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
-    bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS
+    bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS ||
+                                            tag == TAG_SPACE
                                       : tag == TAG_OCCUPANCY ||
                                             tag == TAG_TRAINING2 ||
                                             tag == TAG_MATMUL;
@@ -569,6 +592,25 @@ static const char *get_matmul(const sections *s, nerf_model_options *o)
     return NULL;
 }
 
+/* The space section, as get_matmul(). */
+static const char *get_space(const sections *s, nerf_model_options *o)
+{
+    const unsigned char *b = s->body[SPACE_INDEX];
+    if (b == NULL) {
+        return NULL; /* BOX, as every file before the section */
+    }
+    if (s->len[SPACE_INDEX] != SPACE_SIZE || nerf__load_le32(b + 4) != 0) {
+        return "the space section has the wrong size or a non-zero reserved "
+               "field";
+    }
+    uint32_t v = nerf__load_le32(b);
+    if (v == NERF_SPACE_BOX || v > NERF_SPACE_UNBOUNDED) {
+        return "the space section holds no known nerf_space other than BOX";
+    }
+    o->space = v;
+    return NULL;
+}
+
 /*
  * A checkpoint of a bf16 model holds fp32 weights like any other, so where
  * bf16 products are not available it still loads, computing in fp32 (and
@@ -615,6 +657,7 @@ static int check_shapes(const nerf__env *env, const char *path,
         }
     }
     const char *bad = get_matmul(s, o);
+    bad = bad ? bad : get_space(s, o);
     if (bad) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s)", path,
                            bad);

@@ -105,15 +105,20 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
 
 /*
  * The space a model's networks work in: a hash-grid model's grids cover
- * the cube of half-side `bound`, and nothing outside it has density; the
- * frequency encoding reads world coordinates anywhere.
+ * its domain (the cube of half-side `bound`, its NDC counterpart, or the
+ * contracted cube of an unbounded scene), and nothing outside it has
+ * density; the frequency encoding reads world coordinates anywhere.
  */
-static void model_space(const nerf_model_options *o, nerf__space *space)
+void nerf__model_options_space(const nerf_model_options *o, nerf__space *space)
 {
-    if (o->encoding == NERF_ENCODING_HASHGRID) {
-        nerf__space_cube(space, o->bound);
-    } else {
+    if (o->encoding != NERF_ENCODING_HASHGRID) {
         nerf__space_world(space);
+    } else if (o->space == NERF_SPACE_NDC) {
+        nerf__space_ndc(space, o->bound);
+    } else if (o->space == NERF_SPACE_UNBOUNDED) {
+        nerf__space_contract(space, o->bound);
+    } else {
+        nerf__space_cube(space, o->bound);
     }
 }
 
@@ -186,6 +191,13 @@ static const char *check_fast_fields(const nerf_model_options *o)
     if (o->matmul > NERF_MATMUL_BF16) {
         return "matmul is not a known nerf_matmul";
     }
+    if (o->space > NERF_SPACE_UNBOUNDED) {
+        return "space is not a known nerf_space";
+    }
+    if (o->space != NERF_SPACE_BOX && o->encoding != NERF_ENCODING_HASHGRID) {
+        return "space NDC or UNBOUNDED needs the hash-grid encoding (the "
+               "frequency encoding reads coordinates anywhere)";
+    }
     return NULL;
 }
 
@@ -250,7 +262,7 @@ static void setup_network(nerf__network *net, const nerf_model_options *o,
     bool pi = (o->encoding_flags & NERF_ENCODING_SCALE_PI) != 0;
     const uint32_t dir = o->dir_encoding ? o->dir_encoding
                                          : NERF_ENCODING_FREQUENCY;
-    model_space(o, &net->space);
+    nerf__model_options_space(o, &net->space);
     if (o->encoding == NERF_ENCODING_HASHGRID) {
         nerf__hashgrid hg;
         hash_setup(&hg, o, &net->space);
@@ -487,14 +499,27 @@ NERF_API int nerf_model_query(const nerf_model *model, int network, size_t n,
     if (rc != NERF_OK) {
         return rc;
     }
+    /* World positions reach an unbounded model's networks contracted. */
+    float *mapped = NULL;
+    if (rc == NERF_OK && net->space.kind == NERF__SPACE_CONTRACT) {
+        mapped = nerf__alloc(&model->env, 3 * block * sizeof(float) + 1);
+        rc = mapped ? NERF_OK : NERF_ENOMEM;
+    }
     for (size_t at = 0; at < n && rc == NERF_OK; at += block) {
         size_t k = n - at < block ? n - at : block;
-        rc = nerf__network_forward(net, model->params, &ws, k,
-                                   positions + 3 * at,
+        const float *pos = positions + 3 * at;
+        if (mapped) {
+            for (size_t i = 0; i < k; i++) {
+                nerf__space_to_domain(&net->space, pos + 3 * i, mapped + 3 * i);
+            }
+            pos = mapped;
+        }
+        rc = nerf__network_forward(net, model->params, &ws, k, pos,
                                    directions ? directions + 3 * at : NULL,
                                    rgb_out ? rgb_out + 3 * at : NULL,
                                    sigma_out ? sigma_out + at : NULL);
     }
+    nerf__free(&model->env, mapped);
     nerf__workspace_release(&model->env, &ws);
     return rc;
 }
@@ -541,6 +566,11 @@ const nerf__env *nerf__model_env(const nerf_model *m)
 bool nerf__model_uses_viewdirs(const nerf_model *m)
 {
     return m->nets[0].use_viewdirs;
+}
+
+const nerf__space *nerf__model_space(const nerf_model *m)
+{
+    return &m->nets[0].space;
 }
 
 const nerf__occupancy *nerf__model_grid(const nerf_model *m)

@@ -114,6 +114,14 @@ const nerf__env *nerf__model_env(const nerf_model *m);
 /* Whether the networks take view directions (both or neither do). */
 bool nerf__model_uses_viewdirs(const nerf_model *m);
 
+/* The space the model's networks and grid work in (space.h): a world
+ * point reaches them through nerf__space_to_domain(). */
+const nerf__space *nerf__model_space(const nerf_model *m);
+
+/* The space of a model of these (validated) options. */
+void nerf__model_options_space(const nerf_model_options *o,
+                               nerf__space *space);
+
 /* The occupancy grid of a hash-grid model; NULL for the others. */
 const struct nerf__occupancy *nerf__model_grid(const nerf_model *m);
 

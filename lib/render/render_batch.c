@@ -37,6 +37,22 @@ int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
                            "use march_steps = 0 with this model", fn,
                            (unsigned)s->opts.march_steps);
     }
+    /* The grids of an NDC model lie over NDC space, which only an NDC
+     * sampler's warped rays reach; a contracted model's, over world
+     * space. */
+    const uint32_t space = nerf__model_space(m)->kind;
+    if (space == NERF__SPACE_NDC && !s->opts.ndc) {
+        return nerf__error(NERF_EINVAL, "%s: the model's space is NDC "
+                           "(NERF_SPACE_NDC), so the sampler needs ndc = 1",
+                           fn);
+    }
+    if (s->opts.ndc && (space == NERF__SPACE_CONTRACT ||
+                        (space == NERF__SPACE_BOX &&
+                         nerf__sampler_marches(s)))) {
+        return nerf__error(NERF_EINVAL, "%s: the sampler warps rays to NDC "
+                           "(ndc = 1), which needs a model whose space is "
+                           "NDC (NERF_SPACE_NDC) to march or contract", fn);
+    }
     return NERF_OK;
 }
 
@@ -100,6 +116,7 @@ typedef struct batch_job {
     const float *o, *d; /* the caller's rays */
     int pass;
     bool random, with_dirs;
+    const nerf__space *space; /* the model's */
     const nerf__pass_out *out;
     const float *d_rgb, *d_depth, *d_opacity;
 } batch_job;
@@ -184,6 +201,9 @@ static void fill_points(void *ctx, size_t begin, size_t end)
             for (int c = 0; c < 3; c++) {
                 b->points[3 * at + c] = o[c] + d[c] * ti;
             }
+            /* An unbounded model works on contracted points. */
+            nerf__space_to_domain(j->space, b->points + 3 * at,
+                                  b->points + 3 * at);
             if (with_dirs) {
                 memcpy(b->dirs + 3 * at, b->viewdir + 3 * k, 3 * sizeof(float));
             }
@@ -336,7 +356,8 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     }
     batch_job j = {.b = b, .s = s, .o = origins, .d = directions,
                    .random = s->training && so->perturb,
-                   .with_dirs = nerf__model_uses_viewdirs(m)};
+                   .with_dirs = nerf__model_uses_viewdirs(m),
+                   .space = nerf__model_space(m)};
     /* Rough operations per ray of each loop, to decide whether it is worth
      * waking the pool. */
     nerf__parallel_for(n_rays, 32, prepare_rays, &j);

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "ndc.h"
 #include "occupancy.h"
 #include "parallel.h"
 #include "render_batch.h"
@@ -128,6 +129,8 @@ void nerf__render_march_options(const nerf__render_setup *s,
     mo->jitter = s->training && so->perturb;
     mo->seed = nerf__stream_seed(so->seed, NERF__STREAM_MARCH);
     mo->iteration = 0;
+    const nerf__space *space = nerf__model_space(s->model);
+    mo->contract = space->kind == NERF__SPACE_CONTRACT ? space->inner : 0.0f;
 }
 
 /* What the loops over rays and samples below read; each writes only the
@@ -138,6 +141,7 @@ typedef struct march_job {
     const nerf__march_rays *rays;
     const float *viewdir; /* [rays->n, 3] unit directions of those rays */
     uint32_t max_samples;
+    const nerf__march_options *mo;
 } march_job;
 
 /* Unit view directions of the caller's rays, into b->viewdir. */
@@ -192,7 +196,7 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
     if (rc != NERF_OK || total == 0) {
         return rc;
     }
-    nerf__march_points(j->rays, b->march.offsets, b->march.t,
+    nerf__march_points(j->mo, j->rays, b->march.offsets, b->march.t,
                        b->march_points);
     const float *dirs = NULL;
     if (nerf__model_uses_viewdirs(m)) {
@@ -260,7 +264,7 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
         kept.n = cut_to_budget(&b->march, s->sample_budget);
         b->n_rays = kept.n;
     }
-    march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir};
+    march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir, .mo = &mo};
     if (rc == NERF_OK) {
         rc = evaluate(b, s, &j, true);
     }
@@ -337,7 +341,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
     nerf__march_options mo;
     nerf__render_march_options(s, g, &mo);
     march_job j = {.b = b, .viewdir = b->m_view,
-                   .max_samples = mo.max_samples};
+                   .max_samples = mo.max_samples, .mo = &mo};
     size_t n_active = n;
     for (size_t k = 0; k < n; k++) {
         nerf__composite_state_init(&b->m_state[k]);
@@ -429,7 +433,16 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
     nerf__march_rays rays =
         nerf__render_march_rays(s, n_rays, origins, directions);
     march_job j = {.b = b, .rays = &rays};
+    /* View directions are the world rays' even in NDC, as the
+     * reference's. */
     nerf__parallel_for(n_rays, 32, view_dirs, &j);
+    if (s->sampler->opts.ndc) {
+        /* March the warped rays: the model's grids lie over NDC space. */
+        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f,
+                       n_rays, origins, directions, b->ray_o, b->ray_d);
+        rays.origins = b->ray_o;
+        rays.dirs = b->ray_d;
+    }
     const nerf__pass_out *o = out ? &out[0] : NULL;
     int rc = s->keep ? march_whole(b, s, &rays, o)
                      : march_pieces(b, s, &rays, o);

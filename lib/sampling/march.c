@@ -1,5 +1,6 @@
 /* Ray marching through the occupancy grid (see march.h). */
 #include "march.h"
+#include "march_ray.h"
 
 #include <math.h>
 #include <string.h>
@@ -7,6 +8,7 @@
 #include "error.h"
 #include "parallel.h"
 #include "rng.h"
+#include "space.h"
 
 #define MARCH_STREAM UINT64_C(0x6d61726368726179)
 
@@ -174,17 +176,11 @@ static float walk_empty(const nerf__occupancy *g, const lattice_ray *r,
     }
 }
 
-/*
- * The whole per-ray march, shared by both passes so they agree: from
- * lattice index k0, returns the number of samples and, when t_out is not
- * NULL, writes them; *resume gets the lattice index to continue from, or
- * NERF__MARCH_DONE.
- */
-static uint32_t march_ray(const nerf__occupancy *g,
-                          const nerf__march_options *mo, const float o[3],
-                          const float d[3], float t0, float t1, float u,
-                          uint32_t k0, float *t_out, float *dt_out,
-                          uint32_t *resume)
+uint32_t nerf__march_ray_linear(const nerf__occupancy *g,
+                                const nerf__march_options *mo,
+                                const float o[3], const float d[3], float t0,
+                                float t1, float u, uint32_t k0, float *t_out,
+                                float *dt_out, uint32_t *resume)
 {
     *resume = NERF__MARCH_DONE;
     const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
@@ -301,9 +297,15 @@ static uint32_t march_one(const march_job *j, size_t k, float *t_out,
     float near = r->near ? r->near[k] : r->near_all;
     float far = r->far ? r->far[k] : r->far_all;
     uint32_t k0 = r->first_step ? r->first_step[k] : 0;
-    return march_ray(j->g, j->o, r->origins + 3 * k, r->dirs + 3 * k, near,
-                     far, ray_offset(j->o, r->first_ray + k), k0, t_out,
-                     dt_out, resume);
+    const float u = ray_offset(j->o, r->first_ray + k);
+    if (j->o->contract > 0.0f) {
+        return nerf__march_ray_contract(j->g, j->o, r->origins + 3 * k,
+                                        r->dirs + 3 * k, near, far, u, k0,
+                                        t_out, dt_out, resume);
+    }
+    return nerf__march_ray_linear(j->g, j->o, r->origins + 3 * k,
+                                  r->dirs + 3 * k, near, far, u, k0, t_out,
+                                  dt_out, resume);
 }
 
 static void count_range(void *ctx, size_t begin, size_t end)
@@ -351,21 +353,30 @@ void nerf__march_fill(const nerf__occupancy *g, const nerf__march_options *o,
 static void points_range(void *ctx, size_t begin, size_t end)
 {
     const march_job *j = ctx;
+    nerf__space space;
+    nerf__space_contract(&space, j->o->contract);
+    const bool contract = j->o->contract > 0.0f;
     for (size_t k = begin; k < end; k++) {
         const float *o = j->r->origins + 3 * k, *d = j->r->dirs + 3 * k;
         for (size_t i = j->offsets[k]; i < j->offsets[k + 1]; i++) {
             const float t = j->t[i];
+            float *p = j->xyz + 3 * i;
             for (int a = 0; a < 3; a++) {
-                j->xyz[3 * i + a] = o[a] + t * d[a];
+                p[a] = o[a] + t * d[a];
+            }
+            if (contract) {
+                nerf__space_to_domain(&space, p, p);
             }
         }
     }
 }
 
-void nerf__march_points(const nerf__march_rays *rays, const size_t *offsets,
+void nerf__march_points(const nerf__march_options *o,
+                        const nerf__march_rays *rays, const size_t *offsets,
                         const float *t, float *xyz)
 {
-    march_job j = {.r = rays, .offsets = offsets, .t = t, .xyz = xyz};
+    march_job j = {.o = o, .r = rays, .offsets = offsets, .t = t,
+                   .xyz = xyz};
     size_t per_ray = rays->n ? offsets[rays->n] / rays->n : 0;
     nerf__parallel_for(rays->n, 8 * per_ray + 8, points_range, &j);
 }

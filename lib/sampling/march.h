@@ -33,6 +33,26 @@
  * is written and does not depend on threads; both passes run over the
  * thread pool by rays.  No memory is allocated except by
  * nerf__march_run(), which grows a reusable buffer.
+ *
+ * Contracted spaces (options.contract = inner > 0; space.h's CONTRACT):
+ * the grid lies over contracted space, [-2 inner, 2 inner]^3, and a
+ * sample's cell is that of its contracted point.  A straight ray is curved
+ * there, and evenly spaced world samples would put hundreds in one far
+ * cell, so the lattice is even in a warped distance s instead of t.  With
+ * u = t |d| the world distance along the ray, u0 the start and u_c the
+ * ray's exit from the cube [-inner, inner]^3 (u0 if it misses the cube):
+ *   s(u) = u                              for u <= u_c,
+ *   s(u) = u_c + D - D^2 / (u + a)        beyond, D = u_c + a,
+ * with a = max-norm of the ray's origin.  s is continuous with slope 1 at
+ * u_c, and its slope D^2 / (u + a)^2 falls as the contraction's radial
+ * scale inner^2 / r^2 does for a ray leaving the centre (r ~ u + a), so
+ * the samples come out about evenly spaced in contracted space: a ray from
+ * inside the cube to infinity has about D / step of them beyond the cube.
+ * Lattice point k sits at s = u0 + (k + jitter) step; its dt is the world
+ * length step ds/du stands for.  Inside the cube, from an origin inside
+ * it, contraction is the identity and the march is the linear one above,
+ * empty-space skipping included; beyond, each lattice point's cell is
+ * tested in turn.
  */
 #ifndef NERF_SAMPLING_MARCH_H
 #define NERF_SAMPLING_MARCH_H
@@ -56,6 +76,9 @@ typedef struct nerf__march_options {
      * number so every step draws afresh, and reruns draw the same. */
     uint64_t seed;
     uint64_t iteration;
+    /* > 0: the grid lies over contracted space (see above) with this
+     * half side of the uncontracted cube; 0: over world space. */
+    float contract;
 } nerf__march_options;
 
 /* Defaults for grid g: step nerf__march_step(lo, hi, 1024), no limit,
@@ -100,9 +123,11 @@ void nerf__march_fill(const nerf__occupancy *g, const nerf__march_options *o,
                       const nerf__march_rays *rays, const size_t *offsets,
                       float *t, float *dt, uint32_t *next_step);
 
-/* Sample positions o + t d, xyz[total, 3], computed exactly as the
- * marcher computed them for their occupancy test. */
-void nerf__march_points(const nerf__march_rays *rays, const size_t *offsets,
+/* Sample positions o + t d in the grid's space (contracted with
+ * o->contract), xyz[total, 3], computed exactly as the marcher computed
+ * them for their occupancy test. */
+void nerf__march_points(const nerf__march_options *o,
+                        const nerf__march_rays *rays, const size_t *offsets,
                         const float *t, float *xyz);
 
 /* Packed samples in buffers that grow on demand and are reused. */

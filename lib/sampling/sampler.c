@@ -110,9 +110,6 @@ static int check_options(const void *opts)
                "positive and finite";
     } else if (o->march_steps > MAX_MARCH_STEPS) {
         what = "march_steps must be 0..65536";
-    } else if (o->march_steps > 0 && o->ndc) {
-        /* The grid covers a box of world space; NDC rays live elsewhere. */
-        what = "ray marching (march_steps > 0) does not support ndc";
     } else if (o->march_steps > 0 &&
                (o->max_samples < 1 || o->max_samples > MAX_MARCH_SAMPLES)) {
         what = "max_samples must be 1..65536";

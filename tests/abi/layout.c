@@ -52,7 +52,8 @@ FROZEN(nerf_model_options, view_depth, 100);
 FROZEN(nerf_model_options, density_activation, 104);
 /* matmul took the place of reserved1, which had to be 0 (fp32). */
 FROZEN(nerf_model_options, matmul, 108);
-SIZE(nerf_model_options, 112);
+FROZEN(nerf_model_options, space, 112);
+SIZE(nerf_model_options, 120);
 
 FROZEN(nerf_scene_options, struct_size, 0);
 FROZEN(nerf_scene_options, width, 4);

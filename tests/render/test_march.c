@@ -139,7 +139,7 @@ static void march(const nerf__occupancy *g, const nerf__march_options *o,
     m->dt = malloc((m->total + 1) * sizeof(float));
     m->xyz = malloc((3 * m->total + 1) * sizeof(float));
     nerf__march_fill(g, o, rays, m->offsets, m->t, m->dt, NULL);
-    nerf__march_points(rays, m->offsets, m->t, m->xyz);
+    nerf__march_points(o, rays, m->offsets, m->t, m->xyz);
 }
 
 static void unmarch(marched *m)

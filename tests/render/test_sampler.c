@@ -111,11 +111,13 @@ TEST(marching_options)
     o.max_samples = 1;
     CHECK_OK(nerf_sampler_create(&s, &o));
     nerf_sampler_destroy(s);
+    /* Marching NDC rays is for models whose space is NDC, which the
+     * renderer and trainer check: the sampler alone accepts it. */
     o.ndc = 1;
     o.t_near = 0.0f;
     o.t_far = 1.0f;
-    CHECK_EQ_INT(nerf_sampler_create(&s, &o), NERF_EINVAL);
-    CHECK(strstr(nerf_last_error(), "ndc") != NULL);
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    nerf_sampler_destroy(s);
     /* Without marching max_samples is not looked at. */
     o.march_steps = 0;
     o.max_samples = 0;

@@ -36,6 +36,12 @@ MATMUL_FP32 = 0
 MATMUL_BF16 = 1
 MATMULS = {"fp32": MATMUL_FP32, "bf16": MATMUL_BF16}
 
+# nerf_space: where a hash-grid model's grids lie.
+SPACE_BOX = 0
+SPACE_NDC = 1
+SPACE_UNBOUNDED = 2
+SPACES = {"box": SPACE_BOX, "ndc": SPACE_NDC, "unbounded": SPACE_UNBOUNDED}
+
 LogFn = Optional[Callable[[int, str], Any]]
 
 
@@ -73,6 +79,18 @@ def matmul_key(matmul: Union[str, int]) -> int:
     return int(matmul)
 
 
+def space_key(space: Union[str, int]) -> int:
+    """A nerf_space number from its name (``"box"``, ``"ndc"``,
+    ``"unbounded"``)."""
+    if isinstance(space, str):
+        try:
+            return SPACES[space]
+        except KeyError:
+            raise ValueError("unknown space %r (known: %s)"
+                             % (space, ", ".join(SPACES))) from None
+    return int(space)
+
+
 def matmul_supported(matmul: Union[str, int]) -> bool:
     """Whether models with these products can be created here
     (``nerf_matmul_supported``): bf16 needs a libnerf built with oneDNN
@@ -83,13 +101,16 @@ def matmul_supported(matmul: Union[str, int]) -> bool:
 def model_options(preset: Union[str, int, None] = None, seed: int = 0,
                   **fields: Any) -> ModelOptions:
     """Options from the library's defaults, a preset, then ``fields``
-    (``matmul`` may be given by name: ``matmul="bf16"``)."""
+    (``matmul`` and ``space`` may be given by name: ``matmul="bf16"``,
+    ``space="ndc"``)."""
     opts = ModelOptions()
     if preset is not None:
         lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
     opts.seed = int(seed)
     if "matmul" in fields:
         fields["matmul"] = matmul_key(fields["matmul"])
+    if "space" in fields:
+        fields["space"] = space_key(fields["space"])
     opts.update(**fields)
     return opts
 

@@ -148,6 +148,8 @@ class ModelOptions(_Versioned):
         ("density_activation", c_uint32),
         # nerf_matmul; formerly reserved1 (0 = fp32).
         ("matmul", c_uint32),
+        # Appended in libnerf 0.3: nerf_space (0 = BOX).
+        ("space", c_uint32),
     ]
 
 
