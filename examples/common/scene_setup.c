@@ -24,6 +24,11 @@ int setup_model_preset(const nerf_model *model)
     return 0;
 }
 
+/* How far an unbounded scene's rays are marched, in units of the central
+ * cube's half side: the contracted march takes about as many samples to
+ * any distance, and this is as far as float t stays precise enough. */
+#define UNBOUNDED_FAR 1e4f
+
 int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program)
 {
@@ -99,6 +104,12 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
             so.ndc_width = cam.width;
             so.ndc_height = cam.height;
         }
+    }
+    if (mo.space == NERF_SPACE_UNBOUNDED) {
+        /* A contracted scene reaches to infinity: march to far beyond the
+         * cameras, where the far field's few samples cost little. */
+        so.t_near = dataset ? so.t_near : 0.05f * mo.bound;
+        so.t_far = UNBOUNDED_FAR * mo.bound;
     }
     if (far > near) {
         so.t_near = near;

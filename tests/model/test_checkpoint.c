@@ -52,6 +52,48 @@ TEST(round_trip_without_fine_or_viewdirs)
     round_trip(false);
 }
 
+/* Hash-grid models keep their space: the section is required, so a
+ * reader that does not know it refuses the file rather than laying the
+ * grids over the wrong space. */
+TEST(round_trip_keeps_the_space)
+{
+    const uint32_t spaces[2] = {NERF_SPACE_NDC, NERF_SPACE_UNBOUNDED};
+    for (int i = 0; i < 2; i++) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_FAST));
+        o.hash_log2_size = 12;
+        o.hash_levels = 4;
+        o.space = spaces[i];
+        o.bound = 1.25f;
+        nerf_model *m = NULL, *back = NULL;
+        CHECK_OK(nerf_model_create(&m, &o));
+        char path[128];
+        path_in(path, sizeof path, "space.ckpt");
+        CHECK_OK(nerf_model_save(m, path));
+        CHECK_OK(nerf_model_load(&back, path, NULL));
+        if (m && back) {
+            check_same_model(m, back);
+            nerf_model_options got;
+            NERF_MODEL_OPTIONS_INIT(&got);
+            CHECK_OK(nerf_model_get_options(back, &got));
+            CHECK_EQ_INT(got.space, spaces[i]);
+            CHECK(got.bound == 1.25f);
+        }
+        nerf_model_destroy(back);
+        nerf_model_destroy(m);
+    }
+    /* A frequency model has no grid to place. */
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    o.space = NERF_SPACE_NDC;
+    nerf_model *m = NULL;
+    CHECK_EQ_INT(nerf_model_create(&m, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "space") != NULL);
+    o.space = 3;
+    CHECK_EQ_INT(nerf_model_create(&m, &o), NERF_EINVAL);
+}
+
 TEST(arguments)
 {
     nerf_model *m = trained_model(false);
@@ -332,6 +374,7 @@ int main(void)
     make_tmpdir();
     RUN(round_trip_tiny_preset);
     RUN(round_trip_without_fine_or_viewdirs);
+    RUN(round_trip_keeps_the_space);
     RUN(arguments);
     RUN(truncated_files);
     RUN(bit_flips);

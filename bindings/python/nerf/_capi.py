@@ -168,6 +168,7 @@ _PROTOTYPES = {
                             True),
     "nerf_dataset_bounds": (c_int, [DatasetP, _F, _F], True),
     "nerf_dataset_is_ndc": (c_int, [DatasetP], False),
+    "nerf_dataset_space": (c_int, [DatasetP, _U32, _F], True),
     "nerf_dataset_spiral_camera": (c_int, [DatasetP, c_uint32, c_uint32,
                                            POINTER(Camera)], True),
     # Training.

@@ -115,6 +115,18 @@ class Dataset(_handle.Handle):
         with self._using() as ptr:
             return bool(lib.nerf_dataset_is_ndc(ptr))
 
+    @property
+    def space(self) -> Tuple[str, float]:
+        """(space, bound): the scene space a hash-grid model of this
+        dataset should use (``"box"``, ``"ndc"`` or ``"unbounded"``) and
+        its ``bound`` (``nerf_dataset_space``)."""
+        space, bound = ctypes.c_uint32(), ctypes.c_float()
+        with self._using() as ptr:
+            lib.nerf_dataset_space(ptr, ctypes.byref(space),
+                                   ctypes.byref(bound))
+        names = {0: "box", 1: "ndc", 2: "unbounded"}
+        return names.get(space.value, str(space.value)), bound.value
+
     def _index(self, index: int) -> int:
         n = len(self)
         i = int(index)

@@ -150,6 +150,20 @@ class Model(_handle.Handle):
         return cls(preset, seed, log=log, log_level=log_level, **options)
 
     @classmethod
+    def for_dataset(cls, dataset: Any, preset: Union[str, int, None] = None,
+                    seed: int = 0, *, log: LogFn = None,
+                    log_level: Optional[int] = None,
+                    **options: Any) -> "Model":
+        """As :meth:`create`, with a hash-grid model's grids placed as
+        ``dataset`` wants them (``Dataset.space``: NDC for forward-facing
+        scenes, a contracted space for unbounded ones); ``options``
+        override ``space`` and ``bound`` too."""
+        if model_options(preset, seed).encoding == ENCODING_HASHGRID:
+            space, bound = dataset.space
+            options = dict(dict(space=space, bound=bound), **options)
+        return cls(preset, seed, log=log, log_level=log_level, **options)
+
+    @classmethod
     def _wrap(cls, res: _handle._Resource) -> "Model":
         model = cls.__new__(cls)
         _handle.Handle.__init__(model, res)
