@@ -793,9 +793,14 @@ typedef struct nerf_sampler_options {
                                the bound) to min(t_far, exit), skipping
                                empty cells and stopping a ray once its
                                transmittance falls below 1e-4.  n_fine,
-                               lindisp and paper_bins are then unused;
-                               ndc is refused.  NERF_PRESET_FAST sets
-                               1024 (instant-ngp's). */
+                               lindisp and paper_bins are then unused.
+                               With ndc the warped rays are marched
+                               (the model's space must be NDC); an
+                               UNBOUNDED model's samples are spaced
+                               evenly in contracted space beyond its
+                               central cube (docs/formats.md, "Scene
+                               spaces").  NERF_PRESET_FAST sets 1024
+                               (instant-ngp's). */
     uint32_t max_samples; /**< With march_steps: at most this many samples
                                per ray, 1..65536; default 1024. */
 } nerf_sampler_options;
