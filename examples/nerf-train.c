@@ -198,6 +198,10 @@ static int open_model(const args *a, const nerf_hooks *hooks,
                         "keeps the %s products it was saved with\n",
                         mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
             }
+            if (a->space >= 0 && (uint32_t)a->space != mo.space) {
+                fprintf(stderr, "nerf-train: --space ignored: the model "
+                        "keeps the space it was created with\n");
+            }
         }
         return rc;
     }
