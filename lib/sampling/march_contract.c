@@ -25,12 +25,12 @@ static float warp_u(const warp *w, float s)
 }
 
 
-/* Where the ray leaves the cube [-half, half]^3, in t; false if it never
- * is inside it at t >= 0. */
-static bool cube_exit(const float o[3], const float d[3], float half,
-                      float *t_exit)
+/* Where the ray is inside the cube [-half, half]^3, t in [*t_in, *t_out)
+ * (t_in may be negative); false if it never is. */
+static bool cube_span(const float o[3], const float d[3], float half,
+                      float *t_in, float *t_out)
 {
-    float tn = 0.0f, tf = INFINITY;
+    float tn = -INFINITY, tf = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (d[a] == 0.0f) {
             if (!(fabsf(o[a]) <= half)) {
@@ -43,7 +43,8 @@ static bool cube_exit(const float o[3], const float d[3], float half,
         tn = fmaxf(tn, fminf(ta, tb));
         tf = fminf(tf, fmaxf(ta, tb));
     }
-    *t_exit = tf;
+    *t_in = tn;
+    *t_out = tf;
     return tn < tf;
 }
 
@@ -60,6 +61,35 @@ static uint32_t first_at_or_past(float base, float dt_t, float t_end)
         k++;
     }
     return k;
+}
+
+/* One lattice point beyond the cube's linear stretch: its contracted
+ * cell tested, and the sample written when occupied.  Returns whether it
+ * was kept. */
+static bool plain_point(const nerf__occupancy *g, const nerf__space *space,
+                        const warp *w, const float o[3], const float d[3],
+                        float len, float s, float step, float u1, bool skip,
+                        float *t_out, float *dt_out)
+{
+    const float uw = warp_u(w, s);
+    const float t = uw / len;
+    float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+    nerf__space_to_domain(space, p, p);
+    uint32_t ijk[3];
+    size_t cell;
+    if (!nerf__occupancy_cell(g, p, ijk, &cell) ||
+        (skip && !nerf__occupancy_bit(g, cell))) {
+        return false;
+    }
+    if (t_out) {
+        /* As in the linear march, a sample stands for the stretch to the
+         * next lattice point (so the lengths add up to the distance
+         * covered), or to far. */
+        const float u_next = fminf(warp_u(w, s + step), u1);
+        *t_out = t;
+        *dt_out = u_next > uw ? u_next - uw : 0.0f;
+    }
+    return true;
 }
 
 uint32_t nerf__march_ray_contract(const nerf__occupancy *g,
@@ -79,65 +109,62 @@ uint32_t nerf__march_ray_contract(const nerf__occupancy *g,
     nerf__space space;
     nerf__space_contract(&space, mo->contract);
     const float inner = mo->contract, step = mo->step;
-    const float a = nerf__space_norm(o);
-    float tc = t0, t_exit;
-    if (cube_exit(o, d, inner, &t_exit) && t_exit > t0) {
-        tc = t_exit;
+    float t_in = t0, tc = t0, t_out_cube;
+    const bool hit = cube_span(o, d, inner, &t_in, &t_out_cube) &&
+                     t_out_cube > t0;
+    if (hit) {
+        tc = t_out_cube;
+        t_in = fmaxf(t_in, t0);
     }
-    warp w = {.uc = tc * len, .a = a};
-    w.D = fmaxf(w.uc + a, step);
+    warp w = {.uc = tc * len, .a = nerf__space_norm(o)};
+    w.D = fmaxf(w.uc + w.a, step);
     w.smax = w.uc + w.D;
-    const float u0 = t0 * len;
     const float u1 = t1 * len, s1 = warp_s(&w, u1);
-    const float base_s = u0 + u * step;
+    const float base_s = t0 * len + u * step;
     if (!((s1 - base_s) / step < 16777216.0f)) {
         return 0; /* a step too small for the ray (see march.h) */
     }
+    /* Lattice points k_in .. k_end - 1 lie in the cube, where nothing is
+     * contracted: the linear march takes them, with its skipping; the
+     * others are tested one by one. */
+    const float dt_t = step / len, base_t = t0 + u * dt_t;
+    uint32_t k_in = 0, k_end = 0;
+    if (hit) {
+        k_in = first_at_or_past(base_t, dt_t, t_in);
+        k_end = first_at_or_past(base_t, dt_t, fminf(t1, tc));
+    }
     const uint32_t limit = mo->max_samples ? mo->max_samples : UINT32_MAX;
-    uint32_t count = 0, k = k0;
-    if (a <= inner && tc > t0) {
-        /* From inside the cube to its exit nothing is contracted: the
-         * linear march, with its skipping, on the same lattice. */
-        const float dt_t = step / len, base_t = t0 + u * dt_t;
-        const float t_end = fminf(t1, tc);
-        const uint32_t k_end = first_at_or_past(base_t, dt_t, t_end);
-        if (k < k_end) {
-            count = nerf__march_ray_linear(g, mo, o, d, t0, t_end, u, k,
-                                           t_out, dt_out, resume);
-            if (*resume != NERF__MARCH_DONE || !(t1 > tc)) {
+    const bool skip = mo->skip_empty;
+    uint32_t count = 0;
+    for (uint32_t k = k0;; k++) {
+        if (k >= k_in && k < k_end) {
+            /* The linear march from lattice point k_in, numbered from 0
+             * there; it stops half a step before point k_end, so that
+             * rounding cannot move the seam. */
+            const float t_start = k_in ? t0 + (float)k_in * dt_t : t0;
+            const float t_stop =
+                fminf(t1, base_t + ((float)k_end - 0.5f) * dt_t);
+            nerf__march_options lin = *mo;
+            lin.max_samples = limit - count;
+            uint32_t next;
+            count += nerf__march_ray_linear(
+                g, &lin, o, d, t_start, t_stop, u, k - k_in,
+                t_out ? t_out + count : NULL, dt_out ? dt_out + count : NULL,
+                &next);
+            if (next != NERF__MARCH_DONE) {
+                *resume = next + k_in;
                 return count;
             }
+            k = k_end;
         }
-        k = k > k_end ? k : k_end;
-    }
-    const bool skip = mo->skip_empty;
-    for (;; k++) {
         const float s = base_s + (float)k * step;
-        if (!(s < s1)) {
+        if (!(s < s1) || !(warp_u(&w, s) / len < t1)) {
             break;
         }
-        const float uw = warp_u(&w, s);
-        const float t = uw / len;
-        if (!(t < t1)) {
-            break;
-        }
-        float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
-        nerf__space_to_domain(&space, p, p);
-        uint32_t ijk[3];
-        size_t cell;
-        if (!nerf__occupancy_cell(g, p, ijk, &cell) ||
-            (skip && !nerf__occupancy_bit(g, cell))) {
-            continue;
-        }
-        if (t_out) {
-            /* As in the linear march, a sample stands for the stretch to
-             * the next lattice point (so the lengths add up to the
-             * distance covered), or to far. */
-            const float u_next = fminf(warp_u(&w, s + step), u1);
-            t_out[count] = t;
-            dt_out[count] = u_next > uw ? u_next - uw : 0.0f;
-        }
-        if (++count == limit) {
+        if (plain_point(g, &space, &w, o, d, len, s, step, u1, skip,
+                        t_out ? t_out + count : NULL,
+                        dt_out ? dt_out + count : NULL) &&
+            ++count == limit) {
             *resume = k + 1;
             break;
         }
