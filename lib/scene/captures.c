@@ -100,7 +100,9 @@ void nerf__scene_forward_camera(const nerf_scene_options *o, int split,
 void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
                                   uint32_t i, uint32_t n, nerf_camera *cam)
 {
-    static const double elevation[3] = {8.0 * DEG, 20.0 * DEG, 32.0 * DEG};
+    /* Low enough that even the highest ring sees the backdrop above the
+     * ground in 4:3 views. */
+    static const double elevation[3] = {6.0 * DEG, 15.0 * DEG, 24.0 * DEG};
     static const double radius[3] = {3.0, 2.6, 2.2};
     intrinsics(o, cam);
     double az, el, rad;
