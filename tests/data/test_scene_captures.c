@@ -125,7 +125,15 @@ TEST(adaptive_integration_matches_brute_force)
     for (size_t k = 0; k < sizeof rays / sizeof rays[0]; k++) {
         compare_ray(rays[k], rays[k] + 3);
     }
-    CHECK(compared == 3 * 5 * 4 + 6);
+    /* A fan of rays down to the ground, meeting it ever more obliquely
+     * (from 1 to 25 units away), where the checker has most contrast. */
+    for (int k = 0; k < 12; k++) {
+        const float org[3] = {0.3f, -2.0f, 0.25f};
+        float fall = 1.0f / (1.0f + 2.0f * k * k / 6.0f);
+        const float dir[3] = {0.3f * sinf((float)k), 1.0f, -fall};
+        compare_ray(org, dir);
+    }
+    CHECK(compared == 3 * 5 * 4 + 6 + 12);
 }
 
 TEST(surroundings)
