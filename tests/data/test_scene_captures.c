@@ -11,6 +11,7 @@
 #include "../harness.h"
 #include "camera.h"
 #include "data_fixtures.h"
+#include "../fail_alloc.h"
 #include "env.h"
 #include "field.h"
 #include "file_io.h"
@@ -426,6 +427,51 @@ TEST(npy_writer)
     fx_remove_tree(dir);
 }
 
+/*
+ * Every allocation of each capture's writer failing in turn: NERF_ENOMEM
+ * with a message and nothing left allocated, until the write succeeds.
+ */
+TEST(out_of_memory)
+{
+    static const uint32_t kinds[][2] = {
+        {NERF_SCENE_CAPTURE_FORWARD, NERF_SCENE_LAYOUT_LLFF},
+        {NERF_SCENE_CAPTURE_UNBOUNDED, NERF_SCENE_LAYOUT_BLENDER},
+        {NERF_SCENE_CAPTURE_FORWARD, NERF_SCENE_LAYOUT_BLENDER},
+    };
+    char *dir = fx_make_temp_dir();
+    for (int c = 0; c < 3; c++) {
+        nerf_scene_options o;
+        small_options(&o, kinds[c][0], kinds[c][1]);
+        o.width = 16;
+        o.height = 12;
+        o.n_train = 2;
+        o.n_val = 1;
+        o.n_test = 1;
+        fail_alloc f;
+        nerf_hooks hooks;
+        fail_alloc_hooks(&hooks, &f);
+        o.hooks = &hooks;
+        bool done = false;
+        for (int k = 1; k <= 200 && !done; k++) {
+            f = (fail_alloc){0, k, 0};
+            nerf_clear_error();
+            int rc = nerf_scene_write(dir, &o);
+            if (rc == NERF_OK) {
+                CHECK(f.calls < k);
+                done = true;
+            } else if (rc != NERF_ENOMEM || nerf_last_error()[0] == '\0') {
+                FAILF("capture %u layout %u, failing allocation %d: status "
+                      "%d (%s)", kinds[c][0], kinds[c][1], k, rc,
+                      nerf_last_error());
+                break;
+            }
+            CHECK_EQ_INT(f.live, 0);
+        }
+        CHECK(done);
+    }
+    fx_remove_tree(dir);
+}
+
 int main(void)
 {
     RUN(surroundings);
@@ -433,5 +479,6 @@ int main(void)
     RUN(npy_writer);
     RUN(forward_capture_in_llff_layout);
     RUN(unbounded_capture_in_blender_layout);
+    RUN(out_of_memory);
     HARNESS_EXIT();
 }
