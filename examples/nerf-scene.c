@@ -1,6 +1,7 @@
-/* nerf-scene: write the built-in procedural scene as a Blender dataset. */
+/* nerf-scene: write the built-in procedural scene as a dataset. */
 #include <nerf.h>
 
+#include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -9,15 +10,43 @@
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
-    "Write libnerf's built-in scene (a few coloured solids) to DIR as a\n"
-    "Blender-format dataset: transforms_{train,val,test}.json and PNGs.\n"
+    "                  [--capture object|forward|unbounded]\n"
+    "                  [--layout blender|llff]\n"
+    "Write libnerf's built-in scene (a few coloured solids) to DIR.\n"
+    "  --capture object     the solids alone on a transparent background,\n"
+    "                       from a hemisphere of views (the default)\n"
+    "  --capture forward    forward-facing photos, as LLFF's: the solids on\n"
+    "                       a ground before a far backdrop, from a small\n"
+    "                       grid of cameras on one side\n"
+    "  --capture unbounded  all-round photos of the solids on a ground\n"
+    "                       within a far backdrop (40 units away)\n"
+    "  --layout blender     transforms_{train,val,test}.json and PNGs (the\n"
+    "                       default for object and unbounded)\n"
+    "  --layout llff        poses_bounds.npy and images/ (the default for\n"
+    "                       forward, and only for it): --train + --test\n"
+    "                       views, every 8th held out by the loader\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
+
+/* A name of the list, by its index; -1 when it is not there. */
+static int pick(const char *name, const char *const *names, int n)
+{
+    for (int k = 0; name && k < n; k++) {
+        if (strcmp(name, names[k]) == 0) {
+            return k;
+        }
+    }
+    return -1;
+}
 
 int main(int argc, char **argv)
 {
     nerf_scene_options o;
     NERF_SCENE_OPTIONS_INIT(&o);
     const char *out = NULL;
+    static const char *const captures[] = {"object", "forward", "unbounded"};
+    static const char *const layouts[] = {"blender", "transforms", "llff",
+                                          "colmap-text", "colmap-binary"};
+    int layout = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         uint64_t v = 0;
@@ -29,6 +58,25 @@ int main(int argc, char **argv)
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
                 goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--capture") == 0 ||
+                   strcmp(a, "--layout") == 0) {
+            const char *name = cli_value(argc, argv, &i);
+            bool is_capture = strcmp(a, "--capture") == 0;
+            int k = is_capture ? pick(name, captures, 3)
+                               : pick(name, layouts, 5);
+            if (k < 0) {
+                fprintf(stderr, "nerf-scene: %s needs one of %s\n", a,
+                        is_capture ? "object, forward, unbounded"
+                                   : "blender, transforms, llff, "
+                                     "colmap-text, colmap-binary");
+                goto bad;
+            }
+            if (is_capture) {
+                o.capture = (uint32_t)k;
+            } else {
+                layout = k;
             }
             continue;
         } else if (strcmp(a, "--width") == 0) {
@@ -57,6 +105,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "nerf-scene: --out is required\n");
         goto bad;
     }
+    /* Each capture in its usual layout unless told otherwise. */
+    o.layout = layout >= 0 ? (uint32_t)layout
+               : o.capture == NERF_SCENE_CAPTURE_FORWARD
+                   ? NERF_SCENE_LAYOUT_LLFF
+                   : NERF_SCENE_LAYOUT_BLENDER;
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;

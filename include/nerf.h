@@ -523,7 +523,44 @@ typedef struct nerf_scene_options {
     uint32_t reserved0;   /**< Must be 0. */
     uint64_t seed;        /**< Placement of the validation views; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    uint32_t capture;     /**< Since 0.3.  How the scene is photographed:
+                               NERF_SCENE_CAPTURE_*; default OBJECT. */
+    uint32_t layout;      /**< Since 0.3.  The files it is written as:
+                               NERF_SCENE_LAYOUT_*; default BLENDER.  The
+                               usual pairs: OBJECT and UNBOUNDED in
+                               BLENDER, FORWARD in LLFF. */
 } nerf_scene_options;
+
+/** Captures of the built-in scene (nerf_scene_options.capture). */
+#define NERF_SCENE_CAPTURE_OBJECT 0u    /**< The solids alone on a
+    transparent background, from a hemisphere of views at distance 4. */
+#define NERF_SCENE_CAPTURE_FORWARD 1u   /**< A forward-facing capture, as
+    LLFF's: the solids on a ground before a backdrop 40 units away, seen
+    from a jittered grid of cameras 3.2 units in front of them on one side,
+    all looking the same way (within a degree), spread over 0.8 x 0.6
+    units; horizontal field of view 1 radian.  Opaque. */
+#define NERF_SCENE_CAPTURE_UNBOUNDED 2u /**< An all-round capture with a far
+    background: the solids on a ground within a backdrop 40 units away,
+    from rings of cameras 2.2 to 3 units from them looking at them;
+    horizontal field of view 1 radian.  Opaque. */
+
+/** Layouts of the written scene (nerf_scene_options.layout). */
+#define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}
+    .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
+    opaque captures, whose files also record instant-ngp's aabb_scale 16
+    at top level for UNBOUNDED). */
+#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One transforms.json (not
+    supported yet). */
+#define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
+    poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
+    order), n_train + n_test views in all (n_val is not used): a loader
+    holds out every 8th as LLFF has no split files.  Bounds per view are
+    the 0.1 and 99.9 percentiles of its pixels' depths along the optical
+    axis, as LLFF's imgs2poses takes them from the sparse points. */
+#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< COLMAP's text model (not
+    supported yet). */
+#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< COLMAP's binary model (not
+    supported yet). */
 
 /**
  * Fill @p opts with defaults and record @p struct_size.
@@ -535,15 +572,22 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
 #define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
 
 /**
- * Write the built-in scene to the folder @p dir (created if missing) as a
- * Blender-format dataset: transforms_{train,val,test}.json and RGBA PNGs
- * under train/, val/ and test/.  The scene is a few coloured solids with
- * smooth density edges inside a sphere of radius 1.6 about the origin,
- * rendered by numerically exact volume rendering from cameras at distance
- * 4 (use near 2, far 6, as for the Blender scenes).  Same options, same
- * bytes.
- * @return NERF_OK; NERF_EINVAL (bad options); NERF_EIO (cannot create or
- * write a file, named in the message); NERF_ENOMEM.
+ * Write the built-in scene to the folder @p dir (created if missing) in the
+ * capture and layout the options say.  The scene is a few coloured solids
+ * with smooth density edges inside a sphere of radius 1.6 about the
+ * origin (z up), rendered by numerically exact volume rendering.  The
+ * OBJECT capture (the default) is a Blender-format dataset:
+ * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
+ * test/, from cameras at distance 4 (use near 2, far 6, as for the Blender
+ * scenes).  The FORWARD and UNBOUNDED captures add a ground (the
+ * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
+ * sky, hills and a sun), so every pixel is opaque and depths reach 40;
+ * they are what scenes of forward-facing and all-round photos are like.
+ * Same options, same bytes.
+ * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
+ * capture or layout, a layout that does not fit the capture or is not
+ * supported yet); NERF_EIO (cannot create or write a file, named in the
+ * message); NERF_ENOMEM.
  */
 NERF_API int nerf_scene_write(const char *dir,
                               const nerf_scene_options *opts);

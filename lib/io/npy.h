@@ -12,6 +12,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "env.h"
+
 #define NERF__NPY_MAX_DIMS 4
 
 typedef enum nerf__npy_dtype {
@@ -51,5 +53,14 @@ const char *nerf__npy_dtype_name(nerf__npy_dtype dtype);
  */
 void nerf__npy_format_shape(const size_t *shape, uint32_t ndim, char *buf,
                             size_t size);
+
+/*
+ * Write rows x cols doubles (row-major) to path as a version 1.0 .npy
+ * array, '<f8' in C order, with the header NumPy itself writes, through
+ * nerf__file_write_atomic.  Returns NERF_OK; NERF_EIO (named path);
+ * NERF_ENOMEM.
+ */
+int nerf__npy_write_f8(const nerf__env *env, const char *path,
+                       const double *data, size_t rows, size_t cols);
 
 #endif

@@ -1,7 +1,9 @@
 /*
- * nerf_scene_write(): render the built-in scene into a Blender-format
- * dataset (transforms_{train,val,test}.json and RGBA PNGs), so that the
- * demo and the tests need no download.
+ * nerf_scene_write(): render the built-in scene into a dataset, so that
+ * the demo and the tests need no download.  Here: the options, the object
+ * capture's cameras and the Blender layout (transforms_{train,val,test}
+ * .json and PNGs); the other captures' cameras are in captures.c, the
+ * other layouts in files of their own.
  */
 #include <cJSON.h>
 #include <errno.h>
@@ -20,10 +22,12 @@
 #include "options.h"
 #include "png_io.h"
 #include "rng.h"
+#include "scene_internal.h"
 
 #define NEAR 2.0f
 #define FAR 6.0f
 #define PI 3.14159265358979323846
+#define AABB_SCALE 16
 
 static void scene_defaults(nerf_scene_options *o)
 {
@@ -35,6 +39,8 @@ static void scene_defaults(nerf_scene_options *o)
     o->n_val = 8;
     o->n_test = 16;
     o->threads = 0;
+    o->capture = NERF_SCENE_CAPTURE_OBJECT;
+    o->layout = NERF_SCENE_LAYOUT_BLENDER;
 }
 
 NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
@@ -80,9 +86,21 @@ static void place_camera(int split, uint32_t i, uint32_t n, uint64_t seed,
     nerf_camera_look_at(cam, eye, target, up);
 }
 
+nerf__scene_look nerf__scene_look_of(uint32_t capture)
+{
+    if (capture == NERF_SCENE_CAPTURE_OBJECT) {
+        return (nerf__scene_look){NERF__SCENE_SOLIDS, NEAR, FAR, 4};
+    }
+    /* Nothing stands within a unit of a camera: start at it. */
+    return (nerf__scene_look){NERF__SCENE_SURROUNDED, 0.0f,
+                              NERF__SCENE_WORLD_FAR, 3};
+}
+
 typedef struct view_job {
     const nerf_camera *cam;
-    uint8_t *rgba;
+    const nerf__scene_look *look;
+    uint8_t *px;
+    float *zdepth;
     uint32_t row_begin, row_end;
 } view_job;
 
@@ -102,25 +120,40 @@ static void *render_rows(void *arg)
         size_t n = last - at < BLOCK ? last - at : BLOCK;
         nerf__camera_rays(job->cam, at, n, o, d);
         for (size_t k = 0; k < n; k++) {
+            const nerf__scene_look *look = job->look;
             float rgb[3], depth;
-            float a = nerf__scene_render_ray(o + 3 * k, d + 3 * k, NEAR, FAR,
-                                             rgb, &depth);
-            uint8_t *px = job->rgba + 4 * (at + k);
-            /* Store straight (not premultiplied) colour with alpha, as
-             * Blender does: compositing rgb*a + (1-a) gives back the
-             * rendered colour on white. */
-            for (int c = 0; c < 3; c++) {
-                px[c] = to8(a > 1e-6f ? rgb[c] / a : 0.0f);
+            float a = nerf__scene_render_ray_in(look->world, o + 3 * k,
+                                                d + 3 * k, look->near,
+                                                look->far, rgb, &depth);
+            uint8_t *px = job->px + look->channels * (at + k);
+            if (look->channels == 4) {
+                /* Store straight (not premultiplied) colour with alpha, as
+                 * Blender does: compositing rgb*a + (1-a) gives back the
+                 * rendered colour on white. */
+                for (int c = 0; c < 3; c++) {
+                    px[c] = to8(a > 1e-6f ? rgb[c] / a : 0.0f);
+                }
+                px[3] = to8(a);
+            } else {
+                /* Opaque to 1e-6: what is left shows black, as in a
+                 * photograph. */
+                for (int c = 0; c < 3; c++) {
+                    px[c] = to8(rgb[c]);
+                }
             }
-            px[3] = to8(a);
+            if (job->zdepth) {
+                /* Camera rays have z = -1 in the camera's frame, so t is
+                 * the depth along the optical axis. */
+                job->zdepth[at + k] = a > 1e-6f ? depth / a : look->far;
+            }
         }
     }
     return NULL;
 }
 
-/* Render one view with up to `threads` threads splitting its rows. */
-static void render_view(const nerf_camera *cam, uint32_t threads,
-                        uint8_t *rgba)
+void nerf__scene_render_view(const nerf_camera *cam,
+                             const nerf__scene_look *look, uint32_t threads,
+                             uint8_t *px, float *zdepth)
 {
     enum { MAX_THREADS = 64 };
     pthread_t tid[MAX_THREADS];
@@ -129,7 +162,8 @@ static void render_view(const nerf_camera *cam, uint32_t threads,
     uint32_t t = threads < MAX_THREADS ? threads : MAX_THREADS;
     for (uint32_t k = 0; k < t; k++) {
         uint32_t h = cam->height;
-        jobs[k] = (view_job){cam, rgba, h * k / t, h * (k + 1) / t};
+        jobs[k] = (view_job){cam, look, px, zdepth, h * k / t,
+                             h * (k + 1) / t};
     }
     for (uint32_t k = 1; k < t; k++) {
         started[k] = pthread_create(&tid[k], NULL, render_rows, &jobs[k]) == 0;
@@ -145,8 +179,7 @@ static void render_view(const nerf_camera *cam, uint32_t threads,
     }
 }
 
-/* mkdir -p: the folder and any missing parents. */
-static int make_dir(const char *path)
+int nerf__scene_make_dir(const char *path)
 {
     char buf[4096];
     size_t n = strlen(path);
@@ -182,14 +215,37 @@ static cJSON *matrix_json(const float c2w[12])
     return rows;
 }
 
+/* Camera i of n of a split of the options' capture. */
+static void capture_camera(const nerf_scene_options *o, int split, uint32_t i,
+                           uint32_t n, nerf_camera *cam)
+{
+    if (o->capture == NERF_SCENE_CAPTURE_FORWARD) {
+        nerf__scene_forward_camera(o, split, i, n, cam);
+        return;
+    }
+    if (o->capture == NERF_SCENE_CAPTURE_UNBOUNDED) {
+        nerf__scene_unbounded_camera(o, split, i, n, cam);
+        return;
+    }
+    NERF_CAMERA_INIT(cam);
+    cam->width = o->width;
+    cam->height = o->height;
+    cam->fx = cam->fy = (float)(0.5 * o->width /
+                                tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
+    cam->cx = 0.5f * (float)o->width;
+    cam->cy = 0.5f * (float)o->height;
+    place_camera(split, i, n, o->seed, cam);
+}
+
 static int write_split(const char *dir, int split, uint32_t n,
                        const nerf_scene_options *o, const nerf__env *env,
-                       uint8_t *rgba)
+                       uint8_t *px)
 {
     static const char *const names[] = {"train", "val", "test"};
+    const nerf__scene_look look = nerf__scene_look_of(o->capture);
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[split]);
-    int rc = make_dir(path);
+    int rc = nerf__scene_make_dir(path);
     cJSON *root = cJSON_CreateObject();
     cJSON *frames = cJSON_CreateArray();
     if (root == NULL || frames == NULL) {
@@ -197,21 +253,26 @@ static int write_split(const char *dir, int split, uint32_t n,
         cJSON_Delete(frames);
         return nerf__error(NERF_ENOMEM, "%s: out of memory building JSON", dir);
     }
-    cJSON_AddNumberToObject(root, "camera_angle_x", NERF__SCENE_CAMERA_ANGLE_X);
+    cJSON_AddNumberToObject(root, "camera_angle_x",
+                            o->capture == NERF_SCENE_CAPTURE_OBJECT
+                                ? NERF__SCENE_CAMERA_ANGLE_X
+                                : NERF__SCENE_WIDE_ANGLE_X);
+    if (o->capture == NERF_SCENE_CAPTURE_UNBOUNDED) {
+        /*
+         * instant-ngp's hint that the scene reaches far beyond the unit
+         * box: 16 is the largest power of two its grids cascade to that
+         * keeps the backdrop (radius 40 units) mostly inside.
+         */
+        cJSON_AddNumberToObject(root, "aabb_scale", AABB_SCALE);
+    }
     cJSON_AddItemToObject(root, "frames", frames);
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        cam.width = o->width;
-        cam.height = o->height;
-        cam.fx = cam.fy = (float)(0.5 * o->width /
-                                  tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
-        cam.cx = 0.5f * (float)o->width;
-        cam.cy = 0.5f * (float)o->height;
-        place_camera(split, i, n, o->seed, &cam);
-        render_view(&cam, o->threads, rgba);
+        capture_camera(o, split, i, n, &cam);
+        nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
         snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
-        rc = nerf__png_write8(env, path, o->width, o->height, 4, rgba);
+        rc = nerf__png_write8(env, path, o->width, o->height, look.channels,
+                              px);
         cJSON *frame = cJSON_CreateObject();
         char file[64];
         snprintf(file, sizeof file, "./%s/r_%u", names[split], i);
@@ -231,6 +292,37 @@ static int write_split(const char *dir, int split, uint32_t n,
     nerf__log(env, NERF_LOG_INFO, "scene: wrote %u %s views of %ux%u to %s", n,
               names[split], o->width, o->height, dir);
     return rc;
+}
+
+/* The capture and layout: known, implemented here, and fitting each other. */
+static int check_capture(const nerf_scene_options *o)
+{
+    static const char *const captures[] = {"object", "forward", "unbounded"};
+    if (o->capture > NERF_SCENE_CAPTURE_UNBOUNDED) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: capture %u is "
+                           "unknown (0 object, 1 forward, 2 unbounded)",
+                           (unsigned)o->capture);
+    }
+    if (o->layout > NERF_SCENE_LAYOUT_COLMAP_BINARY) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
+                           "unknown (0 blender, 1 transforms, 2 llff, "
+                           "3 colmap text, 4 colmap binary)",
+                           (unsigned)o->layout);
+    }
+    if (o->layout != NERF_SCENE_LAYOUT_BLENDER &&
+        o->layout != NERF_SCENE_LAYOUT_LLFF) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
+                           "not supported yet", (unsigned)o->layout);
+    }
+    /* LLFF's loaders warp every ray to NDC, which only a forward-facing
+     * capture fits. */
+    if (o->layout == NERF_SCENE_LAYOUT_LLFF &&
+        o->capture != NERF_SCENE_CAPTURE_FORWARD) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: the LLFF layout "
+                           "holds forward-facing captures only, not the %s "
+                           "capture", captures[o->capture]);
+    }
+    return NERF_OK;
 }
 
 NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
@@ -255,6 +347,10 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (o.reserved0 != 0) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
     }
+    rc = check_capture(&o);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     if (o.threads == 0) {
         o.threads = nerf__cpu_count();
     }
@@ -263,17 +359,22 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (rc != NERF_OK) {
         return rc;
     }
-    rc = make_dir(dir);
-    uint8_t *rgba = rc == NERF_OK
-                        ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
-                        : NULL;
-    if (rc == NERF_OK && rgba == NULL) {
+    rc = nerf__scene_make_dir(dir);
+    uint8_t *px = rc == NERF_OK
+                      ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
+                      : NULL;
+    if (rc == NERF_OK && px == NULL) {
         rc = NERF_ENOMEM;
     }
-    const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
-    for (int split = 0; split < 3 && rc == NERF_OK; split++) {
-        rc = write_split(dir, split, counts[split], &o, &env, rgba);
+    if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_LLFF) {
+        rc = nerf__scene_write_llff(dir, &o, &env, px);
     }
-    nerf__free(&env, rgba);
+    const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
+    for (int split = 0; split < 3 && rc == NERF_OK &&
+                        o.layout == NERF_SCENE_LAYOUT_BLENDER;
+         split++) {
+        rc = write_split(dir, split, counts[split], &o, &env, px);
+    }
+    nerf__free(&env, px);
     return rc;
 }

@@ -1,6 +1,7 @@
 /* The built-in scene: its analytic field, and the dataset it writes. */
 #include <cJSON.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "../harness.h"
@@ -114,6 +115,112 @@ TEST(writes_a_blender_dataset)
     fx_remove_tree(dir);
 }
 
+/*
+ * The object capture as the writer made it before the other captures
+ * existed (12x8, 2 train, 1 val, 1 test views), decoded to RGBA bytes: it
+ * must not change.  Compared within one level, so that a libm rounding
+ * differently elsewhere does not fail it.
+ */
+static const char pinned_train_1[] =
+    "00000000000000000000000000000000c62f2326c72f23f1c62e230500000000"
+    "00000000000000000000000000000000000000000000000000000000b92b211f"
+    "c62f23ffc82f23ffc42e23ff000000002b4cc3ff2c4dc6ff2a4abf0200000000"
+    "000000000000000000000000a9281edebc2c21ffbe2d22ffb92c21ff7c2e470e"
+    "2846b5ff2947b8ff2643ad0800000000000000000000000000000000c19f2850"
+    "a4271dffa8281eff4e7932ffc2a329ff9888455f223b97190000000000000000"
+    "0000000000000000c0a2280fc0a229ff33993a1e2f983aff2f983aff2f983afd"
+    "bfa229ffc0a2280f00000000000000000000000000000000bfa128feb79a26e2"
+    "2d9439ff2f983aff2f983aff2f983aff3a9437fcbfa128fe0000000000000000"
+    "0000000000000000b89b27d2c3a429ff25772efb2d9238ff2f983aff2c8e37ff"
+    "94972affb89b27d20000000000000000000000000000000000000000bfa128ff"
+    "c1a429ff24762dff2a8935ff226e2affbea128ff000000000000000000000000";
+static const char pinned_test_0[] =
+    "0000000000000000000000002d4ec99600000000000000000000000000000000"
+    "0000000000000000000000000000000000000000000000002847b6fd2a49bbff"
+    "2846b5ff000000002f993bfe2f993bfe2f993be5000000000000000000000000"
+    "0000000000000000223c9b15253e9fffc63026f1c92f23f7309439ff2e9539ff"
+    "2e9539ff000000000000000000000000000000000000000000000000c22e22ff"
+    "c62f23ffc62f23ffc22e22ff288332ff288332ff000000000000000000000000"
+    "0000000000000000ac281e0ab82b21ffbc2c21ffbc2c21ffb82b20ff316328ff"
+    "226c29ff0000000000000000000000000000000000000000c2a329fea6271dff"
+    "ac281effab281effa5271dff7e2e1c06b89b27ffc2a329fe0000000000000000"
+    "0000000000000000c0a128ffb28024fc91221aff91221aff8620187100000000"
+    "c1a329fbc0a128ff00000000000000000000000000000000ae932522bfa128ff"
+    "c4a529ffc4a529fdc4a529fdc4a529ffbfa128ffae9325220000000000000000";
+
+static int hex_nibble(char c)
+{
+    return c <= '9' ? c - '0' : c - 'a' + 10;
+}
+
+/* Largest difference, in 8-bit levels, between a PNG and a pinned image. */
+static int png_off_pin(const char *path, const char *pin)
+{
+    nerf__env env;
+    nerf__env_default(&env);
+    uint32_t w = 0, h = 0;
+    float *rgba = NULL;
+    if (nerf__png_read_rgba(&env, path, &w, &h, &rgba) != NERF_OK ||
+        w != 12 || h != 8 || strlen(pin) != 2 * 4 * 12 * 8) {
+        nerf__free(&env, rgba);
+        return 1000;
+    }
+    int worst = 0;
+    for (size_t k = 0; k < 4 * 12 * 8; k++) {
+        int want = 16 * hex_nibble(pin[2 * k]) + hex_nibble(pin[2 * k + 1]);
+        int got = (int)lrintf(rgba[k] * 255.0f);
+        int off = abs(got - want);
+        worst = off > worst ? off : worst;
+    }
+    nerf__free(&env, rgba);
+    return worst;
+}
+
+TEST(object_capture_unchanged)
+{
+    char *dir = fx_make_temp_dir();
+    nerf_scene_options o;
+    CHECK_OK(NERF_SCENE_OPTIONS_INIT(&o));
+    CHECK_EQ_INT(o.capture, NERF_SCENE_CAPTURE_OBJECT);
+    CHECK_EQ_INT(o.layout, NERF_SCENE_LAYOUT_BLENDER);
+    o.width = 12;
+    o.height = 8;
+    o.n_train = 2;
+    o.n_val = 1;
+    o.n_test = 1;
+    o.threads = 1;
+    CHECK_OK(nerf_scene_write(dir, &o));
+    char path[1024];
+    snprintf(path, sizeof path, "%s/train/r_1.png", dir);
+    CHECK(png_off_pin(path, pinned_train_1) <= 1);
+    snprintf(path, sizeof path, "%s/test/r_0.png", dir);
+    CHECK(png_off_pin(path, pinned_test_0) <= 1);
+    /* The first train camera, as the writer put it. */
+    static const double want[12] = {0, -0.3125, 0.949917733669281,
+                                    3.799670934677124, 1, 0, 0, 0,
+                                    0, 0.949917733669281, 0.3125, 1.25};
+    nerf__env env;
+    nerf__env_default(&env);
+    unsigned char *text = NULL;
+    size_t size = 0;
+    snprintf(path, sizeof path, "%s/transforms_train.json", dir);
+    CHECK_OK(nerf__file_read(&env, path, 1 << 20, &text, &size));
+    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size) : NULL;
+    nerf__free(&env, text);
+    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "camera_angle_x")),
+               0.69111120700836182, 1e-12);
+    CHECK(cJSON_GetObjectItem(root, "aabb_scale") == NULL);
+    cJSON *m = cJSON_GetObjectItem(
+        cJSON_GetArrayItem(cJSON_GetObjectItem(root, "frames"), 0),
+        "transform_matrix");
+    for (int k = 0; k < 12; k++) {
+        cJSON *v = cJSON_GetArrayItem(cJSON_GetArrayItem(m, k / 4), k % 4);
+        CHECK_NEAR(cJSON_GetNumberValue(v), want[k], 1e-6);
+    }
+    cJSON_Delete(root);
+    fx_remove_tree(dir);
+}
+
 TEST(bad_options)
 {
     nerf_scene_options o;
@@ -139,6 +246,36 @@ TEST(bad_options)
     }
     CHECK_EQ_INT(nerf_scene_write(below, &o), NERF_EIO);
     CHECK(strstr(nerf_last_error(), file) != NULL);
+    /* Captures and layouts: unknown, not yet written, not fitting. */
+    char out[600];
+    snprintf(out, sizeof out, "%s/out", dir);
+    o.capture = 3;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "capture 3 is unknown") != NULL);
+    o.capture = NERF_SCENE_CAPTURE_FORWARD;
+    o.layout = 5;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "layout 5 is unknown") != NULL);
+    static const uint32_t later[] = {NERF_SCENE_LAYOUT_TRANSFORMS,
+                                     NERF_SCENE_LAYOUT_COLMAP_TEXT,
+                                     NERF_SCENE_LAYOUT_COLMAP_BINARY};
+    for (int k = 0; k < 3; k++) {
+        char want[64];
+        snprintf(want, sizeof want, "layout %u is not supported yet",
+                 (unsigned)later[k]);
+        o.layout = later[k];
+        CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+        CHECK(strstr(nerf_last_error(), want) != NULL);
+    }
+    o.layout = NERF_SCENE_LAYOUT_LLFF;
+    o.capture = NERF_SCENE_CAPTURE_UNBOUNDED;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "forward-facing captures only") != NULL);
+    o.capture = NERF_SCENE_CAPTURE_OBJECT;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "not the object capture") != NULL);
+    /* Refused before anything is written. */
+    CHECK(fx_file_size(out) < 0);
     fx_remove_tree(dir);
 }
 
@@ -146,6 +283,7 @@ int main(void)
 {
     RUN(field_rays);
     RUN(writes_a_blender_dataset);
+    RUN(object_capture_unchanged);
     RUN(bad_options);
     HARNESS_EXIT();
 }

@@ -19,6 +19,24 @@ DATASET_BLENDER = 1
 DATASET_LLFF = 2
 FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff"}
 
+# nerf_scene_options.capture and .layout, and their names.
+SCENE_CAPTURE_OBJECT = 0
+SCENE_CAPTURE_FORWARD = 1
+SCENE_CAPTURE_UNBOUNDED = 2
+SCENE_CAPTURES = {"object": SCENE_CAPTURE_OBJECT,
+                  "forward": SCENE_CAPTURE_FORWARD,
+                  "unbounded": SCENE_CAPTURE_UNBOUNDED}
+SCENE_LAYOUT_BLENDER = 0
+SCENE_LAYOUT_TRANSFORMS = 1
+SCENE_LAYOUT_LLFF = 2
+SCENE_LAYOUT_COLMAP_TEXT = 3
+SCENE_LAYOUT_COLMAP_BINARY = 4
+SCENE_LAYOUTS = {"blender": SCENE_LAYOUT_BLENDER,
+                 "transforms": SCENE_LAYOUT_TRANSFORMS,
+                 "llff": SCENE_LAYOUT_LLFF,
+                 "colmap-text": SCENE_LAYOUT_COLMAP_TEXT,
+                 "colmap-binary": SCENE_LAYOUT_COLMAP_BINARY}
+
 #: Largest width or height the PNG functions accept.
 IMAGE_MAX_SIDE = 16384
 
@@ -212,10 +230,21 @@ def load_camera_path(path: Any, *, log: LogFn = None,
 
 def write_scene(path: Any, *, log: LogFn = None,
                 log_level: Optional[int] = None, **options: Any) -> None:
-    """Write the built-in scene to folder ``path`` as a Blender dataset
-    (``nerf_scene_write``).  Keyword options are fields of
-    :class:`nerf.SceneOptions` (width, height, n_train, n_val, n_test,
-    threads, seed)."""
+    """Write the built-in scene to folder ``path`` (``nerf_scene_write``).
+    Keyword options are fields of :class:`nerf.SceneOptions` (width,
+    height, n_train, n_val, n_test, threads, seed, capture, layout);
+    capture and layout may be given by name ("object", "forward",
+    "unbounded"; "blender", "llff", ...).  As in C, the layout defaults to
+    Blender whatever the capture: a forward capture is usually written
+    with layout="llff"."""
+    for key, names in (("capture", SCENE_CAPTURES),
+                       ("layout", SCENE_LAYOUTS)):
+        value = options.get(key)
+        if isinstance(value, str):
+            if value not in names:
+                raise ValueError("%s must be one of %s, not %r"
+                                 % (key, ", ".join(names), value))
+            options[key] = names[value]
     opts = SceneOptions(**options)
     hooks = _handle.make_hooks(log, log_level)
     if hooks is not None:

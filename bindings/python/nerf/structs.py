@@ -169,6 +169,8 @@ class SceneOptions(_Versioned):
         ("reserved0", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
+        ("capture", c_uint32),
+        ("layout", c_uint32),
     ]
 
 

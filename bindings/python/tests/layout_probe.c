@@ -98,6 +98,8 @@ static void structs(void)
     FIELD(nerf_scene_options, reserved0);
     FIELD(nerf_scene_options, seed);
     FIELD(nerf_scene_options, hooks);
+    FIELD(nerf_scene_options, capture);
+    FIELD(nerf_scene_options, layout);
     end_struct();
 
     BEGIN(nerf_camera);
@@ -242,6 +244,14 @@ static void constants(void)
     CONST(NERF_SPLIT_TEST);
     CONST(NERF_DATASET_BLENDER);
     CONST(NERF_DATASET_LLFF);
+    CONST(NERF_SCENE_CAPTURE_OBJECT);
+    CONST(NERF_SCENE_CAPTURE_FORWARD);
+    CONST(NERF_SCENE_CAPTURE_UNBOUNDED);
+    CONST(NERF_SCENE_LAYOUT_BLENDER);
+    CONST(NERF_SCENE_LAYOUT_TRANSFORMS);
+    CONST(NERF_SCENE_LAYOUT_LLFF);
+    CONST(NERF_SCENE_LAYOUT_COLMAP_TEXT);
+    CONST(NERF_SCENE_LAYOUT_COLMAP_BINARY);
     CONST(NERF_IMAGE_MAX_SIDE);
     CONST(NERF_CAMERA_PATH_FILE_SIZE);
     CONST(NERF_CAMERA_PATH_FILE_INTRINSICS);

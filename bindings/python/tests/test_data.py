@@ -31,6 +31,27 @@ class Scene(TestCase):
                          height=8, n_train=1, n_val=1, n_test=1,
                          log=lambda lvl, msg: logged.append(msg))
 
+    def test_captures(self):
+        fwd = os.path.join(_support.tmpdir(), "forward")
+        nerf.write_scene(fwd, width=16, height=12, n_train=7, n_test=2,
+                         capture="forward", layout="llff")
+        with nerf.Dataset.load(fwd, "train") as ds:
+            self.assertEqual(ds.format, "llff")
+            self.assertTrue(ds.is_ndc)
+            self.assertEqual(len(ds), 7)
+            self.assertEqual(ds.image_size, (16, 12))
+        out = os.path.join(_support.tmpdir(), "unbounded")
+        nerf.write_scene(out, width=16, height=12, n_train=2, n_val=1,
+                         n_test=1, capture=nerf.SCENE_CAPTURE_UNBOUNDED)
+        with nerf.Dataset.load(out, "train") as ds:
+            self.assertEqual(ds.format, "blender")
+            self.assertFalse(ds.is_ndc)
+        with self.assertRaises(ValueError):
+            nerf.write_scene(out, capture="sideways")
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "forward-facing captures only"):
+            nerf.write_scene(out, layout="llff")
+
 
 class Datasets(TestCase):
     def test_train_split(self):

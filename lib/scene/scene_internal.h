@@ -1,0 +1,54 @@
+/*
+ * What the parts of the scene writer share: rendering a view of the field,
+ * the cameras of each capture, and the layouts written in files of their
+ * own (scene_writer.c holds the options and the Blender layout).
+ */
+#ifndef NERF_SCENE_INTERNAL_H
+#define NERF_SCENE_INTERNAL_H
+
+#include <stdint.h>
+
+#include "env.h"
+#include "field.h"
+#include "nerf.h"
+
+/* How a capture looks at the field. */
+typedef struct nerf__scene_look {
+    nerf__scene_world world;
+    float near, far;   /* the stretch of each camera ray integrated */
+    uint32_t channels; /* 4: straight RGBA (the object); 3: opaque RGB */
+} nerf__scene_look;
+
+/* The look of a capture (nerf_scene_options.capture, already checked). */
+nerf__scene_look nerf__scene_look_of(uint32_t capture);
+
+/*
+ * Render one view into px (width x height x look->channels bytes) with up
+ * to `threads` threads splitting its rows; zdepth (width x height floats,
+ * or NULL) receives each pixel's expected depth along the optical axis.
+ */
+void nerf__scene_render_view(const nerf_camera *cam,
+                             const nerf__scene_look *look, uint32_t threads,
+                             uint8_t *px, float *zdepth);
+
+/* mkdir -p: the folder and any missing parents. */
+int nerf__scene_make_dir(const char *path);
+
+/*
+ * Camera i of n of a split (0 train, 1 val, 2 test) of a capture, with the
+ * options' image size: FORWARD and UNBOUNDED (captures.c); OBJECT stays in
+ * scene_writer.c.
+ */
+void nerf__scene_forward_camera(const nerf_scene_options *o, int split,
+                                uint32_t i, uint32_t n, nerf_camera *cam);
+void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
+                                  uint32_t i, uint32_t n, nerf_camera *cam);
+
+/* The horizontal field of view (radians) of FORWARD and UNBOUNDED. */
+#define NERF__SCENE_WIDE_ANGLE_X 1.0
+
+/* The LLFF layout of a FORWARD capture (layout_llff.c). */
+int nerf__scene_write_llff(const char *dir, const nerf_scene_options *o,
+                           const nerf__env *env, uint8_t *px);
+
+#endif
