@@ -9,8 +9,11 @@
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
+    "                  [--layout blender|colmap-text|colmap-binary]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR as a\n"
-    "Blender-format dataset: transforms_{train,val,test}.json and PNGs.\n"
+    "Blender-format dataset: transforms_{train,val,test}.json and PNGs;\n"
+    "or, with --layout colmap-*, as a COLMAP model: images/ and sparse/0/\n"
+    "cameras, images and points3D in COLMAP's text or binary files.\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
 
 int main(int argc, char **argv)
@@ -28,6 +31,21 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--layout") == 0) {
+            const char *name = cli_value(argc, argv, &i);
+            if (name == NULL) {
+                goto bad;
+            } else if (strcmp(name, "blender") == 0) {
+                o.layout = NERF_SCENE_LAYOUT_BLENDER;
+            } else if (strcmp(name, "colmap-text") == 0) {
+                o.layout = NERF_SCENE_LAYOUT_COLMAP_TEXT;
+            } else if (strcmp(name, "colmap-binary") == 0) {
+                o.layout = NERF_SCENE_LAYOUT_COLMAP_BINARY;
+            } else {
+                fprintf(stderr, "nerf-scene: unknown layout '%s'\n", name);
                 goto bad;
             }
             continue;

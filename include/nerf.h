@@ -497,7 +497,29 @@ typedef struct nerf_scene_options {
     uint32_t reserved0;   /**< Must be 0. */
     uint64_t seed;        /**< Placement of the validation views; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    uint32_t layout;      /**< NERF_SCENE_LAYOUT_*: the files written;
+                               default BLENDER. */
 } nerf_scene_options;
+
+/** Values of nerf_scene_options.layout. */
+#define NERF_SCENE_LAYOUT_BLENDER 0 /**< transforms_{train,val,test}.json
+                                         and RGBA PNGs in train/, val/,
+                                         test/. */
+#define NERF_SCENE_LAYOUT_TRANSFORMS 1 /**< One transforms.json (instant-ngp
+                                            style); not written by this
+                                            version. */
+#define NERF_SCENE_LAYOUT_LLFF 2 /**< poses_bounds.npy; not written by this
+                                      version. */
+#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3 /**< A COLMAP model as COLMAP's text
+                                             files: images/ (RGB PNGs, the
+                                             views composited onto white,
+                                             named 00000.png ... over the
+                                             train, val and test views in
+                                             that order) and sparse/0/
+                                             cameras.txt, images.txt,
+                                             points3D.txt. */
+#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4 /**< The same with COLMAP's
+                                               binary files (.bin). */
 
 /**
  * Fill @p opts with defaults and record @p struct_size.
@@ -511,7 +533,11 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
 /**
  * Write the built-in scene to the folder @p dir (created if missing) as a
  * Blender-format dataset: transforms_{train,val,test}.json and RGBA PNGs
- * under train/, val/ and test/.  The scene is a few coloured solids with
+ * under train/, val/ and test/ (or a COLMAP model, as opts->layout says:
+ * one PINHOLE camera, every view's pose in COLMAP's convention, and sparse
+ * points on the solids' surfaces, each the expected termination point of a
+ * pixel's ray of opacity above 0.95 in a few views, with a track of the
+ * views whose ray through its projection ends there too).  The scene is a few coloured solids with
  * smooth density edges inside a sphere of radius 1.6 about the origin,
  * rendered by numerically exact volume rendering from cameras at distance
  * 4 (use near 2, far 6, as for the Blender scenes).  Same options, same
@@ -1160,7 +1186,9 @@ typedef enum nerf_split {
 /** The layout a dataset was loaded from, as nerf_dataset_get_format() says. */
 typedef enum nerf_dataset_format {
     NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or transforms.json. */
-    NERF_DATASET_LLFF = 2     /**< poses_bounds.npy and images folders. */
+    NERF_DATASET_LLFF = 2,    /**< poses_bounds.npy and images folders. */
+    NERF_DATASET_COLMAP = 3   /**< A COLMAP sparse model (sparse/0/ or
+                                   sparse/) beside images folders. */
 } nerf_dataset_format;
 
 /** How nerf_dataset_load() reads a scene. */

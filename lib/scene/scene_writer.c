@@ -20,6 +20,7 @@
 #include "options.h"
 #include "png_io.h"
 #include "rng.h"
+#include "scene_internal.h"
 
 #define NEAR 2.0f
 #define FAR 6.0f
@@ -58,8 +59,8 @@ static void position(double azimuth, double elevation, double p[3])
  * sin(elevation)); validation views are random there; test views circle
  * at a fixed elevation, as the lego test split does.
  */
-static void place_camera(int split, uint32_t i, uint32_t n, uint64_t seed,
-                         nerf_camera *cam)
+void nerf__scene_place_camera(int split, uint32_t i, uint32_t n,
+                              uint64_t seed, nerf_camera *cam)
 {
     double p[3];
     if (split == 0) {
@@ -119,8 +120,8 @@ static void *render_rows(void *arg)
 }
 
 /* Render one view with up to `threads` threads splitting its rows. */
-static void render_view(const nerf_camera *cam, uint32_t threads,
-                        uint8_t *rgba)
+void nerf__scene_render_view(const nerf_camera *cam, uint32_t threads,
+                             uint8_t *rgba)
 {
     enum { MAX_THREADS = 64 };
     pthread_t tid[MAX_THREADS];
@@ -146,7 +147,7 @@ static void render_view(const nerf_camera *cam, uint32_t threads,
 }
 
 /* mkdir -p: the folder and any missing parents. */
-static int make_dir(const char *path)
+int nerf__scene_make_dir(const char *path)
 {
     char buf[4096];
     size_t n = strlen(path);
@@ -189,7 +190,7 @@ static int write_split(const char *dir, int split, uint32_t n,
     static const char *const names[] = {"train", "val", "test"};
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[split]);
-    int rc = make_dir(path);
+    int rc = nerf__scene_make_dir(path);
     cJSON *root = cJSON_CreateObject();
     cJSON *frames = cJSON_CreateArray();
     if (root == NULL || frames == NULL) {
@@ -208,8 +209,8 @@ static int write_split(const char *dir, int split, uint32_t n,
                                   tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
         cam.cx = 0.5f * (float)o->width;
         cam.cy = 0.5f * (float)o->height;
-        place_camera(split, i, n, o->seed, &cam);
-        render_view(&cam, o->threads, rgba);
+        nerf__scene_place_camera(split, i, n, o->seed, &cam);
+        nerf__scene_render_view(&cam, o->threads, rgba);
         snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
         rc = nerf__png_write8(env, path, o->width, o->height, 4, rgba);
         cJSON *frame = cJSON_CreateObject();
@@ -255,6 +256,13 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (o.reserved0 != 0) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
     }
+    if (o.layout != NERF_SCENE_LAYOUT_BLENDER &&
+        o.layout != NERF_SCENE_LAYOUT_COLMAP_TEXT &&
+        o.layout != NERF_SCENE_LAYOUT_COLMAP_BINARY) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
+                           "not one this version writes (BLENDER, "
+                           "COLMAP_TEXT, COLMAP_BINARY)", (unsigned)o.layout);
+    }
     if (o.threads == 0) {
         o.threads = nerf__cpu_count();
     }
@@ -263,7 +271,7 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (rc != NERF_OK) {
         return rc;
     }
-    rc = make_dir(dir);
+    rc = nerf__scene_make_dir(dir);
     uint8_t *rgba = rc == NERF_OK
                         ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
                         : NULL;
@@ -271,6 +279,11 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
         rc = NERF_ENOMEM;
     }
     const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
+    if (rc == NERF_OK && o.layout != NERF_SCENE_LAYOUT_BLENDER) {
+        rc = nerf__scene_write_colmap(dir, &o, &env, rgba);
+        nerf__free(&env, rgba);
+        return rc;
+    }
     for (int split = 0; split < 3 && rc == NERF_OK; split++) {
         rc = write_split(dir, split, counts[split], &o, &env, rgba);
     }
