@@ -17,6 +17,8 @@
 #   --min-registered N   fail when COLMAP places fewer than N photos
 #                        (default: all of them)
 #   --no-train           stop after COLMAP
+#   --colmap PATH        the colmap program (default: $COLMAP, else colmap
+#                        on PATH)
 #   --nerf-train PATH    the nerf-train program (default: $NERF_TRAIN, else
 #                        nerf-train on PATH, else build*/examples/nerf-train
 #                        of this checkout)
@@ -29,13 +31,14 @@ set -u
 
 me=colmap-train
 usage() {
-  sed -n '3,26p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '3,28p' "$0" | sed 's/^# \{0,1\}//'
 }
 
 camera_model=SIMPLE_RADIAL
 min_registered=""
 train=1
 nerf_train=${NERF_TRAIN:-}
+colmap=${COLMAP:-colmap}
 while [ $# -gt 0 ]; do
   case $1 in
     -h|--help) usage; exit 0 ;;
@@ -43,6 +46,7 @@ while [ $# -gt 0 ]; do
     --min-registered) min_registered=${2:-}; shift 2 || exit 2 ;;
     --no-train) train=0; shift ;;
     --nerf-train) nerf_train=${2:-}; shift 2 || exit 2 ;;
+    --colmap) colmap=${2:-}; shift 2 || exit 2 ;;
     --) break ;;
     -*) echo "$me: unknown option $1" >&2; usage >&2; exit 2 ;;
     *) break ;;
@@ -65,8 +69,8 @@ case $camera_model in
      exit 2 ;;
 esac
 
-if ! command -v colmap >/dev/null 2>&1; then
-  echo "$me: COLMAP is not installed (no 'colmap' on PATH); on Debian:" \
+if ! command -v "$colmap" >/dev/null 2>&1; then
+  echo "$me: COLMAP is not installed (no '$colmap' found); on Debian:" \
        "sudo apt-get install colmap" >&2
   exit 3
 fi
@@ -109,8 +113,14 @@ stage() {
   echo "$me: [$number/4] $name ..."
   start=$(date +%s.%N)
   if ! "$@" >>"$log" 2>&1; then
-    echo "$me: COLMAP $name failed; its output is in $log:" >&2
-    tail -n 5 "$log" >&2
+    if [ "$number" = 3 ]; then
+      echo "$me: COLMAP could not reconstruct the scene from the $n" \
+           "photos: the mapper placed none (too few features matched" \
+           "between them?); its output is in $log:" >&2
+    else
+      echo "$me: COLMAP $name failed; its output is in $log:" >&2
+    fi
+    grep -v '^$' "$log" | tail -n 3 >&2
     exit 1
   fi
   end=$(date +%s.%N)
@@ -119,13 +129,13 @@ stage() {
 }
 
 stage 1 "feature extraction ($n photos)" \
-  colmap feature_extractor --database_path "$db" --image_path "$out/images" \
+  "$colmap" feature_extractor --database_path "$db" --image_path "$out/images" \
     --ImageReader.single_camera 1 --ImageReader.camera_model "$camera_model" \
     --SiftExtraction.use_gpu 0
 stage 2 "exhaustive matching" \
-  colmap exhaustive_matcher --database_path "$db" --SiftMatching.use_gpu 0
+  "$colmap" exhaustive_matcher --database_path "$db" --SiftMatching.use_gpu 0
 stage 3 "mapping" \
-  colmap mapper --database_path "$db" --image_path "$out/images" \
+  "$colmap" mapper --database_path "$db" --image_path "$out/images" \
     --output_path "$out/sparse"
 
 # The mapper may split the photos into several models (sparse/0, 1, ...):
