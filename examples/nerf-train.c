@@ -1,4 +1,4 @@
-/* nerf-train: train a NeRF on a Blender or LLFF scene. */
+/* nerf-train: train a NeRF on a Blender, LLFF or COLMAP scene. */
 #include <nerf.h>
 
 #include <signal.h>
@@ -17,8 +17,9 @@ static const char usage[] =
     "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
     "                  [--batch-samples N] [--random-background 0|1]\n"
     "                  [--matmul fp32|bf16]\n"
-    "Train a NeRF on the scene in DIR (Blender transforms_*.json, or LLFF\n"
-    "poses_bounds.npy, detected from the folder) and save it to MODEL.\n"
+    "Train a NeRF on the scene in DIR (Blender transforms_*.json, LLFF\n"
+    "poses_bounds.npy, or a COLMAP model in sparse/0/ beside images/,\n"
+    "detected from the folder) and save it to MODEL.\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
     "                CPU), tiny (default) or fast (hash grid and small MLPs)\n"
     "  --steps N     train until the model has taken N steps (default 2000)\n"

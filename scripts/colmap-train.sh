@@ -29,7 +29,7 @@
 
 set -u
 
-me=colmap-train
+me="colmap-train"
 usage() {
   sed -n '3,28p' "$0" | sed 's/^# \{0,1\}//'
 }
