@@ -22,6 +22,10 @@
  * distance from the centre). */
 #define DEFAULT_NEAR 0.01
 #define DEFAULT_FAR 10.0
+/* Points nearer a camera than this (a millionth of the farthest camera's
+ * distance from the centre) are not in front of it: a near bound that
+ * small would vanish as a float. */
+#define MIN_DEPTH 1e-6
 
 static const char *const subdirs[] = {"sparse/0", "sparse"};
 static const char *const kinds[][3] = {
@@ -221,10 +225,10 @@ static double percentile(const depth_of *v, size_t n, double q)
 
 /*
  * Near and far: for each image, the 1st and 99th percentiles of the depths
- * (along its optical axis, in front of it) of the sparse points whose track
- * holds it; near is 0.9 x the least of the first, far 1.1 x the largest of
- * the second, in the scaled units.  Track entries naming an image the
- * model does not have are skipped.
+ * (along its optical axis, at least MIN_DEPTH in front of it) of the
+ * sparse points whose track holds it; near is 0.9 x the least of the
+ * first, far 1.1 x the largest of the second, in the scaled units.  Track
+ * entries naming an image the model does not have are skipped.
  */
 static int bounds(colmap_ctx *c, const id_index *ids)
 {
@@ -254,7 +258,7 @@ static int bounds(colmap_ctx *c, const id_index *ids)
                                            (pt->xyz[2] - c->sim.centre[2]));
                 z -= m[4 * a + 2] * (x - m[4 * a + 3]);
             }
-            if (z > 0.0) {
+            if (z > MIN_DEPTH) {
                 d[nd++] = (depth_of){(uint32_t)at, z};
             }
         }
