@@ -141,15 +141,15 @@ static int compare_camera(const void *a, const void *b)
 
 static int sort_cameras(const char *path, nerf__colmap_model *m)
 {
+    if (m->n_cameras == 0) {
+        return nerf__error(NERF_EFORMAT, "%s: no cameras", path);
+    }
     qsort(m->cameras, m->n_cameras, sizeof *m->cameras, compare_camera);
     for (size_t i = 1; i < m->n_cameras; i++) {
         if (m->cameras[i].id == m->cameras[i - 1].id) {
             return nerf__error(NERF_EFORMAT, "%s: camera %u appears twice",
                                path, (unsigned)m->cameras[i].id);
         }
-    }
-    if (m->n_cameras == 0) {
-        return nerf__error(NERF_EFORMAT, "%s: no cameras", path);
     }
     return NERF_OK;
 }

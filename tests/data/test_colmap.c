@@ -247,6 +247,10 @@ TEST(camera_models_map_onto_opencv)
     CHECK(parse_cameras("1 PINHOLE 64 48 nan 51 31 23\n", &m) ==
           NERF_EFORMAT);
     free_model(&m);
+    /* Found by fuzz_colmap_text: no camera at all reached qsort(NULL). */
+    CHECK(parse_cameras("# only a comment\n", &m) == NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "no cameras"));
+    free_model(&m);
     CHECK(parse_cameras("1 PINHOLE 64 48 5 5 3 3\n1 PINHOLE 64 48 5 5 3 3\n",
                         &m) == NERF_EFORMAT);
     CHECK(fx_has(nerf_last_error(), "twice"));
