@@ -167,6 +167,7 @@ class SceneOptions(_Versioned):
         ("reserved0", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
+        ("layout", c_uint32),
     ]
 
 

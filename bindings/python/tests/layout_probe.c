@@ -98,6 +98,7 @@ static void structs(void)
     FIELD(nerf_scene_options, reserved0);
     FIELD(nerf_scene_options, seed);
     FIELD(nerf_scene_options, hooks);
+    FIELD(nerf_scene_options, layout);
     end_struct();
 
     BEGIN(nerf_camera);
