@@ -75,6 +75,10 @@ static void colmap_cameras(const char *name, nerf_camera *out, float *near,
     CHECK_EQ_INT(nerf_dataset_get_format(train), NERF_DATASET_COLMAP);
     CHECK_EQ_INT(nerf_dataset_is_ndc(train), 0);
     /* Every 8th image, from the first, is held out. */
+    uint32_t w = 0, h = 0;
+    CHECK_OK(nerf_dataset_image_size(train, &w, &h));
+    CHECK_EQ_INT(w, W);
+    CHECK_EQ_INT(h, H);
     CHECK_EQ_INT(nerf_dataset_count(test), 2);
     CHECK_EQ_INT(nerf_dataset_count(train), N_ALL - 2);
     uint32_t it = 0, ie = 0;
@@ -89,6 +93,36 @@ static void colmap_cameras(const char *name, nerf_camera *out, float *near,
     CHECK_OK(nerf_dataset_bounds(train, near, far));
     nerf_dataset_destroy(train);
     nerf_dataset_destroy(test);
+}
+
+/* No images_2/: downscale 2 averages images/ and halves the intrinsics. */
+TEST(downscale_halves_the_intrinsics)
+{
+    char dir[1024];
+    fx_path(dir, sizeof dir, tmp, "bin");
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.downscale = 2;
+    nerf_dataset *full = load("bin", NERF_SPLIT_TRAIN), *half = NULL;
+    CHECK_OK(nerf_dataset_load(&half, dir, &o));
+    if (full && half) {
+        uint32_t w, h;
+        CHECK_OK(nerf_dataset_image_size(half, &w, &h));
+        CHECK_EQ_INT(w, W / 2);
+        CHECK_EQ_INT(h, H / 2);
+        nerf_camera a, b;
+        NERF_CAMERA_INIT(&a);
+        NERF_CAMERA_INIT(&b);
+        CHECK_OK(nerf_dataset_camera(full, 3, &a));
+        CHECK_OK(nerf_dataset_camera(half, 3, &b));
+        CHECK_NEAR(b.fx, 0.5 * a.fx, 1e-4);
+        CHECK_NEAR(b.cy, 0.5 * a.cy, 1e-4);
+        for (int i = 0; i < 12; i++) {
+            CHECK_NEAR(b.c2w[i], a.c2w[i], 0);
+        }
+    }
+    nerf_dataset_destroy(full);
+    nerf_dataset_destroy(half);
 }
 
 TEST(text_and_binary_agree_with_the_writer)
@@ -446,6 +480,7 @@ int main(void)
 {
     tmp = fx_make_temp_dir();
     RUN(text_and_binary_agree_with_the_writer);
+    RUN(downscale_halves_the_intrinsics);
     RUN(camera_models_map_onto_opencv);
     RUN(quaternions_round_trip);
     RUN(truncated_images_bin);
