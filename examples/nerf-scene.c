@@ -11,7 +11,7 @@ static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
     "                  [--capture object|forward|unbounded]\n"
-    "                  [--layout blender|llff]\n"
+    "                  [--layout blender|llff|colmap-text|colmap-binary]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR.\n"
     "  --capture object     the solids alone on a transparent background,\n"
     "                       from a hemisphere of views (the default)\n"
@@ -25,6 +25,9 @@ static const char usage[] =
     "  --layout llff        poses_bounds.npy and images/ (the default for\n"
     "                       forward, and only for it): --train + --test\n"
     "                       views, every 8th held out by the loader\n"
+    "  --layout colmap-text, colmap-binary  a COLMAP model: images/ and\n"
+    "                       sparse/0/ cameras, images and points3D in\n"
+    "                       COLMAP's text or binary files, all views\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
 
 /* A name of the list, by its index; -1 when it is not there. */

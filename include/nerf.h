@@ -557,10 +557,15 @@ typedef struct nerf_scene_options {
     holds out every 8th as LLFF has no split files.  Bounds per view are
     the 0.1 and 99.9 percentiles of its pixels' depths along the optical
     axis, as LLFF's imgs2poses takes them from the sparse points. */
-#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< COLMAP's text model (not
-    supported yet). */
-#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< COLMAP's binary model (not
-    supported yet). */
+#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< A COLMAP model as COLMAP's
+    text files: images/ (RGB PNGs, composited onto white for OBJECT, named
+    00000.png ... over the train, val and test views in that order) and
+    sparse/0/ cameras.txt, images.txt, points3D.txt: one PINHOLE camera,
+    every view's pose in COLMAP's convention, and sparse points where
+    pixels' rays of opacity above 0.95 end in a few views, each with a
+    track of the views whose ray through its projection ends there too. */
+#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< The same as COLMAP's binary
+    files (cameras.bin, images.bin, points3D.bin). */
 
 /**
  * Fill @p opts with defaults and record @p struct_size.
@@ -583,7 +588,8 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
  * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
  * sky, hills and a sun), so every pixel is opaque and depths reach 40;
  * they are what scenes of forward-facing and all-round photos are like.
- * Same options, same bytes.
+ * The layout (NERF_SCENE_LAYOUT_*) decides the files.  Same options, same
+ * bytes.
  * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
  * capture or layout, a layout that does not fit the capture or is not
  * supported yet); NERF_EIO (cannot create or write a file, named in the
@@ -1235,7 +1241,9 @@ typedef enum nerf_split {
 /** The layout a dataset was loaded from, as nerf_dataset_get_format() says. */
 typedef enum nerf_dataset_format {
     NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or transforms.json. */
-    NERF_DATASET_LLFF = 2     /**< poses_bounds.npy and images folders. */
+    NERF_DATASET_LLFF = 2,    /**< poses_bounds.npy and images folders. */
+    NERF_DATASET_COLMAP = 3   /**< A COLMAP sparse model (sparse/0/ or
+                                   sparse/) beside images folders. */
 } nerf_dataset_format;
 
 /** How nerf_dataset_load() reads a scene. */
@@ -1245,8 +1253,8 @@ typedef struct nerf_dataset_options {
     uint32_t downscale;        /**< Integer factor K, 1..256; default 1.
                                     Blender: each K x K block of the
                                     composited image is averaged and the
-                                    intrinsics are divided by K.  LLFF:
-                                    reads images_K/ if present, else
+                                    intrinsics are divided by K.  LLFF
+                                    and COLMAP: reads images_K/ if present, else
                                     images_M/ (images/ for M = 1) for the
                                     largest M dividing K, averaged in
                                     blocks of K / M.  Sizes are rounded
@@ -1260,11 +1268,12 @@ typedef struct nerf_dataset_options {
     uint32_t skip_missing;     /**< Blender: 1 drops frames whose image file
                                     does not exist (with a warning); 0
                                     (default) fails naming the file. */
-    uint32_t llff_holdout;     /**< LLFF: images whose index is a multiple
-                                    of this form the test split (and the
-                                    val split, as in the reference); the
-                                    others are train.  Default 8; 0 = none
-                                    held out. */
+    uint32_t llff_holdout;     /**< LLFF and COLMAP (formats without a
+                                    split): images, sorted by name, whose
+                                    index is a multiple of this form the
+                                    test split (and the val split, as in
+                                    the reference); the others are train.
+                                    Default 8; 0 = none held out. */
     uint32_t reserved0;        /**< Must be 0. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
@@ -1299,6 +1308,17 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *    on their average pose.  Focal = the file's focal x image width / the
  *    file's width, for both axes; principal point at the centre.  Rays are
  *    meant for NDC (nerf_dataset_is_ndc() is 1; bounds are 0 and 1).
+ *  - sparse/0/ or sparse/ holding COLMAP's cameras and images files
+ *    (.bin preferred to .txt; points3D optional): COLMAP.  Camera models
+ *    SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV, intrinsics
+ *    per image; photos (PNG) from images/ (or images_K/ as for LLFF) under
+ *    the model's names, sorted by name and split every llff_holdout-th.
+ *    Poses are turned from COLMAP's world-to-camera quaternions and
+ *    OpenCV axes into camera-to-world OpenGL ones, then moved so that the
+ *    sparse points' per-axis median is the origin, the cameras' mean up
+ *    vector is +z and the farthest camera is at distance 1; near and far
+ *    come from the 1st and 99th percentiles of the points' depths in each
+ *    image (docs/formats.md, "COLMAP models").  Not NDC.
  *
  * Images are stored as float RGB in [0, 1], composited as the options say.
  * The loader logs (level INFO, through the hooks) the format, image count
@@ -1309,7 +1329,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * larger than the images, an LLFF split left empty by llff_holdout);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
- * (malformed JSON, missing field, matrix of the wrong shape, NaN or
+ * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
+ * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
  * infinite values, entries beyond 1e6, a degenerate rotation, a focal
  * under 1e-3 pixels, near >= far (docs/formats.md, "Camera sanity"; the
  * message names the frame and its file_path), npy of the wrong
@@ -1349,7 +1370,8 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
 
 /**
  * The camera of image @p index: pose (OpenGL axes, world units of the
- * dataset, i.e. after the LLFF rescaling and recentring), intrinsics in
+ * dataset, i.e. after the LLFF rescaling and recentring, or the COLMAP
+ * centring and scaling), intrinsics in
  * pixels of the stored images, size, flags 0 (rays through pixel centres;
  * set NERF_CAMERA_PIXEL_CORNER to reproduce the reference's rays).
  * @param out initialised with nerf_camera_init(); as many bytes as its
@@ -1362,7 +1384,8 @@ NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,
 
 /**
  * The interval of t to sample along the dataset's rays: 2 and 6 for
- * Blender scenes, 0 and 1 (NDC depth) for LLFF scenes.
+ * Blender scenes, 0 and 1 (NDC depth) for LLFF scenes, from the sparse
+ * points' depths for COLMAP scenes.
  * @return NERF_OK or NERF_EINVAL (NULL pointer).
  */
 NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,

@@ -19,6 +19,12 @@ NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
                    libsdl2-dev xvfb xauth libdnnl-dev abigail-tools
                    clang libclang-rt-dev)
 
+# Optional packages: the test command installs them when it can (as root,
+# from the configured apt sources) and carries on without them otherwise;
+# the demo does not need them.  colmap (COLMAP, photos to poses) serves
+# scripts/colmap-train.sh; its test is skipped without it.
+NERF_DEB_OPTIONAL=(colmap)
+
 # Options of build/release, shared by both scripts so that running one after
 # the other reuses the build instead of reconfiguring it back and forth.
 # shellcheck disable=SC2034 # used by the scripts that source this file
@@ -72,6 +78,35 @@ nerf_ensure_packages() {
   if [ -n "$missing" ]; then
     echo "deps: still missing after apt-get: $missing" >&2
     return 1
+  fi
+  return 0
+}
+
+# Install the packages of NERF_DEB_OPTIONAL that are missing, when running
+# as root on Debian; never fails: what cannot be installed is named and its
+# tests skip.
+nerf_offer_optional_packages() {
+  command -v dpkg-query >/dev/null 2>&1 || return 0
+  local pkg status missing=""
+  for pkg in "${NERF_DEB_OPTIONAL[@]}"; do
+    status=$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null) || status=""
+    case "$status" in
+      *" ok installed") ;;
+      *) missing="$missing $pkg" ;;
+    esac
+  done
+  missing=${missing# }
+  [ -n "$missing" ] || return 0
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "deps: optional packages not installed: $missing (their tests" \
+         "will be skipped; sudo apt-get install -y $missing)" >&2
+    return 0
+  fi
+  echo "deps: installing optional Debian packages: $missing" >&2
+  # shellcheck disable=SC2086 # the list is meant to split into words
+  if ! DEBIAN_FRONTEND=noninteractive apt-get install -y $missing \
+       </dev/null; then
+    echo "deps: could not install $missing; their tests will be skipped" >&2
   fi
   return 0
 }

@@ -126,6 +126,8 @@ if ! nerf_ensure_packages; then
   exit 1
 fi
 
+nerf_offer_optional_packages
+
 run_suite release build/release -- "${NERF_RELEASE_OPTIONS[@]}" --
 
 # The same suites built by clang: macOS, FreeBSD and Android toolchains

@@ -108,6 +108,10 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
     if (rc == NERF_OK && !split_json && !all_json) {
         rc = is_file(&ds->env, dir, "poses_bounds.npy", &llff);
     }
+    int colmap = 0;
+    if (rc == NERF_OK && !split_json && !all_json && !llff) {
+        rc = nerf__colmap_detect(&ds->env, dir, &colmap);
+    }
     if (rc != NERF_OK) {
         return rc;
     }
@@ -120,9 +124,12 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
     if (llff) {
         return nerf__llff_load(ds, dir, cfg);
     }
-    return nerf__error(NERF_EIO, "%s: no %s, transforms.json or "
-                       "poses_bounds.npy: not a known dataset layout", dir,
-                       name);
+    if (colmap) {
+        return nerf__colmap_load(ds, dir, cfg);
+    }
+    return nerf__error(NERF_EIO, "%s: no %s, transforms.json, "
+                       "poses_bounds.npy or COLMAP model (sparse/0/ or "
+                       "sparse/): not a known dataset layout", dir, name);
 }
 
 NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,

@@ -12,13 +12,17 @@
 
 typedef enum nerf__dataset_kind {
     NERF__DATASET_BLENDER = 1,
-    NERF__DATASET_LLFF = 2
+    NERF__DATASET_LLFF = 2,
+    NERF__DATASET_COLMAP = 3
 } nerf__dataset_kind;
 
 /* The camera of one image, in the units of the stored (downscaled) image. */
 typedef struct nerf__view {
     double c2w[12]; /* 3x4 camera-to-world, row-major, OpenGL axes */
     double fx, fy, cx, cy;
+    /* OpenCV lens distortion (COLMAP's radial and OPENCV models); all 0
+     * for a pinhole camera.  Not applied to rays yet. */
+    double k1, k2, p1, p2, k3;
 } nerf__view;
 
 /*
@@ -94,10 +98,34 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
 char *nerf__path_join(const nerf__env *env, const char *dir,
                       const char *name);
 
+/*
+ * The folder of a downscale factor (docs of nerf_dataset_options.downscale):
+ * images_<factor>, else images_M for the largest M dividing it (images for
+ * M = 1); its path in *path_out (free with nerf__free) and M in
+ * *factor_out.  NERF_EIO naming dir when there is none.
+ */
+int nerf__find_image_dir(const nerf__env *env, const char *dir,
+                         uint32_t factor, char **path_out,
+                         uint32_t *factor_out);
+
+/*
+ * Indices (into n images sorted by name) of the split: every
+ * llff_holdout-th image from the first is test and val, the others train,
+ * thinned by skip.  Returns how many went to out (room for n).
+ */
+uint32_t nerf__holdout_split(size_t n, const nerf__dataset_config *cfg,
+                             uint32_t *out);
+
+/* Whether a COLMAP model (sparse/0/ or sparse/ holding cameras and images
+ * files) is in dir. */
+int nerf__colmap_detect(const nerf__env *env, const char *dir, int *found);
+
 /* Loaders.  dir is the scene folder; name is the file that was found. */
 int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
                        const nerf__dataset_config *cfg);
 int nerf__llff_load(nerf_dataset *ds, const char *dir,
                     const nerf__dataset_config *cfg);
+int nerf__colmap_load(nerf_dataset *ds, const char *dir,
+                      const nerf__dataset_config *cfg);
 
 #endif

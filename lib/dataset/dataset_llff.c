@@ -5,7 +5,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "dataset.h"
 #include "file_io.h"
@@ -122,43 +121,10 @@ static int check_rows(const llff_ctx *c)
     return NERF_OK;
 }
 
-static bool is_dir(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-/*
- * The folder to read: images_K for downscale K, else images_M for the
- * largest M dividing K (images/ being M = 1), filtered further by K / M.
- */
 static int find_image_dir(llff_ctx *c, uint32_t factor)
 {
-    for (uint32_t m = factor; m >= 1; m--) {
-        if (factor % m != 0) {
-            continue;
-        }
-        char name[32];
-        if (m == 1) {
-            snprintf(name, sizeof name, "images");
-        } else {
-            snprintf(name, sizeof name, "images_%u", (unsigned)m);
-        }
-        char *path = nerf__path_join(&c->ds->env, c->dir, name);
-        if (path == NULL) {
-            return NERF_ENOMEM;
-        }
-        if (is_dir(path)) {
-            c->image_dir = path;
-            c->image_factor = m;
-            return NERF_OK;
-        }
-        nerf__free(&c->ds->env, path);
-    }
-    return nerf__error(NERF_EIO, "%s: no image folder for downscale %u "
-                       "(looked for images_%u/, images_M/ with M dividing "
-                       "%u, and images/)", c->dir, (unsigned)factor,
-                       (unsigned)factor, (unsigned)factor);
+    return nerf__find_image_dir(&c->ds->env, c->dir, factor, &c->image_dir,
+                                &c->image_factor);
 }
 
 /* Case-insensitive suffix test on ASCII names. */
@@ -233,21 +199,6 @@ static int list_images(llff_ctx *c)
         qsort(c->names, c->n_names, sizeof *c->names, compare_names);
     }
     return rc;
-}
-
-/* Indices of the split's images: every holdout-th image is test (and val). */
-static uint32_t select_split(size_t n, const nerf__dataset_config *cfg,
-                             uint32_t *out)
-{
-    uint32_t count = 0, seen = 0;
-    for (size_t i = 0; i < n; i++) {
-        bool held = cfg->llff_holdout > 0 && i % cfg->llff_holdout == 0;
-        bool want = cfg->split == NERF_SPLIT_TRAIN ? !held : held;
-        if (want && seen++ % cfg->skip == 0) {
-            out[count++] = (uint32_t)i;
-        }
-    }
-    return count;
 }
 
 static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
@@ -343,7 +294,7 @@ static int load(llff_ctx *c, const nerf__dataset_config *cfg)
     if (sel == NULL) {
         return NERF_ENOMEM;
     }
-    uint32_t count = select_split(c->n, cfg, sel);
+    uint32_t count = nerf__holdout_split(c->n, cfg, sel);
     if (count == 0) {
         rc = nerf__error(NERF_EINVAL, "%s: the requested split has no images "
                          "(%zu views, holdout %u)", c->dir, c->n,

@@ -47,6 +47,15 @@ void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
 /* The horizontal field of view (radians) of FORWARD and UNBOUNDED. */
 #define NERF__SCENE_WIDE_ANGLE_X 1.0
 
+/* Camera i of n of a split of the options' capture, any of them. */
+void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
+                                uint32_t i, uint32_t n, nerf_camera *cam);
+
+/* The COLMAP layouts, text or binary (write_colmap.c); px holds one view
+ * of 4 channels. */
+int nerf__scene_write_colmap(const char *dir, const nerf_scene_options *o,
+                             const nerf__env *env, uint8_t *px);
+
 /* The LLFF layout of a FORWARD capture (layout_llff.c). */
 int nerf__scene_write_llff(const char *dir, const nerf_scene_options *o,
                            const nerf__env *env, uint8_t *px);

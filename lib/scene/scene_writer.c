@@ -215,9 +215,8 @@ static cJSON *matrix_json(const float c2w[12])
     return rows;
 }
 
-/* Camera i of n of a split of the options' capture. */
-static void capture_camera(const nerf_scene_options *o, int split, uint32_t i,
-                           uint32_t n, nerf_camera *cam)
+void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
+                                uint32_t i, uint32_t n, nerf_camera *cam)
 {
     if (o->capture == NERF_SCENE_CAPTURE_FORWARD) {
         nerf__scene_forward_camera(o, split, i, n, cam);
@@ -268,7 +267,7 @@ static int write_split(const char *dir, int split, uint32_t n,
     cJSON_AddItemToObject(root, "frames", frames);
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
-        capture_camera(o, split, i, n, &cam);
+        nerf__scene_capture_camera(o, split, i, n, &cam);
         nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
         snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
         rc = nerf__png_write8(env, path, o->width, o->height, look.channels,
@@ -309,8 +308,7 @@ static int check_capture(const nerf_scene_options *o)
                            "3 colmap text, 4 colmap binary)",
                            (unsigned)o->layout);
     }
-    if (o->layout != NERF_SCENE_LAYOUT_BLENDER &&
-        o->layout != NERF_SCENE_LAYOUT_LLFF) {
+    if (o->layout == NERF_SCENE_LAYOUT_TRANSFORMS) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
                            "not supported yet", (unsigned)o->layout);
     }
@@ -368,6 +366,10 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     }
     if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_LLFF) {
         rc = nerf__scene_write_llff(dir, &o, &env, px);
+    }
+    if (rc == NERF_OK && (o.layout == NERF_SCENE_LAYOUT_COLMAP_TEXT ||
+                          o.layout == NERF_SCENE_LAYOUT_COLMAP_BINARY)) {
+        rc = nerf__scene_write_colmap(dir, &o, &env, px);
     }
     const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
     for (int split = 0; split < 3 && rc == NERF_OK &&

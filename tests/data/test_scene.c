@@ -256,10 +256,8 @@ TEST(bad_options)
     o.layout = 5;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
     CHECK(strstr(nerf_last_error(), "layout 5 is unknown") != NULL);
-    static const uint32_t later[] = {NERF_SCENE_LAYOUT_TRANSFORMS,
-                                     NERF_SCENE_LAYOUT_COLMAP_TEXT,
-                                     NERF_SCENE_LAYOUT_COLMAP_BINARY};
-    for (int k = 0; k < 3; k++) {
+    static const uint32_t later[] = {NERF_SCENE_LAYOUT_TRANSFORMS};
+    for (int k = 0; k < 1; k++) {
         char want[64];
         snprintf(want, sizeof want, "layout %u is not supported yet",
                  (unsigned)later[k]);

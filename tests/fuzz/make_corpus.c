@@ -437,6 +437,48 @@ static void camera_path_seeds(void)
     camera_path_npy("npy_flat12_fov.bin", 0x05, "<f4", s12, 2);
 }
 
+/*
+ * The COLMAP targets' seeds: each file of the model fuzz_colmap.h writes
+ * (the built-in scene, 3 views of 8x8), behind option bytes that pick it,
+ * and a model without points.
+ */
+static void colmap_seeds(const char *target, uint32_t layout,
+                         const char *ext)
+{
+    static const char *const names[3] = {"cameras", "images", "points3D"};
+    static const unsigned char firsts[3][2] = {{0x00, 0x2c},
+                                               {0x01, 0x14},
+                                               {0x02, 0x36}};
+    char *dir = fx_make_temp_dir();
+    nerf_scene_options o;
+    NERF_SCENE_OPTIONS_INIT(&o);
+    o.width = 8;
+    o.height = 8;
+    o.n_train = 3;
+    o.n_val = 0;
+    o.n_test = 0;
+    o.threads = 1;
+    o.layout = layout;
+    CHECK_OK(nerf_scene_write(dir, &o));
+    for (int f = 0; f < 3; f++) {
+        char rel[64], path[1024], name[64];
+        snprintf(rel, sizeof rel, "sparse/0/%s.%s", names[f], ext);
+        fx_path(path, sizeof path, dir, rel);
+        size_t n;
+        unsigned char *b = slurp(path, &n);
+        for (int k = 0; k < 2; k++) {
+            snprintf(name, sizeof name, "%s_%02x.bin", names[f],
+                     firsts[f][k]);
+            save_with(target, name, firsts[f][k], b, n);
+        }
+        if (f == 1) {
+            save_with(target, "images_no_points.bin", 0x03, b, n);
+        }
+        free(b);
+    }
+    fx_remove_tree(dir);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -452,6 +494,8 @@ int main(int argc, char **argv)
     png_seeds();
     llff_seeds();
     camera_path_seeds();
+    colmap_seeds("colmap_text", NERF_SCENE_LAYOUT_COLMAP_TEXT, "txt");
+    colmap_seeds("colmap_bin", NERF_SCENE_LAYOUT_COLMAP_BINARY, "bin");
     FILE *stamp = fopen(argv[2], "w");
     if (stamp == NULL || fclose(stamp) != 0) {
         perror(argv[2]);

@@ -17,7 +17,9 @@ SPLIT_TEST = 2
 SPLITS = {"train": SPLIT_TRAIN, "val": SPLIT_VAL, "test": SPLIT_TEST}
 DATASET_BLENDER = 1
 DATASET_LLFF = 2
-FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff"}
+DATASET_COLMAP = 3
+FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff",
+           DATASET_COLMAP: "colmap"}
 
 # nerf_scene_options.capture and .layout, and their names.
 SCENE_CAPTURE_OBJECT = 0

@@ -85,6 +85,7 @@ static void structs(void)
     FIELD(nerf_model_options, view_depth);
     FIELD(nerf_model_options, density_activation);
     FIELD(nerf_model_options, matmul);
+    FIELD(nerf_model_options, space);
     end_struct();
 
     BEGIN(nerf_scene_options);
@@ -227,6 +228,9 @@ static void constants(void)
     CONST(NERF_PRESET_TINY);
     CONST(NERF_MATMUL_FP32);
     CONST(NERF_MATMUL_BF16);
+    CONST(NERF_SPACE_BOX);
+    CONST(NERF_SPACE_NDC);
+    CONST(NERF_SPACE_UNBOUNDED);
     CONST(NERF_NETWORK_COARSE);
     CONST(NERF_NETWORK_FINE);
     CONST(NERF_PARAM_LEARNING_RATE);
@@ -244,6 +248,7 @@ static void constants(void)
     CONST(NERF_SPLIT_TEST);
     CONST(NERF_DATASET_BLENDER);
     CONST(NERF_DATASET_LLFF);
+    CONST(NERF_DATASET_COLMAP);
     CONST(NERF_SCENE_CAPTURE_OBJECT);
     CONST(NERF_SCENE_CAPTURE_FORWARD);
     CONST(NERF_SCENE_CAPTURE_UNBOUNDED);

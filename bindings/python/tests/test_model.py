@@ -58,7 +58,7 @@ class Create(TestCase):
 
     def test_options_struct(self):
         opts = nerf.ModelOptions(depth=3, seed=9)
-        self.assertEqual(opts.struct_size, 112)
+        self.assertEqual(opts.struct_size, 120)
         d = opts.to_dict()
         self.assertEqual((d["depth"], d["seed"]), (3, 9))
         self.assertNotIn("struct_size", d)

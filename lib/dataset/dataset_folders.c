@@ -1,0 +1,58 @@
+/* What the loaders of photo folders (LLFF, COLMAP) share: the downscale
+ * rule's image folder and the every-n-th hold-out split. */
+#include <stdbool.h>
+#include <stdio.h>
+#include <sys/stat.h>
+
+#include "dataset.h"
+
+static bool is_dir(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+int nerf__find_image_dir(const nerf__env *env, const char *dir,
+                         uint32_t factor, char **path_out,
+                         uint32_t *factor_out)
+{
+    for (uint32_t m = factor; m >= 1; m--) {
+        if (factor % m != 0) {
+            continue;
+        }
+        char name[32];
+        if (m == 1) {
+            snprintf(name, sizeof name, "images");
+        } else {
+            snprintf(name, sizeof name, "images_%u", (unsigned)m);
+        }
+        char *path = nerf__path_join(env, dir, name);
+        if (path == NULL) {
+            return NERF_ENOMEM;
+        }
+        if (is_dir(path)) {
+            *path_out = path;
+            *factor_out = m;
+            return NERF_OK;
+        }
+        nerf__free(env, path);
+    }
+    return nerf__error(NERF_EIO, "%s: no image folder for downscale %u "
+                       "(looked for images_%u/, images_M/ with M dividing "
+                       "%u, and images/)", dir, (unsigned)factor,
+                       (unsigned)factor, (unsigned)factor);
+}
+
+uint32_t nerf__holdout_split(size_t n, const nerf__dataset_config *cfg,
+                             uint32_t *out)
+{
+    uint32_t count = 0, seen = 0;
+    for (size_t i = 0; i < n; i++) {
+        bool held = cfg->llff_holdout > 0 && i % cfg->llff_holdout == 0;
+        bool want = cfg->split == NERF_SPLIT_TRAIN ? !held : held;
+        if (want && seen++ % cfg->skip == 0) {
+            out[count++] = (uint32_t)i;
+        }
+    }
+    return count;
+}
