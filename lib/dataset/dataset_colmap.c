@@ -18,6 +18,10 @@
 /* Margins around the sparse points' depth percentiles. */
 #define NEAR_MARGIN 0.9
 #define FAR_MARGIN 1.1
+/* Half side of the central cube of a COLMAP scene's contracted space, in
+ * the units the placement leaves (farthest camera at 1). */
+#define COLMAP_INNER 1.0
+
 /* The bounds of a model without points (in units of the farthest camera's
  * distance from the centre). */
 #define DEFAULT_NEAR 0.01
@@ -469,6 +473,10 @@ int nerf__colmap_load(nerf_dataset *ds, const char *dir,
     if (rc == NERF_OK) {
         ds->kind = NERF__DATASET_COLMAP;
         ds->ndc = 0;
+        /* The farthest camera is at distance 1 from the centre, so every
+         * camera is in the unit cube, and the contraction takes what lies
+         * beyond it: the background a capture sees past its subject. */
+        ds->unbounded_inner = COLMAP_INNER;
         ds->near_bound = (float)c.near;
         ds->far_bound = (float)c.far;
         ds->scene_scale = c.sim.scale;
