@@ -9,9 +9,28 @@
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
+    "                  [--format png|jpeg] [--jpeg [QUALITY]]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR as a\n"
-    "Blender-format dataset: transforms_{train,val,test}.json and PNGs.\n"
+    "Blender-format dataset: transforms_{train,val,test}.json and PNGs\n"
+    "(RGBA), or with --format jpeg / --jpeg JPEGs (RGB on white, quality\n"
+    "QUALITY 1..100, default 95).\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
+
+/* --jpeg takes an optional quality: the next argument if it is a number. */
+static int jpeg_flag(int argc, char **argv, int *i, nerf_scene_options *o)
+{
+    o->image_format = NERF_IMAGE_FORMAT_JPEG;
+    uint64_t q = 0;
+    if (*i + 1 < argc && argv[*i + 1][0] >= '0' && argv[*i + 1][0] <= '9') {
+        if (cli_uint(argv[*i + 1], 1, 100, &q) != 0) {
+            fprintf(stderr, "nerf-scene: --jpeg quality must be 1..100\n");
+            return -1;
+        }
+        o->jpeg_quality = (uint32_t)q;
+        (*i)++;
+    }
+    return 0;
+}
 
 int main(int argc, char **argv)
 {
@@ -28,6 +47,23 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--jpeg") == 0) {
+            if (jpeg_flag(argc, argv, &i, &o) != 0) {
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--format") == 0) {
+            const char *f = cli_value(argc, argv, &i);
+            if (f != NULL && strcmp(f, "png") == 0) {
+                o.image_format = NERF_IMAGE_FORMAT_PNG;
+            } else if (f != NULL && (strcmp(f, "jpeg") == 0 ||
+                                     strcmp(f, "jpg") == 0)) {
+                o.image_format = NERF_IMAGE_FORMAT_JPEG;
+            } else {
+                fprintf(stderr, "nerf-scene: --format is png or jpeg\n");
                 goto bad;
             }
             continue;

@@ -1,7 +1,7 @@
 /*
  * nerf_scene_write(): render the built-in scene into a Blender-format
- * dataset (transforms_{train,val,test}.json and RGBA PNGs), so that the
- * demo and the tests need no download.
+ * dataset (transforms_{train,val,test}.json and RGBA PNGs or RGB JPEGs,
+ * see scene_image.h), so that the demo and the tests need no download.
  */
 #include <cJSON.h>
 #include <errno.h>
@@ -18,8 +18,8 @@
 #include "file_io.h"
 #include "field.h"
 #include "options.h"
-#include "png_io.h"
 #include "rng.h"
+#include "scene_image.h"
 
 #define NEAR 2.0f
 #define FAR 6.0f
@@ -210,11 +210,12 @@ static int write_split(const char *dir, int split, uint32_t n,
         cam.cy = 0.5f * (float)o->height;
         place_camera(split, i, n, o->seed, &cam);
         render_view(&cam, o->threads, rgba);
-        snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
-        rc = nerf__png_write8(env, path, o->width, o->height, 4, rgba);
+        snprintf(path, sizeof path, "%s/%s/r_%u", dir, names[split], i);
+        rc = nerf__scene_image_write(env, path, o, rgba);
         cJSON *frame = cJSON_CreateObject();
         char file[64];
-        snprintf(file, sizeof file, "./%s/r_%u", names[split], i);
+        snprintf(file, sizeof file, "./%s/r_%u%s", names[split], i,
+                 nerf__scene_image_suffix(o));
         cJSON_AddStringToObject(frame, "file_path", file);
         cJSON_AddItemToObject(frame, "transform_matrix", matrix_json(cam.c2w));
         cJSON_AddItemToArray(frames, frame);
@@ -254,6 +255,10 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     }
     if (o.reserved0 != 0) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
+    }
+    rc = nerf__scene_image_check(&o);
+    if (rc != NERF_OK) {
+        return rc;
     }
     if (o.threads == 0) {
         o.threads = nerf__cpu_count();

@@ -64,7 +64,9 @@ FROZEN(nerf_scene_options, threads, 24);
 FROZEN(nerf_scene_options, reserved0, 28);
 FROZEN(nerf_scene_options, seed, 32);
 FROZEN(nerf_scene_options, hooks, 40);
-SIZE(nerf_scene_options, 48);
+FROZEN(nerf_scene_options, image_format, 48);
+FROZEN(nerf_scene_options, jpeg_quality, 52);
+SIZE(nerf_scene_options, 56);
 
 FROZEN(nerf_camera, struct_size, 0);
 FROZEN(nerf_camera, flags, 4);
