@@ -38,9 +38,10 @@ from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
                    param_bounds, set_log_handler, status_string, version,
                    version_number, version_string)
 from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
-                   DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE, SPLIT_TEST,
+                   DATASET_BLENDER, DATASET_LLFF, IMAGE_FORMAT_JPEG,
+                   IMAGE_FORMAT_PNG, IMAGE_MAX_SIDE, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
-                   read_png, ssim, write_png, write_scene)
+                   read_image, read_png, ssim, write_png, write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
@@ -68,7 +69,7 @@ __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats",
-    "write_scene", "read_png", "write_png", "psnr", "ssim",
+    "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
@@ -96,7 +97,8 @@ __all__ = [
     "ENCODING_SCALE_PI", "SAMPLE_TRAINING", "NOISE_AUTO",
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",
     "SPLIT_TRAIN", "SPLIT_VAL", "SPLIT_TEST",
-    "DATASET_BLENDER", "DATASET_LLFF", "IMAGE_MAX_SIDE",
+    "DATASET_BLENDER", "DATASET_LLFF", "IMAGE_MAX_SIDE", "IMAGE_FORMAT_PNG",
+    "IMAGE_FORMAT_JPEG",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
 ]
 

@@ -167,6 +167,8 @@ class SceneOptions(_Versioned):
         ("reserved0", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
+        ("image_format", c_uint32),
+        ("jpeg_quality", c_uint32),
     ]
 
 

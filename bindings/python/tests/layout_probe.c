@@ -98,6 +98,8 @@ static void structs(void)
     FIELD(nerf_scene_options, reserved0);
     FIELD(nerf_scene_options, seed);
     FIELD(nerf_scene_options, hooks);
+    FIELD(nerf_scene_options, image_format);
+    FIELD(nerf_scene_options, jpeg_quality);
     end_struct();
 
     BEGIN(nerf_camera);
