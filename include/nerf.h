@@ -110,7 +110,8 @@ NERF_API const char *nerf_version_string(void);
 
 /**
  * A one-line description of how the library was built: version, BLAS
- * provider, library versions of libpng, zlib and cJSON, and build type.
+ * provider, library versions of libpng, libjpeg, zlib and cJSON, and
+ * build type.
  * Static, never NULL.  Thread-safe.
  */
 NERF_API const char *nerf_build_info(void);
