@@ -12,6 +12,7 @@ static const char usage[] =
     "                  [--val N] [--test N] [--threads N]\n"
     "                  [--capture object|forward|unbounded]\n"
     "                  [--layout blender|llff|colmap-text|colmap-binary]\n"
+    "                  [--format png|jpeg] [--jpeg [QUALITY]]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR.\n"
     "  --capture object     the solids alone on a transparent background,\n"
     "                       from a hemisphere of views (the default)\n"
@@ -28,6 +29,9 @@ static const char usage[] =
     "  --layout colmap-text, colmap-binary  a COLMAP model: images/ and\n"
     "                       sparse/0/ cameras, images and points3D in\n"
     "                       COLMAP's text or binary files, all views\n"
+    "  --format png|jpeg    the views' files: PNG (default; RGBA for object)\n"
+    "                       or JPEG (RGB, on white for object)\n"
+    "  --jpeg [QUALITY]     JPEG files of quality 1..100 (default 95)\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
 
 /* A name of the list, by its index; -1 when it is not there. */
@@ -39,6 +43,22 @@ static int pick(const char *name, const char *const *names, int n)
         }
     }
     return -1;
+}
+
+/* --jpeg takes an optional quality: the next argument if it is a number. */
+static int jpeg_flag(int argc, char **argv, int *i, nerf_scene_options *o)
+{
+    o->image_format = NERF_IMAGE_FORMAT_JPEG;
+    uint64_t q = 0;
+    if (*i + 1 < argc && argv[*i + 1][0] >= '0' && argv[*i + 1][0] <= '9') {
+        if (cli_uint(argv[*i + 1], 1, 100, &q) != 0) {
+            fprintf(stderr, "nerf-scene: --jpeg quality must be 1..100\n");
+            return -1;
+        }
+        o->jpeg_quality = (uint32_t)q;
+        (*i)++;
+    }
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -80,6 +100,23 @@ int main(int argc, char **argv)
                 o.capture = (uint32_t)k;
             } else {
                 layout = k;
+            }
+            continue;
+        } else if (strcmp(a, "--jpeg") == 0) {
+            if (jpeg_flag(argc, argv, &i, &o) != 0) {
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--format") == 0) {
+            const char *f = cli_value(argc, argv, &i);
+            if (f != NULL && strcmp(f, "png") == 0) {
+                o.image_format = NERF_IMAGE_FORMAT_PNG;
+            } else if (f != NULL && (strcmp(f, "jpeg") == 0 ||
+                                     strcmp(f, "jpg") == 0)) {
+                o.image_format = NERF_IMAGE_FORMAT_JPEG;
+            } else {
+                fprintf(stderr, "nerf-scene: --format is png or jpeg\n");
+                goto bad;
             }
             continue;
         } else if (strcmp(a, "--width") == 0) {

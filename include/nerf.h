@@ -110,7 +110,8 @@ NERF_API const char *nerf_version_string(void);
 
 /**
  * A one-line description of how the library was built: version, BLAS
- * provider, library versions of libpng, zlib and cJSON, and build type.
+ * provider, library versions of libpng, libjpeg, zlib and cJSON, and
+ * build type.
  * Static, never NULL.  Thread-safe.
  */
 NERF_API const char *nerf_build_info(void);
@@ -510,6 +511,12 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
 /* Built-in scene                                                           */
 /* ------------------------------------------------------------------------ */
 
+/** Values of nerf_scene_options.image_format. */
+#define NERF_IMAGE_FORMAT_PNG 0u  /**< PNGs (RGBA for the object capture). */
+#define NERF_IMAGE_FORMAT_JPEG 1u /**< RGB JPEGs composited on white, named
+                                       .jpg in file_path: what a camera
+                                       gives, with no mask. */
+
 /** What nerf_scene_write() produces. */
 typedef struct nerf_scene_options {
     uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
@@ -529,6 +536,10 @@ typedef struct nerf_scene_options {
                                NERF_SCENE_LAYOUT_*; default BLENDER.  The
                                usual pairs: OBJECT and UNBOUNDED in
                                BLENDER, FORWARD in LLFF. */
+    uint32_t image_format; /**< Since 0.3.  NERF_IMAGE_FORMAT_*: the views'
+                                files; default NERF_IMAGE_FORMAT_PNG. */
+    uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
+                                (default) = 95.  Ignored for PNG. */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
@@ -588,8 +599,9 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
  * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
  * sky, hills and a sun), so every pixel is opaque and depths reach 40;
  * they are what scenes of forward-facing and all-round photos are like.
- * The layout (NERF_SCENE_LAYOUT_*) decides the files.  Same options, same
- * bytes.
+ * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
+ * JPEG (RGB, composited on white for OBJECT) for the views.  Same options,
+ * same bytes.
  * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
  * capture or layout, a layout that does not fit the capture or is not
  * supported yet); NERF_EIO (cannot create or write a file, named in the
@@ -1131,7 +1143,7 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
 /* Images and metrics                                                       */
 /* ------------------------------------------------------------------------ */
 
-/** Largest width or height, in pixels, that the PNG functions accept. */
+/** Largest width or height, in pixels, that the image functions accept. */
 #define NERF_IMAGE_MAX_SIDE 16384
 
 /**
@@ -1157,6 +1169,25 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
  */
 NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
                                  uint32_t *height_out, float **rgba_out);
+
+/**
+ * Read a PNG or a JPEG file, told apart by its first bytes (not its
+ * name), as the dataset loaders do.  PNGs are read as by
+ * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
+ * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
+ * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
+ * width and height are those of the upright picture, swapped for 5 to 8).
+ *
+ * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_EIO (the file cannot
+ * be opened or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
+ * corrupted data (JPEG decoder warnings about the data count as errors),
+ * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
+ * to 8, a side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages
+ * start with the path.  Reentrant.
+ */
+NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
+                             uint32_t *height_out, float **rgba_out);
 
 /**
  * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
@@ -1298,11 +1329,12 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *    cx, cy, w, h, at top level or per frame (per frame wins; fy defaults
  *    to fx, the principal point to the centre); frames[].transform_matrix,
  *    a 4 x 4 camera-to-world matrix as a list of rows; frames[].file_path
- *    relative to @p dir, ".png" added when it has no extension.  Images
- *    are PNGs of one size.  Ray bounds: near 2, far 6.
+ *    relative to @p dir; when it has no extension, ".png" is added, or
+ *    if no such file exists the first of ".jpg", ".jpeg", ".JPG", ".JPEG"
+ *    that does.  Images are of one size.  Ray bounds: near 2, far 6.
  *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
- *    array must be '<f8', C order, N x 17; images are the N PNG files of
- *    the image folder sorted by name.  Rotations are reordered from
+ *    array must be '<f8', C order, N x 17; images are the N .png, .jpg or
+ *    .jpeg files (any case) of the image folder sorted by name.  Rotations are reordered from
  *    [down, right, back] to [right, up, back], positions and bounds are
  *    scaled so that the smallest bound is 1/0.75, and poses are recentred
  *    on their average pose.  Focal = the file's focal x image width / the
@@ -1320,7 +1352,10 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *    come from the 1st and 99th percentiles of the points' depths in each
  *    image (docs/formats.md, "COLMAP models").  Not NDC.
  *
- * Images are stored as float RGB in [0, 1], composited as the options say.
+ * Images are PNG or JPEG files, told apart by their first bytes and read
+ * as nerf_image_read() reads them (JPEGs turned upright by their Exif
+ * orientation; docs/formats.md, "Images"), and stored as float RGB in
+ * [0, 1], composited as the options say.
  * The loader logs (level INFO, through the hooks) the format, image count
  * and size, focal length, bounds and scene scale.
  *
@@ -1334,7 +1369,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * infinite values, entries beyond 1e6, a degenerate rotation, a focal
  * under 1e-3 pixels, near >= far (docs/formats.md, "Camera sanity"; the
  * message names the frame and its file_path), npy of the wrong
- * dtype, order or shape, corrupt PNG, images of different sizes, image
+ * dtype, order or shape, a corrupt image or one that is neither PNG nor
+ * JPEG, a bad Exif orientation, images of different sizes, image
  * count not matching the poses, no frames left); NERF_ENOMEM.  Messages name the file and
  * the problem.  On failure *out is NULL.
  * Reentrant: separate loads may run on separate threads.

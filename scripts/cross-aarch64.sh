@@ -48,7 +48,7 @@ export OPENBLAS_NUM_THREADS
 NERF_DEB_PACKAGES=(meson ninja-build pkg-config python3
                    gcc-aarch64-linux-gnu g++-aarch64-linux-gnu qemu-user
                    libc6-dev:arm64 libopenblas-dev:arm64 libpng-dev:arm64
-                   zlib1g-dev:arm64 libcjson-dev:arm64)
+                   libjpeg-dev:arm64 zlib1g-dev:arm64 libcjson-dev:arm64)
 
 passed=0
 failed=0

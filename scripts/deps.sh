@@ -6,6 +6,7 @@
 
 # Everything needed to build, test and run the examples, as Debian packages.
 # README.md lists the same packages for people who install them by hand.
+# libjpeg-dev is libjpeg-turbo's (libjpeg62-turbo-dev), for JPEG photos.
 # libsdl2-dev builds examples/viewer; xvfb and xauth let its test open a
 # window without a display.  libdnnl-dev (oneDNN) is optional for the
 # library, which builds without it, but listed so that the tests cover the
@@ -14,8 +15,8 @@
 # is skipped.  clang builds the library a second time (a C library must
 # build with both compilers) and, with libclang-rt-dev's libFuzzer, the fuzz
 # targets.
-NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev zlib1g-dev libcjson-dev
-                   meson ninja-build pkg-config python3-numpy
+NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev libjpeg-dev zlib1g-dev
+                   libcjson-dev meson ninja-build pkg-config python3-numpy
                    libsdl2-dev xvfb xauth libdnnl-dev abigail-tools
                    clang libclang-rt-dev)
 

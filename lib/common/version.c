@@ -16,6 +16,7 @@ NERF_API const char *nerf_build_info(void)
     return "libnerf " NERF_VERSION_STRING
            "; blas " NERF_CONFIG_BLAS
            "; libpng " NERF_CONFIG_PNG_VERSION
+           "; libjpeg " NERF_CONFIG_JPEG_VERSION
            "; zlib " NERF_CONFIG_ZLIB_VERSION
            "; cjson " NERF_CONFIG_CJSON_VERSION
            "; bf16 " NERF_CONFIG_BF16

@@ -84,11 +84,12 @@ struct nerf_dataset {
 int nerf__dataset_reserve(nerf_dataset *ds, uint32_t count);
 
 /*
- * Read the PNG at path and store it as image index: composited onto white
- * (or black) by its alpha, then box-filtered by factor x factor, and its
- * coverage into ds->alpha (allocated by the first image with a transparent
- * pixel).  The first image fixes the size; a later one of another size is
- * an error naming it.
+ * Read the PNG or JPEG at path (nerf__image_read_rgba: told apart by its
+ * first bytes, a JPEG turned upright by its Exif orientation) and store it
+ * as image index: composited onto white (or black) by its alpha, then
+ * box-filtered by factor x factor, and its coverage into ds->alpha
+ * (allocated by the first image with a transparent pixel).  The first
+ * image fixes the size; a later one of another size is an error naming it.
  */
 int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
                              const char *path, uint32_t factor,

@@ -31,7 +31,33 @@ typedef struct blender_ctx {
     uint32_t n_frames;
 } blender_ctx;
 
-/* The image path of a frame: relative to the json, ".png" when bare. */
+/*
+ * A bare file_path (the Blender scenes write "./train/r_0") names the PNG
+ * beside it, as it always has, or failing that a JPEG: the first of these
+ * that exists.  With none of them the .png path is kept, so that the error
+ * (or skip_missing) names what the format expects.
+ */
+static const char *const bare_exts[] = {".png", ".jpg", ".jpeg", ".JPG",
+                                        ".JPEG"};
+#define BARE_EXT_MAX 5
+
+static void add_extension(const char *dir, char *rel, size_t stem)
+{
+    for (size_t k = 0; k < sizeof bare_exts / sizeof *bare_exts; k++) {
+        strcpy(rel + stem, bare_exts[k]);
+        char full[4096];
+        struct stat st;
+        if (snprintf(full, sizeof full, "%s/%s", dir, rel) <
+                (int)sizeof full &&
+            stat(full, &st) == 0) {
+            return;
+        }
+    }
+    strcpy(rel + stem, bare_exts[0]);
+}
+
+/* The image path of a frame: relative to the json, an extension added
+ * when bare (add_extension). */
 static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
                       char **out)
 {
@@ -48,13 +74,14 @@ static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
     const char *base = strrchr(name, '/');
     base = base ? base + 1 : name;
     bool has_ext = strchr(base + (base[0] != '\0'), '.') != NULL;
-    char *rel = nerf__alloc(&b->ds->env, strlen(name) + 5);
+    size_t stem = strlen(name);
+    char *rel = nerf__alloc(&b->ds->env, stem + BARE_EXT_MAX + 1);
     if (rel == NULL) {
         return NERF_ENOMEM;
     }
     strcpy(rel, name);
     if (!has_ext) {
-        strcat(rel, ".png");
+        add_extension(b->dir, rel, stem);
     }
     *out = nerf__path_join(&b->ds->env, b->dir, rel);
     nerf__free(&b->ds->env, rel);

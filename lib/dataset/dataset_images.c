@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "dataset.h"
-#include "png_io.h"
+#include "image_read.h"
 
 char *nerf__path_join(const nerf__env *env, const char *dir,
                       const char *name)
@@ -161,7 +161,7 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
 {
     uint32_t w, h;
     float *rgba;
-    int rc = nerf__png_read_rgba(&ds->env, path, &w, &h, &rgba);
+    int rc = nerf__image_read_rgba(&ds->env, path, &w, &h, &rgba);
     if (rc != NERF_OK) {
         return rc;
     }

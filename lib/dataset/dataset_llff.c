@@ -213,13 +213,8 @@ static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
         if (path == NULL) {
             return NERF_ENOMEM;
         }
-        if (!has_suffix(path, ".png")) {
-            rc = nerf__error(NERF_EFORMAT, "%s: only PNG images can be read",
-                             path);
-        } else {
-            rc = nerf__dataset_load_image(ds, i, path, extra,
-                                          cfg->white_background);
-        }
+        rc = nerf__dataset_load_image(ds, i, path, extra,
+                                      cfg->white_background);
         nerf__free(&ds->env, path);
     }
     if (rc != NERF_OK) {

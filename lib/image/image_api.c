@@ -1,5 +1,6 @@
-/* The public image functions: thin checks around png_io. */
+/* The public image functions: thin checks around png_io and image_read. */
 #include "env.h"
+#include "image_read.h"
 #include "png_io.h"
 
 NERF_API void nerf_free(void *ptr)
@@ -19,6 +20,19 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
         return nerf__error(NERF_EINVAL, "nerf_image_read_png: NULL argument");
     }
     return nerf__png_read_rgba(NULL, path, width_out, height_out, rgba_out);
+}
+
+NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
+                             uint32_t *height_out, float **rgba_out)
+{
+    if (rgba_out != NULL) {
+        *rgba_out = NULL;
+    }
+    if (path == NULL || width_out == NULL || height_out == NULL ||
+        rgba_out == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_image_read: NULL argument");
+    }
+    return nerf__image_read_rgba(NULL, path, width_out, height_out, rgba_out);
 }
 
 NERF_API int nerf_image_write_png8(const char *path, uint32_t width,

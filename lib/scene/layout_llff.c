@@ -9,7 +9,7 @@
 
 #include "file_io.h"
 #include "npy.h"
-#include "png_io.h"
+#include "scene_image.h"
 #include "scene_internal.h"
 
 /* A row: the 3x5 [down | right | back | centre | (H, W, focal)], row-major,
@@ -76,10 +76,8 @@ int nerf__scene_write_llff(const char *dir, const nerf_scene_options *o,
         nerf__scene_render_view(&cam, &look, o->threads, px, zdepth);
         /* Zero-padded, so that sorting the names gives the capture order
          * (the loader pairs the sorted names with the rows). */
-        snprintf(path, sizeof path, "%s/images/image%05u.png", dir,
-                 (unsigned)i);
-        rc = nerf__png_write8(env, path, o->width, o->height, look.channels,
-                              px);
+        snprintf(path, sizeof path, "%s/images/image%05u", dir, (unsigned)i);
+        rc = nerf__scene_image_write(env, path, o, look.channels, px);
         fill_row(&cam, zdepth, pixels, rows + (size_t)ROW * i);
     }
     if (rc == NERF_OK) {

@@ -2,8 +2,8 @@
  * nerf_scene_write(): render the built-in scene into a dataset, so that
  * the demo and the tests need no download.  Here: the options, the object
  * capture's cameras and the Blender layout (transforms_{train,val,test}
- * .json and PNGs); the other captures' cameras are in captures.c, the
- * other layouts in files of their own.
+ * .json and PNGs or JPEGs, see scene_image.h); the other captures' cameras
+ * are in captures.c, the other layouts in files of their own.
  */
 #include <cJSON.h>
 #include <errno.h>
@@ -22,6 +22,7 @@
 #include "options.h"
 #include "png_io.h"
 #include "rng.h"
+#include "scene_image.h"
 #include "scene_internal.h"
 
 #define NEAR 2.0f
@@ -269,12 +270,12 @@ static int write_split(const char *dir, int split, uint32_t n,
         nerf_camera cam;
         nerf__scene_capture_camera(o, split, i, n, &cam);
         nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
-        snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
-        rc = nerf__png_write8(env, path, o->width, o->height, look.channels,
-                              px);
+        snprintf(path, sizeof path, "%s/%s/r_%u", dir, names[split], i);
+        rc = nerf__scene_image_write(env, path, o, look.channels, px);
         cJSON *frame = cJSON_CreateObject();
         char file[64];
-        snprintf(file, sizeof file, "./%s/r_%u", names[split], i);
+        snprintf(file, sizeof file, "./%s/r_%u%s", names[split], i,
+                 nerf__scene_image_suffix(o));
         cJSON_AddStringToObject(frame, "file_path", file);
         cJSON_AddItemToObject(frame, "transform_matrix", matrix_json(cam.c2w));
         cJSON_AddItemToArray(frames, frame);
@@ -346,6 +347,7 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
     }
     rc = check_capture(&o);
+    rc = rc == NERF_OK ? nerf__scene_image_check(&o) : rc;
     if (rc != NERF_OK) {
         return rc;
     }

@@ -15,7 +15,7 @@
 #include "colmap_poses.h"
 #include "file_io.h"
 #include "field.h"
-#include "png_io.h"
+#include "scene_image.h"
 #include "scene_internal.h"
 
 /* Views that seed points, and pixels a side of their grid. */
@@ -161,9 +161,9 @@ static int write_views(colmap_writer *w, uint8_t *rgba)
                         to8(rgba[4 * j + c] / 255.0 * a + (1.0 - a));
                 }
             }
-            snprintf(path, sizeof path, "%s/images/%05u.png", w->dir,
+            snprintf(path, sizeof path, "%s/images/%05u", w->dir,
                      (unsigned)k);
-            rc = nerf__png_write8(w->env, path, o->width, o->height, 3, rgba);
+            rc = nerf__scene_image_write(w->env, path, o, 3, rgba);
         }
     }
     return rc;
@@ -314,7 +314,8 @@ static void image_records(const colmap_writer *w, bool bin, buf *b)
         }
         nerf__c2w_to_colmap(c2w, q, t);
         char name[32];
-        snprintf(name, sizeof name, "%05u.png", (unsigned)k);
+        snprintf(name, sizeof name, "%05u%s", (unsigned)k,
+                 nerf__scene_image_extension(w->o));
         if (bin) {
             put_u32(b, k + 1);
             for (int i = 0; i < 4; i++) {

@@ -81,6 +81,7 @@ TEST(version_matches_header)
     CHECK(strcmp(nerf_version_string(), NERF_VERSION_STRING) == 0);
     CHECK(strstr(nerf_build_info(), NERF_VERSION_STRING) != NULL);
     CHECK(strstr(nerf_build_info(), "blas") != NULL);
+    CHECK(strstr(nerf_build_info(), "; libjpeg ") != NULL);
 }
 
 int main(void)

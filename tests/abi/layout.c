@@ -67,7 +67,9 @@ FROZEN(nerf_scene_options, seed, 32);
 FROZEN(nerf_scene_options, hooks, 40);
 FROZEN(nerf_scene_options, capture, 48);
 FROZEN(nerf_scene_options, layout, 52);
-SIZE(nerf_scene_options, 56);
+FROZEN(nerf_scene_options, image_format, 56);
+FROZEN(nerf_scene_options, jpeg_quality, 60);
+SIZE(nerf_scene_options, 64);
 
 FROZEN(nerf_camera, struct_size, 0);
 FROZEN(nerf_camera, flags, 4);

@@ -2,12 +2,13 @@
  * Allocation-failure injection for the dataset loaders: every allocation
  * of a load is failed in turn, and each failure must come back as
  * NERF_ENOMEM with a message, no dataset and no block left behind.  Only
- * libnerf's own allocations go through the hooks (libpng, zlib and cJSON
- * use malloc directly), so those are the ones exercised here.
+ * libnerf's own allocations go through the hooks (libpng, libjpeg, zlib
+ * and cJSON use malloc directly), so those are the ones exercised here.
  */
 #include <nerf.h>
 
 #include "data_fixtures.h"
+#include "jpeg_fixtures.h"
 #include "../fail_alloc.h"
 #include "../harness.h"
 
@@ -61,10 +62,29 @@ static void make_blender(char *dir, size_t size, const char *name,
     fx_write_text(dir, "transforms_train.json", json);
 }
 
-/* poses_bounds.npy with LLFF_N identity-rotation rows and images/. */
-static void make_llff(char *dir, size_t size)
+/* The same picture as write_image, opaque, as a JPEG; orientation 6 (a
+ * quarter turn, square images keep their size) when turned. */
+static void write_jpeg(const char *dir, const char *name, int seed,
+                       int turned)
 {
-    snprintf(dir, size, "%s/llff", tmp);
+    uint8_t px[W * H * 3];
+    for (int i = 0; i < W * H; i++) {
+        px[3 * i + 0] = (uint8_t)((i * 13 + seed * 40) % 256);
+        px[3 * i + 1] = (uint8_t)((i * 7) % 256);
+        px[3 * i + 2] = (uint8_t)(seed * 60);
+    }
+    uint8_t exif[64];
+    size_t n = turned ? fx_exif(exif, 1, 6, 3) : 0;
+    char p[1024];
+    fx_path(p, sizeof p, dir, name);
+    fx_write_jpeg(p, W, H, JCS_RGB, px, 90, 0, exif, n);
+}
+
+/* poses_bounds.npy with LLFF_N identity-rotation rows and images/ of PNGs
+ * or JPEGs. */
+static void make_llff(char *dir, size_t size, int jpeg)
+{
+    snprintf(dir, size, "%s/llff%s", tmp, jpeg ? "_jpeg" : "");
     mkdir(dir, 0777);
     fx_mkdir(dir, "images");
     double rows[LLFF_N * 17];
@@ -89,8 +109,13 @@ static void make_llff(char *dir, size_t size)
     fx_write_npy(p, "<f8", "False", "(3, 17)", rows, sizeof rows);
     for (int i = 0; i < LLFF_N; i++) {
         char name[64];
-        snprintf(name, sizeof name, "images/IMG_%d.png", i);
-        write_image(dir, name, i);
+        snprintf(name, sizeof name, "images/IMG_%d.%s", i,
+                 jpeg ? "JPG" : "png");
+        if (jpeg) {
+            write_jpeg(dir, name, i, i == 1);
+        } else {
+            write_image(dir, name, i);
+        }
     }
 }
 
@@ -157,14 +182,16 @@ TEST(blender_skip_missing)
 TEST(llff)
 {
     char dir[1024];
-    make_llff(dir, sizeof dir);
-    nerf_dataset_options o;
-    NERF_DATASET_OPTIONS_INIT(&o);
-    CHECK(sweep(dir, &o, LLFF_N - 1) > 0);
-    /* No images_2/: the loader searches, then filters images/ by 2. */
-    o.downscale = 2;
-    o.split = NERF_SPLIT_TEST;
-    CHECK(sweep(dir, &o, 1) > 0);
+    for (int jpeg = 0; jpeg < 2; jpeg++) {
+        make_llff(dir, sizeof dir, jpeg);
+        nerf_dataset_options o;
+        NERF_DATASET_OPTIONS_INIT(&o);
+        CHECK(sweep(dir, &o, LLFF_N - 1) > 0);
+        /* No images_2/: the loader searches, then filters images/ by 2. */
+        o.downscale = 2;
+        o.split = NERF_SPLIT_TEST;
+        CHECK(sweep(dir, &o, 1) > 0);
+    }
 }
 
 int main(void)

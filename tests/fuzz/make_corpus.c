@@ -9,6 +9,7 @@
 
 #include "../harness.h"
 #include "../data/data_fixtures.h"
+#include "../data/jpeg_fixtures.h"
 #include "../model/npz_writer.h"
 
 static const char *root;
@@ -381,6 +382,45 @@ static void llff_seed(const char *name, unsigned char first, size_t n,
 }
 
 /* See fuzz_llff.c for what the first byte picks. */
+/* One JPEG seed for fuzz_jpeg's mode 0: the file behind the option byte. */
+static void jpeg_seed(const char *name, unsigned char first, uint32_t w,
+                      uint32_t h, J_COLOR_SPACE space, int flags,
+                      uint32_t orientation)
+{
+    uint8_t px[16 * 16 * 3];
+    for (size_t i = 0; i < sizeof px; i++) {
+        px[i] = (uint8_t)((i * 29 + 5) % 256);
+    }
+    uint8_t exif[64];
+    size_t n_exif = orientation ? fx_exif(exif, orientation & 1,
+                                          orientation, 3)
+                                : 0;
+    char p[1024];
+    out_path(p, sizeof p, "jpeg", "tmp.jpg");
+    fx_write_jpeg(p, w, h, space, px, 75, flags, exif, n_exif);
+    size_t n;
+    unsigned char *f = slurp(p, &n);
+    unlink(p);
+    save_with("jpeg", name, first, f, n);
+    free(f);
+}
+
+static void jpeg_seeds(void)
+{
+    jpeg_seed("rgb_orient6.bin", 0x00, 8, 5, JCS_RGB, 0, 6);
+    jpeg_seed("gray_progressive.bin", 0x03, 6, 9, JCS_GRAYSCALE,
+              FX_JPEG_PROGRESSIVE, 0);
+    jpeg_seed("rgb_arith_orient3.bin", 0x02, 7, 7, JCS_RGB,
+              FX_JPEG_ARITHMETIC, 3);
+    jpeg_seed("cmyk.bin", 0x00, 4, 4, JCS_CMYK, 0, 0);
+    /* Mode 1: Exif blocks alone, in both byte orders. */
+    uint8_t exif[64];
+    size_t n = fx_exif(exif, 1, 8, 3);
+    save_with("jpeg", "exif_mm_orient8.bin", 0x08, exif, n);
+    n = fx_exif(exif, 0, 5, 3);
+    save_with("jpeg", "exif_ii_orient5.bin", 0x0b, exif, n);
+}
+
 static void llff_seeds(void)
 {
     llff_seed("two_rgb.bin", 0x01, 2, 6, 8, 7);
@@ -492,6 +532,7 @@ int main(int argc, char **argv)
     checkpoint_seeds();
     transforms_seeds();
     png_seeds();
+    jpeg_seeds();
     llff_seeds();
     camera_path_seeds();
     colmap_seeds("colmap_text", NERF_SCENE_LAYOUT_COLMAP_TEXT, "txt");

@@ -39,13 +39,13 @@ from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
                    version_number, version_string)
 from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
                    DATASET_BLENDER, DATASET_COLMAP, DATASET_LLFF,
-                   IMAGE_MAX_SIDE,
+                   IMAGE_FORMAT_JPEG, IMAGE_FORMAT_PNG, IMAGE_MAX_SIDE,
                    SCENE_CAPTURE_FORWARD, SCENE_CAPTURE_OBJECT,
                    SCENE_CAPTURE_UNBOUNDED, SCENE_LAYOUT_BLENDER,
                    SCENE_LAYOUT_COLMAP_BINARY, SCENE_LAYOUT_COLMAP_TEXT,
                    SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
-                   read_png, ssim, write_png, write_scene)
+                   read_image, read_png, ssim, write_png, write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
@@ -74,7 +74,7 @@ __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats",
-    "write_scene", "read_png", "write_png", "psnr", "ssim",
+    "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
@@ -104,6 +104,7 @@ __all__ = [
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",
     "SPLIT_TRAIN", "SPLIT_VAL", "SPLIT_TEST",
     "DATASET_BLENDER", "DATASET_LLFF", "DATASET_COLMAP", "IMAGE_MAX_SIDE",
+    "IMAGE_FORMAT_PNG", "IMAGE_FORMAT_JPEG",
     "SCENE_CAPTURE_OBJECT", "SCENE_CAPTURE_FORWARD",
     "SCENE_CAPTURE_UNBOUNDED", "SCENE_LAYOUT_BLENDER",
     "SCENE_LAYOUT_TRANSFORMS", "SCENE_LAYOUT_LLFF",

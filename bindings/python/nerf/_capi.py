@@ -146,6 +146,7 @@ _PROTOTYPES = {
     "nerf_renderer_render_rays": (c_int, [RendererP, c_size_t, _F, _F, _F, _F,
                                           _F], True),
     # Images and metrics.
+    "nerf_image_read": (c_int, [c_char_p, _U32, _U32, POINTER(_F)], True),
     "nerf_image_read_png": (c_int, [c_char_p, _U32, _U32, POINTER(_F)], True),
     "nerf_image_write_png": (c_int, [c_char_p, c_uint32, c_uint32, c_uint32,
                                      _F], True),

@@ -39,8 +39,12 @@ SCENE_LAYOUTS = {"blender": SCENE_LAYOUT_BLENDER,
                  "colmap-text": SCENE_LAYOUT_COLMAP_TEXT,
                  "colmap-binary": SCENE_LAYOUT_COLMAP_BINARY}
 
-#: Largest width or height the PNG functions accept.
+#: Largest width or height the image functions accept.
 IMAGE_MAX_SIDE = 16384
+
+# Values of SceneOptions.image_format.
+IMAGE_FORMAT_PNG = 0
+IMAGE_FORMAT_JPEG = 1
 
 # Flags of nerf_camera_path_options.
 CAMERA_PATH_FILE_SIZE = 0x1
@@ -234,7 +238,8 @@ def write_scene(path: Any, *, log: LogFn = None,
                 log_level: Optional[int] = None, **options: Any) -> None:
     """Write the built-in scene to folder ``path`` (``nerf_scene_write``).
     Keyword options are fields of :class:`nerf.SceneOptions` (width,
-    height, n_train, n_val, n_test, threads, seed, capture, layout);
+    height, n_train, n_val, n_test, threads, seed, capture, layout,
+    image_format, jpeg_quality);
     capture and layout may be given by name ("object", "forward",
     "unbounded"; "blender", "llff", ...).  As in C, the layout defaults to
     Blender whatever the capture: a forward capture is usually written
@@ -265,10 +270,21 @@ def read_png(path: Any) -> Any:
     """Read a PNG file as a height x width x 4 float array of straight RGBA
     in [0, 1] (``nerf_image_read_png``).  The array wraps the library's
     buffer without copying and frees it when collected."""
+    return _read_rgba(lib.nerf_image_read_png, path)
+
+
+def read_image(path: Any) -> Any:
+    """Read a PNG or JPEG file (told apart by its first bytes; a JPEG is
+    turned upright by its Exif orientation) as :func:`read_png` does
+    (``nerf_image_read``)."""
+    return _read_rgba(lib.nerf_image_read, path)
+
+
+def _read_rgba(reader: Any, path: Any) -> Any:
     w, h = ctypes.c_uint32(), ctypes.c_uint32()
     pixels = ctypes.POINTER(ctypes.c_float)()
-    lib.nerf_image_read_png(_handle.fspath(path), ctypes.byref(w),
-                            ctypes.byref(h), ctypes.byref(pixels))
+    reader(_handle.fspath(path), ctypes.byref(w), ctypes.byref(h),
+           ctypes.byref(pixels))
     address = ctypes.cast(pixels, ctypes.c_void_p).value
     owner = _CBuffer(address)
     return _buffers.borrowed_floats(address, (h.value, w.value, 4), owner,

@@ -171,6 +171,8 @@ class SceneOptions(_Versioned):
         ("hooks", POINTER(Hooks)),
         ("capture", c_uint32),
         ("layout", c_uint32),
+        ("image_format", c_uint32),
+        ("jpeg_quality", c_uint32),
     ]
 
 

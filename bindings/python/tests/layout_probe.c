@@ -101,6 +101,8 @@ static void structs(void)
     FIELD(nerf_scene_options, hooks);
     FIELD(nerf_scene_options, capture);
     FIELD(nerf_scene_options, layout);
+    FIELD(nerf_scene_options, image_format);
+    FIELD(nerf_scene_options, jpeg_quality);
     end_struct();
 
     BEGIN(nerf_camera);

@@ -266,6 +266,24 @@ class Png(TestCase):
         with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "nowhere"):
             nerf.write_png(bad_dir, bytes(3), 1, 1)
 
+    def test_read_image_jpeg_scene(self):
+        out = os.path.join(_support.tmpdir(), "jpeg_scene")
+        nerf.write_scene(out, width=16, height=8, n_train=1, n_val=0,
+                         n_test=0, image_format=nerf.IMAGE_FORMAT_JPEG,
+                         jpeg_quality=90)
+        img = nerf.read_image(os.path.join(out, "train", "r_0.jpg"))
+        self.assertEqual(shape(img), (8, 16, 4))
+        self.assertEqual(flat(img)[3], 1.0)
+        png = os.path.join(_support.tmpdir(), "f.png")
+        nerf.write_png(png, bytes(range(12)), width=2, height=2)
+        self.assertEqual(shape(nerf.read_image(png)), (2, 2, 4))
+        junk = os.path.join(_support.tmpdir(), "junk.jpg")
+        with open(junk, "wb") as f:
+            f.write(b"GIF89a")
+        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
+                                  "not a PNG or JPEG file"):
+            nerf.read_image(junk)
+
     def test_scene_image_matches_dataset(self):
         png = nerf.read_png(os.path.join(_support.scene_dir(), "train",
                                          "r_0.png"))
