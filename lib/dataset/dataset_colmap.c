@@ -319,18 +319,10 @@ static int normalise(colmap_ctx *c)
     return NERF_OK;
 }
 
-/*
- * One photo into slot i.  The only place the loader reads an image, so
- * that another reader (JPEG) can take over here.
- */
+/* One photo into slot i: PNG or JPEG, whatever its name says. */
 static int load_photo(colmap_ctx *c, uint32_t slot, const char *path,
                       uint32_t factor, const nerf__dataset_config *cfg)
 {
-    size_t n = strlen(path);
-    if (n < 4 || strcmp(path + n - 4, ".png") != 0) {
-        return nerf__error(NERF_EFORMAT, "%s: only PNG images can be read",
-                           path);
-    }
     return nerf__dataset_load_image(c->ds, slot, path, factor,
                                     cfg->white_background);
 }
