@@ -536,8 +536,9 @@ NERF_API int nerf_scene_write(const char *dir,
 #define NERF_CAMERA_PIXEL_CORNER 0x1u
 
 /**
- * A pinhole camera in the OpenGL/Blender convention: in camera space x
- * points right, y up, and the camera looks down -z.
+ * A camera in the OpenGL/Blender convention: in camera space x points
+ * right, y up, and the camera looks down -z.  A pinhole camera unless its
+ * distortion coefficients are set.
  *
  * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
  * c2w[.][3] (the camera centre) and the unnormalised direction
@@ -545,6 +546,24 @@ NERF_API int nerf_scene_write(const char *dir,
  * of c2w: its camera-space z component is -1, so t along the ray is depth
  * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
  * set.
+ *
+ * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
+ * acting on normalised image coordinates in OpenCV's axes (x right, y
+ * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
+ * at
+ *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
+ *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
+ * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
+ * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
+ * through the undistorted point, direction R (x, -y, -1), found by
+ * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
+ * A pixel that no point distorts onto (beyond the fold of a strong barrel
+ * lens, where r_d stops growing with r) gets the ray of the point whose
+ * distortion comes closest to it.  Images are never resampled.  COLMAP's
+ * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
+ * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
+ * All zero (the default, and what a caller built against a header without
+ * them gets) is a pinhole camera, with the rays above bit for bit.
  *
  * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
  * the fields.  The defaults (identity pose, all intrinsics 0) are not a
@@ -563,6 +582,13 @@ typedef struct nerf_camera {
                                fx = 0.5 width / tan(0.5 a). */
     float cx, cy;         /**< Principal point in pixels from the top-left
                                image corner; usually width/2, height/2. */
+    /* Since 0.2.  Zero-filled by an older caller: a pinhole camera. */
+    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
+                               within +-1000; default 0. */
+    float p1, p2;         /**< Tangential distortion; finite, within
+                               +-1000; default 0. */
+    float k3;             /**< Radial distortion, r^6 term; finite, within
+                               +-1000; default 0. */
 } nerf_camera;
 
 /**
@@ -581,8 +607,8 @@ NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
  * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
  *                       their length scales distances when compositing.
  * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
- * (sizes, non-positive or non-finite focal, non-finite pose) or a pixel
- * range beyond width x height; NERF_EVERSION for a camera struct from a
+ * (sizes, non-positive or non-finite focal, non-finite pose, distortion
+ * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
  * newer header with non-zero unknown fields.
  * Reentrant.
  */

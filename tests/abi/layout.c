@@ -75,7 +75,13 @@ FROZEN(nerf_camera, fx, 64);
 FROZEN(nerf_camera, fy, 68);
 FROZEN(nerf_camera, cx, 72);
 FROZEN(nerf_camera, cy, 76);
-SIZE(nerf_camera, 80);
+/* Appended in 0.2. */
+FROZEN(nerf_camera, k1, 80);
+FROZEN(nerf_camera, k2, 84);
+FROZEN(nerf_camera, p1, 88);
+FROZEN(nerf_camera, p2, 92);
+FROZEN(nerf_camera, k3, 96);
+SIZE(nerf_camera, 100);
 
 FROZEN(nerf_camera_path_options, struct_size, 0);
 FROZEN(nerf_camera_path_options, width, 4);
