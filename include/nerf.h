@@ -1211,11 +1211,16 @@ typedef struct nerf_dataset_options {
     uint32_t skip_missing;     /**< Blender: 1 drops frames whose image file
                                     does not exist (with a warning); 0
                                     (default) fails naming the file. */
-    uint32_t llff_holdout;     /**< LLFF: images whose index is a multiple
-                                    of this form the test split (and the
-                                    val split, as in the reference); the
-                                    others are train.  Default 8; 0 = none
-                                    held out. */
+    uint32_t llff_holdout;     /**< The split of every format that has
+                                    none of its own (LLFF, a single
+                                    transforms.json): images whose index
+                                    is a multiple of this form the test
+                                    split (and the val split, as in the
+                                    reference); the others are train.
+                                    Default 8.  0: LLFF holds none out
+                                    (test and val are empty); a single
+                                    transforms.json serves every frame to
+                                    every split. */
     uint32_t reserved0;        /**< Must be 0. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
@@ -1234,12 +1239,16 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * Load one split of the scene in the folder @p dir.  The layout is
  * detected from the files present, in this order:
  *
- *  - transforms_<split>.json, or a single transforms.json (which holds
- *    every frame, whatever the split): Blender.  Fields: camera_angle_x
- *    (focal = 0.5 W / tan(0.5 camera_angle_x)) or instant-ngp's fl_x, fl_y,
- *    cx, cy, w, h, at top level or per frame (per frame wins; fy defaults
- *    to fx, the principal point to the centre); frames[].transform_matrix,
- *    a 4 x 4 camera-to-world matrix as a list of rows; frames[].file_path
+ *  - transforms_<split>.json, or a single transforms.json (instant-ngp's:
+ *    its frames are split as LLFF scenes are, every llff_holdout-th frame
+ *    from the first held out for test and val): Blender.  Fields:
+ *    camera_angle_x (focal = 0.5 W / tan(0.5 camera_angle_x)) or
+ *    instant-ngp's fl_x, fl_y, cx, cy, w, h and lens distortion k1, k2,
+ *    p1, p2, k3 (nerf_camera's model; default 0), at top level or per
+ *    frame (per frame wins, field by field; fy defaults to fx, the
+ *    principal point to the centre); aabb_scale, a power of two 1..128
+ *    (kept for the scene's extent); frames[].transform_matrix, a 4 x 4
+ *    camera-to-world matrix as a list of rows; frames[].file_path
  *    relative to @p dir, ".png" added when it has no extension.  Images
  *    are PNGs of one size.  Ray bounds: near 2, far 6.
  *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
@@ -1257,12 +1266,15 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *
  * @param opts NULL for the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
- * larger than the images, an LLFF split left empty by llff_holdout);
+ * larger than the images, an LLFF or transforms.json split left empty by
+ * llff_holdout);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
  * (malformed JSON, missing field, matrix of the wrong shape, NaN or
  * infinite values, entries beyond 1e6, a degenerate rotation, a focal
- * under 1e-3 pixels, near >= far (docs/formats.md, "Camera sanity"; the
+ * under 1e-3 pixels, a distortion coefficient beyond 1000, an aabb_scale
+ * that is not a power of two in 1..128, near >= far (docs/formats.md,
+ * "Camera sanity"; the
  * message names the frame and its file_path), npy of the wrong
  * dtype, order or shape, corrupt PNG, images of different sizes, image
  * count not matching the poses, no frames left); NERF_ENOMEM.  Messages name the file and
@@ -1301,8 +1313,11 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
 /**
  * The camera of image @p index: pose (OpenGL axes, world units of the
  * dataset, i.e. after the LLFF rescaling and recentring), intrinsics in
- * pixels of the stored images, size, flags 0 (rays through pixel centres;
- * set NERF_CAMERA_PIXEL_CORNER to reproduce the reference's rays).
+ * pixels of the stored images, lens distortion as the files give it
+ * (unchanged by downscaling: it acts on normalised coordinates), size,
+ * flags 0 (rays through pixel centres; set NERF_CAMERA_PIXEL_CORNER to
+ * reproduce the reference's rays).  The trainer draws its rays from these
+ * cameras, so a distorted image trains on its pixels' true rays.
  * @param out initialised with nerf_camera_init(); as many bytes as its
  *            struct_size are written.
  * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,

@@ -4,6 +4,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "distortion.h"
 #include "error.h"
 #include "file_io.h"
 
@@ -13,6 +14,7 @@ void nerf__intrinsics_none(nerf__intrinsics *in)
 {
     in->angle_x = in->angle_y = in->fl_x = in->fl_y = NAN;
     in->cx = in->cy = in->w = in->h = NAN;
+    in->k1 = in->k2 = in->p1 = in->p2 = in->k3 = 0.0;
 }
 
 int nerf__transforms_parse_text(const char *path, const unsigned char *text,
@@ -108,6 +110,12 @@ static int check_intrinsics(const char *path, const char *where,
                                NERF__CAMERA_MAX_ABS);
         }
     }
+    const double k[5] = {in->k1, in->k2, in->p1, in->p2, in->k3};
+    char text[96];
+    const char *why = nerf__lens_problem(k, text, sizeof text);
+    if (why != NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: %s%s", path, where, why);
+    }
     return NERF_OK;
 }
 
@@ -115,9 +123,11 @@ int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
                                      const char *where, nerf__intrinsics *in)
 {
     static const char *const keys[] = {"camera_angle_x", "camera_angle_y",
-                                       "fl_x", "fl_y", "cx", "cy", "w", "h"};
+                                       "fl_x", "fl_y", "cx", "cy", "w", "h",
+                                       "k1", "k2", "p1", "p2", "k3"};
     double *fields[] = {&in->angle_x, &in->angle_y, &in->fl_x, &in->fl_y,
-                        &in->cx, &in->cy, &in->w, &in->h};
+                        &in->cx, &in->cy, &in->w, &in->h,
+                        &in->k1, &in->k2, &in->p1, &in->p2, &in->k3};
     for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
         int rc = get_number(path, obj, keys[i], where, fields[i]);
         if (rc != NERF_OK) {
@@ -127,8 +137,27 @@ int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
     return check_intrinsics(path, where, in);
 }
 
+/* aabb_scale: instant-ngp's scene box, in units of the unit cube. */
+static int read_aabb_scale(const char *path, const cJSON *root, double *out)
+{
+    double v = 1.0;
+    int rc = get_number(path, root, "aabb_scale", "", &v);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    int e;
+    /* A power of two is a mantissa of exactly one half. */
+    if (!(v >= 1.0 && v <= NERF__AABB_SCALE_MAX && frexp(v, &e) == 0.5)) {
+        return nerf__error(NERF_EFORMAT, "%s: aabb_scale %g is not a power "
+                           "of two in 1..%d", path, v, NERF__AABB_SCALE_MAX);
+    }
+    *out = v;
+    return NERF_OK;
+}
+
 int nerf__transforms_top(const char *path, const cJSON *root,
-                         nerf__intrinsics *top, const cJSON **frames_out)
+                         nerf__intrinsics *top, const cJSON **frames_out,
+                         double *aabb_scale)
 {
     if (!cJSON_IsObject(root)) {
         return nerf__error(NERF_EFORMAT, "%s: the top level is not a JSON "
@@ -136,6 +165,9 @@ int nerf__transforms_top(const char *path, const cJSON *root,
     }
     nerf__intrinsics_none(top);
     int rc = nerf__transforms_read_intrinsics(path, root, "", top);
+    if (rc == NERF_OK) {
+        rc = read_aabb_scale(path, root, aabb_scale);
+    }
     if (rc != NERF_OK) {
         return rc;
     }
