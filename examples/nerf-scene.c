@@ -1,4 +1,4 @@
-/* nerf-scene: write the built-in procedural scene as a Blender dataset. */
+/* nerf-scene: write the built-in procedural scene as a dataset. */
 #include <nerf.h>
 
 #include <stdio.h>
@@ -9,9 +9,42 @@
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
+    "                  [--layout blender|transforms]\n"
+    "                  [--distortion K1,K2,P1,P2,K3]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR as a\n"
-    "Blender-format dataset: transforms_{train,val,test}.json and PNGs.\n"
+    "dataset.  Layouts: blender (default), transforms_{train,val,test}.json\n"
+    "and PNGs; transforms, one instant-ngp transforms.json with every view.\n"
+    "--distortion photographs the scene through that lens (OpenCV's model,\n"
+    "as nerf_camera's k1, k2, p1, p2, k3; trailing ones may be left out).\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
+
+/* "k1,k2,p1,p2,k3", trailing coefficients optional; 0 or -1. */
+static int parse_lens(const char *text, nerf_scene_options *o)
+{
+    float *dst[5] = {&o->k1, &o->k2, &o->p1, &o->p2, &o->k3};
+    char buf[256];
+    if (text == NULL || strlen(text) >= sizeof buf) {
+        return -1;
+    }
+    strcpy(buf, text);
+    char *rest = buf;
+    for (int i = 0; i < 5; i++) {
+        char *comma = strchr(rest, ',');
+        if (comma) {
+            *comma = '\0';
+        }
+        double v;
+        if (cli_double(rest, &v) != 0) {
+            return -1;
+        }
+        *dst[i] = (float)v;
+        if (comma == NULL) {
+            return 0;
+        }
+        rest = comma + 1;
+    }
+    return -1; /* more than five */
+}
 
 int main(int argc, char **argv)
 {
@@ -28,6 +61,25 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--layout") == 0) {
+            const char *name = cli_value(argc, argv, &i);
+            if (name && strcmp(name, "blender") == 0) {
+                o.layout = NERF_SCENE_LAYOUT_BLENDER;
+            } else if (name && strcmp(name, "transforms") == 0) {
+                o.layout = NERF_SCENE_LAYOUT_TRANSFORMS;
+            } else {
+                fprintf(stderr, "nerf-scene: --layout is blender or "
+                        "transforms\n");
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--distortion") == 0) {
+            if (parse_lens(cli_value(argc, argv, &i), &o) != 0) {
+                fprintf(stderr, "nerf-scene: --distortion needs 1 to 5 "
+                        "numbers separated by commas: k1,k2,p1,p2,k3\n");
                 goto bad;
             }
             continue;

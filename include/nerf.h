@@ -497,7 +497,34 @@ typedef struct nerf_scene_options {
     uint32_t reserved0;   /**< Must be 0. */
     uint64_t seed;        /**< Placement of the validation views; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    /* Since 0.2.  Zero-filled by an older caller, which gives the
+     * behaviour from before these fields. */
+    uint32_t layout;      /**< NERF_SCENE_LAYOUT_*; default BLENDER. */
+    float k1, k2, p1, p2, k3; /**< The lens the views are photographed
+                               through (nerf_camera's distortion): each
+                               pixel holds what its ray through that lens
+                               sees, and the files record the coefficients.
+                               Default 0: a pinhole camera. */
 } nerf_scene_options;
+
+/**
+ * Values of nerf_scene_options.layout: the files nerf_scene_write()
+ * writes.
+ */
+typedef enum nerf_scene_layout {
+    NERF_SCENE_LAYOUT_BLENDER = 0,   /**< transforms_{train,val,test}.json,
+                                          camera_angle_x, images under
+                                          train/, val/, test/. */
+    NERF_SCENE_LAYOUT_TRANSFORMS = 1 /**< One instant-ngp style
+                                          transforms.json holding every
+                                          view (train, then val, then
+                                          test, under images/), with fl_x,
+                                          fl_y, cx, cy, w, h, k1, k2, p1,
+                                          p2, k3 and aabb_scale at top
+                                          level.  Loading it splits it
+                                          every llff_holdout-th frame, not
+                                          by the counts written. */
+} nerf_scene_layout;
 
 /**
  * Fill @p opts with defaults and record @p struct_size.
@@ -510,14 +537,19 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
 
 /**
  * Write the built-in scene to the folder @p dir (created if missing) as a
- * Blender-format dataset: transforms_{train,val,test}.json and RGBA PNGs
- * under train/, val/ and test/.  The scene is a few coloured solids with
- * smooth density edges inside a sphere of radius 1.6 about the origin,
- * rendered by numerically exact volume rendering from cameras at distance
- * 4 (use near 2, far 6, as for the Blender scenes).  Same options, same
+ * dataset in the options' layout: by default Blender's,
+ * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
+ * test/.  The scene is a few coloured solids with smooth density edges
+ * inside a sphere of radius 1.6 about the origin, rendered by numerically
+ * exact volume rendering from cameras at distance 4 (use near 2, far 6,
+ * as for the Blender scenes).  With a lens (k1 .. k3 not all 0) every
+ * pixel holds what its ray through the lens sees (nerf_camera's model),
+ * and the files record the coefficients at top level.  Same options, same
  * bytes.
- * @return NERF_OK; NERF_EINVAL (bad options); NERF_EIO (cannot create or
- * write a file, named in the message); NERF_ENOMEM.
+ * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, a layout
+ * this libnerf does not write, distortion not finite or beyond +-1000);
+ * NERF_EIO (cannot create or write a file, named in the message);
+ * NERF_ENOMEM.
  */
 NERF_API int nerf_scene_write(const char *dir,
                               const nerf_scene_options *opts);

@@ -1,7 +1,8 @@
 /*
- * nerf_scene_write(): render the built-in scene into a Blender-format
- * dataset (transforms_{train,val,test}.json and RGBA PNGs), so that the
- * demo and the tests need no download.
+ * nerf_scene_write(): render the built-in scene into a dataset (by
+ * default the Blender layout, transforms_{train,val,test}.json and RGBA
+ * PNGs), so that the demo and the tests need no download.  Other layouts
+ * live in their own files (scene_transforms.c).
  */
 #include <cJSON.h>
 #include <errno.h>
@@ -14,16 +15,20 @@
 
 #include "camera.h"
 #include "cpu.h"
+#include "distortion.h"
 #include "env.h"
 #include "file_io.h"
 #include "field.h"
 #include "options.h"
 #include "png_io.h"
 #include "rng.h"
+#include "scene_writer.h"
 
 #define NEAR 2.0f
 #define FAR 6.0f
 #define PI 3.14159265358979323846
+
+const char *const nerf__scene_split_names[3] = {"train", "val", "test"};
 
 static void scene_defaults(nerf_scene_options *o)
 {
@@ -80,6 +85,24 @@ static void place_camera(int split, uint32_t i, uint32_t n, uint64_t seed,
     nerf_camera_look_at(cam, eye, target, up);
 }
 
+void nerf__scene_camera(const nerf_scene_options *o, int split, uint32_t i,
+                        uint32_t n, nerf_camera *cam)
+{
+    NERF_CAMERA_INIT(cam);
+    cam->width = o->width;
+    cam->height = o->height;
+    cam->fx = cam->fy = (float)(0.5 * o->width /
+                                tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
+    cam->cx = 0.5f * (float)o->width;
+    cam->cy = 0.5f * (float)o->height;
+    cam->k1 = o->k1;
+    cam->k2 = o->k2;
+    cam->p1 = o->p1;
+    cam->p2 = o->p2;
+    cam->k3 = o->k3;
+    place_camera(split, i, n, o->seed, cam);
+}
+
 typedef struct view_job {
     const nerf_camera *cam;
     uint8_t *rgba;
@@ -118,9 +141,8 @@ static void *render_rows(void *arg)
     return NULL;
 }
 
-/* Render one view with up to `threads` threads splitting its rows. */
-static void render_view(const nerf_camera *cam, uint32_t threads,
-                        uint8_t *rgba)
+void nerf__scene_render_view(const nerf_camera *cam, uint32_t threads,
+                             uint8_t *rgba)
 {
     enum { MAX_THREADS = 64 };
     pthread_t tid[MAX_THREADS];
@@ -145,8 +167,7 @@ static void render_view(const nerf_camera *cam, uint32_t threads,
     }
 }
 
-/* mkdir -p: the folder and any missing parents. */
-static int make_dir(const char *path)
+int nerf__scene_make_dir(const char *path)
 {
     char buf[4096];
     size_t n = strlen(path);
@@ -169,7 +190,7 @@ static int make_dir(const char *path)
     return NERF_OK;
 }
 
-static cJSON *matrix_json(const float c2w[12])
+cJSON *nerf__scene_matrix_json(const float c2w[12])
 {
     cJSON *rows = cJSON_CreateArray();
     for (int r = 0; r < 4; r++) {
@@ -182,14 +203,39 @@ static cJSON *matrix_json(const float c2w[12])
     return rows;
 }
 
+void nerf__scene_lens_json(cJSON *obj, const nerf_scene_options *o,
+                           bool always)
+{
+    static const char *const names[5] = {"k1", "k2", "p1", "p2", "k3"};
+    const float k[5] = {o->k1, o->k2, o->p1, o->p2, o->k3};
+    bool any = false;
+    for (int i = 0; i < 5; i++) {
+        any = any || k[i] != 0.0f;
+    }
+    for (int i = 0; i < 5 && (any || always); i++) {
+        cJSON_AddNumberToObject(obj, names[i], (double)k[i]);
+    }
+}
+
+int nerf__scene_write_json(const nerf__env *env, const char *path,
+                           const cJSON *root)
+{
+    char *text = cJSON_Print(root);
+    nerf__span part = {text, text ? strlen(text) : 0};
+    int rc = text ? nerf__file_write_atomic(env, path, &part, 1)
+                  : nerf__error(NERF_ENOMEM, "%s: out of memory", path);
+    cJSON_free(text);
+    return rc;
+}
+
 static int write_split(const char *dir, int split, uint32_t n,
                        const nerf_scene_options *o, const nerf__env *env,
                        uint8_t *rgba)
 {
-    static const char *const names[] = {"train", "val", "test"};
+    const char *const *names = nerf__scene_split_names;
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[split]);
-    int rc = make_dir(path);
+    int rc = nerf__scene_make_dir(path);
     cJSON *root = cJSON_CreateObject();
     cJSON *frames = cJSON_CreateArray();
     if (root == NULL || frames == NULL) {
@@ -198,34 +244,27 @@ static int write_split(const char *dir, int split, uint32_t n,
         return nerf__error(NERF_ENOMEM, "%s: out of memory building JSON", dir);
     }
     cJSON_AddNumberToObject(root, "camera_angle_x", NERF__SCENE_CAMERA_ANGLE_X);
+    /* Only with a lens, so that a pinhole scene's files stay as they
+     * were. */
+    nerf__scene_lens_json(root, o, false);
     cJSON_AddItemToObject(root, "frames", frames);
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        cam.width = o->width;
-        cam.height = o->height;
-        cam.fx = cam.fy = (float)(0.5 * o->width /
-                                  tan(0.5 * NERF__SCENE_CAMERA_ANGLE_X));
-        cam.cx = 0.5f * (float)o->width;
-        cam.cy = 0.5f * (float)o->height;
-        place_camera(split, i, n, o->seed, &cam);
-        render_view(&cam, o->threads, rgba);
+        nerf__scene_camera(o, split, i, n, &cam);
+        nerf__scene_render_view(&cam, o->threads, rgba);
         snprintf(path, sizeof path, "%s/%s/r_%u.png", dir, names[split], i);
         rc = nerf__png_write8(env, path, o->width, o->height, 4, rgba);
         cJSON *frame = cJSON_CreateObject();
         char file[64];
         snprintf(file, sizeof file, "./%s/r_%u", names[split], i);
         cJSON_AddStringToObject(frame, "file_path", file);
-        cJSON_AddItemToObject(frame, "transform_matrix", matrix_json(cam.c2w));
+        cJSON_AddItemToObject(frame, "transform_matrix",
+                              nerf__scene_matrix_json(cam.c2w));
         cJSON_AddItemToArray(frames, frame);
     }
     if (rc == NERF_OK) {
-        char *text = cJSON_Print(root);
         snprintf(path, sizeof path, "%s/transforms_%s.json", dir, names[split]);
-        nerf__span part = {text, text ? strlen(text) : 0};
-        rc = text ? nerf__file_write_atomic(env, path, &part, 1)
-                  : nerf__error(NERF_ENOMEM, "%s: out of memory", path);
-        cJSON_free(text);
+        rc = nerf__scene_write_json(env, path, root);
     }
     cJSON_Delete(root);
     nerf__log(env, NERF_LOG_INFO, "scene: wrote %u %s views of %ux%u to %s", n,
@@ -255,6 +294,16 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (o.reserved0 != 0) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
     }
+    if (o.layout > NERF_SCENE_LAYOUT_TRANSFORMS) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
+                           "not supported", (unsigned)o.layout);
+    }
+    const double lens[5] = {o.k1, o.k2, o.p1, o.p2, o.k3};
+    char text[96];
+    const char *why = nerf__lens_problem(lens, text, sizeof text);
+    if (why != NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: %s", why);
+    }
     if (o.threads == 0) {
         o.threads = nerf__cpu_count();
     }
@@ -263,7 +312,7 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (rc != NERF_OK) {
         return rc;
     }
-    rc = make_dir(dir);
+    rc = nerf__scene_make_dir(dir);
     uint8_t *rgba = rc == NERF_OK
                         ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
                         : NULL;
@@ -271,7 +320,11 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
         rc = NERF_ENOMEM;
     }
     const uint32_t counts[3] = {o.n_train, o.n_val, o.n_test};
-    for (int split = 0; split < 3 && rc == NERF_OK; split++) {
+    if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_TRANSFORMS) {
+        rc = nerf__scene_write_transforms(dir, &o, &env, rgba);
+    }
+    for (int split = 0; split < 3 && rc == NERF_OK &&
+                    o.layout == NERF_SCENE_LAYOUT_BLENDER; split++) {
         rc = write_split(dir, split, counts[split], &o, &env, rgba);
     }
     nerf__free(&env, rgba);

@@ -64,7 +64,14 @@ FROZEN(nerf_scene_options, threads, 24);
 FROZEN(nerf_scene_options, reserved0, 28);
 FROZEN(nerf_scene_options, seed, 32);
 FROZEN(nerf_scene_options, hooks, 40);
-SIZE(nerf_scene_options, 48);
+/* Appended in 0.2. */
+FROZEN(nerf_scene_options, layout, 48);
+FROZEN(nerf_scene_options, k1, 52);
+FROZEN(nerf_scene_options, k2, 56);
+FROZEN(nerf_scene_options, p1, 60);
+FROZEN(nerf_scene_options, p2, 64);
+FROZEN(nerf_scene_options, k3, 68);
+SIZE(nerf_scene_options, 72);
 
 FROZEN(nerf_camera, struct_size, 0);
 FROZEN(nerf_camera, flags, 4);
