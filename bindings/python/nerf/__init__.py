@@ -38,7 +38,8 @@ from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
                    param_bounds, set_log_handler, status_string, version,
                    version_number, version_string)
 from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
-                   DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE, SPLIT_TEST,
+                   DATASET_BLENDER, DATASET_LLFF, IMAGE_MAX_SIDE,
+                   SCENE_LAYOUT_BLENDER, SCENE_LAYOUT_TRANSFORMS, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
                    read_png, ssim, write_png, write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
@@ -97,6 +98,7 @@ __all__ = [
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",
     "SPLIT_TRAIN", "SPLIT_VAL", "SPLIT_TEST",
     "DATASET_BLENDER", "DATASET_LLFF", "IMAGE_MAX_SIDE",
+    "SCENE_LAYOUT_BLENDER", "SCENE_LAYOUT_TRANSFORMS",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
 ]
 

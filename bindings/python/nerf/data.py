@@ -26,6 +26,10 @@ IMAGE_MAX_SIDE = 16384
 CAMERA_PATH_FILE_SIZE = 0x1
 CAMERA_PATH_FILE_INTRINSICS = 0x2
 
+# nerf_scene_layout: the files write_scene() writes.
+SCENE_LAYOUT_BLENDER = 0
+SCENE_LAYOUT_TRANSFORMS = 1
+
 LogFn = Optional[Callable[[int, str], Any]]
 
 
@@ -200,10 +204,11 @@ def load_camera_path(path: Any, *, log: LogFn = None,
 
 def write_scene(path: Any, *, log: LogFn = None,
                 log_level: Optional[int] = None, **options: Any) -> None:
-    """Write the built-in scene to folder ``path`` as a Blender dataset
+    """Write the built-in scene to folder ``path`` as a dataset
     (``nerf_scene_write``).  Keyword options are fields of
     :class:`nerf.SceneOptions` (width, height, n_train, n_val, n_test,
-    threads, seed)."""
+    threads, seed, layout: SCENE_LAYOUT_BLENDER or SCENE_LAYOUT_TRANSFORMS,
+    and the lens k1, k2, p1, p2, k3)."""
     opts = SceneOptions(**options)
     hooks = _handle.make_hooks(log, log_level)
     if hooks is not None:

@@ -98,6 +98,12 @@ static void structs(void)
     FIELD(nerf_scene_options, reserved0);
     FIELD(nerf_scene_options, seed);
     FIELD(nerf_scene_options, hooks);
+    FIELD(nerf_scene_options, layout);
+    FIELD(nerf_scene_options, k1);
+    FIELD(nerf_scene_options, k2);
+    FIELD(nerf_scene_options, p1);
+    FIELD(nerf_scene_options, p2);
+    FIELD(nerf_scene_options, k3);
     end_struct();
 
     BEGIN(nerf_camera);
@@ -110,6 +116,11 @@ static void structs(void)
     FIELD(nerf_camera, fy);
     FIELD(nerf_camera, cx);
     FIELD(nerf_camera, cy);
+    FIELD(nerf_camera, k1);
+    FIELD(nerf_camera, k2);
+    FIELD(nerf_camera, p1);
+    FIELD(nerf_camera, p2);
+    FIELD(nerf_camera, k3);
     end_struct();
 
     BEGIN(nerf_sampler_options);
@@ -245,6 +256,8 @@ static void constants(void)
     CONST(NERF_IMAGE_MAX_SIDE);
     CONST(NERF_CAMERA_PATH_FILE_SIZE);
     CONST(NERF_CAMERA_PATH_FILE_INTRINSICS);
+    CONST(NERF_SCENE_LAYOUT_BLENDER);
+    CONST(NERF_SCENE_LAYOUT_TRANSFORMS);
 }
 
 int main(void)
