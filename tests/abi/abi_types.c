@@ -13,6 +13,7 @@ nerf_log_level nerf_abi_log_level;
 nerf_encoding_kind nerf_abi_encoding_kind;
 nerf_density_activation nerf_abi_density_activation;
 nerf_preset nerf_abi_preset;
+nerf_scene_layout nerf_abi_scene_layout;
 nerf_matmul nerf_abi_matmul;
 nerf_network nerf_abi_network;
 nerf_param nerf_abi_param;
