@@ -647,6 +647,24 @@ TEST(bad_json)
                    NERF_EFORMAT, "distortion k2 1e+300 is beyond");
     expect_failure("0.6911112070083618", "0.69, \"k1\": null",
                    NERF_EFORMAT, "field 'k1' is not a finite number");
+    /* Other lens models are refused, not misread. */
+    expect_failure("\"rotation\"", "\"k4\": 0.01, \"rotation\"",
+                   NERF_EFORMAT, "frame 0 (./train/r_0): 'k4' (a fisheye or "
+                   "rational lens model) is not supported");
+    expect_failure("0.6911112070083618", "0.69, \"is_fisheye\": true",
+                   NERF_EFORMAT, "a fisheye lens is not supported");
+    expect_failure("0.6911112070083618",
+                   "0.69, \"camera_model\": \"OPENCV_FISHEYE\"",
+                   NERF_EFORMAT, "OPENCV_FISHEYE lens is not supported");
+    /* ... but a k4 of 0 and the model this is are fine. */
+    char dir[1024];
+    blender_scene(dir, sizeof dir);
+    edit_json(dir, "transforms_train.json", "0.6911112070083618",
+              "0.69, \"k4\": 0, \"camera_model\": \"OPENCV\", "
+              "\"is_fisheye\": false");
+    nerf_dataset *ds = NULL;
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    nerf_dataset_destroy(ds);
     /* instant-ngp's aabb_scale: a power of two, 1..128. */
     expect_failure("0.6911112070083618", "0.69, \"aabb_scale\": 3",
                    NERF_EFORMAT, "aabb_scale 3 is not a power of two in "
