@@ -1381,7 +1381,8 @@ NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
  * placed between the nearest and the farthest bounds (by the reference's
  * disparity weighting).  The path depends on all the scene's poses, not
  * just the loaded split.  Intrinsics and size are those of the dataset's
- * images.  The reference renders 120 views.
+ * images, without their lens distortion (renders are pinhole images).
+ * The reference renders 120 views.
  * @param out initialised with nerf_camera_init().
  * @return NERF_OK or NERF_EINVAL (NULL pointer, not an LLFF dataset,
  * n_views 0 or index >= n_views, uninitialised struct).  Reentrant.

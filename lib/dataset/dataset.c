@@ -228,10 +228,11 @@ double nerf__dataset_aabb_scale(const nerf_dataset *ds)
     return ds ? ds->aabb_scale : 1.0;
 }
 
-/* Write a camera of the dataset's image size with view v's intrinsics
- * and lens and the pose c2w into the caller's struct. */
+/* Write a camera of the dataset's image size with view v's intrinsics,
+ * its lens when lens is set, and the pose c2w into the caller's struct. */
 static int write_camera(const nerf_dataset *ds, const double *c2w,
-                        const nerf__view *v, nerf_camera *out, const char *fn)
+                        const nerf__view *v, bool lens, nerf_camera *out,
+                        const char *fn)
 {
     nerf_camera cam;
     nerf_camera_init(&cam, sizeof cam);
@@ -244,11 +245,13 @@ static int write_camera(const nerf_dataset *ds, const double *c2w,
     cam.fy = (float)v->fy;
     cam.cx = (float)v->cx;
     cam.cy = (float)v->cy;
-    cam.k1 = (float)v->k1;
-    cam.k2 = (float)v->k2;
-    cam.p1 = (float)v->p1;
-    cam.p2 = (float)v->p2;
-    cam.k3 = (float)v->k3;
+    if (lens) {
+        cam.k1 = (float)v->k1;
+        cam.k2 = (float)v->k2;
+        cam.p1 = (float)v->p1;
+        cam.p2 = (float)v->p2;
+        cam.k3 = (float)v->k3;
+    }
     return nerf__camera_write(out, &cam, fn);
 }
 
@@ -260,7 +263,7 @@ NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,
         return rc;
     }
     const nerf__view *v = &ds->views[index];
-    return write_camera(ds, v->c2w, v, out, "nerf_dataset_camera");
+    return write_camera(ds, v->c2w, v, true, out, "nerf_dataset_camera");
 }
 
 NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
@@ -298,5 +301,6 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
     double c2w[12];
     nerf__llff_spiral_pose(&ds->spiral, index, n_views, c2w);
     const nerf__view *v = &ds->views[0];
-    return write_camera(ds, c2w, v, out, fn);
+    /* A path to render, not a photo: the ideal (pinhole) camera. */
+    return write_camera(ds, c2w, v, false, out, fn);
 }
