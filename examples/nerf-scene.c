@@ -13,6 +13,7 @@ static const char usage[] =
     "                  [--capture object|forward|unbounded]\n"
     "                  [--layout blender|llff|colmap-text|colmap-binary]\n"
     "                  [--format png|jpeg] [--jpeg [QUALITY]]\n"
+    "                  [--distortion K1,K2,P1,P2,K3]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR.\n"
     "  --capture object     the solids alone on a transparent background,\n"
     "                       from a hemisphere of views (the default)\n"
@@ -32,6 +33,11 @@ static const char usage[] =
     "  --format png|jpeg    the views' files: PNG (default; RGBA for object)\n"
     "                       or JPEG (RGB, on white for object)\n"
     "  --jpeg [QUALITY]     JPEG files of quality 1..100 (default 95)\n"
+    "  --layout transforms  one instant-ngp transforms.json with every view\n"
+    "                       (fl_x, fl_y, cx, cy, w, h, the lens, aabb_scale)\n"
+    "  --distortion K1,...  photograph through that lens (OpenCV's model, as\n"
+    "                       nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
+    "                       may be left out)\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
 
 /* A name of the list, by its index; -1 when it is not there. */
@@ -59,6 +65,34 @@ static int jpeg_flag(int argc, char **argv, int *i, nerf_scene_options *o)
         (*i)++;
     }
     return 0;
+}
+
+/* "k1,k2,p1,p2,k3", trailing coefficients optional; 0 or -1. */
+static int parse_lens(const char *text, nerf_scene_options *o)
+{
+    float *dst[5] = {&o->k1, &o->k2, &o->p1, &o->p2, &o->k3};
+    char buf[256];
+    if (text == NULL || strlen(text) >= sizeof buf) {
+        return -1;
+    }
+    strcpy(buf, text);
+    char *rest = buf;
+    for (int i = 0; i < 5; i++) {
+        char *comma = strchr(rest, ',');
+        if (comma) {
+            *comma = '\0';
+        }
+        double v;
+        if (cli_double(rest, &v) != 0) {
+            return -1;
+        }
+        *dst[i] = (float)v;
+        if (comma == NULL) {
+            return 0;
+        }
+        rest = comma + 1;
+    }
+    return -1; /* more than five */
 }
 
 int main(int argc, char **argv)
@@ -116,6 +150,13 @@ int main(int argc, char **argv)
                 o.image_format = NERF_IMAGE_FORMAT_JPEG;
             } else {
                 fprintf(stderr, "nerf-scene: --format is png or jpeg\n");
+                goto bad;
+            }
+            continue;
+        } else if (strcmp(a, "--distortion") == 0) {
+            if (parse_lens(cli_value(argc, argv, &i), &o) != 0) {
+                fprintf(stderr, "nerf-scene: --distortion needs 1 to 5 "
+                        "numbers separated by commas: k1,k2,p1,p2,k3\n");
                 goto bad;
             }
             continue;

@@ -540,6 +540,13 @@ typedef struct nerf_scene_options {
                                 files; default NERF_IMAGE_FORMAT_PNG. */
     uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
                                 (default) = 95.  Ignored for PNG. */
+    float k1, k2, p1, p2, k3; /**< Since 0.3.  The lens the views are
+                               photographed through (nerf_camera's
+                               distortion): each pixel holds what its ray
+                               through that lens sees, and the files
+                               record the coefficients (the LLFF layout
+                               cannot, COLMAP's OPENCV model has no k3).
+                               Default 0: a pinhole camera. */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
@@ -560,8 +567,12 @@ typedef struct nerf_scene_options {
     .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
     opaque captures, whose files also record instant-ngp's aabb_scale 16
     at top level for UNBOUNDED). */
-#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One transforms.json (not
-    supported yet). */
+#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One instant-ngp style
+    transforms.json holding every view (train, then val, then test, under
+    images/), with fl_x, fl_y, cx, cy, w, h, k1, k2, p1, p2, k3 and
+    aabb_scale at top level (16 for the opaque captures, 2 for OBJECT).
+    Loading it splits it every llff_holdout-th frame, not by the counts
+    written. */
 #define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
     poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
     order), n_train + n_test views in all (n_val is not used): a loader
@@ -600,8 +611,9 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
  * sky, hills and a sun), so every pixel is opaque and depths reach 40;
  * they are what scenes of forward-facing and all-round photos are like.
  * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
- * JPEG (RGB, composited on white for OBJECT) for the views.  Same options,
- * same bytes.
+ * JPEG (RGB, composited on white for OBJECT) for the views.  With a lens
+ * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
+ * sees (nerf_camera's model).  Same options, same bytes.
  * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
  * capture or layout, a layout that does not fit the capture or is not
  * supported yet); NERF_EIO (cannot create or write a file, named in the
@@ -624,8 +636,9 @@ NERF_API int nerf_scene_write(const char *dir,
 #define NERF_CAMERA_PIXEL_CORNER 0x1u
 
 /**
- * A pinhole camera in the OpenGL/Blender convention: in camera space x
- * points right, y up, and the camera looks down -z.
+ * A camera in the OpenGL/Blender convention: in camera space x points
+ * right, y up, and the camera looks down -z.  A pinhole camera unless its
+ * distortion coefficients are set.
  *
  * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
  * c2w[.][3] (the camera centre) and the unnormalised direction
@@ -633,6 +646,24 @@ NERF_API int nerf_scene_write(const char *dir,
  * of c2w: its camera-space z component is -1, so t along the ray is depth
  * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
  * set.
+ *
+ * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
+ * acting on normalised image coordinates in OpenCV's axes (x right, y
+ * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
+ * at
+ *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
+ *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
+ * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
+ * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
+ * through the undistorted point, direction R (x, -y, -1), found by
+ * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
+ * A pixel that no point distorts onto (beyond the fold of a strong barrel
+ * lens, where r_d stops growing with r) gets the ray of the point whose
+ * distortion comes closest to it.  Images are never resampled.  COLMAP's
+ * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
+ * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
+ * All zero (the default, and what a caller built against a header without
+ * them gets) is a pinhole camera, with the rays above bit for bit.
  *
  * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
  * the fields.  The defaults (identity pose, all intrinsics 0) are not a
@@ -651,6 +682,13 @@ typedef struct nerf_camera {
                                fx = 0.5 width / tan(0.5 a). */
     float cx, cy;         /**< Principal point in pixels from the top-left
                                image corner; usually width/2, height/2. */
+    /* Since 0.2.  Zero-filled by an older caller: a pinhole camera. */
+    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
+                               within +-1000; default 0. */
+    float p1, p2;         /**< Tangential distortion; finite, within
+                               +-1000; default 0. */
+    float k3;             /**< Radial distortion, r^6 term; finite, within
+                               +-1000; default 0. */
 } nerf_camera;
 
 /**
@@ -669,8 +707,8 @@ NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
  * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
  *                       their length scales distances when compositing.
  * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
- * (sizes, non-positive or non-finite focal, non-finite pose) or a pixel
- * range beyond width x height; NERF_EVERSION for a camera struct from a
+ * (sizes, non-positive or non-finite focal, non-finite pose, distortion
+ * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
  * newer header with non-zero unknown fields.
  * Reentrant.
  */
@@ -1299,12 +1337,18 @@ typedef struct nerf_dataset_options {
     uint32_t skip_missing;     /**< Blender: 1 drops frames whose image file
                                     does not exist (with a warning); 0
                                     (default) fails naming the file. */
-    uint32_t llff_holdout;     /**< LLFF and COLMAP (formats without a
-                                    split): images, sorted by name, whose
-                                    index is a multiple of this form the
-                                    test split (and the val split, as in
-                                    the reference); the others are train.
-                                    Default 8; 0 = none held out. */
+    uint32_t llff_holdout;     /**< The split of every format that has
+                                    none of its own (LLFF, COLMAP, a
+                                    single transforms.json): images
+                                    (sorted by name for LLFF and COLMAP)
+                                    whose index is a multiple of this
+                                    form the test split (and the val
+                                    split, as in the reference); the
+                                    others are train.  Default 8.  0:
+                                    LLFF and COLMAP hold none out (test
+                                    and val are empty); a single
+                                    transforms.json serves every frame to
+                                    every split. */
     uint32_t reserved0;        /**< Must be 0. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
@@ -1323,15 +1367,21 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * Load one split of the scene in the folder @p dir.  The layout is
  * detected from the files present, in this order:
  *
- *  - transforms_<split>.json, or a single transforms.json (which holds
- *    every frame, whatever the split): Blender.  Fields: camera_angle_x
- *    (focal = 0.5 W / tan(0.5 camera_angle_x)) or instant-ngp's fl_x, fl_y,
- *    cx, cy, w, h, at top level or per frame (per frame wins; fy defaults
- *    to fx, the principal point to the centre); frames[].transform_matrix,
- *    a 4 x 4 camera-to-world matrix as a list of rows; frames[].file_path
- *    relative to @p dir; when it has no extension, ".png" is added, or
- *    if no such file exists the first of ".jpg", ".jpeg", ".JPG", ".JPEG"
- *    that does.  Images are of one size.  Ray bounds: near 2, far 6.
+ *  - transforms_<split>.json, or a single transforms.json (instant-ngp's:
+ *    its frames are split as LLFF scenes are, every llff_holdout-th frame
+ *    from the first held out for test and val): Blender.  Fields:
+ *    camera_angle_x (focal = 0.5 W / tan(0.5 camera_angle_x)) or
+ *    instant-ngp's fl_x, fl_y, cx, cy, w, h and lens distortion k1, k2,
+ *    p1, p2, k3 (nerf_camera's model; default 0), at top level or per
+ *    frame (per frame wins, field by field; fy defaults to fx, the
+ *    principal point to the centre); aabb_scale, a power of two 1..128
+ *    (above 1 the scene is unbounded: nerf_dataset_space());
+ *    frames[].transform_matrix, a 4 x 4 camera-to-world matrix as a list
+ *    of rows; frames[].file_path relative to @p dir; when it has no
+ *    extension, ".png" is added, or if no such file exists the first of
+ *    ".jpg", ".jpeg", ".JPG", ".JPEG" that does.  Images are of one size.
+ *    Ray bounds: near 2, far 6 (unbounded: near 0.05, far 1e4 times the
+ *    central cube).
  *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
  *    array must be '<f8', C order, N x 17; images are the N .png, .jpg or
  *    .jpeg files (any case) of the image folder sorted by name.  Rotations are reordered from
@@ -1361,13 +1411,16 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *
  * @param opts NULL for the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
- * larger than the images, an LLFF split left empty by llff_holdout);
+ * larger than the images, an LLFF or transforms.json split left empty by
+ * llff_holdout);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
  * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
  * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
  * infinite values, entries beyond 1e6, a degenerate rotation, a focal
- * under 1e-3 pixels, near >= far (docs/formats.md, "Camera sanity"; the
+ * under 1e-3 pixels, a distortion coefficient beyond 1000, an aabb_scale
+ * that is not a power of two in 1..128, near >= far (docs/formats.md,
+ * "Camera sanity"; the
  * message names the frame and its file_path), npy of the wrong
  * dtype, order or shape, a corrupt image or one that is neither PNG nor
  * JPEG, a bad Exif orientation, images of different sizes, image
@@ -1407,9 +1460,12 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
 /**
  * The camera of image @p index: pose (OpenGL axes, world units of the
  * dataset, i.e. after the LLFF rescaling and recentring, or the COLMAP
- * centring and scaling), intrinsics in
- * pixels of the stored images, size, flags 0 (rays through pixel centres;
- * set NERF_CAMERA_PIXEL_CORNER to reproduce the reference's rays).
+ * centring and scaling), intrinsics in pixels of the stored images, lens
+ * distortion as the files give it (unchanged by downscaling: it acts on
+ * normalised coordinates), size, flags 0 (rays through pixel centres; set
+ * NERF_CAMERA_PIXEL_CORNER to reproduce the reference's rays).  The
+ * trainer draws its rays from these cameras, so a distorted image trains
+ * on its pixels' true rays.
  * @param out initialised with nerf_camera_init(); as many bytes as its
  *            struct_size are written.
  * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
@@ -1455,7 +1511,8 @@ NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
  * placed between the nearest and the farthest bounds (by the reference's
  * disparity weighting).  The path depends on all the scene's poses, not
  * just the loaded split.  Intrinsics and size are those of the dataset's
- * images.  The reference renders 120 views.
+ * images, without their lens distortion (renders are pinhole images).
+ * The reference renders 120 views.
  * @param out initialised with nerf_camera_init().
  * @return NERF_OK or NERF_EINVAL (NULL pointer, not an LLFF dataset,
  * n_views 0 or index >= n_views, uninitialised struct).  Reentrant.

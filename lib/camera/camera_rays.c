@@ -1,9 +1,10 @@
-/* Pinhole cameras in the OpenGL convention and their rays. */
+/* Cameras in the OpenGL convention and their rays. */
 #include <math.h>
 #include <stdbool.h>
 #include <string.h>
 
 #include "camera.h"
+#include "distortion.h"
 #include "error.h"
 #include "options.h"
 
@@ -35,6 +36,8 @@ int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn)
         return nerf__error_prefix(rc, fn);
     }
     const char *what = NULL;
+    char text[96];
+    const double lens[5] = {out->k1, out->k2, out->p1, out->p2, out->k3};
     bool pose_finite = true;
     for (int k = 0; k < 12; k++) {
         pose_finite = pose_finite && isfinite(out->c2w[k]);
@@ -51,6 +54,8 @@ int nerf__camera_read(nerf_camera *out, const nerf_camera *in, const char *fn)
         what = "cx and cy must be finite";
     } else if (!pose_finite) {
         what = "c2w has a NaN or infinite entry";
+    } else {
+        what = nerf__lens_problem(lens, text, sizeof text);
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "%s: invalid camera: %s", fn, what);
@@ -74,20 +79,59 @@ int nerf__camera_write(nerf_camera *out, const nerf_camera *cam,
     return NERF_OK;
 }
 
+/* The world direction of camera-space (x, y, -1), y up. */
+static inline void rotate(const float *m, const float d[3], float *out)
+{
+    for (int r = 0; r < 3; r++) {
+        /* Summed in the reference's order, so rays match it bitwise. */
+        out[r] = d[0] * m[4 * r] + d[1] * m[4 * r + 1] + d[2] * m[4 * r + 2];
+    }
+}
+
+/*
+ * Through a lens: the pixel records the distorted normalised point, the
+ * ray goes through the undistorted one.  In double, so that the inverse
+ * converges far below a float's resolution.  A pixel that nothing
+ * distorts onto (beyond the fold of a strong barrel lens) gets the ray of
+ * the point whose distortion comes closest to it.
+ */
+static void lens_rays(const nerf_camera *cam, size_t first, size_t n,
+                      float off, float *origins, float *directions)
+{
+    const float *m = cam->c2w;
+    nerf__lens lens;
+    nerf__lens_of(cam, &lens);
+    for (size_t k = 0; k < n; k++) {
+        size_t p = first + k;
+        double i = (double)(p % cam->width) + off;
+        double j = (double)(p / cam->width) + off;
+        double x, y;
+        nerf__undistort(&lens, (i - cam->cx) / cam->fx,
+                        (j - cam->cy) / cam->fy, &x, &y);
+        const float d[3] = {(float)x, (float)-y, -1.0f};
+        rotate(m, d, directions + 3 * k);
+        for (int r = 0; r < 3; r++) {
+            origins[3 * k + r] = m[4 * r + 3];
+        }
+    }
+}
+
 void nerf__camera_rays(const nerf_camera *cam, size_t first, size_t n,
                        float *origins, float *directions)
 {
     const float *m = cam->c2w;
     const float off = (cam->flags & NERF_CAMERA_PIXEL_CORNER) ? 0.0f : 0.5f;
+    if (nerf__lens_distorts(cam)) {
+        lens_rays(cam, first, n, off, origins, directions);
+        return;
+    }
     for (size_t k = 0; k < n; k++) {
         size_t p = first + k;
         float i = (float)(p % cam->width) + off;
         float j = (float)(p / cam->width) + off;
         float d[3] = {(i - cam->cx) / cam->fx, -(j - cam->cy) / cam->fy, -1.0f};
+        rotate(m, d, directions + 3 * k);
         for (int r = 0; r < 3; r++) {
-            /* Summed in the reference's order, so rays match it bitwise. */
-            directions[3 * k + r] = d[0] * m[4 * r] + d[1] * m[4 * r + 1] +
-                                    d[2] * m[4 * r + 2];
             origins[3 * k + r] = m[4 * r + 3];
         }
     }

@@ -116,10 +116,10 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
         return rc;
     }
     if (split_json) {
-        return nerf__blender_load(ds, dir, name, cfg);
+        return nerf__blender_load(ds, dir, name, false, cfg);
     }
     if (all_json) {
-        return nerf__blender_load(ds, dir, "transforms.json", cfg);
+        return nerf__blender_load(ds, dir, "transforms.json", true, cfg);
     }
     if (llff) {
         return nerf__llff_load(ds, dir, cfg);
@@ -156,6 +156,7 @@ NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
         return NERF_ENOMEM;
     }
     ds->env = env;
+    ds->aabb_scale = 1.0;
     nerf__dataset_config cfg = {o.split, o.downscale, o.skip,
                                 o.white_background, o.skip_missing,
                                 o.llff_holdout};
@@ -229,10 +230,16 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
     return rc;
 }
 
-/* Write a camera of the dataset's image size into the caller's struct. */
+double nerf__dataset_aabb_scale(const nerf_dataset *ds)
+{
+    return ds ? ds->aabb_scale : 1.0;
+}
+
+/* Write a camera of the dataset's image size with view v's intrinsics,
+ * its lens when lens is set, and the pose c2w into the caller's struct. */
 static int write_camera(const nerf_dataset *ds, const double *c2w,
-                        double fx, double fy, double cx, double cy,
-                        nerf_camera *out, const char *fn)
+                        const nerf__view *v, bool lens, nerf_camera *out,
+                        const char *fn)
 {
     nerf_camera cam;
     nerf_camera_init(&cam, sizeof cam);
@@ -241,10 +248,17 @@ static int write_camera(const nerf_dataset *ds, const double *c2w,
     for (int i = 0; i < 12; i++) {
         cam.c2w[i] = (float)c2w[i];
     }
-    cam.fx = (float)fx;
-    cam.fy = (float)fy;
-    cam.cx = (float)cx;
-    cam.cy = (float)cy;
+    cam.fx = (float)v->fx;
+    cam.fy = (float)v->fy;
+    cam.cx = (float)v->cx;
+    cam.cy = (float)v->cy;
+    if (lens) {
+        cam.k1 = (float)v->k1;
+        cam.k2 = (float)v->k2;
+        cam.p1 = (float)v->p1;
+        cam.p2 = (float)v->p2;
+        cam.k3 = (float)v->k3;
+    }
     return nerf__camera_write(out, &cam, fn);
 }
 
@@ -256,8 +270,7 @@ NERF_API int nerf_dataset_camera(const nerf_dataset *ds, uint32_t index,
         return rc;
     }
     const nerf__view *v = &ds->views[index];
-    return write_camera(ds, v->c2w, v->fx, v->fy, v->cx, v->cy, out,
-                        "nerf_dataset_camera");
+    return write_camera(ds, v->c2w, v, true, out, "nerf_dataset_camera");
 }
 
 NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
@@ -317,5 +330,6 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
     double c2w[12];
     nerf__llff_spiral_pose(&ds->spiral, index, n_views, c2w);
     const nerf__view *v = &ds->views[0];
-    return write_camera(ds, c2w, v->fx, v->fy, v->cx, v->cy, out, fn);
+    /* A path to render, not a photo: the ideal (pinhole) camera. */
+    return write_camera(ds, c2w, v, false, out, fn);
 }

@@ -6,6 +6,7 @@
 #ifndef NERF_DATASET_DATASET_H
 #define NERF_DATASET_DATASET_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "env.h"
@@ -20,9 +21,7 @@ typedef enum nerf__dataset_kind {
 typedef struct nerf__view {
     double c2w[12]; /* 3x4 camera-to-world, row-major, OpenGL axes */
     double fx, fy, cx, cy;
-    /* OpenCV lens distortion (COLMAP's radial and OPENCV models); all 0
-     * for a pinhole camera.  Not applied to rays yet. */
-    double k1, k2, p1, p2, k3;
+    double k1, k2, p1, p2, k3; /* nerf_camera's lens distortion */
 } nerf__view;
 
 /*
@@ -77,7 +76,13 @@ struct nerf_dataset {
                               so renders of this scene should be too */
     int has_spiral;
     nerf__spiral spiral;
+    double aabb_scale;     /* instant-ngp's transforms.json aabb_scale: the
+                              scene fills a cube this many times the unit
+                              cube; 1 when the files do not say */
 };
+
+/* The dataset's aabb_scale (1 for NULL). */
+double nerf__dataset_aabb_scale(const nerf_dataset *ds);
 
 /* Allocate room for count images and views (pixels come with the first
  * image, once its size is known). */
@@ -122,8 +127,9 @@ uint32_t nerf__holdout_split(size_t n, const nerf__dataset_config *cfg,
 int nerf__colmap_detect(const nerf__env *env, const char *dir, int *found);
 
 /* Loaders.  dir is the scene folder; name is the file that was found. */
+/* whole: name is the one transforms.json of every split. */
 int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
-                       const nerf__dataset_config *cfg);
+                       bool whole, const nerf__dataset_config *cfg);
 int nerf__llff_load(nerf_dataset *ds, const char *dir,
                     const nerf__dataset_config *cfg);
 int nerf__colmap_load(nerf_dataset *ds, const char *dir,

@@ -14,6 +14,13 @@
 #include "dataset.h"
 #include "transforms.h"
 
+/* An unbounded Blender-layout scene (aabb_scale > 1): the central cube's
+ * half side (the Blender scenes' bound), and its rays' bounds in units of
+ * it. */
+#define BLENDER_INNER 1.5
+#define UNBOUNDED_NEAR 0.05
+#define UNBOUNDED_FAR 1e4
+
 typedef struct frame {
     uint32_t index;  /* position in the file's frames list */
     char name[224];  /* for messages: index and file_path */
@@ -29,6 +36,7 @@ typedef struct blender_ctx {
     const char *json_path;
     frame *frames;
     uint32_t n_frames;
+    bool whole;        /* one transforms.json for every split */
 } blender_ctx;
 
 /*
@@ -88,13 +96,31 @@ static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
     return *out ? NERF_OK : NERF_ENOMEM;
 }
 
-/* Collect the frames the skip setting keeps, in file order. */
+/*
+ * Whether frame idx belongs to the split: a file of one split holds only
+ * its own frames; one transforms.json for all splits is split as LLFF
+ * scenes are, every llff_holdout-th frame (from the first) held out for
+ * test and val, or with a hold-out of 0 serves every frame to every split.
+ */
+static bool in_split(const blender_ctx *b, uint32_t idx,
+                     const nerf__dataset_config *cfg)
+{
+    if (!b->whole || cfg->llff_holdout == 0) {
+        return true;
+    }
+    bool held = idx % cfg->llff_holdout == 0;
+    return cfg->split == NERF_SPLIT_TRAIN ? !held : held;
+}
+
+/* Collect the frames of the split that the skip setting keeps, in file
+ * order. */
 static int parse_frames(blender_ctx *b, const cJSON *root,
                         const nerf__dataset_config *cfg)
 {
     nerf__intrinsics top;
     const cJSON *frames = NULL;
-    int rc = nerf__transforms_top(b->json_path, root, &top, &frames);
+    int rc = nerf__transforms_top(b->json_path, root, &top, &frames,
+                                  &b->ds->aabb_scale);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -104,9 +130,9 @@ static int parse_frames(blender_ctx *b, const cJSON *root,
     if (b->frames == NULL) {
         return NERF_ENOMEM;
     }
-    uint32_t idx = 0;
+    uint32_t idx = 0, seen = 0;
     for (const cJSON *fr = frames->child; fr; fr = fr->next, idx++) {
-        if (idx % cfg->skip != 0) {
+        if (!in_split(b, idx, cfg) || seen++ % cfg->skip != 0) {
             continue;
         }
         frame *f = &b->frames[b->n_frames];
@@ -156,6 +182,11 @@ static int resolve_intrinsics(const blender_ctx *b, const frame *f,
     v->fy = k[1];
     v->cx = k[2];
     v->cy = k[3];
+    v->k1 = in->k1;
+    v->k2 = in->k2;
+    v->p1 = in->p1;
+    v->p2 = in->p2;
+    v->k3 = in->k3;
     memcpy(v->c2w, f->c2w, sizeof v->c2w);
     return NERF_OK;
 }
@@ -202,6 +233,8 @@ static int load_frames(blender_ctx *b, const nerf__dataset_config *cfg)
         if (rc != NERF_OK) {
             break;
         }
+        /* The distortion acts on normalised coordinates: it does not
+         * scale with the image. */
         v->fx /= k;
         v->fy /= k;
         v->cx /= k;
@@ -225,15 +258,20 @@ static int parse_file(blender_ctx *b, const nerf__dataset_config *cfg)
 }
 
 int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
-                       const nerf__dataset_config *cfg)
+                       bool whole, const nerf__dataset_config *cfg)
 {
-    blender_ctx b = {ds, dir, NULL, NULL, 0};
+    blender_ctx b = {ds, dir, NULL, NULL, 0, whole};
     char *json_path = nerf__path_join(&ds->env, dir, name);
     if (json_path == NULL) {
         return NERF_ENOMEM;
     }
     b.json_path = json_path;
     int rc = parse_file(&b, cfg);
+    if (rc == NERF_OK && b.n_frames == 0 && whole) {
+        rc = nerf__error(NERF_EINVAL, "%s: the requested split has no "
+                         "frames (holdout %u)", json_path,
+                         (unsigned)cfg->llff_holdout);
+    }
     if (rc == NERF_OK) {
         rc = load_frames(&b, cfg);
     }
@@ -241,6 +279,14 @@ int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
         ds->kind = NERF__DATASET_BLENDER;
         ds->near_bound = 2.0f;
         ds->far_bound = 6.0f;
+        if (ds->aabb_scale > 1.0) {
+            /* instant-ngp's sign of a scene reaching far beyond its
+             * centre: contract it beyond the Blender scenes' bound, and
+             * sample from near the cameras to far beyond the scene. */
+            ds->unbounded_inner = BLENDER_INNER;
+            ds->near_bound = (float)(UNBOUNDED_NEAR * BLENDER_INNER);
+            ds->far_bound = (float)(UNBOUNDED_FAR * BLENDER_INNER);
+        }
         ds->scene_scale = 1.0;
         nerf__log(&ds->env, NERF_LOG_INFO,
                   "%s: Blender scene, %u images of %ux%u (downscale %u from "
@@ -250,6 +296,22 @@ int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
                   (unsigned)cfg->downscale, (unsigned)ds->src_width,
                   (unsigned)ds->src_height, ds->views[0].fx, ds->views[0].fy,
                   ds->near_bound, ds->far_bound, ds->scene_radius);
+        const nerf__view *v = &ds->views[0];
+        if (v->k1 != 0.0 || v->k2 != 0.0 || v->p1 != 0.0 || v->p2 != 0.0 ||
+            v->k3 != 0.0) {
+            nerf__log(&ds->env, NERF_LOG_INFO, "%s: lens distortion (first "
+                      "image) k1 %g k2 %g p1 %g p2 %g k3 %g", json_path,
+                      v->k1, v->k2, v->p1, v->p2, v->k3);
+        }
+        if (whole && cfg->llff_holdout > 0) {
+            nerf__log(&ds->env, NERF_LOG_INFO, "%s: one file for every "
+                      "split: every %u-th frame is test and val, the others "
+                      "train", json_path, (unsigned)cfg->llff_holdout);
+        } else if (whole) {
+            nerf__log(&ds->env, NERF_LOG_INFO, "%s: one file for every "
+                      "split, holdout 0: every frame in every split",
+                      json_path);
+        }
     }
     for (uint32_t i = 0; i < b.n_frames; i++) {
         nerf__free(&ds->env, b.frames[i].path);

@@ -271,7 +271,8 @@ static int load_json(path_ctx *c, const unsigned char *buf, size_t size)
     nerf__intrinsics top;
     int rc = nerf__transforms_parse_text(c->path, buf, size, &root);
     if (rc == NERF_OK) {
-        rc = nerf__transforms_top(c->path, root, &top, &frames);
+        double aabb_scale; /* checked as the loader does, not used */
+        rc = nerf__transforms_top(c->path, root, &top, &frames, &aabb_scale);
     }
     if (rc == NERF_OK) {
         rc = reserve(c, (size_t)cJSON_GetArraySize(frames));

@@ -1,9 +1,12 @@
 #include "transforms.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <string.h>
 
+#include "distortion.h"
 #include "error.h"
 #include "file_io.h"
 
@@ -13,6 +16,7 @@ void nerf__intrinsics_none(nerf__intrinsics *in)
 {
     in->angle_x = in->angle_y = in->fl_x = in->fl_y = NAN;
     in->cx = in->cy = in->w = in->h = NAN;
+    in->k1 = in->k2 = in->p1 = in->p2 = in->k3 = 0.0;
 }
 
 int nerf__transforms_parse_text(const char *path, const unsigned char *text,
@@ -108,27 +112,85 @@ static int check_intrinsics(const char *path, const char *where,
                                NERF__CAMERA_MAX_ABS);
         }
     }
+    const double k[5] = {in->k1, in->k2, in->p1, in->p2, in->k3};
+    char text[96];
+    const char *why = nerf__lens_problem(k, text, sizeof text);
+    if (why != NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: %s%s", path, where, why);
+    }
+    return NERF_OK;
+}
+
+/*
+ * Lens models other than nerf_camera's: a fisheye is another function of
+ * the angle, and OpenCV's rational model divides by a polynomial, so
+ * reading their files as our model would give wrong rays without a word.
+ */
+static int check_lens_model(const char *path, const cJSON *obj,
+                            const char *where)
+{
+    static const char *const higher[] = {"k4", "k5", "k6"};
+    for (size_t i = 0; i < sizeof higher / sizeof higher[0]; i++) {
+        const cJSON *k = cJSON_GetObjectItemCaseSensitive(obj, higher[i]);
+        if (k != NULL && !(cJSON_IsNumber(k) && k->valuedouble == 0.0)) {
+            return nerf__error(NERF_EFORMAT, "%s: %s'%s' (a fisheye or "
+                               "rational lens model) is not supported: only "
+                               "k1, k2, p1, p2, k3", path, where, higher[i]);
+        }
+    }
+    const cJSON *fisheye = cJSON_GetObjectItemCaseSensitive(obj, "is_fisheye");
+    const cJSON *model = cJSON_GetObjectItemCaseSensitive(obj,
+                                                          "camera_model");
+    bool bad_model = cJSON_IsString(model) &&
+                     (strstr(model->valuestring, "FISHEYE") != NULL ||
+                      strcmp(model->valuestring, "EQUIRECTANGULAR") == 0);
+    if (cJSON_IsTrue(fisheye) || bad_model) {
+        return nerf__error(NERF_EFORMAT, "%s: %s%s lens is not supported: "
+                           "only OpenCV's k1, k2, p1, p2, k3 model", path,
+                           where, bad_model ? model->valuestring
+                                            : "a fisheye");
+    }
     return NERF_OK;
 }
 
 int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,
                                      const char *where, nerf__intrinsics *in)
 {
+    int rc = check_lens_model(path, obj, where);
     static const char *const keys[] = {"camera_angle_x", "camera_angle_y",
-                                       "fl_x", "fl_y", "cx", "cy", "w", "h"};
+                                       "fl_x", "fl_y", "cx", "cy", "w", "h",
+                                       "k1", "k2", "p1", "p2", "k3"};
     double *fields[] = {&in->angle_x, &in->angle_y, &in->fl_x, &in->fl_y,
-                        &in->cx, &in->cy, &in->w, &in->h};
-    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
-        int rc = get_number(path, obj, keys[i], where, fields[i]);
-        if (rc != NERF_OK) {
-            return rc;
-        }
+                        &in->cx, &in->cy, &in->w, &in->h,
+                        &in->k1, &in->k2, &in->p1, &in->p2, &in->k3};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0] && rc == NERF_OK;
+         i++) {
+        rc = get_number(path, obj, keys[i], where, fields[i]);
     }
-    return check_intrinsics(path, where, in);
+    return rc == NERF_OK ? check_intrinsics(path, where, in) : rc;
+}
+
+/* aabb_scale: instant-ngp's scene box, in units of the unit cube. */
+static int read_aabb_scale(const char *path, const cJSON *root, double *out)
+{
+    double v = 1.0;
+    int rc = get_number(path, root, "aabb_scale", "", &v);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    int e;
+    /* A power of two is a mantissa of exactly one half. */
+    if (!(v >= 1.0 && v <= NERF__AABB_SCALE_MAX && frexp(v, &e) == 0.5)) {
+        return nerf__error(NERF_EFORMAT, "%s: aabb_scale %g is not a power "
+                           "of two in 1..%d", path, v, NERF__AABB_SCALE_MAX);
+    }
+    *out = v;
+    return NERF_OK;
 }
 
 int nerf__transforms_top(const char *path, const cJSON *root,
-                         nerf__intrinsics *top, const cJSON **frames_out)
+                         nerf__intrinsics *top, const cJSON **frames_out,
+                         double *aabb_scale)
 {
     if (!cJSON_IsObject(root)) {
         return nerf__error(NERF_EFORMAT, "%s: the top level is not a JSON "
@@ -136,6 +198,9 @@ int nerf__transforms_top(const char *path, const cJSON *root,
     }
     nerf__intrinsics_none(top);
     int rc = nerf__transforms_read_intrinsics(path, root, "", top);
+    if (rc == NERF_OK) {
+        rc = read_aabb_scale(path, root, aabb_scale);
+    }
     if (rc != NERF_OK) {
         return rc;
     }

@@ -30,12 +30,18 @@
 #define NERF__POSE_MIN_DET_RATIO 1e-3
 #define NERF__FOCAL_MIN 1e-3
 
-/* Intrinsics fields, at top level or per frame; NAN when absent. */
+/* Intrinsics fields, at top level or per frame; NAN when absent.  The
+ * distortion coefficients k1, k2, p1, p2, k3 (nerf_camera's model) are
+ * 0 when absent, as instant-ngp reads them. */
 typedef struct nerf__intrinsics {
     double angle_x, angle_y, fl_x, fl_y, cx, cy, w, h;
+    double k1, k2, p1, p2, k3;
 } nerf__intrinsics;
 
-/* All fields NAN. */
+/* instant-ngp's aabb_scale: a power of two up to this; 1 when absent. */
+#define NERF__AABB_SCALE_MAX 128
+
+/* All fields NAN, the distortion 0. */
 void nerf__intrinsics_none(nerf__intrinsics *in);
 
 /*
@@ -51,10 +57,13 @@ int nerf__transforms_parse_text(const char *path, const unsigned char *text,
 
 /*
  * The top level: an object whose top-level intrinsics go to *top (fields
- * absent stay NAN) and whose 'frames' list goes to *frames_out.
+ * absent stay NAN) and whose 'frames' list goes to *frames_out.  Its
+ * aabb_scale, a power of two 1..NERF__AABB_SCALE_MAX (1 when absent),
+ * goes to *aabb_scale.
  */
 int nerf__transforms_top(const char *path, const cJSON *root,
-                         nerf__intrinsics *top, const cJSON **frames_out);
+                         nerf__intrinsics *top, const cJSON **frames_out,
+                         double *aabb_scale);
 
 /*
  * How messages name frame idx: "frame 3", and its file_path when it has
@@ -66,7 +75,8 @@ void nerf__transforms_frame_name(const cJSON *frame, uint32_t idx, char *buf,
 /*
  * Overlay the intrinsics fields present in obj onto *in, refusing values
  * no camera has (angles outside (0, pi), focal lengths below
- * NERF__FOCAL_MIN, anything beyond NERF__CAMERA_MAX_ABS).  where prefixes
+ * NERF__FOCAL_MIN, anything beyond NERF__CAMERA_MAX_ABS, distortion
+ * beyond NERF__DISTORTION_MAX_ABS).  where prefixes
  * field names in messages ("frame 3: ", or "" at top level).
  */
 int nerf__transforms_read_intrinsics(const char *path, const cJSON *obj,

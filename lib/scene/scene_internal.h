@@ -6,6 +6,8 @@
 #ifndef NERF_SCENE_INTERNAL_H
 #define NERF_SCENE_INTERNAL_H
 
+#include <cJSON.h>
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "env.h"
@@ -47,7 +49,27 @@ void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
 /* The horizontal field of view (radians) of FORWARD and UNBOUNDED. */
 #define NERF__SCENE_WIDE_ANGLE_X 1.0
 
-/* Camera i of n of a split of the options' capture, any of them. */
+/* "train", "val", "test": the splits, numbered 0..2. */
+extern const char *const nerf__scene_split_names[3];
+
+/* A 3x4 pose as a transform_matrix, 4 rows. */
+cJSON *nerf__scene_matrix_json(const float c2w[12]);
+
+/* Add k1, k2, p1, p2, k3 to obj: always, or only when one is non-zero. */
+void nerf__scene_lens_json(cJSON *obj, const nerf_scene_options *o,
+                           bool always);
+
+/* Print root and write it to path atomically. */
+int nerf__scene_write_json(const nerf__env *env, const char *path,
+                           const cJSON *root);
+
+/* NERF_SCENE_LAYOUT_TRANSFORMS into dir (which exists); px holds one view
+ * of 4 channels (scene_transforms.c). */
+int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
+                                 const nerf__env *env, uint8_t *px);
+
+/* Camera i of n of a split of the options' capture, any of them, through
+ * the options' lens. */
 void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
                                 uint32_t i, uint32_t n, nerf_camera *cam);
 

@@ -16,6 +16,7 @@
 
 #include "camera.h"
 #include "cpu.h"
+#include "distortion.h"
 #include "env.h"
 #include "file_io.h"
 #include "field.h"
@@ -203,7 +204,9 @@ int nerf__scene_make_dir(const char *path)
     return NERF_OK;
 }
 
-static cJSON *matrix_json(const float c2w[12])
+const char *const nerf__scene_split_names[3] = {"train", "val", "test"};
+
+cJSON *nerf__scene_matrix_json(const float c2w[12])
 {
     cJSON *rows = cJSON_CreateArray();
     for (int r = 0; r < 4; r++) {
@@ -216,8 +219,9 @@ static cJSON *matrix_json(const float c2w[12])
     return rows;
 }
 
-void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
-                                uint32_t i, uint32_t n, nerf_camera *cam)
+/* Camera i of n of a split of the options' capture, pinhole. */
+static void capture_pose(const nerf_scene_options *o, int split, uint32_t i,
+                         uint32_t n, nerf_camera *cam)
 {
     if (o->capture == NERF_SCENE_CAPTURE_FORWARD) {
         nerf__scene_forward_camera(o, split, i, n, cam);
@@ -237,11 +241,48 @@ void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
     place_camera(split, i, n, o->seed, cam);
 }
 
+void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
+                                uint32_t i, uint32_t n, nerf_camera *cam)
+{
+    capture_pose(o, split, i, n, cam);
+    /* The lens the options photograph through. */
+    cam->k1 = o->k1;
+    cam->k2 = o->k2;
+    cam->p1 = o->p1;
+    cam->p2 = o->p2;
+    cam->k3 = o->k3;
+}
+
+void nerf__scene_lens_json(cJSON *obj, const nerf_scene_options *o,
+                           bool always)
+{
+    static const char *const names[5] = {"k1", "k2", "p1", "p2", "k3"};
+    const float k[5] = {o->k1, o->k2, o->p1, o->p2, o->k3};
+    bool any = false;
+    for (int i = 0; i < 5; i++) {
+        any = any || k[i] != 0.0f;
+    }
+    for (int i = 0; i < 5 && (any || always); i++) {
+        cJSON_AddNumberToObject(obj, names[i], (double)k[i]);
+    }
+}
+
+int nerf__scene_write_json(const nerf__env *env, const char *path,
+                           const cJSON *root)
+{
+    char *text = cJSON_Print(root);
+    nerf__span part = {text, text ? strlen(text) : 0};
+    int rc = text ? nerf__file_write_atomic(env, path, &part, 1)
+                  : nerf__error(NERF_ENOMEM, "%s: out of memory", path);
+    cJSON_free(text);
+    return rc;
+}
+
 static int write_split(const char *dir, int split, uint32_t n,
                        const nerf_scene_options *o, const nerf__env *env,
                        uint8_t *px)
 {
-    static const char *const names[] = {"train", "val", "test"};
+    const char *const *names = nerf__scene_split_names;
     const nerf__scene_look look = nerf__scene_look_of(o->capture);
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[split]);
@@ -257,6 +298,9 @@ static int write_split(const char *dir, int split, uint32_t n,
                             o->capture == NERF_SCENE_CAPTURE_OBJECT
                                 ? NERF__SCENE_CAMERA_ANGLE_X
                                 : NERF__SCENE_WIDE_ANGLE_X);
+    /* Only with a lens, so that a pinhole scene's files stay as they
+     * were. */
+    nerf__scene_lens_json(root, o, false);
     if (o->capture == NERF_SCENE_CAPTURE_UNBOUNDED) {
         /*
          * instant-ngp's hint that the scene reaches far beyond the unit
@@ -277,16 +321,13 @@ static int write_split(const char *dir, int split, uint32_t n,
         snprintf(file, sizeof file, "./%s/r_%u%s", names[split], i,
                  nerf__scene_image_suffix(o));
         cJSON_AddStringToObject(frame, "file_path", file);
-        cJSON_AddItemToObject(frame, "transform_matrix", matrix_json(cam.c2w));
+        cJSON_AddItemToObject(frame, "transform_matrix",
+                              nerf__scene_matrix_json(cam.c2w));
         cJSON_AddItemToArray(frames, frame);
     }
     if (rc == NERF_OK) {
-        char *text = cJSON_Print(root);
         snprintf(path, sizeof path, "%s/transforms_%s.json", dir, names[split]);
-        nerf__span part = {text, text ? strlen(text) : 0};
-        rc = text ? nerf__file_write_atomic(env, path, &part, 1)
-                  : nerf__error(NERF_ENOMEM, "%s: out of memory", path);
-        cJSON_free(text);
+        rc = nerf__scene_write_json(env, path, root);
     }
     cJSON_Delete(root);
     nerf__log(env, NERF_LOG_INFO, "scene: wrote %u %s views of %ux%u to %s", n,
@@ -309,9 +350,15 @@ static int check_capture(const nerf_scene_options *o)
                            "3 colmap text, 4 colmap binary)",
                            (unsigned)o->layout);
     }
-    if (o->layout == NERF_SCENE_LAYOUT_TRANSFORMS) {
-        return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "
-                           "not supported yet", (unsigned)o->layout);
+    const bool lens = o->k1 != 0.0f || o->k2 != 0.0f || o->p1 != 0.0f ||
+                      o->p2 != 0.0f || o->k3 != 0.0f;
+    if (lens && o->layout == NERF_SCENE_LAYOUT_LLFF) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: the LLFF layout "
+                           "(poses_bounds.npy) has no lens fields");
+    }
+    if (o->k3 != 0.0f && o->layout >= NERF_SCENE_LAYOUT_COLMAP_TEXT) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: COLMAP's OPENCV "
+                           "camera model has no k3");
     }
     /* LLFF's loaders warp every ray to NDC, which only a forward-facing
      * capture fits. */
@@ -351,6 +398,12 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (rc != NERF_OK) {
         return rc;
     }
+    const double lens[5] = {o.k1, o.k2, o.p1, o.p2, o.k3};
+    char text[96];
+    const char *why = nerf__lens_problem(lens, text, sizeof text);
+    if (why != NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: %s", why);
+    }
     if (o.threads == 0) {
         o.threads = nerf__cpu_count();
     }
@@ -365,6 +418,9 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
                       : NULL;
     if (rc == NERF_OK && px == NULL) {
         rc = NERF_ENOMEM;
+    }
+    if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_TRANSFORMS) {
+        rc = nerf__scene_write_transforms(dir, &o, &env, px);
     }
     if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_LLFF) {
         rc = nerf__scene_write_llff(dir, &o, &env, px);

@@ -273,27 +273,36 @@ static int make_points(colmap_writer *w)
     return NERF_OK;
 }
 
+/* One camera: PINHOLE, or OPENCV when the views have a lens (k3 is
+ * refused beforehand: OPENCV has none). */
 static void camera_record(const colmap_writer *w, bool bin, buf *b)
 {
     const nerf_camera *c = &w->cams[0];
+    const bool lens = c->k1 != 0.0f || c->k2 != 0.0f || c->p1 != 0.0f ||
+                      c->p2 != 0.0f;
+    const double p[8] = {c->fx, c->fy, c->cx, c->cy,
+                         c->k1, c->k2, c->p1, c->p2};
+    const int n = lens ? 8 : 4;
     if (bin) {
         put_u64(b, 1);
         put_u32(b, 1);
-        put_u32(b, NERF__COLMAP_PINHOLE);
+        put_u32(b, lens ? NERF__COLMAP_OPENCV : NERF__COLMAP_PINHOLE);
         put_u64(b, c->width);
         put_u64(b, c->height);
-        put_f64(b, c->fx);
-        put_f64(b, c->fy);
-        put_f64(b, c->cx);
-        put_f64(b, c->cy);
+        for (int i = 0; i < n; i++) {
+            put_f64(b, p[i]);
+        }
         return;
     }
     put_text(b, "# Camera list with one line of data per camera:\n"
                 "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
                 "# Number of cameras: 1\n");
-    put_text(b, "1 PINHOLE %u %u %.17g %.17g %.17g %.17g\n",
-             (unsigned)c->width, (unsigned)c->height, (double)c->fx,
-             (double)c->fy, (double)c->cx, (double)c->cy);
+    put_text(b, "1 %s %u %u", lens ? "OPENCV" : "PINHOLE",
+             (unsigned)c->width, (unsigned)c->height);
+    for (int i = 0; i < n; i++) {
+        put_text(b, " %.17g", p[i]);
+    }
+    put_text(b, "\n");
 }
 
 static void image_records(const colmap_writer *w, bool bin, buf *b)

@@ -69,7 +69,12 @@ FROZEN(nerf_scene_options, capture, 48);
 FROZEN(nerf_scene_options, layout, 52);
 FROZEN(nerf_scene_options, image_format, 56);
 FROZEN(nerf_scene_options, jpeg_quality, 60);
-SIZE(nerf_scene_options, 64);
+FROZEN(nerf_scene_options, k1, 64);
+FROZEN(nerf_scene_options, k2, 68);
+FROZEN(nerf_scene_options, p1, 72);
+FROZEN(nerf_scene_options, p2, 76);
+FROZEN(nerf_scene_options, k3, 80);
+SIZE(nerf_scene_options, 88);
 
 FROZEN(nerf_camera, struct_size, 0);
 FROZEN(nerf_camera, flags, 4);
@@ -80,7 +85,13 @@ FROZEN(nerf_camera, fx, 64);
 FROZEN(nerf_camera, fy, 68);
 FROZEN(nerf_camera, cx, 72);
 FROZEN(nerf_camera, cy, 76);
-SIZE(nerf_camera, 80);
+/* Appended in 0.2. */
+FROZEN(nerf_camera, k1, 80);
+FROZEN(nerf_camera, k2, 84);
+FROZEN(nerf_camera, p1, 88);
+FROZEN(nerf_camera, p2, 92);
+FROZEN(nerf_camera, k3, 96);
+SIZE(nerf_camera, 100);
 
 FROZEN(nerf_camera_path_options, struct_size, 0);
 FROZEN(nerf_camera_path_options, width, 4);

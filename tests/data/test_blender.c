@@ -1,6 +1,8 @@
 /* The Blender / instant-ngp loader on tiny scenes written by the test. */
 #include <nerf.h>
 
+#include <stddef.h>
+
 #include "data_fixtures.h"
 #include "dataset.h"
 #include "../harness.h"
@@ -325,35 +327,124 @@ TEST(instant_ngp_fields)
     char dir[1024], json[16384];
     make_scene(dir, sizeof dir);
     scene_json(json, sizeof json, "\"fl_x\": 7, \"fl_y\": 8, \"cx\": 3.5, "
-               "\"cy\": 2.25, \"w\": 8, \"h\": 6, \"aabb_scale\": 4", 1);
+               "\"cy\": 2.25, \"w\": 8, \"h\": 6, \"aabb_scale\": 4, "
+               "\"k1\": -0.25, \"k2\": 0.0625, \"p1\": 0.001, "
+               "\"p2\": -0.002", 1);
     fx_write_text(dir, "transforms.json", json);
-    /* Frame 1 has its own focal. */
+    /* Frame 1 has its own focal, principal point and lens (k3 too);
+     * frame 2 only its own k2. */
     edit_json(dir, "transforms.json", "\"file_path\": \"train/r_1.png\"",
-              "\"fl_x\": 9, \"file_path\": \"train/r_1.png\"");
+              "\"fl_x\": 9, \"cx\": 4.5, \"cy\": 3.5, \"k1\": 0.125, "
+              "\"k3\": 0.5, \"file_path\": \"train/r_1.png\"");
+    edit_json(dir, "transforms.json", "\"file_path\": \"train/r_2.png\"",
+              "\"k2\": -0.5, \"file_path\": \"train/r_2.png\"");
     nerf_dataset_options o;
     NERF_DATASET_OPTIONS_INIT(&o);
-    o.split = NERF_SPLIT_TEST; /* transforms.json serves every split */
+    o.split = NERF_SPLIT_TEST;
+    o.llff_holdout = 0; /* every frame in every split */
     o.downscale = 2;
     nerf_dataset *ds = NULL;
     CHECK_OK(nerf_dataset_load(&ds, dir, &o));
     CHECK_EQ_INT(nerf_dataset_count(ds), FRAMES);
+    CHECK_NEAR(nerf__dataset_aabb_scale(ds), 4.0, 0.0);
     nerf_camera cam;
     NERF_CAMERA_INIT(&cam);
     if (ds) {
+        /* Downscaling scales the intrinsics in pixels, not the lens,
+         * which acts on normalised coordinates. */
         CHECK_OK(nerf_dataset_camera(ds, 0, &cam));
         CHECK_NEAR(cam.fx, 3.5, 1e-6);
         CHECK_NEAR(cam.fy, 4.0, 1e-6);
         CHECK_NEAR(cam.cx, 1.75, 1e-6);
         CHECK_NEAR(cam.cy, 1.125, 1e-6);
+        CHECK(cam.k1 == -0.25f && cam.k2 == 0.0625f && cam.p1 == 0.001f &&
+              cam.p2 == -0.002f && cam.k3 == 0.0f);
         CHECK_OK(nerf_dataset_camera(ds, 1, &cam));
         CHECK_NEAR(cam.fx, 4.5, 1e-6);
         CHECK_NEAR(cam.fy, 4.0, 1e-6);
+        CHECK_NEAR(cam.cx, 2.25, 1e-6);
+        CHECK_NEAR(cam.cy, 1.75, 1e-6);
+        CHECK(cam.k1 == 0.125f && cam.k2 == 0.0625f && cam.p1 == 0.001f &&
+              cam.p2 == -0.002f && cam.k3 == 0.5f);
+        CHECK_OK(nerf_dataset_camera(ds, 2, &cam));
+        CHECK_NEAR(cam.fx, 3.5, 1e-6);
+        CHECK(cam.k1 == -0.25f && cam.k2 == -0.5f && cam.k3 == 0.0f);
+        /* A caller built before the lens fields gets the rest. */
+        nerf_camera old;
+        memset(&old, 0x55, sizeof old);
+        old.struct_size = offsetof(nerf_camera, k1);
+        CHECK_OK(nerf_dataset_camera(ds, 1, &old));
+        CHECK_NEAR(old.fx, 4.5, 1e-6);
+        CHECK(old.k1 != 0.125f); /* untouched: not part of its struct */
     }
     nerf_dataset_destroy(ds);
     /* A size that disagrees with the images is an error. */
     edit_json(dir, "transforms.json", "\"w\": 8", "\"w\": 16");
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
     CHECK(fx_has(nerf_last_error(), "transforms.json"));
+}
+
+/* The frame numbers of a loaded split, from the poses' x shift. */
+static int split_frames(const char *dir, uint32_t split, uint32_t holdout,
+                        uint32_t skip, int *frames)
+{
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.split = split;
+    o.llff_holdout = holdout;
+    o.skip = skip;
+    nerf_dataset *ds = NULL;
+    int rc = nerf_dataset_load(&ds, dir, &o);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    int n = (int)nerf_dataset_count(ds);
+    for (int i = 0; i < n; i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        CHECK_OK(nerf_dataset_camera(ds, (uint32_t)i, &cam));
+        frames[i] = (int)lrintf(cam.c2w[3]);
+    }
+    nerf_dataset_destroy(ds);
+    return n;
+}
+
+/*
+ * One transforms.json for every split is split as LLFF scenes are: every
+ * llff_holdout-th frame, from the first, is test and val, the others
+ * train; a hold-out of 0 serves every frame to every split.
+ */
+TEST(single_transforms_split)
+{
+    char dir[1024], json[16384];
+    make_scene(dir, sizeof dir);
+    scene_json(json, sizeof json, "\"fl_x\": 7, \"w\": 8, \"h\": 6", 1);
+    fx_write_text(dir, "transforms.json", json);
+    int f[FRAMES];
+    /* The default, 8: frame 0 held out. */
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 8, 1, f), 3);
+    CHECK(f[0] == 1 && f[1] == 2 && f[2] == 3);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TEST, 8, 1, f), 1);
+    CHECK(f[0] == 0);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_VAL, 8, 1, f), 1);
+    CHECK(f[0] == 0);
+    /* Every second frame; skip counts within the split. */
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TEST, 2, 1, f), 2);
+    CHECK(f[0] == 0 && f[1] == 2);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 2, 1, f), 2);
+    CHECK(f[0] == 1 && f[1] == 3);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 3, 2, f), 1);
+    CHECK(f[0] == 1);
+    /* 0: everything everywhere, as before. */
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TEST, 0, 1, f), FRAMES);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 0, 1, f), FRAMES);
+    /* A hold-out of 1 leaves the training split empty: said so. */
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 1, 1, f), NERF_EINVAL);
+    CHECK(fx_has(nerf_last_error(), "transforms.json: the requested split "
+                 "has no frames"));
+    /* Files of one split are not split again. */
+    blender_scene(dir, sizeof dir);
+    CHECK_EQ_INT(split_frames(dir, NERF_SPLIT_TRAIN, 2, 1, f), FRAMES);
 }
 
 TEST(gray_and_16bit_frames)
@@ -543,6 +634,47 @@ TEST(bad_json)
                    "be positive, within [0.001, 1e+06] pixels (fl_x 1e-09)");
     expect_failure("0.6911112070083618", "3.14159265358979", NERF_EFORMAT,
                    "frame 0 (./train/r_0): focal length must be positive");
+    /* The lens: numbers, finite, not absurd, at top level or per frame. */
+    expect_failure("0.6911112070083618", "0.69, \"k1\": \"strong\"",
+                   NERF_EFORMAT, "field 'k1' is not a finite number");
+    expect_failure("\"rotation\"", "\"p2\": 1e999, \"rotation\"",
+                   NERF_EFORMAT, "frame 0 (./train/r_0): field 'p2' is not a "
+                   "finite number");
+    expect_failure("\"rotation\"", "\"k3\": -5e3, \"rotation\"",
+                   NERF_EFORMAT, "frame 0 (./train/r_0): distortion k3 -5000 "
+                   "is beyond +-1000");
+    expect_failure("0.6911112070083618", "0.69, \"k2\": 1e300",
+                   NERF_EFORMAT, "distortion k2 1e+300 is beyond");
+    expect_failure("0.6911112070083618", "0.69, \"k1\": null",
+                   NERF_EFORMAT, "field 'k1' is not a finite number");
+    /* Other lens models are refused, not misread. */
+    expect_failure("\"rotation\"", "\"k4\": 0.01, \"rotation\"",
+                   NERF_EFORMAT, "frame 0 (./train/r_0): 'k4' (a fisheye or "
+                   "rational lens model) is not supported");
+    expect_failure("0.6911112070083618", "0.69, \"is_fisheye\": true",
+                   NERF_EFORMAT, "a fisheye lens is not supported");
+    expect_failure("0.6911112070083618",
+                   "0.69, \"camera_model\": \"OPENCV_FISHEYE\"",
+                   NERF_EFORMAT, "OPENCV_FISHEYE lens is not supported");
+    /* ... but a k4 of 0 and the model this is are fine. */
+    char dir[1024];
+    blender_scene(dir, sizeof dir);
+    edit_json(dir, "transforms_train.json", "0.6911112070083618",
+              "0.69, \"k4\": 0, \"camera_model\": \"OPENCV\", "
+              "\"is_fisheye\": false");
+    nerf_dataset *ds = NULL;
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    nerf_dataset_destroy(ds);
+    /* instant-ngp's aabb_scale: a power of two, 1..128. */
+    expect_failure("0.6911112070083618", "0.69, \"aabb_scale\": 3",
+                   NERF_EFORMAT, "aabb_scale 3 is not a power of two in "
+                   "1..128");
+    expect_failure("0.6911112070083618", "0.69, \"aabb_scale\": 256",
+                   NERF_EFORMAT, "aabb_scale 256 is not a power");
+    expect_failure("0.6911112070083618", "0.69, \"aabb_scale\": 0.5",
+                   NERF_EFORMAT, "aabb_scale 0.5 is not a power");
+    expect_failure("0.6911112070083618", "0.69, \"aabb_scale\": \"16\"",
+                   NERF_EFORMAT, "field 'aabb_scale' is not a finite number");
 }
 
 TEST(bad_images)
@@ -657,6 +789,7 @@ int main(void)
     RUN(downscale);
     RUN(skip_and_missing_images);
     RUN(instant_ngp_fields);
+    RUN(single_transforms_split);
     RUN(gray_and_16bit_frames);
     RUN(alpha_kept_beside_pixels);
     RUN(bad_json);

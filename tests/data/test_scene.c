@@ -2,10 +2,12 @@
 #include <cJSON.h>
 #include <math.h>
 #include <stdlib.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "../harness.h"
 #include "data_fixtures.h"
+#include "dataset.h"
 #include "env.h"
 #include "field.h"
 #include "file_io.h"
@@ -221,6 +223,154 @@ TEST(object_capture_unchanged)
     fx_remove_tree(dir);
 }
 
+/* The lens of the tests below: strong barrel, a little of the rest. */
+static void set_lens(nerf_scene_options *o)
+{
+    o->k1 = -0.45f;
+    o->k2 = 0.15f;
+    o->p1 = 0.003f;
+    o->p2 = -0.002f;
+    o->k3 = 0.02f;
+}
+
+static bool has_lens(const nerf_camera *c, const nerf_scene_options *o)
+{
+    return c->k1 == o->k1 && c->k2 == o->k2 && c->p1 == o->p1 &&
+           c->p2 == o->p2 && c->k3 == o->k3;
+}
+
+/*
+ * PSNR of view i of ds against the ground truth rendered along the rays
+ * of its camera (composited on white, as the loader composites the
+ * images), with the camera's lens or without it.
+ */
+static double truth_psnr(const nerf_dataset *ds, uint32_t i, bool lens)
+{
+    nerf_camera cam;
+    NERF_CAMERA_INIT(&cam);
+    const float *img = NULL;
+    if (nerf_dataset_camera(ds, i, &cam) != NERF_OK ||
+        nerf_dataset_image(ds, i, &img) != NERF_OK) {
+        return -1.0;
+    }
+    if (!lens) {
+        cam.k1 = cam.k2 = cam.p1 = cam.p2 = cam.k3 = 0.0f;
+    }
+    size_t n = (size_t)cam.width * cam.height;
+    double se = 0.0;
+    for (size_t p = 0; p < n; p++) {
+        float o[3], d[3], rgb[3], depth;
+        nerf_camera_rays(&cam, p, 1, o, d);
+        float a = nerf__scene_render_ray(o, d, 2.0f, 6.0f, rgb, &depth);
+        for (int c = 0; c < 3; c++) {
+            double e = rgb[c] + (1.0 - a) - img[3 * p + c];
+            se += e * e;
+        }
+    }
+    return 10.0 * log10(1.0 / (se / (3.0 * n)));
+}
+
+/*
+ * The scene photographed through a known lens, as one instant-ngp
+ * transforms.json: loaded back, its cameras carry the lens, and the
+ * ground truth along their (undistorted) rays is what the images hold;
+ * along pinhole rays it is not.
+ */
+TEST(writes_through_a_lens)
+{
+    char *dir = fx_make_temp_dir();
+    char sub[1024];
+    snprintf(sub, sizeof sub, "%s/lens", dir);
+    nerf_scene_options o;
+    CHECK_OK(NERF_SCENE_OPTIONS_INIT(&o));
+    o.width = 48;
+    o.height = 36;
+    o.n_train = 12;
+    o.n_val = 2;
+    o.n_test = 2;
+    o.threads = 2;
+    o.layout = NERF_SCENE_LAYOUT_TRANSFORMS;
+    set_lens(&o);
+    CHECK_OK(nerf_scene_write(sub, &o));
+
+    /* instant-ngp's fields at top level. */
+    nerf__env env;
+    nerf__env_default(&env);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/transforms.json", sub);
+    unsigned char *text = NULL;
+    size_t size = 0;
+    CHECK_OK(nerf__file_read(&env, path, 1 << 24, &text, &size));
+    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size)
+                       : NULL;
+    nerf__free(&env, text);
+    static const char *const keys[] = {"fl_x", "fl_y", "cx", "cy", "w", "h",
+                                       "k1", "k2", "p1", "p2", "k3",
+                                       "aabb_scale"};
+    for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++) {
+        if (!cJSON_IsNumber(cJSON_GetObjectItem(root, keys[k]))) {
+            FAILF("transforms.json has no number '%s'", keys[k]);
+        }
+    }
+    CHECK_EQ_INT(cJSON_GetArraySize(cJSON_GetObjectItem(root, "frames")), 16);
+    cJSON_Delete(root);
+
+    /* Split every 8th frame: 14 train, 2 test. */
+    nerf_dataset_options dopt;
+    NERF_DATASET_OPTIONS_INIT(&dopt);
+    nerf_dataset *train = NULL, *test = NULL;
+    CHECK_OK(nerf_dataset_load(&train, sub, &dopt));
+    dopt.split = NERF_SPLIT_TEST;
+    CHECK_OK(nerf_dataset_load(&test, sub, &dopt));
+    CHECK_EQ_INT(nerf_dataset_count(train), 14);
+    CHECK_EQ_INT(nerf_dataset_count(test), 2);
+    if (train == NULL || test == NULL) {
+        nerf_dataset_destroy(train);
+        nerf_dataset_destroy(test);
+        fx_remove_tree(dir);
+        return;
+    }
+    CHECK_NEAR(nerf__dataset_aabb_scale(train), 2.0, 0.0);
+    double worst_lens = 1e9, best_pinhole = 0.0;
+    for (uint32_t k = 0; k < 4; k++) {
+        const nerf_dataset *ds = k < 2 ? train : test;
+        uint32_t i = k % 2;
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        CHECK_OK(nerf_dataset_camera(ds, i, &cam));
+        CHECK(has_lens(&cam, &o));
+        double with = truth_psnr(ds, i, true);
+        double without = truth_psnr(ds, i, false);
+        worst_lens = with < worst_lens ? with : worst_lens;
+        best_pinhole = without > best_pinhole ? without : best_pinhole;
+    }
+    printf("  ground truth vs images: %.1f dB or more along the lens's rays, "
+           "%.1f dB or less along pinhole rays\n", worst_lens, best_pinhole);
+    /* 8-bit images: about 50 dB when the rays are right. */
+    CHECK(worst_lens > 40.0);
+    CHECK(best_pinhole < worst_lens - 15.0);
+    nerf_dataset_destroy(train);
+    nerf_dataset_destroy(test);
+
+    /* The Blender layout records the lens too. */
+    snprintf(sub, sizeof sub, "%s/blender", dir);
+    o.layout = NERF_SCENE_LAYOUT_BLENDER;
+    o.n_train = 1;
+    o.n_val = 0;
+    o.n_test = 0;
+    CHECK_OK(nerf_scene_write(sub, &o));
+    CHECK_OK(nerf_dataset_load(&train, sub, NULL));
+    nerf_camera cam;
+    NERF_CAMERA_INIT(&cam);
+    if (train) {
+        CHECK_OK(nerf_dataset_camera(train, 0, &cam));
+        CHECK(has_lens(&cam, &o));
+        CHECK(truth_psnr(train, 0, true) > 40.0);
+    }
+    nerf_dataset_destroy(train);
+    fx_remove_tree(dir);
+}
+
 TEST(bad_options)
 {
     nerf_scene_options o;
@@ -256,15 +406,6 @@ TEST(bad_options)
     o.layout = 5;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
     CHECK(strstr(nerf_last_error(), "layout 5 is unknown") != NULL);
-    static const uint32_t later[] = {NERF_SCENE_LAYOUT_TRANSFORMS};
-    for (int k = 0; k < 1; k++) {
-        char want[64];
-        snprintf(want, sizeof want, "layout %u is not supported yet",
-                 (unsigned)later[k]);
-        o.layout = later[k];
-        CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
-        CHECK(strstr(nerf_last_error(), want) != NULL);
-    }
     o.layout = NERF_SCENE_LAYOUT_LLFF;
     o.capture = NERF_SCENE_CAPTURE_UNBOUNDED;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
@@ -272,8 +413,30 @@ TEST(bad_options)
     o.capture = NERF_SCENE_CAPTURE_OBJECT;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
     CHECK(strstr(nerf_last_error(), "not the object capture") != NULL);
+    /* Lenses a layout cannot record. */
+    o.capture = NERF_SCENE_CAPTURE_FORWARD;
+    o.k1 = 0.1f;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "no lens fields") != NULL);
+    o.k1 = 0.0f;
+    o.k3 = 0.01f;
+    o.layout = NERF_SCENE_LAYOUT_COLMAP_TEXT;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "no k3") != NULL);
+    o.k3 = 0.0f;
+    o.capture = NERF_SCENE_CAPTURE_OBJECT;
     /* Refused before anything is written. */
     CHECK(fx_file_size(out) < 0);
+    /* Layouts this libnerf does not write, and lenses no camera has. */
+    snprintf(below, sizeof below, "%s/never", dir);
+    o.layout = NERF_SCENE_LAYOUT_TRANSFORMS;
+    o.k2 = NAN;
+    CHECK_EQ_INT(nerf_scene_write(below, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "distortion k2 is not finite") != NULL);
+    o.k2 = 0.0f;
+    o.p1 = 2e3f;
+    CHECK_EQ_INT(nerf_scene_write(below, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "distortion p1 2000 is beyond") != NULL);
     fx_remove_tree(dir);
 }
 
@@ -282,6 +445,7 @@ int main(void)
     RUN(field_rays);
     RUN(writes_a_blender_dataset);
     RUN(object_capture_unchanged);
+    RUN(writes_through_a_lens);
     RUN(bad_options);
     HARNESS_EXIT();
 }

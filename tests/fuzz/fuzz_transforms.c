@@ -4,7 +4,11 @@
  * two tiny images, r_0.png (4x4 RGBA) and r_1.png (2x2 grey, a different
  * size on purpose), and nerf_dataset_load reads the folder twice: with the
  * default options and with skip_missing, downscale 2 and skip 2, which
- * take other paths through the frame list.
+ * take other paths through the frame list.  It also becomes the single
+ * transforms.json of a second folder with the same images, loaded as the
+ * test split with holdouts 2 and 0 and as the train split with holdout
+ * 1 (always empty), which the split of one file for every split takes.
+ * Every camera of a load must be usable (fuzz_camera.h), its lens too.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -13,16 +17,18 @@
 #include <nerf.h>
 
 #include "../data/data_fixtures.h"
+#include "fuzz_camera.h"
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char scene[512];
-static char json_path[1024];
+static char scene[512], whole[512];
+static char json_path[1024], whole_path[1024];
 
 static void remove_scene(void)
 {
     fx_remove_tree(scene);
+    fx_remove_tree(whole);
 }
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
@@ -30,29 +36,37 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     (void)argc;
     (void)argv;
     snprintf(scene, sizeof scene, "%s", fx_make_temp_dir());
+    snprintf(whole, sizeof whole, "%s", fx_make_temp_dir());
     atexit(remove_scene);
     uint16_t px[4 * 4 * 4];
     for (int i = 0; i < 4 * 4 * 4; i++) {
         px[i] = (uint16_t)(i * 37 % 256);
     }
     char p[1024];
-    fx_path(p, sizeof p, scene, "r_0.png");
-    fx_write_png(p, 4, 4, 6, 8, px, NULL, 0, NULL, 0);
-    fx_path(p, sizeof p, scene, "r_1.png");
-    fx_write_png(p, 2, 2, 0, 8, px, NULL, 0, NULL, 0);
+    const char *dirs[2] = {scene, whole};
+    for (int d = 0; d < 2; d++) {
+        fx_path(p, sizeof p, dirs[d], "r_0.png");
+        fx_write_png(p, 4, 4, 6, 8, px, NULL, 0, NULL, 0);
+        fx_path(p, sizeof p, dirs[d], "r_1.png");
+        fx_write_png(p, 2, 2, 0, 8, px, NULL, 0, NULL, 0);
+    }
     fx_path(json_path, sizeof json_path, scene, "transforms_train.json");
+    fx_path(whole_path, sizeof whole_path, whole, "transforms.json");
     return 0;
 }
 
-static void load(uint32_t skip_missing, uint32_t downscale, uint32_t skip)
+static void load(const char *dir, uint32_t split, uint32_t holdout,
+                 uint32_t skip_missing, uint32_t downscale, uint32_t skip)
 {
     nerf_dataset_options o;
     NERF_DATASET_OPTIONS_INIT(&o);
+    o.split = split;
+    o.llff_holdout = holdout;
     o.skip_missing = skip_missing;
     o.downscale = downscale;
     o.skip = skip;
     nerf_dataset *ds = NULL;
-    int rc = nerf_dataset_load(&ds, scene, &o);
+    int rc = nerf_dataset_load(&ds, dir, &o);
     if ((rc == NERF_OK) != (ds != NULL)) {
         abort();
     }
@@ -61,7 +75,8 @@ static void load(uint32_t skip_missing, uint32_t downscale, uint32_t skip)
         for (uint32_t i = 0; i < nerf_dataset_count(ds); i++) {
             nerf_camera cam;
             NERF_CAMERA_INIT(&cam);
-            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK) {
+            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK ||
+                !fuzz_camera_usable(&cam)) {
                 abort();
             }
         }
@@ -82,7 +97,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     fx_write_bytes(json_path, data, size);
-    load(0, 1, 1);
-    load(1, 2, 2);
+    load(scene, NERF_SPLIT_TRAIN, 8, 0, 1, 1);
+    load(scene, NERF_SPLIT_TRAIN, 8, 1, 2, 2);
+    fx_write_bytes(whole_path, data, size);
+    load(whole, NERF_SPLIT_TEST, 2, 1, 1, 1);
+    load(whole, NERF_SPLIT_TEST, 0, 1, 1, 2);
+    load(whole, NERF_SPLIT_TRAIN, 1, 1, 1, 1);
     return 0;
 }

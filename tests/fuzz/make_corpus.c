@@ -265,8 +265,22 @@ static void transforms_seeds(void)
         "{\"file_path\": \"r_1\", \"camera_angle_x\": 1.0, "
         "\"transform_matrix\": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], "
         "[0, 0, 0, 1]]}]}\n";
+    /* instant-ngp's lens and aabb_scale, at top level and per frame. */
+    static const char lens[] =
+        "{\"fl_x\": 5, \"fl_y\": 6, \"cx\": 2, \"cy\": 2, \"w\": 4, \"h\": 4, "
+        "\"k1\": -0.3, \"k2\": 0.1, \"p1\": 0.001, \"p2\": -0.002, "
+        "\"k3\": 0.01, \"aabb_scale\": 16, \"frames\": [\n"
+        "{\"file_path\": \"r_0.png\", \"transform_matrix\": [[1, 0, 0, 0], "
+        "[0, 1, 0, 0], [0, 0, 1, 4], [0, 0, 0, 1]]},\n"
+        "{\"file_path\": \"r_0.png\", \"k1\": 0.2, \"k3\": -900, "
+        "\"fl_x\": 3, \"cx\": 1.5, \"transform_matrix\": [[0, -1, 0, 1], "
+        "[1, 0, 0, 0], [0, 0, 1, 3], [0, 0, 0, 1]]},\n"
+        "{\"file_path\": \"r_0\", \"p1\": 999, \"p2\": -999, "
+        "\"transform_matrix\": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], "
+        "[0, 0, 0, 1]]}]}\n";
     save("transforms", "blender.json", blender, sizeof blender - 1);
     save("transforms", "ngp.json", ngp, sizeof ngp - 1);
+    save("transforms", "lens.json", lens, sizeof lens - 1);
 }
 
 /*

@@ -10,6 +10,7 @@
 #include "model.h"
 #include "occupancy.h"
 #include "train_fixture.h"
+#include "trainer.h"
 
 static fixture fx;
 
@@ -445,6 +446,86 @@ TEST(allocation_failures)
     nerf_sampler_destroy(s);
 }
 
+/*
+ * A dataset photographed through a lens trains on its pixels' true rays:
+ * every ray a step draws is, bit for bit, the ray nerf_dataset_camera()'s
+ * camera (lens included) gives some pixel, and its target is that pixel.
+ */
+TEST(rays_go_through_the_lens)
+{
+    char *dir = fx_make_temp_dir();
+    nerf_scene_options so;
+    NERF_SCENE_OPTIONS_INIT(&so);
+    so.width = 16;
+    so.height = 12;
+    so.n_train = 3;
+    so.n_val = 0;
+    so.n_test = 0;
+    so.k1 = -0.4f;
+    so.k2 = 0.1f;
+    so.p2 = 0.01f;
+    nerf_dataset *ds = NULL;
+    CHECK_OK(nerf_scene_write(dir, &so));
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(1);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 64;
+    o.precrop_steps = 0;
+    nerf_trainer *t = NULL;
+    if (ds) {
+        CHECK_OK(nerf_trainer_create(&t, m, ds, s, &o));
+    }
+    enum { N = 3 * 16 * 12 };
+    static float org[N * 3], dir_[N * 3], pinhole[N * 3];
+    const float *img[3] = {NULL, NULL, NULL};
+    for (uint32_t i = 0; t && i < 3; i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        CHECK_OK(nerf_dataset_camera(ds, i, &cam));
+        CHECK(cam.k1 == so.k1 && cam.k2 == so.k2 && cam.p2 == so.p2);
+        CHECK_OK(nerf_camera_rays(&cam, 0, 192, org + i * 576,
+                                  dir_ + i * 576));
+        cam.k1 = cam.k2 = cam.p2 = 0.0f;
+        CHECK_OK(nerf_camera_rays(&cam, 0, 192, org + i * 576,
+                                  pinhole + i * 576));
+        CHECK_OK(nerf_dataset_image(ds, i, &img[i]));
+    }
+    int found = 0, targets = 0, as_pinhole = 0;
+    for (uint64_t step = 0; t && step < 4; step++) {
+        nerf__trainer_pick_rays(t, step);
+        for (uint32_t r = 0; r < o.batch_rays; r++) {
+            const float *d = t->directions + 3 * r;
+            for (int k = 0; k < N; k++) {
+                if (memcmp(d, dir_ + 3 * k, 3 * sizeof(float)) == 0 &&
+                    memcmp(t->origins + 3 * r, org + 3 * k,
+                           3 * sizeof(float)) == 0) {
+                    found++;
+                    const float *px = img[k / 192] + 3 * (k % 192);
+                    targets += memcmp(px, t->targets + 3 * r,
+                                      3 * sizeof(float)) == 0;
+                    break;
+                }
+            }
+            for (int k = 0; k < N; k++) {
+                if (memcmp(d, pinhole + 3 * k, 3 * sizeof(float)) == 0 &&
+                    k % 16 != 8 && (k % 192) / 16 != 6) {
+                    as_pinhole++; /* off the axes the lens bends rays */
+                }
+            }
+        }
+    }
+    CHECK_EQ_INT(found, 4 * 64);
+    CHECK_EQ_INT(targets, 4 * 64);
+    CHECK_EQ_INT(as_pinhole, 0);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+    nerf_dataset_destroy(ds);
+    fx_remove_tree(dir);
+}
+
 int main(void)
 {
     if (fixture_open(&fx, 24, 6, 0) != NERF_OK) {
@@ -461,6 +542,7 @@ int main(void)
     RUN(bad_arguments);
     RUN(batch_samples_without_marching);
     RUN(allocation_failures);
+    RUN(rays_go_through_the_lens);
     fixture_close(&fx);
     HARNESS_EXIT();
 }

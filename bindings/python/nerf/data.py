@@ -50,6 +50,10 @@ IMAGE_FORMAT_JPEG = 1
 CAMERA_PATH_FILE_SIZE = 0x1
 CAMERA_PATH_FILE_INTRINSICS = 0x2
 
+# nerf_scene_layout: the files write_scene() writes.
+SCENE_LAYOUT_BLENDER = 0
+SCENE_LAYOUT_TRANSFORMS = 1
+
 LogFn = Optional[Callable[[int, str], Any]]
 
 
@@ -239,7 +243,7 @@ def write_scene(path: Any, *, log: LogFn = None,
     """Write the built-in scene to folder ``path`` (``nerf_scene_write``).
     Keyword options are fields of :class:`nerf.SceneOptions` (width,
     height, n_train, n_val, n_test, threads, seed, capture, layout,
-    image_format, jpeg_quality);
+    image_format, jpeg_quality, and the lens k1, k2, p1, p2, k3);
     capture and layout may be given by name ("object", "forward",
     "unbounded"; "blender", "llff", ...).  As in C, the layout defaults to
     Blender whatever the capture: a forward capture is usually written

@@ -173,6 +173,11 @@ class SceneOptions(_Versioned):
         ("layout", c_uint32),
         ("image_format", c_uint32),
         ("jpeg_quality", c_uint32),
+        ("k1", c_float),
+        ("k2", c_float),
+        ("p1", c_float),
+        ("p2", c_float),
+        ("k3", c_float),
     ]
 
 
@@ -407,8 +412,9 @@ def _vec3(v: Any, name: str) -> Any:
 
 
 class Camera(_Versioned):
-    """``nerf_camera``: a pinhole camera (OpenGL axes: x right, y up, the
-    camera looks down -z), plus helpers.
+    """``nerf_camera``: a camera (OpenGL axes: x right, y up, the camera
+    looks down -z), pinhole unless its lens distortion k1, k2, p1, p2, k3
+    (OpenCV's model, see nerf.h) is set, plus helpers.
 
     The defaults from ``nerf_camera_init`` (identity pose, zero intrinsics)
     are not a usable camera: set width, height, fx, fy (and usually cx, cy),
@@ -430,6 +436,11 @@ class Camera(_Versioned):
         ("fy", c_float),
         ("cx", c_float),
         ("cy", c_float),
+        ("k1", c_float),
+        ("k2", c_float),
+        ("p1", c_float),
+        ("p2", c_float),
+        ("k3", c_float),
     ]
 
     def _set(self, name: str, value: Any) -> None:

@@ -103,6 +103,11 @@ static void structs(void)
     FIELD(nerf_scene_options, layout);
     FIELD(nerf_scene_options, image_format);
     FIELD(nerf_scene_options, jpeg_quality);
+    FIELD(nerf_scene_options, k1);
+    FIELD(nerf_scene_options, k2);
+    FIELD(nerf_scene_options, p1);
+    FIELD(nerf_scene_options, p2);
+    FIELD(nerf_scene_options, k3);
     end_struct();
 
     BEGIN(nerf_camera);
@@ -115,6 +120,11 @@ static void structs(void)
     FIELD(nerf_camera, fy);
     FIELD(nerf_camera, cx);
     FIELD(nerf_camera, cy);
+    FIELD(nerf_camera, k1);
+    FIELD(nerf_camera, k2);
+    FIELD(nerf_camera, p1);
+    FIELD(nerf_camera, p2);
+    FIELD(nerf_camera, k3);
     end_struct();
 
     BEGIN(nerf_sampler_options);
@@ -262,6 +272,8 @@ static void constants(void)
     CONST(NERF_IMAGE_MAX_SIDE);
     CONST(NERF_CAMERA_PATH_FILE_SIZE);
     CONST(NERF_CAMERA_PATH_FILE_INTRINSICS);
+    CONST(NERF_SCENE_LAYOUT_BLENDER);
+    CONST(NERF_SCENE_LAYOUT_TRANSFORMS);
 }
 
 int main(void)

@@ -19,9 +19,24 @@ def camera(size=8):
 class Cameras(TestCase):
     def test_defaults_come_from_the_library(self):
         cam = nerf.Camera()
-        self.assertEqual(cam.struct_size, 80)
+        self.assertEqual(cam.struct_size, 100)
         self.assertEqual(cam.pose, [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
         self.assertEqual((cam.width, cam.fx), (0, 0.0))
+        self.assertEqual((cam.k1, cam.k2, cam.p1, cam.p2, cam.k3),
+                         (0.0, 0.0, 0.0, 0.0, 0.0))
+
+    def test_lens(self):
+        # A lens bends the rays of off-centre pixels, not the centre's.
+        cam = camera(9)
+        d = flat(cam.rays()[1])
+        cam.k1 = -0.3
+        d2 = flat(cam.rays()[1])
+        centre = 3 * (4 * 9 + 4)
+        self.assertEqual(d[centre:centre + 3], d2[centre:centre + 3])
+        self.assertNotEqual(d[0:3], d2[0:3])
+        cam.k1 = float("nan")
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
+            cam.rays()
 
     def test_from_fov_and_look_at(self):
         cam = nerf.Camera.from_fov(20, 10, 90.0)
