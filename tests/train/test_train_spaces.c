@@ -210,6 +210,14 @@ TEST(all_round_trains_better_contracted_than_boxed)
         fixture_close(&f);
         return;
     }
+    /* aabb_scale 16 in its transforms files says: unbounded. */
+    uint32_t space = 99;
+    float bound = 0.0f, near = 0.0f, far = 0.0f;
+    CHECK_OK(nerf_dataset_space(f.train, &space, &bound));
+    CHECK_EQ_INT(space, NERF_SPACE_UNBOUNDED);
+    CHECK(bound == 1.5f);
+    CHECK_OK(nerf_dataset_bounds(f.train, &near, &far));
+    CHECK(near < 0.1f && far > 1e3f);
     /* The backdrop is 40 units away; the cameras 2.2 to 3 from the
      * centre.  The boxed model gets the Blender scenes' bound and rays
      * through it; the contracted one rays to far beyond the backdrop. */
@@ -238,9 +246,46 @@ TEST(all_round_trains_better_contracted_than_boxed)
     fixture_close(&f);
 }
 
+/* A COLMAP model is unbounded too: its cameras fill the unit cube. */
+TEST(colmap_models_are_unbounded)
+{
+    fixture f;
+    memset(&f, 0, sizeof f);
+    snprintf(f.dir, sizeof f.dir, "%s", fx_make_temp_dir());
+    nerf_scene_options so;
+    NERF_SCENE_OPTIONS_INIT(&so);
+    so.width = 16;
+    so.height = 12;
+    so.n_train = 8;
+    so.n_val = 0;
+    so.n_test = 1;
+    so.capture = NERF_SCENE_CAPTURE_UNBOUNDED;
+    so.layout = NERF_SCENE_LAYOUT_COLMAP_TEXT;
+    CHECK_OK(nerf_scene_write(f.dir, &so));
+    CHECK_OK(nerf_dataset_load(&f.train, f.dir, NULL));
+    uint32_t space = 99;
+    float bound = 0.0f;
+    if (f.train) {
+        CHECK_OK(nerf_dataset_space(f.train, &space, &bound));
+        CHECK_EQ_INT(space, NERF_SPACE_UNBOUNDED);
+        CHECK(bound == 1.0f);
+        /* Every camera inside the central cube. */
+        for (uint32_t i = 0; i < nerf_dataset_count(f.train); i++) {
+            nerf_camera cam;
+            NERF_CAMERA_INIT(&cam);
+            CHECK_OK(nerf_dataset_camera(f.train, i, &cam));
+            for (int a = 0; a < 3; a++) {
+                CHECK(fabsf(cam.c2w[4 * a + 3]) <= bound);
+            }
+        }
+    }
+    fixture_close(&f);
+}
+
 int main(void)
 {
     RUN(forward_facing_trains_in_ndc);
     RUN(all_round_trains_better_contracted_than_boxed);
+    RUN(colmap_models_are_unbounded);
     HARNESS_EXIT();
 }
