@@ -57,9 +57,8 @@
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
-#define MATMUL_SIZE 8u /* u32 matmul, u32 reserved */
 #define SPACE_INDEX 9
-#define SPACE_SIZE 8u /* u32 space, u32 reserved */
+#define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
 #define OPTIONS_SIZE 52u /* 11 u32 fields and the u64 seed */
@@ -165,30 +164,57 @@ static unsigned char *put_options2(unsigned char *p,
     return p + OPTIONS2_SIZE;
 }
 
-static size_t matmul_size(const nerf_model *m)
+/*
+ * The sections that hold one option each (matmul, space): a u32 value and
+ * a reserved u32 0, written only when the value is not the one every file
+ * before the section implies.
+ */
+typedef struct word_section {
+    uint32_t tag, index;
+    size_t offset;      /* of the option in nerf_model_options */
+    uint32_t implied;   /* the value of a file without the section */
+    uint32_t max;       /* largest known value */
+    const char *name;
+} word_section;
+
+static const word_section word_sections[2] = {
+    {TAG_MATMUL, MATMUL_INDEX, offsetof(nerf_model_options, matmul),
+     NERF_MATMUL_FP32, NERF_MATMUL_BF16, "matmul"},
+    {TAG_SPACE, SPACE_INDEX, offsetof(nerf_model_options, space),
+     NERF_SPACE_BOX, NERF_SPACE_UNBOUNDED, "space"},
+};
+
+static uint32_t word_value(const word_section *w, const nerf_model_options *o)
 {
-    return m->opts.matmul != NERF_MATMUL_FP32 ? SECTION_HEAD + MATMUL_SIZE : 0;
+    uint32_t v;
+    memcpy(&v, (const char *)o + w->offset, sizeof v);
+    return v;
 }
 
-static unsigned char *put_matmul(unsigned char *p, const nerf_model *m)
+static size_t word_sections_size(const nerf_model *m)
 {
-    p = put_section(p, TAG_MATMUL, MATMUL_SIZE);
-    nerf__store_le32(p, m->opts.matmul);
-    nerf__store_le32(p + 4, 0);
-    return p + MATMUL_SIZE;
+    size_t n = 0;
+    for (int i = 0; i < 2; i++) {
+        const word_section *w = &word_sections[i];
+        n += word_value(w, &m->opts) != w->implied ? SECTION_HEAD + WORD_SIZE
+                                                   : 0;
+    }
+    return n;
 }
 
-static size_t space_size(const nerf_model *m)
+static unsigned char *put_word_sections(unsigned char *p, const nerf_model *m)
 {
-    return m->opts.space != NERF_SPACE_BOX ? SECTION_HEAD + SPACE_SIZE : 0;
-}
-
-static unsigned char *put_space(unsigned char *p, const nerf_model *m)
-{
-    p = put_section(p, TAG_SPACE, SPACE_SIZE);
-    nerf__store_le32(p, m->opts.space);
-    nerf__store_le32(p + 4, 0);
-    return p + SPACE_SIZE;
+    for (int i = 0; i < 2; i++) {
+        const word_section *w = &word_sections[i];
+        const uint32_t v = word_value(w, &m->opts);
+        if (v != w->implied) {
+            p = put_section(p, w->tag, WORD_SIZE);
+            nerf__store_le32(p, v);
+            nerf__store_le32(p + 4, 0);
+            p += WORD_SIZE;
+        }
+    }
+    return p;
 }
 
 static unsigned char *put_training(unsigned char *p, const nerf_model *m)
@@ -247,8 +273,7 @@ static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
            TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
-           TRAINING2_SIZE + occupancy_size(m) + matmul_size(m) +
-           space_size(m);
+           TRAINING2_SIZE + occupancy_size(m) + word_sections_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -263,12 +288,7 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     if (m->grid) {
         p = put_occupancy(p, m);
     }
-    if (matmul_size(m)) {
-        p = put_matmul(p, m);
-    }
-    if (space_size(m)) {
-        put_space(p, m);
-    }
+    put_word_sections(p, m);
 }
 
 static void put_header(unsigned char *h, const ckpt_header *hd)
@@ -573,41 +593,30 @@ static void get_options2(const unsigned char *p, nerf_model_options *o)
     load_fields(p, o, option2_u32, N_OPTION2_U32);
 }
 
-/* The matmul section: what it holds, or why it is corrupt (NULL: fine). */
-static const char *get_matmul(const sections *s, nerf_model_options *o)
+/* The one-option sections: what they hold, or why one is corrupt (NULL:
+ * fine); a section absent leaves the value every file before it had. */
+static const char *get_word_sections(const sections *s, nerf_model_options *o,
+                                     char *why, size_t why_size)
 {
-    const unsigned char *b = s->body[MATMUL_INDEX];
-    if (b == NULL) {
-        return NULL; /* fp32, as every file before the section */
+    for (int i = 0; i < 2; i++) {
+        const word_section *w = &word_sections[i];
+        const unsigned char *b = s->body[w->index];
+        if (b == NULL) {
+            continue;
+        }
+        const uint32_t v = nerf__load_le32(b);
+        if (s->len[w->index] != WORD_SIZE || nerf__load_le32(b + 4) != 0) {
+            snprintf(why, why_size, "the %s section has the wrong size or a "
+                     "non-zero reserved field", w->name);
+            return why;
+        }
+        if (v > w->max) {
+            snprintf(why, why_size, "the %s section holds %u, no known "
+                     "value", w->name, (unsigned)v);
+            return why;
+        }
+        memcpy((char *)o + w->offset, &v, sizeof v);
     }
-    if (s->len[MATMUL_INDEX] != MATMUL_SIZE || nerf__load_le32(b + 4) != 0) {
-        return "the matmul section has the wrong size or a non-zero reserved "
-               "field";
-    }
-    uint32_t v = nerf__load_le32(b);
-    if (v > NERF_MATMUL_BF16) {
-        return "the matmul section holds no known nerf_matmul";
-    }
-    o->matmul = v;
-    return NULL;
-}
-
-/* The space section, as get_matmul(). */
-static const char *get_space(const sections *s, nerf_model_options *o)
-{
-    const unsigned char *b = s->body[SPACE_INDEX];
-    if (b == NULL) {
-        return NULL; /* BOX, as every file before the section */
-    }
-    if (s->len[SPACE_INDEX] != SPACE_SIZE || nerf__load_le32(b + 4) != 0) {
-        return "the space section has the wrong size or a non-zero reserved "
-               "field";
-    }
-    uint32_t v = nerf__load_le32(b);
-    if (v == NERF_SPACE_BOX || v > NERF_SPACE_UNBOUNDED) {
-        return "the space section holds no known nerf_space other than BOX";
-    }
-    o->space = v;
     return NULL;
 }
 
@@ -656,8 +665,8 @@ static int check_shapes(const nerf__env *env, const char *path,
                                path);
         }
     }
-    const char *bad = get_matmul(s, o);
-    bad = bad ? bad : get_space(s, o);
+    char why_word[128];
+    const char *bad = get_word_sections(s, o, why_word, sizeof why_word);
     if (bad) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s)", path,
                            bad);
