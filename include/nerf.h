@@ -682,7 +682,7 @@ typedef struct nerf_camera {
                                fx = 0.5 width / tan(0.5 a). */
     float cx, cy;         /**< Principal point in pixels from the top-left
                                image corner; usually width/2, height/2. */
-    /* Since 0.2.  Zero-filled by an older caller: a pinhole camera. */
+    /* Since 0.3.  Zero-filled by an older caller: a pinhole camera. */
     float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
                                within +-1000; default 0. */
     float p1, p2;         /**< Tangential distortion; finite, within
@@ -1209,8 +1209,8 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
                                  uint32_t *height_out, float **rgba_out);
 
 /**
- * Read a PNG or a JPEG file, told apart by its first bytes (not its
- * name), as the dataset loaders do.  PNGs are read as by
+ * Since 0.3: read a PNG or a JPEG file, told apart by its first bytes
+ * (not its name), as the dataset loaders do.  PNGs are read as by
  * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
  * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
  * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
