@@ -6,7 +6,9 @@
 #define NERF_TESTS_MARCH_FIXTURE_H
 
 #include <stdlib.h>
+#include <string.h>
 
+#include "env.h"
 #include "march.h"
 
 typedef struct marched {
@@ -31,6 +33,61 @@ static void unmarch(marched *m)
     free(m->t);
     free(m->dt);
     free(m->xyz);
+}
+
+/*
+ * March rays again `piece` samples at a time, each piece resuming where
+ * the last stopped, against the whole march `all` of the same rays and
+ * options: returns the samples (t and dt) and resume points that differ,
+ * 0 when the pieces give exactly the whole march; *pieces counts them.
+ */
+static size_t march_in_pieces(const nerf__occupancy *g,
+                              nerf__march_options o, nerf__march_rays rays,
+                              const marched *all, uint32_t piece,
+                              size_t *pieces)
+{
+    static uint32_t step[N_RAYS];
+    static size_t got[N_RAYS];
+    memset(step, 0, sizeof step);
+    memset(got, 0, sizeof got);
+    nerf__env env;
+    nerf__env_default(&env);
+    nerf__march_samples ms;
+    nerf__march_samples_init(&ms, &env);
+    rays.first_step = step;
+    o.max_samples = piece;
+    size_t bad = 0;
+    for (*pieces = 0; *pieces < 1000; ++*pieces) {
+        if (nerf__march_run(g, &o, &rays, &ms) != NERF_OK) {
+            bad++;
+            break;
+        }
+        if (ms.total == 0) {
+            break;
+        }
+        for (size_t k = 0; k < N_RAYS; k++) {
+            size_t n = ms.offsets[k + 1] - ms.offsets[k];
+            size_t full = all->offsets[k + 1] - all->offsets[k];
+            if (got[k] + n > full) {
+                bad++;
+                continue;
+            }
+            const size_t at = all->offsets[k] + got[k];
+            bad += memcmp(ms.t + ms.offsets[k], all->t + at,
+                          n * sizeof(float)) != 0;
+            bad += memcmp(ms.dt + ms.offsets[k], all->dt + at,
+                          n * sizeof(float)) != 0;
+            got[k] += n;
+            /* Cut rays resume; finished ones say so. */
+            bad += (n == piece) != (ms.next_step[k] != NERF__MARCH_DONE);
+            step[k] = ms.next_step[k];
+        }
+    }
+    for (size_t k = 0; k < N_RAYS; k++) {
+        bad += got[k] != all->offsets[k + 1] - all->offsets[k];
+    }
+    nerf__march_samples_release(&ms);
+    return bad;
 }
 
 #endif

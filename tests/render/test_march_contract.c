@@ -198,47 +198,9 @@ TEST(resumed_marches_continue_exactly)
     options(g, &o);
     static marched all;
     march(g, &o, &s.rays, &all);
-    static uint32_t step[N_RAYS];
-    static size_t got[N_RAYS];
-    memset(step, 0, sizeof step);
-    memset(got, 0, sizeof got);
-    nerf__env env;
-    nerf__env_default(&env);
-    nerf__march_samples ms;
-    nerf__march_samples_init(&ms, &env);
-    nerf__march_rays rays = s.rays;
-    rays.first_step = step;
-    o.max_samples = 7;
-    size_t bad = 0, pieces = 0;
-    while (pieces < 1000) {
-        CHECK_OK(nerf__march_run(g, &o, &rays, &ms));
-        if (ms.total == 0) {
-            break;
-        }
-        pieces++;
-        for (size_t k = 0; k < N_RAYS; k++) {
-            size_t n = ms.offsets[k + 1] - ms.offsets[k];
-            size_t full = all.offsets[k + 1] - all.offsets[k];
-            if (got[k] + n > full) {
-                bad++;
-                continue;
-            }
-            bad += memcmp(ms.t + ms.offsets[k], all.t + all.offsets[k] + got[k],
-                          n * sizeof(float)) != 0;
-            bad += memcmp(ms.dt + ms.offsets[k],
-                          all.dt + all.offsets[k] + got[k],
-                          n * sizeof(float)) != 0;
-            got[k] += n;
-            bad += (n == 7) != (ms.next_step[k] != NERF__MARCH_DONE);
-            step[k] = ms.next_step[k];
-        }
-    }
-    for (size_t k = 0; k < N_RAYS; k++) {
-        bad += got[k] != all.offsets[k + 1] - all.offsets[k];
-    }
-    CHECK_EQ_INT(bad, 0);
+    size_t pieces = 0;
+    CHECK_EQ_INT(march_in_pieces(g, o, s.rays, &all, 7, &pieces), 0);
     printf("  %zu pieces of at most 7 samples\n", pieces);
-    nerf__march_samples_release(&ms);
     unmarch(&all);
     nerf__occupancy_destroy(g);
 }
