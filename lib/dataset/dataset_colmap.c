@@ -389,9 +389,12 @@ static int load_images(colmap_ctx *c, const nerf__dataset_config *cfg,
         nerf__free(&ds->env, path);
     }
     if (rc == NERF_OK && distorted) {
-        nerf__log(&ds->env, NERF_LOG_WARN, "%s: the cameras have lens "
-                  "distortion, which this version reads but does not yet "
-                  "apply to rays", c->paths[0]);
+        /* Applied to each pixel's ray (nerf_camera's model); said once,
+         * since it changes what a pinhole render of the scene shows. */
+        const nerf__view *v = &ds->views[0];
+        nerf__log(&ds->env, NERF_LOG_INFO, "%s: lens distortion (first "
+                  "image) k1 %g k2 %g p1 %g p2 %g", c->paths[0], v->k1,
+                  v->k2, v->p1, v->p2);
     }
     return rc;
 }
