@@ -63,15 +63,14 @@ static uint32_t first_at_or_past(float base, float dt_t, float t_end)
     return k;
 }
 
-/* One lattice point beyond the cube's linear stretch: its contracted
- * cell tested, and the sample written when occupied.  Returns whether it
- * was kept. */
+/* One lattice point, at warped distance s and world distance uw =
+ * warp_u(s), outside the linear march: its contracted cell tested, and the
+ * sample written when occupied.  Returns whether it was kept. */
 static bool plain_point(const nerf__occupancy *g, const nerf__space *space,
                         const warp *w, const float o[3], const float d[3],
-                        float len, float s, float step, float u1, bool skip,
-                        float *t_out, float *dt_out)
+                        float len, float s, float uw, float step, float u1,
+                        bool skip, float *t_out, float *dt_out)
 {
-    const float uw = warp_u(w, s);
     const float t = uw / len;
     float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
     nerf__space_to_domain(space, p, p);
@@ -158,10 +157,14 @@ uint32_t nerf__march_ray_contract(const nerf__occupancy *g,
             k = k_end;
         }
         const float s = base_s + (float)k * step;
-        if (!(s < s1) || !(warp_u(&w, s) / len < t1)) {
+        if (!(s < s1)) {
             break;
         }
-        if (plain_point(g, &space, &w, o, d, len, s, step, u1, skip,
+        const float uw = warp_u(&w, s);
+        if (!(uw / len < t1)) {
+            break;
+        }
+        if (plain_point(g, &space, &w, o, d, len, s, uw, step, u1, skip,
                         t_out ? t_out + count : NULL,
                         dt_out ? dt_out + count : NULL) &&
             ++count == limit) {
