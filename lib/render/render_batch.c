@@ -193,6 +193,9 @@ static void fill_points(void *ctx, size_t begin, size_t end)
     const uint32_t m = b->n_samples[j->pass];
     const float *t = b->t[j->pass];
     const bool with_dirs = j->with_dirs;
+    /* An unbounded model works on contracted points; the others take the
+     * points as they are. */
+    const bool contract = j->space->kind == NERF__SPACE_CONTRACT;
     for (size_t k = begin; k < end; k++) {
         const float *o = b->ray_o + 3 * k, *d = b->ray_d + 3 * k;
         for (uint32_t i = 0; i < m; i++) {
@@ -201,9 +204,10 @@ static void fill_points(void *ctx, size_t begin, size_t end)
             for (int c = 0; c < 3; c++) {
                 b->points[3 * at + c] = o[c] + d[c] * ti;
             }
-            /* An unbounded model works on contracted points. */
-            nerf__space_to_domain(j->space, b->points + 3 * at,
-                                  b->points + 3 * at);
+            if (contract) {
+                nerf__space_to_domain(j->space, b->points + 3 * at,
+                                      b->points + 3 * at);
+            }
             if (with_dirs) {
                 memcpy(b->dirs + 3 * at, b->viewdir + 3 * k, 3 * sizeof(float));
             }

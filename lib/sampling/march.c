@@ -353,9 +353,11 @@ void nerf__march_fill(const nerf__occupancy *g, const nerf__march_options *o,
 static void points_range(void *ctx, size_t begin, size_t end)
 {
     const march_job *j = ctx;
-    nerf__space space;
-    nerf__space_contract(&space, j->o->contract);
     const bool contract = j->o->contract > 0.0f;
+    nerf__space space;
+    if (contract) {
+        nerf__space_contract(&space, j->o->contract);
+    }
     for (size_t k = begin; k < end; k++) {
         const float *o = j->r->origins + 3 * k, *d = j->r->dirs + 3 * k;
         for (size_t i = j->offsets[k]; i < j->offsets[k + 1]; i++) {
