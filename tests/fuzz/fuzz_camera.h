@@ -10,6 +10,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
 
 #include <nerf.h>
 
@@ -41,6 +42,30 @@ static inline int fuzz_camera_usable(const nerf_camera *cam)
         }
     }
     return 1;
+}
+
+/*
+ * Load the scene in dir and hold the loader to its contract: a dataset
+ * exactly when it says NERF_OK, and every camera a trainer would ask for
+ * usable.  Aborts otherwise; returns the dataset (NULL on a refusal).
+ */
+static inline nerf_dataset *fuzz_load_dataset(const char *dir,
+                                              const nerf_dataset_options *o)
+{
+    nerf_dataset *ds = NULL;
+    int rc = nerf_dataset_load(&ds, dir, o);
+    if ((rc == NERF_OK) != (ds != NULL)) {
+        abort();
+    }
+    for (uint32_t i = 0; ds != NULL && i < nerf_dataset_count(ds); i++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        if (nerf_dataset_camera(ds, i, &cam) != NERF_OK ||
+            !fuzz_camera_usable(&cam)) {
+            abort();
+        }
+    }
+    return ds;
 }
 
 #endif

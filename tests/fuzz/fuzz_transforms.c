@@ -65,23 +65,7 @@ static void load(const char *dir, uint32_t split, uint32_t holdout,
     o.skip_missing = skip_missing;
     o.downscale = downscale;
     o.skip = skip;
-    nerf_dataset *ds = NULL;
-    int rc = nerf_dataset_load(&ds, dir, &o);
-    if ((rc == NERF_OK) != (ds != NULL)) {
-        abort();
-    }
-    if (ds != NULL) {
-        /* Touch every camera, as a trainer would. */
-        for (uint32_t i = 0; i < nerf_dataset_count(ds); i++) {
-            nerf_camera cam;
-            NERF_CAMERA_INIT(&cam);
-            if (nerf_dataset_camera(ds, i, &cam) != NERF_OK ||
-                !fuzz_camera_usable(&cam)) {
-                abort();
-            }
-        }
-    }
-    nerf_dataset_destroy(ds);
+    nerf_dataset_destroy(fuzz_load_dataset(dir, &o));
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
