@@ -27,12 +27,12 @@
 #include <nerf.h>
 
 #include "dataset.h"
+#include "fuzz_image.h"
 #include "exif.h"
 #include "file_io.h"
 #include "jpeg_io.h"
 #include "../data/data_fixtures.h"
 
-#define ALLOC_CAP ((size_t)16 << 20)
 #define APP1_MAX 65533u
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
@@ -77,18 +77,6 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     return 0;
 }
 
-static void *capped_alloc(size_t size, void *user)
-{
-    (void)user;
-    return size > ALLOC_CAP ? NULL : malloc(size);
-}
-
-static void plain_free(void *ptr, void *user)
-{
-    (void)user;
-    free(ptr);
-}
-
 /* SOI, APP1 holding body, then the base file after its SOI. */
 static void write_with_app1(const uint8_t *body, size_t n)
 {
@@ -119,16 +107,6 @@ static void write_with_app1(const uint8_t *body, size_t n)
     free(out);
 }
 
-static void check_range(const nerf_dataset *ds)
-{
-    size_t n = (size_t)ds->width * ds->height * 3;
-    for (size_t i = 0; i < n; i++) {
-        if (!(ds->pixels[i] >= 0.0f && ds->pixels[i] <= 1.0f)) {
-            abort();
-        }
-    }
-}
-
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size == 0) {
@@ -142,30 +120,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fx_write_bytes(jpeg_path, data + 1, size - 1);
     }
 
-    nerf_hooks hooks;
-    if (NERF_HOOKS_INIT(&hooks) != NERF_OK) {
-        abort();
-    }
-    hooks.alloc = capped_alloc;
-    hooks.free = plain_free;
-    nerf__env env;
-    if (nerf__env_from_hooks(&env, &hooks) != NERF_OK) {
-        abort();
-    }
-    nerf_dataset *ds = nerf__calloc(&env, 1, sizeof *ds);
-    if (ds == NULL) {
-        return 0;
-    }
-    ds->env = env;
-    if (nerf__dataset_reserve(ds, 1) == NERF_OK &&
-        nerf__dataset_load_image(ds, 0, jpeg_path, factor, white) ==
-            NERF_OK) {
-        if (ds->width != ds->src_width / factor || ds->width == 0 ||
-            ds->height != ds->src_height / factor || ds->height == 0) {
-            abort();
-        }
-        check_range(ds);
-    }
-    nerf_dataset_destroy(ds);
+    fuzz_load_image(jpeg_path, factor, white);
     return 0;
 }

@@ -32,9 +32,9 @@
 #include <nerf.h>
 
 #include "dataset.h"
+#include "fuzz_image.h"
 #include "../data/data_fixtures.h"
 
-#define ALLOC_CAP ((size_t)16 << 20)
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -55,18 +55,6 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     atexit(remove_scene);
     fx_path(png_path, sizeof png_path, scene, "image.png");
     return 0;
-}
-
-static void *capped_alloc(size_t size, void *user)
-{
-    (void)user;
-    return size > ALLOC_CAP ? NULL : malloc(size);
-}
-
-static void plain_free(void *ptr, void *user)
-{
-    (void)user;
-    free(ptr);
 }
 
 static uint32_t be32(const uint8_t *p)
@@ -175,16 +163,6 @@ static uint8_t *rebuild(const uint8_t *in, size_t n, int mode,
     return out;
 }
 
-static void check_range(const nerf_dataset *ds)
-{
-    size_t n = (size_t)ds->width * ds->height * 3;
-    for (size_t i = 0; i < n; i++) {
-        if (!(ds->pixels[i] >= 0.0f && ds->pixels[i] <= 1.0f)) {
-            abort();
-        }
-    }
-}
-
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size == 0) {
@@ -205,30 +183,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         free(file);
     }
 
-    nerf_hooks hooks;
-    if (NERF_HOOKS_INIT(&hooks) != NERF_OK) {
-        abort();
-    }
-    hooks.alloc = capped_alloc;
-    hooks.free = plain_free;
-    nerf__env env;
-    if (nerf__env_from_hooks(&env, &hooks) != NERF_OK) {
-        abort();
-    }
-    nerf_dataset *ds = nerf__calloc(&env, 1, sizeof *ds);
-    if (ds == NULL) {
-        return 0;
-    }
-    ds->env = env;
-    if (nerf__dataset_reserve(ds, 1) == NERF_OK &&
-        nerf__dataset_load_image(ds, 0, png_path, factor, white) ==
-            NERF_OK) {
-        if (ds->width != ds->src_width / factor || ds->width == 0 ||
-            ds->height != ds->src_height / factor || ds->height == 0) {
-            abort();
-        }
-        check_range(ds);
-    }
-    nerf_dataset_destroy(ds);
+    fuzz_load_image(png_path, factor, white);
     return 0;
 }
