@@ -157,6 +157,7 @@ int main(int argc, char **argv)
     dopt.hooks = &hooks;
     int rc = nerf_model_load(&m, a.model, &hooks);
     if (rc == NERF_OK) {
+        dopt.forward_facing = setup_forward_facing(m, -1);
         rc = nerf_dataset_load(&ds, a.data, &dopt);
     }
     if (rc == NERF_OK) {

@@ -399,6 +399,7 @@ int main(int argc, char **argv)
         NERF_DATASET_OPTIONS_INIT(&dopt);
         dopt.split = (uint32_t)a.split;
         dopt.downscale = (uint32_t)a.downscale;
+        dopt.forward_facing = setup_forward_facing(m, -1);
         dopt.hooks = &hooks;
         rc = nerf_dataset_load(&ds, a.data, &dopt);
     }

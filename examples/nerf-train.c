@@ -49,7 +49,9 @@ static const char usage[] =
     "                scene), ndc (forward-facing), unbounded (all-round with\n"
     "                a far background: space beyond a central cube is\n"
     "                contracted); default auto, the dataset's (LLFF: ndc,\n"
-    "                COLMAP or aabb_scale > 1: unbounded, else box)\n"
+    "                COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
+    "                on a COLMAP folder places it as LLFF places a\n"
+    "                forward-facing capture (any preset)\n"
     "Ctrl-C stops after the current step and saves MODEL.\n"
     "MODEL is tried before training (a file is created beside it and\n"
     "removed); a save that fails leaves the last good MODEL in place, says\n"
@@ -184,8 +186,10 @@ static int parse(int argc, char **argv, args *a)
     return 0;
 }
 
-static int open_model(const args *a, const nerf_hooks *hooks,
-                      const nerf_dataset *ds, nerf_model **m)
+/* The checkpoint to resume, loaded before the dataset, whose placement
+ * depends on the model's space; *m stays NULL when there is none. */
+static int resume_model(const args *a, const nerf_hooks *hooks,
+                        nerf_model **m)
 {
     if (a->resume && access(a->out, F_OK) == 0) {
         int rc = nerf_model_load(m, a->out, hooks);
@@ -207,6 +211,12 @@ static int open_model(const args *a, const nerf_hooks *hooks,
         }
         return rc;
     }
+    return NERF_OK;
+}
+
+static int create_model(const args *a, const nerf_hooks *hooks,
+                        const nerf_dataset *ds, nerf_model **m)
+{
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, a->preset);
@@ -218,7 +228,7 @@ static int open_model(const args *a, const nerf_hooks *hooks,
         if (rc != NERF_OK) {
             return rc;
         }
-    } else if (a->space > 0) {
+    } else if (a->space > 0 && a->space != NERF_SPACE_NDC) {
         fprintf(stderr, "nerf-train: --space applies to the fast preset's "
                 "grids; this preset reads coordinates anywhere\n");
     }
@@ -249,17 +259,21 @@ int main(int argc, char **argv)
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-train";
 
-    nerf_dataset_options dopt;
-    NERF_DATASET_OPTIONS_INIT(&dopt);
-    dopt.downscale = (uint32_t)a.downscale;
-    dopt.hooks = &hooks;
     nerf_dataset *ds = NULL;
     nerf_model *m = NULL;
     nerf_sampler *s = NULL;
     nerf_trainer *t = NULL;
-    int rc = nerf_dataset_load(&ds, a.data, &dopt);
+    int rc = resume_model(&a, &hooks, &m);
+    nerf_dataset_options dopt;
+    NERF_DATASET_OPTIONS_INIT(&dopt);
+    dopt.downscale = (uint32_t)a.downscale;
+    dopt.forward_facing = setup_forward_facing(m, a.space);
+    dopt.hooks = &hooks;
     if (rc == NERF_OK) {
-        rc = open_model(&a, &hooks, ds, &m);
+        rc = nerf_dataset_load(&ds, a.data, &dopt);
+    }
+    if (rc == NERF_OK && m == NULL) {
+        rc = create_model(&a, &hooks, ds, &m);
     }
     if (rc == NERF_OK) {
         rc = setup_sampler(&s, m, ds, 0, 0, 0.0f, 0.0f, a.seed);

@@ -1349,7 +1349,15 @@ typedef struct nerf_dataset_options {
                                     and val are empty); a single
                                     transforms.json serves every frame to
                                     every split. */
-    uint32_t reserved0;        /**< Must be 0. */
+    uint32_t forward_facing;   /**< COLMAP: 1 places the scene as LLFF
+                                    places a forward-facing capture
+                                    (recentred on the average pose, the
+                                    nearest sparse-point depth at 1/0.75)
+                                    for NDC rays, with the spiral path;
+                                    nerf_dataset_space() then says NDC.
+                                    0 (default): unbounded.  LLFF scenes
+                                    are forward-facing either way; a
+                                    Blender scene with 1 is refused. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
 
@@ -1400,7 +1408,11 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *    sparse points' per-axis median is the origin, the cameras' mean up
  *    vector is +z and the farthest camera is at distance 1; near and far
  *    come from the 1st and 99th percentiles of the points' depths in each
- *    image (docs/formats.md, "COLMAP models").  Not NDC.
+ *    image (docs/formats.md, "COLMAP models").  Not NDC, unless
+ *    forward_facing is set: then the poses are placed as LLFF's are, from
+ *    per-image bounds at the 0.1st and 99.9th percentiles of the depths
+ *    (as LLFF's own preparation from COLMAP computes them), and each image
+ *    keeps its intrinsics and lens.
  *
  * Images are PNG or JPEG files, told apart by their first bytes and read
  * as nerf_image_read() reads them (JPEGs turned upright by their Exif
@@ -1412,7 +1424,7 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * @param opts NULL for the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
  * larger than the images, an LLFF or transforms.json split left empty by
- * llff_holdout);
+ * llff_holdout, forward_facing on a Blender scene);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
  * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
@@ -1424,7 +1436,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * message names the frame and its file_path), npy of the wrong
  * dtype, order or shape, a corrupt image or one that is neither PNG nor
  * JPEG, a bad Exif orientation, images of different sizes, image
- * count not matching the poses, no frames left); NERF_ENOMEM.  Messages name the file and
+ * count not matching the poses, no frames left, a forward-facing COLMAP
+ * model without sparse points in front of its cameras); NERF_ENOMEM.  Messages name the file and
  * the problem.  On failure *out is NULL.
  * Reentrant: separate loads may run on separate threads.
  */
@@ -1505,7 +1518,8 @@ NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
 
 /**
  * Camera @p index of @p n_views along the reference implementation's
- * spiral render path of an LLFF scene: two turns around the average pose
+ * spiral render path of a forward-facing scene (LLFF, or COLMAP loaded
+ * with forward_facing): two turns around the average pose
  * with radii the 90th percentile of the absolute camera positions, the
  * depth moving at half the angular rate, always looking at a focus point
  * placed between the nearest and the farthest bounds (by the reference's
@@ -1514,7 +1528,7 @@ NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
  * images, without their lens distortion (renders are pinhole images).
  * The reference renders 120 views.
  * @param out initialised with nerf_camera_init().
- * @return NERF_OK or NERF_EINVAL (NULL pointer, not an LLFF dataset,
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, not forward-facing,
  * n_views 0 or index >= n_views, uninitialised struct).  Reentrant.
  */
 NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,

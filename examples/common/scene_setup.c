@@ -29,6 +29,18 @@ int setup_model_preset(const nerf_model *model)
  * any distance, and this is as far as float t stays precise enough. */
 #define UNBOUNDED_FAR 1e4f
 
+uint32_t setup_forward_facing(const nerf_model *model, int space)
+{
+    if (model == NULL) {
+        return space == NERF_SPACE_NDC;
+    }
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    return nerf_model_get_options(model, &mo) == NERF_OK &&
+           mo.encoding == NERF_ENCODING_HASHGRID &&
+           mo.space == NERF_SPACE_NDC;
+}
+
 int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program)
 {

@@ -18,6 +18,14 @@ int setup_model_preset(const nerf_model *model);
  * SETUP_USAGE, a usage error rather than a nerf status.
  */
 #define SETUP_USAGE (-1000)
+
+/*
+ * nerf_dataset_options.forward_facing for a scene that model (NULL: one
+ * still to be made in space, a nerf_space or -1 for the dataset's) is
+ * trained or rendered in: 1 for an NDC model, so that a COLMAP capture is
+ * placed for NDC rays as LLFF captures are.
+ */
+uint32_t setup_forward_facing(const nerf_model *model, int space);
 int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program);
 

@@ -121,6 +121,7 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         /* Every LLFF image, so that camera 0 is the scene's first one
          * (the held-out test views include it). */
         dopt.llff_holdout = 0;
+        dopt.forward_facing = setup_forward_facing(v->model, -1);
         dopt.hooks = hooks;
         rc = nerf_dataset_load(&v->dataset, a->data, &dopt);
     }

@@ -53,10 +53,10 @@ static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
         what = "downscale must be 1..256";
     } else if (o->skip < 1) {
         what = "skip must be at least 1";
-    } else if (o->white_background > 1 || o->skip_missing > 1) {
-        what = "white_background and skip_missing must be 0 or 1";
-    } else if (o->reserved0 != 0) {
-        what = "reserved0 must be 0";
+    } else if (o->white_background > 1 || o->skip_missing > 1 ||
+               o->forward_facing > 1) {
+        what = "white_background, skip_missing and forward_facing must be "
+               "0 or 1";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_dataset_options: %s", what);
@@ -159,8 +159,14 @@ NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
     ds->aabb_scale = 1.0;
     nerf__dataset_config cfg = {o.split, o.downscale, o.skip,
                                 o.white_background, o.skip_missing,
-                                o.llff_holdout};
+                                o.llff_holdout, o.forward_facing};
     rc = detect_and_load(ds, dir, &cfg);
+    if (rc == NERF_OK && o.forward_facing &&
+        ds->kind == NERF__DATASET_BLENDER) {
+        rc = nerf__error(NERF_EINVAL, "%s: forward_facing is for COLMAP "
+                         "models (LLFF scenes are forward-facing anyway); "
+                         "this is a Blender scene", dir);
+    }
     if (rc != NERF_OK) {
         nerf_dataset_destroy(ds);
         return rc;
@@ -320,8 +326,9 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
         return nerf__error(NERF_EINVAL, "%s: NULL argument", fn);
     }
     if (!ds->has_spiral) {
-        return nerf__error(NERF_EINVAL, "%s: only forward-facing (LLFF) "
-                           "scenes have a spiral path", fn);
+        return nerf__error(NERF_EINVAL, "%s: only forward-facing scenes "
+                           "(LLFF, or COLMAP loaded with forward_facing) "
+                           "have a spiral path", fn);
     }
     if (n_views == 0 || index >= n_views) {
         return nerf__error(NERF_EINVAL, "%s: view %u of %u is out of range",

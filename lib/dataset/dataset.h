@@ -43,6 +43,7 @@ typedef struct nerf__dataset_config {
     uint32_t white_background;
     uint32_t skip_missing;
     uint32_t llff_holdout;
+    uint32_t forward_facing;
 } nerf__dataset_config;
 
 struct nerf_dataset {

@@ -14,6 +14,7 @@
 #include "colmap_poses.h"
 #include "dataset.h"
 #include "file_io.h"
+#include "llff_poses.h"
 
 /* Margins around the sparse points' depth percentiles. */
 #define NEAR_MARGIN 0.9
@@ -228,13 +229,14 @@ static double percentile(const depth_of *v, size_t n, double q)
 }
 
 /*
- * Near and far: for each image, the 1st and 99th percentiles of the depths
- * (along its optical axis, at least MIN_DEPTH in front of it) of the
- * sparse points whose track holds it; near is 0.9 x the least of the
- * first, far 1.1 x the largest of the second, in the scaled units.  Track
- * entries naming an image the model does not have are skipped.
+ * Per image, the q_lo and q_hi percentiles of the depths (along its
+ * optical axis, at least MIN_DEPTH in front of it) of the sparse points
+ * whose track holds it, in the placed units, into range (2 per image; NAN
+ * for an image that sees none).  Track entries naming an image the model
+ * does not have are skipped.  *seen counts the images with depths.
  */
-static int bounds(colmap_ctx *c, const id_index *ids)
+static int depth_ranges(colmap_ctx *c, const id_index *ids, double q_lo,
+                        double q_hi, double *range, size_t *seen)
 {
     size_t n = c->m.n_images;
     depth_of *d = nerf__calloc(&c->ds->env, c->m.n_track ? c->m.n_track : 1,
@@ -268,30 +270,65 @@ static int bounds(colmap_ctx *c, const id_index *ids)
         }
     }
     qsort(d, nd, sizeof *d, compare_depth);
-    double lo = INFINITY, hi = 0.0;
+    for (size_t i = 0; i < 2 * n; i++) {
+        range[i] = NAN;
+    }
+    *seen = 0;
     for (size_t first = 0; first < nd;) {
         size_t last = first;
         while (last < nd && d[last].image == d[first].image) {
             last++;
         }
-        double a = percentile(d + first, last - first, 0.01);
-        double b = percentile(d + first, last - first, 0.99);
-        lo = a < lo ? a : lo;
-        hi = b > hi ? b : hi;
+        range[2 * d[first].image] = percentile(d + first, last - first, q_lo);
+        range[2 * d[first].image + 1] = percentile(d + first, last - first,
+                                                   q_hi);
+        (*seen)++;
         first = last;
     }
     nerf__free(&c->ds->env, d);
-    if (nd == 0 || !(hi > lo)) {
+    return NERF_OK;
+}
+
+/*
+ * Near and far of an unbounded scene: 0.9 x the least 1st percentile of
+ * the images' depths, 1.1 x the largest 99th, in the scaled units.
+ */
+static int bounds(colmap_ctx *c, const id_index *ids)
+{
+    size_t n = c->m.n_images, seen;
+    double *range = nerf__calloc(&c->ds->env, 2 * n, sizeof *range);
+    if (range == NULL) {
+        return NERF_ENOMEM;
+    }
+    int rc = depth_ranges(c, ids, 0.01, 0.99, range, &seen);
+    double lo = INFINITY, hi = 0.0;
+    for (size_t i = 0; i < n && rc == NERF_OK; i++) {
+        if (!isnan(range[2 * i])) {
+            lo = range[2 * i] < lo ? range[2 * i] : lo;
+            hi = range[2 * i + 1] > hi ? range[2 * i + 1] : hi;
+        }
+    }
+    nerf__free(&c->ds->env, range);
+    if (seen == 0 || !(hi > lo)) {
         c->near = DEFAULT_NEAR;
         c->far = DEFAULT_FAR;
     } else {
         c->near = NEAR_MARGIN * lo;
         c->far = FAR_MARGIN * hi;
     }
-    return NERF_OK;
+    return rc;
 }
 
-/* Poses in name order, then the similarity of docs/formats.md. */
+/* The COLMAP poses in name order, in OpenGL axes and COLMAP's units. */
+static void raw_poses(colmap_ctx *c)
+{
+    for (size_t i = 0; i < c->m.n_images; i++) {
+        const nerf__colmap_image *im = &c->m.images[c->order[i]];
+        nerf__colmap_to_c2w(im->q, im->t, c->poses + 12 * i);
+    }
+}
+
+/* Then the similarity of docs/formats.md. */
 static int normalise(colmap_ctx *c)
 {
     nerf__env *env = &c->ds->env;
@@ -303,10 +340,7 @@ static int normalise(colmap_ctx *c)
         nerf__free(env, scratch);
         return NERF_ENOMEM;
     }
-    for (size_t i = 0; i < n; i++) {
-        const nerf__colmap_image *im = &c->m.images[c->order[i]];
-        nerf__colmap_to_c2w(im->q, im->t, c->poses + 12 * i);
-    }
+    raw_poses(c);
     for (size_t p = 0; p < np; p++) {
         memcpy(pts + 3 * p, c->m.points[p].xyz, 3 * sizeof *pts);
     }
@@ -317,6 +351,58 @@ static int normalise(colmap_ctx *c)
     nerf__free(env, pts);
     nerf__free(env, scratch);
     return NERF_OK;
+}
+
+/*
+ * A forward-facing capture placed as LLFF places one (LLFF's own poses
+ * come from COLMAP this way): per-image bounds from the depths at LLFF's
+ * percentiles, then its rescaling, recentring and spiral.  An image that
+ * sees no point takes the widest bounds of the others, which only the
+ * spiral and the scale read.
+ */
+static int place_forward(colmap_ctx *c, const id_index *ids)
+{
+    nerf__env *env = &c->ds->env;
+    size_t n = c->m.n_images, seen;
+    memset(&c->sim, 0, sizeof c->sim);
+    c->sim.rot[0] = c->sim.rot[4] = c->sim.rot[8] = 1.0;
+    c->sim.scale = 1.0;
+    raw_poses(c);
+    double *range = nerf__calloc(env, 2 * n, sizeof *range);
+    double *scratch = nerf__calloc(env, n, sizeof *scratch);
+    int rc = range && scratch ? depth_ranges(c, ids, 0.001, 0.999, range,
+                                             &seen)
+                              : NERF_ENOMEM;
+    if (rc == NERF_OK && seen == 0) {
+        rc = nerf__error(NERF_EFORMAT, "%s: a forward-facing scene needs "
+                         "sparse points in front of its cameras for its "
+                         "depth bounds, and this model has none",
+                         c->has_points ? c->paths[2] : c->paths[1]);
+    }
+    if (rc == NERF_OK) {
+        double lo = INFINITY, hi = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            if (!isnan(range[2 * i])) {
+                lo = range[2 * i] < lo ? range[2 * i] : lo;
+                hi = range[2 * i + 1] > hi ? range[2 * i + 1] : hi;
+            }
+        }
+        for (size_t i = 0; i < n; i++) {
+            if (isnan(range[2 * i])) {
+                range[2 * i] = lo;
+                range[2 * i + 1] = hi;
+            }
+        }
+        c->sim.scale = nerf__llff_normalize(c->poses, range, n);
+        nerf__llff_spiral_setup(c->poses, range, n, scratch,
+                                &c->ds->spiral);
+        c->ds->has_spiral = 1;
+        c->near = lo * c->sim.scale;
+        c->far = hi * c->sim.scale;
+    }
+    nerf__free(env, range);
+    nerf__free(env, scratch);
+    return rc;
 }
 
 /* One photo into slot i: PNG or JPEG, whatever its name says. */
@@ -422,11 +508,13 @@ static int load(colmap_ctx *c, const nerf__dataset_config *cfg)
     if (rc == NERF_OK) {
         rc = order_images(c, tmp, ids);
     }
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && cfg->forward_facing) {
+        rc = place_forward(c, ids);
+    } else if (rc == NERF_OK) {
         rc = normalise(c);
-    }
-    if (rc == NERF_OK) {
-        rc = bounds(c, ids);
+        if (rc == NERF_OK) {
+            rc = bounds(c, ids);
+        }
     }
     if (rc == NERF_OK) {
         rc = nerf__find_image_dir(env, c->dir, cfg->downscale, &c->image_dir,
@@ -467,25 +555,34 @@ int nerf__colmap_load(nerf_dataset *ds, const char *dir,
     }
     if (rc == NERF_OK) {
         ds->kind = NERF__DATASET_COLMAP;
-        ds->ndc = 0;
-        /* The farthest camera is at distance 1 from the centre, so every
-         * camera is in the unit cube, and the contraction takes what lies
-         * beyond it: the background a capture sees past its subject. */
-        ds->unbounded_inner = COLMAP_INNER;
-        ds->near_bound = (float)c.near;
-        ds->far_bound = (float)c.far;
         ds->scene_scale = c.sim.scale;
-        ds->scene_radius = 1.0;
+        if (cfg->forward_facing) {
+            ds->ndc = 1;
+            ds->near_bound = 0.0f;
+            ds->far_bound = 1.0f;
+        } else {
+            /* The farthest camera is at distance 1 from the centre, so
+             * every camera is in the unit cube, and the contraction takes
+             * what lies beyond it: the background a capture sees past its
+             * subject. */
+            ds->unbounded_inner = COLMAP_INNER;
+            ds->near_bound = (float)c.near;
+            ds->far_bound = (float)c.far;
+            ds->scene_radius = 1.0;
+        }
         nerf__log(&ds->env, NERF_LOG_INFO,
                   "%s: COLMAP model (%s, %s), %u of %zu images, %ux%u (from "
-                  "%s, %ux%u, downscale %u), %zu points, centre (%.4g, %.4g, "
-                  "%.4g), scale %.6g, bounds [%.4g, %.4g]",
+                  "%s, %ux%u, downscale %u), %zu points, %s, scale %.6g, "
+                  "bounds [%.4g, %.4g]%s",
                   dir, c.paths[1], c.binary ? "binary" : "text",
                   (unsigned)ds->count, c.m.n_images, (unsigned)ds->width,
                   (unsigned)ds->height, c.image_dir, (unsigned)ds->src_width,
                   (unsigned)ds->src_height, (unsigned)cfg->downscale,
-                  c.m.n_points, c.sim.centre[0], c.sim.centre[1],
-                  c.sim.centre[2], c.sim.scale, c.near, c.far);
+                  c.m.n_points, cfg->forward_facing ? "forward-facing"
+                                                    : "unbounded",
+                  c.sim.scale, c.near, c.far,
+                  cfg->forward_facing ? " after scaling, NDC rays in [0, 1]"
+                                      : "");
     }
     for (int f = 0; f < 3; f++) {
         nerf__free(&ds->env, c.paths[f]);

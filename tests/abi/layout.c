@@ -148,7 +148,7 @@ FROZEN(nerf_dataset_options, skip, 12);
 FROZEN(nerf_dataset_options, white_background, 16);
 FROZEN(nerf_dataset_options, skip_missing, 20);
 FROZEN(nerf_dataset_options, llff_holdout, 24);
-FROZEN(nerf_dataset_options, reserved0, 28);
+FROZEN(nerf_dataset_options, forward_facing, 28);
 FROZEN(nerf_dataset_options, hooks, 32);
 SIZE(nerf_dataset_options, 40);
 

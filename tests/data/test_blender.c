@@ -720,13 +720,20 @@ TEST(folders_and_options)
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EIO);
     CHECK(fx_has(nerf_last_error(), "transforms_val.json"));
     uint32_t *fields[] = {&o.split, &o.downscale, &o.skip,
-                          &o.white_background, &o.skip_missing, &o.reserved0};
-    uint32_t bad[] = {3, 0, 0, 2, 2, 1};
+                          &o.white_background, &o.skip_missing,
+                          &o.forward_facing};
+    uint32_t bad[] = {3, 0, 0, 2, 2, 2};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         NERF_DATASET_OPTIONS_INIT(&o);
         *fields[i] = bad[i];
         CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EINVAL);
     }
+    /* A valid value, but a Blender scene is no forward-facing capture. */
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.forward_facing = 1;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EINVAL);
+    CHECK(fx_has(nerf_last_error(), "forward_facing is for COLMAP"));
+    CHECK(ds == NULL);
     NERF_DATASET_OPTIONS_INIT(&o);
     o.downscale = 9; /* larger than the 8x6 images */
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EINVAL);

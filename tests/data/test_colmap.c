@@ -214,6 +214,90 @@ TEST(text_and_binary_agree_with_the_writer)
     CHECK(far_b > 4.0 * s && far_b < 1.1 * 5.6 * s);
 }
 
+/*
+ * The forward-facing capture written as LLFF and as COLMAP: loaded with
+ * forward_facing, the COLMAP model is placed as LLFF places its poses.
+ * The rotations agree; the positions agree up to one scale, since LLFF's
+ * bounds are the writer's and COLMAP's come from the sparse points.
+ */
+TEST(forward_facing_colmap_is_placed_as_llff)
+{
+    char llff_dir[1024], colmap_dir[1024];
+    fx_path(llff_dir, sizeof llff_dir, tmp, "ff-llff");
+    fx_path(colmap_dir, sizeof colmap_dir, tmp, "ff-colmap");
+    nerf_scene_options so;
+    NERF_SCENE_OPTIONS_INIT(&so);
+    so.width = W;
+    so.height = H;
+    so.n_train = N_ALL;
+    so.n_val = so.n_test = 0;
+    so.threads = 1;
+    so.capture = NERF_SCENE_CAPTURE_FORWARD;
+    so.layout = NERF_SCENE_LAYOUT_LLFF;
+    CHECK_OK(nerf_scene_write(llff_dir, &so));
+    so.layout = NERF_SCENE_LAYOUT_COLMAP_BINARY;
+    CHECK_OK(nerf_scene_write(colmap_dir, &so));
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    nerf_dataset *unbounded = NULL, *llff = NULL, *colmap = NULL;
+    CHECK_OK(nerf_dataset_load(&unbounded, colmap_dir, &o));
+    o.forward_facing = 1;
+    CHECK_OK(nerf_dataset_load(&llff, llff_dir, &o));
+    CHECK_OK(nerf_dataset_load(&colmap, colmap_dir, &o));
+    if (unbounded == NULL || llff == NULL || colmap == NULL) {
+        goto done;
+    }
+    uint32_t space = 0;
+    float bound = 0, near = -1, far = -1;
+    CHECK_OK(nerf_dataset_space(unbounded, &space, &bound));
+    CHECK_EQ_INT(space, NERF_SPACE_UNBOUNDED);
+    CHECK_OK(nerf_dataset_space(colmap, &space, &bound));
+    CHECK_EQ_INT(space, NERF_SPACE_NDC);
+    CHECK_EQ_INT(nerf_dataset_is_ndc(colmap), 1);
+    CHECK_OK(nerf_dataset_bounds(colmap, &near, &far));
+    CHECK(near == 0.0f && far == 1.0f);
+    uint32_t n = nerf_dataset_count(colmap);
+    CHECK_EQ_INT(n, nerf_dataset_count(llff));
+    double scale = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        nerf_camera a, b;
+        NERF_CAMERA_INIT(&a);
+        NERF_CAMERA_INIT(&b);
+        CHECK_OK(nerf_dataset_camera(llff, k, &a));
+        CHECK_OK(nerf_dataset_camera(colmap, k, &b));
+        CHECK_NEAR(b.fx, a.fx, 1e-3);
+        double pa = 0, pb = 0;
+        for (int r = 0; r < 3; r++) {
+            for (int c = 0; c < 3; c++) {
+                CHECK_NEAR(b.c2w[4 * r + c], a.c2w[4 * r + c], 1e-4);
+            }
+            pa += (double)a.c2w[4 * r + 3] * a.c2w[4 * r + 3];
+            pb += (double)b.c2w[4 * r + 3] * b.c2w[4 * r + 3];
+        }
+        if (pa < 1e-8) {
+            continue;
+        }
+        double s = sqrt(pb / pa);
+        scale = scale == 0 ? s : scale;
+        CHECK_NEAR(s, scale, 1e-3 * scale);
+        for (int r = 0; r < 3; r++) {
+            CHECK_NEAR(b.c2w[4 * r + 3], scale * a.c2w[4 * r + 3],
+                       1e-4 + 1e-3 * fabs(a.c2w[4 * r + 3]));
+        }
+    }
+    /* Both near planes sit at depth 1/0.75 of their own bounds. */
+    CHECK(scale > 0.5 && scale < 2.0);
+    nerf_camera spiral;
+    NERF_CAMERA_INIT(&spiral);
+    CHECK_OK(nerf_dataset_spiral_camera(colmap, 3, 120, &spiral));
+    CHECK_EQ_INT(nerf_dataset_spiral_camera(unbounded, 3, 120, &spiral),
+                 NERF_EINVAL);
+done:
+    nerf_dataset_destroy(unbounded);
+    nerf_dataset_destroy(llff);
+    nerf_dataset_destroy(colmap);
+}
+
 /* ---- camera models ------------------------------------------------------ */
 
 static int parse_cameras(const char *text, nerf__colmap_model *m)
@@ -481,6 +565,7 @@ int main(void)
     tmp = fx_make_temp_dir();
     RUN(text_and_binary_agree_with_the_writer);
     RUN(downscale_halves_the_intrinsics);
+    RUN(forward_facing_colmap_is_placed_as_llff);
     RUN(camera_models_map_onto_opencv);
     RUN(quaternions_round_trip);
     RUN(truncated_images_bin);

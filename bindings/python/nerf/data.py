@@ -79,8 +79,10 @@ class Dataset(_handle.Handle):
     """One split of a scene on disk (``nerf_dataset``).
 
     ``Dataset(path, split="train", downscale=1, ...)`` (the same as
-    :meth:`load`); the layout (Blender or LLFF) is detected from the files.
-    Keyword options are fields of :class:`nerf.DatasetOptions`.
+    :meth:`load`); the layout (Blender, LLFF or COLMAP) is detected from
+    the files.  Keyword options are fields of :class:`nerf.DatasetOptions`:
+    ``forward_facing=1`` places a COLMAP model as LLFF places a
+    forward-facing capture, for NDC rays (:attr:`space` then says "ndc").
     """
 
     _kind = "Dataset"
@@ -114,7 +116,7 @@ class Dataset(_handle.Handle):
 
     @property
     def format(self) -> str:
-        """"blender" or "llff"."""
+        """"blender", "llff" or "colmap"."""
         with self._using() as ptr:
             code = lib.nerf_dataset_get_format(ptr)
         return FORMATS.get(code, str(code))

@@ -255,7 +255,7 @@ class DatasetOptions(_Versioned):
         ("white_background", c_uint32),
         ("skip_missing", c_uint32),
         ("llff_holdout", c_uint32),
-        ("reserved0", c_uint32),
+        ("forward_facing", c_uint32),
         ("hooks", POINTER(Hooks)),
     ]
 

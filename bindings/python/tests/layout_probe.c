@@ -176,7 +176,7 @@ static void structs(void)
     FIELD(nerf_dataset_options, white_background);
     FIELD(nerf_dataset_options, skip_missing);
     FIELD(nerf_dataset_options, llff_holdout);
-    FIELD(nerf_dataset_options, reserved0);
+    FIELD(nerf_dataset_options, forward_facing);
     FIELD(nerf_dataset_options, hooks);
     end_struct();
 
