@@ -5,10 +5,11 @@
 # frame count, size and rate; with ffmpeg, its frames match the PNGs.
 # Sizes and options it must refuse before rendering anything.  Skipped (77)
 # after checking the PNG fallback when the build has no video output.
+# Whatever the build, libnerf itself must not need FFmpeg's libraries.
 #
-#   test-render-video.sh NERF-SCENE NERF-TRAIN NERF-RENDER
+#   test-render-video.sh NERF-SCENE NERF-TRAIN NERF-RENDER LIBNERF.so
 set -eu
-scene=$1 train=$2 render=$3
+scene=$1 train=$2 render=$3 libnerf=$4
 # In a cross build meson names the cross file's exe_wrapper (qemu-user,
 # say) that runs the programs; natively it is unset and they run as is.
 wrap=${MESON_EXE_WRAPPER:-}
@@ -25,6 +26,17 @@ fail() {
   echo "FAIL: $*"
   exit 1
 }
+
+# Only nerf-render links FFmpeg: the library's users must not inherit it.
+if command -v readelf >/dev/null 2>&1; then
+  needed=$(readelf -d "$libnerf" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p')
+  case $needed in
+    *libav* | *libsw*) fail "$libnerf needs FFmpeg's libraries:" $needed ;;
+  esac
+  echo "ok   libnerf needs none of FFmpeg's libraries"
+else
+  echo "readelf not found: not checking libnerf's dependencies"
+fi
 
 # render NAME ARGS...: nerf-render into $work/NAME, stderr in NAME.log;
 # its exit status in $status.
