@@ -17,7 +17,7 @@
 # library; NERF_EXAMPLES=false skips them for a build without examples),
 # and the compile line of docs/tutorial-c.md (NERF_TUTORIAL_DOC), taken
 # from the document, must build examples/tutorial.c (NERF_TUTORIAL_SRC)
-# into a program that runs with the staged library.
+# into a program that starts with the staged library.
 #
 # In a cross build tests/abi/meson.build sets CC and CXX to the cross
 # compilers and PKG_CONFIG_LIBDIR to the host machine's .pc files, and
@@ -172,15 +172,24 @@ mkdir -p "$scratch/tutorial"
 cp "$src" "$scratch/tutorial/tutorial.c"
 line="$cc $san ${line#cc }"
 (cd "$scratch/tutorial" && eval "$line")
-if ! (cd "$scratch/tutorial" &&
-      env -i ./tutorial out 1 1 >run.log 2>&1); then
-  echo "the tutorial built with the documented command failed to run:"
+# Without arguments it prints its usage and exits 2, once the dynamic
+# linker has found libnerf (a training run is the 'tutorial' test's job);
+# a missing library stops it before main with status 127.
+status=0
+(cd "$scratch/tutorial" && env -i ./tutorial >run.log 2>&1) || status=$?
+if [ "$status" -ne 2 ] || ! grep -q '^usage: tutorial' \
+     "$scratch/tutorial/run.log"; then
+  echo "the tutorial built with the documented command did not start" \
+       "(exit $status):"
   cat "$scratch/tutorial/run.log"
   exit 1
 fi
-if [ ! -s "$scratch/tutorial/out/orbit_000.png" ]; then
-  echo "the tutorial ran but wrote no out/orbit_000.png"
-  exit 1
+if command -v ldd >/dev/null 2>&1; then
+  loaded=$(env -i ldd "$scratch/tutorial/tutorial" | grep libnerf)
+  case $loaded in
+    *"$libdir"/*) ;;
+    *) echo "the tutorial's libnerf is not the staged one: $loaded"; exit 1 ;;
+  esac
 fi
-echo "ok   docs/tutorial-c.md's command builds a tutorial that runs with" \
+echo "ok   docs/tutorial-c.md's command builds a tutorial that starts with" \
      "an empty environment"
