@@ -42,7 +42,7 @@ case $out in
 esac
 echo "ok   a failed reconstruction is named"
 
-fern=${NERF_DATA_DIR:-}/fern
+fern=${NERF_DATA_DIR:-${NERF_DEFAULT_DATA_DIR:-}}/fern
 if [ "${NERF_TEST_COLMAP_FERN:-0}" != 1 ]; then
   echo "ok   (fern's reconstruction not tried: NERF_TEST_COLMAP_FERN=1" \
        "asks for it)"
