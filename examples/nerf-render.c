@@ -3,12 +3,15 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/cli.h"
+#include "common/out_folder.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
@@ -19,9 +22,10 @@ static const char usage[] =
     "                      [--height H] [--data DIR]\n"
     "                    | --poses FILE [--width W --height H]\n"
     "                      [--focal F | --fov DEG] [--data DIR])\n"
-    "                   [--depth] [--near T --far T]\n"
+    "                   [--depth] [--near T --far T] [--skip-existing]\n"
     "Render views of MODEL and write them to DIR as r_NNN.png (and\n"
-    "depth_NNN.png, opacity_NNN.png with --depth).\n"
+    "depth_NNN.png, opacity_NNN.png with --depth).  DIR is created if\n"
+    "missing.\n"
     "  --data DIR    the scene's cameras (and bounds): render every view of\n"
     "                its split (default test)\n"
     "  --path orbit  a circle at 30 degrees elevation, radius 4, around the\n"
@@ -39,13 +43,19 @@ static const char usage[] =
     "                --data, the scene gives bounds, background and NDC.\n"
     "  --near T --far T  the range of depths sampled along each ray, given\n"
     "                together, 0 <= T_near < T_far (NDC depths within [0, 1]\n"
-    "                for an LLFF scene); default the scene's, else 2 and 6\n";
+    "                for an LLFF scene); default the scene's, else 2 and 6\n"
+    "  --skip-existing  render only the views whose files are not in DIR\n"
+    "                yet: the same command again finishes a render that\n"
+    "                was stopped\n"
+    "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
+    "written), says which views are written and exits with status 130\n"
+    "(SIGTERM: 143).\n";
 
 typedef struct args {
     const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
-    int depth, size_given;
+    int depth, size_given, skip_existing;
     int bounds_given; /* 1: --near, 2: --far */
 } args;
 
@@ -68,6 +78,10 @@ static int parse(int argc, char **argv, args *a)
         }
         if (strcmp(k, "--depth") == 0) {
             a->depth = 1;
+            continue;
+        }
+        if (strcmp(k, "--skip-existing") == 0) {
+            a->skip_existing = 1;
             continue;
         }
         const char *v = cli_value(argc, argv, &i);
@@ -234,6 +248,16 @@ static void depth_to_grey(float *depth, const float *opacity, size_t n,
 
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED 1
+/* Stopped by a signal, and said so. */
+#define INTERRUPTED 2
+
+/* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
+static volatile sig_atomic_t interrupted;
+
+static void on_signal(int sig)
+{
+    interrupted = sig;
+}
 
 /* The renderer's reports, within an image, onto the bar of all views. */
 typedef struct render_progress {
@@ -245,7 +269,7 @@ static int on_render_progress(const nerf_progress *p, void *user)
 {
     render_progress *rp = user;
     progress_update(&rp->bar, rp->before + p->done, "pixels");
-    return 0;
+    return interrupted ? 1 : 0;
 }
 
 /*
@@ -312,12 +336,57 @@ static int write_view(const args *a, const nerf_camera *cam, uint32_t i,
     return rc;
 }
 
+/* Whether view i's files are all in the output folder: write_view()
+ * writes each through a temporary file, so one that is there is whole. */
+static int view_written(const args *a, uint32_t i)
+{
+    static const char *const kinds[3] = {"r", "opacity", "depth"};
+    for (int k = 0; k < (a->depth ? 3 : 1); k++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s_%03u.png", a->out, kinds[k], i);
+        if (access(path, F_OK) != 0) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* What a run has written, for the line that ends an interrupted one. */
+typedef struct written {
+    uint32_t before;      /* views skipped: already in the folder */
+    uint32_t now;         /* views written by this run */
+    uint32_t first, last; /* this run's first and last view written */
+} written;
+
+static void say_interrupted(const args *a, const written *w, uint32_t n,
+                            int tty)
+{
+    if (tty) {
+        fputc('\n', stderr); /* end the bar's line */
+    }
+    uint32_t have = w->before + w->now;
+    char now[96];
+    if (w->now == 0) {
+        snprintf(now, sizeof now, "none");
+    } else if (w->now == 1) {
+        snprintf(now, sizeof now, "1, r_%03u.png", w->first);
+    } else {
+        snprintf(now, sizeof now, "%u, r_%03u.png to r_%03u.png", w->now,
+                 w->first, w->last);
+    }
+    fprintf(stderr, "nerf-render: interrupted: %s holds %u of the %u views "
+            "(this run wrote %s); the same command with --skip-existing "
+            "renders the other %u\n", a->out, have, n, now, n - have);
+}
+
 static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
                       const nerf_camera_path *cp, float near, float far)
 {
     uint32_t n = cp        ? nerf_camera_path_count(cp)
                  : a->path ? (uint32_t)a->frames
                            : nerf_dataset_count(ds);
+    written w;
+    memset(&w, 0, sizeof w);
     /* Every view's size first: the bar counts pixels, and the buffers
      * hold the largest view. */
     uint64_t total = 0;
@@ -330,12 +399,24 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             return rc;
         }
         size_t pixels = (size_t)cam.width * cam.height;
+        if (a->skip_existing && view_written(a, i)) {
+            w.before++;
+            continue;
+        }
         total += pixels;
         if (pixels > largest) {
             largest = pixels;
             lw = cam.width;
             lh = cam.height;
         }
+    }
+    if (w.before > 0) {
+        fprintf(stderr, "nerf-render: %u of the %u views are in %s already; "
+                "rendering the other %u\n", w.before, n, a->out,
+                n - w.before);
+    }
+    if (w.before == n) {
+        return NERF_OK;
     }
     outputs o;
     if (alloc_outputs(&o, largest, lw, lh, a->depth) != 0) {
@@ -348,6 +429,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     nerf_renderer_set_progress(r, on_render_progress, &rp);
     int rc = NERF_OK;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        if (a->skip_existing && view_written(a, i)) {
+            continue;
+        }
         nerf_camera cam;
         rc = view_camera(a, ds, cp, i, n, &cam);
         if (rc == NERF_OK) {
@@ -357,9 +441,18 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (rc == NERF_OK) {
             rc = write_view(a, &cam, i, &o, near, far);
         }
+        if (rc == NERF_OK) {
+            w.first = w.now == 0 ? i : w.first;
+            w.last = i;
+            w.now++;
+        }
         rp.before += (uint64_t)cam.width * cam.height;
     }
     free_outputs(&o);
+    if (rc == NERF_ECANCELLED && interrupted) {
+        say_interrupted(a, &w, n, rp.bar.tty);
+        return INTERRUPTED;
+    }
     if (rc == NERF_OK) {
         char note[4200];
         snprintf(note, sizeof note, "%u view%s in %s", (unsigned)n,
@@ -381,10 +474,6 @@ int main(int argc, char **argv)
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-render";
-    if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
-        fprintf(stderr, "nerf-render: %s: %s\n", a.out, strerror(errno));
-        return 1;
-    }
     nerf_model *m = NULL;
     nerf_dataset *ds = NULL;
     nerf_sampler *s = NULL;
@@ -422,9 +511,15 @@ int main(int argc, char **argv)
         rc = nerf_renderer_create(&r, m, s, &ro);
     }
     if (rc == NERF_OK) {
+        rc = out_ready_folder(a.out, "nerf-render") == 0 ? NERF_OK
+                                                          : REPORTED;
+    }
+    if (rc == NERF_OK) {
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
         rc = render_all(&a, r, ds, cp, near, far);
     }
-    if (rc != NERF_OK && rc != REPORTED) {
+    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED) {
         cli_report("nerf-render", rc);
     }
     nerf_renderer_destroy(r);
@@ -432,5 +527,7 @@ int main(int argc, char **argv)
     nerf_dataset_destroy(ds);
     nerf_camera_path_destroy(cp);
     nerf_model_destroy(m);
-    return rc == NERF_OK ? 0 : 1;
+    /* As a shell reports a program killed by the signal: 130 for
+     * SIGINT. */
+    return rc == INTERRUPTED ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
 }

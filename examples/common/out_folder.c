@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 static int is_folder(const char *path)
 {
@@ -86,4 +87,30 @@ int out_make_parent(const char *file, const char *program)
     }
     free(dir);
     return err != 0 ? -1 : 0;
+}
+
+int out_ready_folder(const char *dir, const char *program)
+{
+    char failed[4200];
+    int created = 0;
+    int err = out_make_folder(dir, &created, failed, sizeof failed);
+    if (err == ENOTDIR && strcmp(failed, dir) == 0) {
+        fprintf(stderr, "%s: %s: cannot be written: it is not a folder\n",
+                program, dir);
+        return -1;
+    }
+    if (err != 0) {
+        fprintf(stderr, "%s: %s: cannot be written: %s: %s\n", program, dir,
+                failed, strerror(err));
+        return -1;
+    }
+    if (created) {
+        fprintf(stderr, "%s: created the folder %s\n", program, dir);
+    }
+    if (access(dir, W_OK | X_OK) != 0) {
+        fprintf(stderr, "%s: %s: cannot be written: %s\n", program, dir,
+                strerror(errno));
+        return -1;
+    }
+    return 0;
 }

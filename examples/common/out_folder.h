@@ -23,4 +23,11 @@ int out_make_folder(const char *dir, int *created, char *failed,
  */
 int out_make_parent(const char *file, const char *program);
 
+/*
+ * The output folder dir, made when missing (saying so on stderr as
+ * program) and found writable, before anything is computed for it; 0, or
+ * -1 after printing "program: dir: cannot be written: REASON".
+ */
+int out_ready_folder(const char *dir, const char *program);
+
 #endif
