@@ -1,7 +1,8 @@
 #!/bin/sh
 # nerf-train on an existing MODEL: refused without --resume or --overwrite
 # (nothing trained, MODEL untouched); --overwrite replaces it; --resume
-# continues it, but not with another --preset.
+# continues it, but not with another --preset, and warns when the data is
+# not what MODEL was trained on.
 #
 #   test-train-resume.sh NERF-SCENE NERF-TRAIN
 set -eu
@@ -55,6 +56,31 @@ run same-preset.log --steps 3 --resume --preset tiny
 [ "$status" -eq 0 ] || { cat "$work/same-preset.log"; fail "same preset"; }
 grep -q "resuming $work/model.nerf at step 2" "$work/same-preset.log" ||
   { cat "$work/same-preset.log"; fail "same preset: not resumed"; }
+
+grep -q "other data" "$work/same-preset.log" &&
+  { cat "$work/same-preset.log"; fail "same data: warned"; }
+
+# Other data: more and larger images; images of the same number and size
+# that show another scene.
+other() {
+  "$scene" --out "$work/$1" --width "$2" --height "$2" --train "$3" \
+    --val 0 --test 0 $4 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
+  status=0
+  "$train" --data "$work/$1" --out "$work/model.nerf" --batch 64 --resume \
+    --steps 100000000 --seconds 0.1 2>"$work/$1.log" || status=$?
+  [ "$status" -eq 0 ] || { cat "$work/$1.log"; fail "$1: status $status"; }
+}
+other larger 24 6 ""
+grep -q "^nerf-train: trainer: the model was trained on other data than this dataset (image count, image size differ): it was trained on 4 images of 16x16 (blender, .*), this dataset has 6 of 24x24 (blender, " \
+  "$work/larger.log" || { cat "$work/larger.log"; fail "larger: warning"; }
+run same-again.log --steps 100000000 --seconds 0.1 --resume
+grep -q "trained on 6 images of 24x24" "$work/same-again.log" ||
+  { cat "$work/same-again.log"; fail "the last data trained on is not kept"; }
+# (model.nerf was last trained on scene: 4 images of 16x16.)
+other unbounded 16 4 "--capture unbounded"
+grep -q "(mean colour, near/far bounds differ): it was trained on 4 images of 16x16 (blender, .*), this dataset has 4 of 16x16 (blender, " \
+  "$work/unbounded.log" ||
+  { cat "$work/unbounded.log"; fail "unbounded: warning"; }
 
 run overwrite.log --steps 1 --overwrite
 [ "$status" -eq 0 ] || { cat "$work/overwrite.log"; fail "overwrite"; }
