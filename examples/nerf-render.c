@@ -1,13 +1,11 @@
 /* nerf-render: render views of a trained model to PNG files. */
 #include <nerf.h>
 
-#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "common/cli.h"
@@ -410,13 +408,15 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             lh = cam.height;
         }
     }
+    if (w.before == n) {
+        fprintf(stderr, "nerf-render: all %u views are in %s already: "
+                "nothing to render\n", n, a->out);
+        return NERF_OK;
+    }
     if (w.before > 0) {
         fprintf(stderr, "nerf-render: %u of the %u views are in %s already; "
                 "rendering the other %u\n", w.before, n, a->out,
                 n - w.before);
-    }
-    if (w.before == n) {
-        return NERF_OK;
     }
     outputs o;
     if (alloc_outputs(&o, largest, lw, lh, a->depth) != 0) {

@@ -410,13 +410,14 @@ int main(int argc, char **argv)
     /* Interrupted, the run is not done: one line says where it stopped
      * (the bar's line, on a terminal, is ended first). */
     int stopped = rc == NERF_ECANCELLED && interrupted;
-    if (stopped) {
+    if (interrupted && (stopped || rc == NERF_EIO)) {
         if (st.bar.tty) {
             fputc('\n', stderr);
         }
-        fprintf(stderr, "nerf-train: interrupted at step %llu; saved %s "
-                "(resume with --resume)\n",
-                (unsigned long long)nerf_model_step(m), a.out);
+        fprintf(stderr, "nerf-train: interrupted at step %llu; %s %s%s\n",
+                (unsigned long long)nerf_model_step(m),
+                saved ? "saved" : "NOT saved to", a.out,
+                saved ? " (resume with --resume)" : "");
     } else {
         char note[4200];
         snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s %s)",

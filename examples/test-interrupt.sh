@@ -102,4 +102,8 @@ for i in $(seq 0 $((frames - 1))); do
   [ -f "$(printf '%s/frames/r_%03d.png' "$work" "$i")" ] ||
     fail "skip: view $i missing"
 done
+(render_cmd --skip-existing 2>"$work/none.log") ||
+  { cat "$work/none.log"; fail "render --skip-existing, all there"; }
+grep -q "^nerf-render: all $frames views are in $work/frames already: nothing to render\$" \
+  "$work/none.log" || { cat "$work/none.log"; fail "skip all: message"; }
 echo "ok   Ctrl-C in nerf-train and nerf-render, and --skip-existing"
