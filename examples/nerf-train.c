@@ -215,7 +215,7 @@ static const char *preset_name(int preset)
     return preset == NERF_PRESET_TINY        ? "tiny"
            : preset == NERF_PRESET_REFERENCE ? "reference"
            : preset == NERF_PRESET_FAST      ? "fast"
-                                             : "no preset's (a custom network)";
+                                             : NULL;
 }
 
 /*
@@ -229,10 +229,12 @@ static int check_preset(const args *a, const nerf_model *m)
     if (!a->preset_given || have == a->preset) {
         return NERF_OK;
     }
-    fprintf(stderr, "nerf-train: %s holds a model of the %s preset, not "
-            "of --preset %s: resume it without --preset, or train a new "
-            "one with --overwrite\n", a->out, preset_name(have),
-            preset_name(a->preset));
+    const char *name = preset_name(have);
+    fprintf(stderr, "nerf-train: %s holds a model of %s%s%s, not of "
+            "--preset %s: resume it without --preset, or train a new one "
+            "with --overwrite\n", a->out, name ? "the " : "",
+            name ? name : "no preset's network",
+            name ? " preset" : "", preset_name(a->preset));
     return SETUP_USAGE;
 }
 
