@@ -1,14 +1,15 @@
 /* nerf-render: render views of a trained model to PNG files. */
 #include <nerf.h>
 
-#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/cli.h"
+#include "common/out_folder.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 #include "common/video.h"
@@ -20,10 +21,11 @@ static const char usage[] =
     "                      [--height H] [--data DIR]\n"
     "                    | --poses FILE [--width W --height H]\n"
     "                      [--focal F | --fov DEG] [--data DIR])\n"
-    "                   [--depth] [--near T --far T]\n"
+    "                   [--depth] [--near T --far T] [--skip-existing]\n"
     "                   [--video FILE.mp4 [--fps N]]\n"
     "Render views of MODEL and write them to DIR as r_NNN.png (and\n"
-    "depth_NNN.png, opacity_NNN.png with --depth).\n"
+    "depth_NNN.png, opacity_NNN.png with --depth).  DIR is created if\n"
+    "missing.\n"
     "  --data DIR    the scene's cameras (and bounds): render every view of\n"
     "                its split (default test)\n"
     "  --path orbit  a circle at 30 degrees elevation, radius 4, around the\n"
@@ -46,13 +48,19 @@ static const char usage[] =
     "                or MPEG-4 part 2 if FFmpeg lacks libx264); all views\n"
     "                must share one even width and height.  A build without\n"
     "                FFmpeg's libraries says so and writes the PNGs only\n"
-    "  --fps N       frames a second of the video (default 30)\n";
+    "  --fps N       frames a second of the video (default 30)\n"
+    "  --skip-existing  render only the views whose files are not in DIR\n"
+    "                yet: the same command again finishes a render that\n"
+    "                was stopped\n"
+    "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
+    "written), says which views are written and exits with status 130\n"
+    "(SIGTERM: 143).\n";
 
 typedef struct args {
     const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
-    int depth, size_given;
+    int depth, size_given, skip_existing;
     int bounds_given; /* 1: --near, 2: --far */
     const char *video; /* NULL: PNG frames only */
     uint64_t fps;
@@ -79,6 +87,10 @@ static int parse(int argc, char **argv, args *a)
         }
         if (strcmp(k, "--depth") == 0) {
             a->depth = 1;
+            continue;
+        }
+        if (strcmp(k, "--skip-existing") == 0) {
+            a->skip_existing = 1;
             continue;
         }
         const char *v = cli_value(argc, argv, &i);
@@ -181,6 +193,12 @@ static int parse(int argc, char **argv, args *a)
         fprintf(stderr, "nerf-render: --fps goes with --video\n");
         return -1;
     }
+    if (a->video != NULL && a->skip_existing) {
+        /* The video is encoded from the views this run renders. */
+        fprintf(stderr, "nerf-render: --video needs every view rendered: "
+                "drop --skip-existing\n");
+        return -1;
+    }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
         fprintf(stderr, "nerf-render: --path spiral needs --data\n");
         return -1;
@@ -254,6 +272,16 @@ static void depth_to_grey(float *depth, const float *opacity, size_t n,
 
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED 1
+/* Stopped by a signal, and said so. */
+#define INTERRUPTED 2
+
+/* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
+static volatile sig_atomic_t interrupted;
+
+static void on_signal(int sig)
+{
+    interrupted = sig;
+}
 
 /* The renderer's reports, within an image, onto the bar of all views. */
 typedef struct render_progress {
@@ -265,7 +293,7 @@ static int on_render_progress(const nerf_progress *p, void *user)
 {
     render_progress *rp = user;
     progress_update(&rp->bar, rp->before + p->done, "pixels");
-    return 0;
+    return interrupted ? 1 : 0;
 }
 
 /*
@@ -360,12 +388,57 @@ static int video_mismatch(const args *a, const nerf_camera *cam, uint32_t i,
     return 0;
 }
 
+/* Whether view i's files are all in the output folder: write_view()
+ * writes each through a temporary file, so one that is there is whole. */
+static int view_written(const args *a, uint32_t i)
+{
+    static const char *const kinds[3] = {"r", "opacity", "depth"};
+    for (int k = 0; k < (a->depth ? 3 : 1); k++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s_%03u.png", a->out, kinds[k], i);
+        if (access(path, F_OK) != 0) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* What a run has written, for the line that ends an interrupted one. */
+typedef struct written {
+    uint32_t before;      /* views skipped: already in the folder */
+    uint32_t now;         /* views written by this run */
+    uint32_t first, last; /* this run's first and last view written */
+} written;
+
+static void say_interrupted(const args *a, const written *w, uint32_t n,
+                            int tty)
+{
+    if (tty) {
+        fputc('\n', stderr); /* end the bar's line */
+    }
+    uint32_t have = w->before + w->now;
+    char now[96];
+    if (w->now == 0) {
+        snprintf(now, sizeof now, "none");
+    } else if (w->now == 1) {
+        snprintf(now, sizeof now, "1, r_%03u.png", w->first);
+    } else {
+        snprintf(now, sizeof now, "%u, r_%03u.png to r_%03u.png", w->now,
+                 w->first, w->last);
+    }
+    fprintf(stderr, "nerf-render: interrupted: %s holds %u of the %u views "
+            "(this run wrote %s); the same command with --skip-existing "
+            "renders the other %u\n", a->out, have, n, now, n - have);
+}
+
 static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
                       const nerf_camera_path *cp, float near, float far)
 {
     uint32_t n = cp        ? nerf_camera_path_count(cp)
                  : a->path ? (uint32_t)a->frames
                            : nerf_dataset_count(ds);
+    written w;
+    memset(&w, 0, sizeof w);
     /* Every view's size first: the bar counts pixels, and the buffers
      * hold the largest view. */
     uint64_t total = 0;
@@ -381,12 +454,26 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             return REPORTED;
         }
         size_t pixels = (size_t)cam.width * cam.height;
+        if (a->skip_existing && view_written(a, i)) {
+            w.before++;
+            continue;
+        }
         total += pixels;
         if (pixels > largest) {
             largest = pixels;
             lw = cam.width;
             lh = cam.height;
         }
+    }
+    if (w.before == n) {
+        fprintf(stderr, "nerf-render: all %u views are in %s already: "
+                "nothing to render\n", n, a->out);
+        return NERF_OK;
+    }
+    if (w.before > 0) {
+        fprintf(stderr, "nerf-render: %u of the %u views are in %s already; "
+                "rendering the other %u\n", w.before, n, a->out,
+                n - w.before);
     }
     outputs o;
     if (alloc_outputs(&o, largest, lw, lh, a->depth) != 0) {
@@ -409,6 +496,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     nerf_renderer_set_progress(r, on_render_progress, &rp);
     int rc = NERF_OK;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        if (a->skip_existing && view_written(a, i)) {
+            continue;
+        }
         nerf_camera cam;
         rc = view_camera(a, ds, cp, i, n, &cam);
         if (rc == NERF_OK) {
@@ -421,6 +511,11 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (rc == NERF_OK && vid != NULL && video_write(vid, o.rgb) != 0) {
             rc = REPORTED;
         }
+        if (rc == NERF_OK) {
+            w.first = w.now == 0 ? i : w.first;
+            w.last = i;
+            w.now++;
+        }
         rp.before += (uint64_t)cam.width * cam.height;
     }
     free_outputs(&o);
@@ -432,6 +527,10 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         } else if (video_finish(vid) != 0) {
             rc = REPORTED;
         }
+    }
+    if (rc == NERF_ECANCELLED && interrupted) {
+        say_interrupted(a, &w, n, rp.bar.tty);
+        return INTERRUPTED;
     }
     if (rc == NERF_OK) {
         char note[4200];
@@ -464,10 +563,6 @@ int main(int argc, char **argv)
                         "(FFmpeg's libraries were not found at build time); "
                         "the frames are written as PNG in %s\n", a.out);
         a.video = NULL;
-    }
-    if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
-        fprintf(stderr, "nerf-render: %s: %s\n", a.out, strerror(errno));
-        return 1;
     }
     nerf_model *m = NULL;
     nerf_dataset *ds = NULL;
@@ -506,9 +601,15 @@ int main(int argc, char **argv)
         rc = nerf_renderer_create(&r, m, s, &ro);
     }
     if (rc == NERF_OK) {
+        rc = out_ready_folder(a.out, "nerf-render") == 0 ? NERF_OK
+                                                          : REPORTED;
+    }
+    if (rc == NERF_OK) {
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
         rc = render_all(&a, r, ds, cp, near, far);
     }
-    if (rc != NERF_OK && rc != REPORTED) {
+    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED) {
         cli_report("nerf-render", rc);
     }
     nerf_renderer_destroy(r);
@@ -516,5 +617,7 @@ int main(int argc, char **argv)
     nerf_dataset_destroy(ds);
     nerf_camera_path_destroy(cp);
     nerf_model_destroy(m);
-    return rc == NERF_OK ? 0 : 1;
+    /* As a shell reports a program killed by the signal: 130 for
+     * SIGINT. */
+    return rc == INTERRUPTED ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
 }

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/out_folder.h"
 
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
@@ -196,6 +197,11 @@ int main(int argc, char **argv)
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-scene";
     o.hooks = &hooks;
+    /* Before the views are rendered, which a file in the way would
+     * waste. */
+    if (out_ready_folder(out, "nerf-scene") != 0) {
+        return 1;
+    }
     int rc = nerf_scene_write(out, &o);
     if (rc != NERF_OK) {
         cli_report("nerf-scene", rc);

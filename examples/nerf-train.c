@@ -5,16 +5,19 @@
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "common/cli.h"
+#include "common/out_folder.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
 static const char usage[] =
     "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
     "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
-    "                  [--seed N] [--lr RATE] [--checkpoint-every N] [--resume]\n"
+    "                  [--seed N] [--lr RATE] [--checkpoint-every N]\n"
+    "                  [--resume | --overwrite]\n"
     "                  [--batch-samples N] [--random-background 0|1]\n"
     "                  [--matmul fp32|bf16] [--space auto|box|ndc|unbounded]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, one\n"
@@ -33,7 +36,11 @@ static const char usage[] =
     "                fast)\n"
     "  --checkpoint-every N  save MODEL every N steps (default 500)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
-    "                batch and seed give the same result as an unbroken run)\n"
+    "                batch and seed give the same result as an unbroken run);\n"
+    "                a --preset other than MODEL's is refused, and data\n"
+    "                unlike what MODEL was trained on is warned about\n"
+    "  --overwrite   replace MODEL if it exists (without --resume or\n"
+    "                --overwrite, an existing MODEL is refused)\n"
     "  --batch-samples N  a step takes rays until their samples reach N\n"
     "                (--batch is then the most rays a step takes; default 0:\n"
     "                always --batch rays)\n"
@@ -52,17 +59,21 @@ static const char usage[] =
     "                COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
     "                on a COLMAP folder places it as LLFF places a\n"
     "                forward-facing capture (any preset)\n"
-    "Ctrl-C stops after the current step and saves MODEL.\n"
-    "MODEL is tried before training (a file is created beside it and\n"
-    "removed); a save that fails leaves the last good MODEL in place, says\n"
-    "so and makes the status 1.\n";
+    "Ctrl-C (SIGINT) stops after the current step, saves MODEL and exits\n"
+    "with status 130 (SIGTERM: 143).\n"
+    "MODEL's folder is created if missing; MODEL is tried before training\n"
+    "(a file is created beside it and removed); a save that fails leaves\n"
+    "the last good MODEL in place, says so and makes the status 1.\n";
 
 static volatile sig_atomic_t interrupted;
 
+/* A failure already described on stderr (not a libnerf status). */
+#define REPORTED (-1001)
+
+/* The signal that stopped the run (SIGINT, SIGTERM), 0 while none has. */
 static void on_signal(int sig)
 {
-    (void)sig;
-    interrupted = 1;
+    interrupted = sig;
 }
 
 typedef struct run_state {
@@ -90,7 +101,8 @@ typedef struct args {
     int preset;
     uint64_t steps, downscale, batch, batch_samples, seed, every;
     double lr, seconds;
-    int resume;
+    int resume, overwrite;
+    int preset_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (fp32) */
     int space;     /* nerf_space; -1: the dataset's */
@@ -117,6 +129,10 @@ static int parse(int argc, char **argv, args *a)
             a->resume = 1;
             continue;
         }
+        if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
+            continue;
+        }
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
@@ -131,6 +147,7 @@ static int parse(int argc, char **argv, args *a)
                         : strcmp(v, "fast") == 0      ? NERF_PRESET_FAST
                                                       : 0;
             bad = a->preset == 0;
+            a->preset_given = 1;
         } else if (strcmp(k, "--steps") == 0) {
             bad = cli_uint(v, 1, UINT64_C(1) << 40, &a->steps);
         } else if (strcmp(k, "--seconds") == 0) {
@@ -178,6 +195,11 @@ static int parse(int argc, char **argv, args *a)
         fprintf(stderr, "nerf-train: --data and --out are required\n");
         return -1;
     }
+    if (a->resume && a->overwrite) {
+        fprintf(stderr, "nerf-train: --resume continues MODEL, --overwrite "
+                "replaces it: give one\n");
+        return -1;
+    }
     if (a->lr == 0.0) {
         a->lr = a->preset == NERF_PRESET_TINY   ? 5e-3
                 : a->preset == NERF_PRESET_FAST ? 1e-2
@@ -188,11 +210,58 @@ static int parse(int argc, char **argv, args *a)
 
 /* The checkpoint to resume, loaded before the dataset, whose placement
  * depends on the model's space; *m stays NULL when there is none. */
+static const char *preset_name(int preset)
+{
+    return preset == NERF_PRESET_TINY        ? "tiny"
+           : preset == NERF_PRESET_REFERENCE ? "reference"
+           : preset == NERF_PRESET_FAST      ? "fast"
+                                             : NULL;
+}
+
+/*
+ * A model is a network of one shape: training another preset's network
+ * from it cannot be done, and silently keeping the model's would be
+ * training something else than asked.
+ */
+static int check_preset(const args *a, const nerf_model *m)
+{
+    int have = setup_model_preset(m);
+    if (!a->preset_given || have == a->preset) {
+        return NERF_OK;
+    }
+    const char *name = preset_name(have);
+    fprintf(stderr, "nerf-train: %s holds a model of %s%s%s, not of "
+            "--preset %s: resume it without --preset, or train a new one "
+            "with --overwrite\n", a->out, name ? "the " : "",
+            name ? name : "no preset's network",
+            name ? " preset" : "", preset_name(a->preset));
+    return SETUP_USAGE;
+}
+
+/*
+ * An existing MODEL is replaced only when asked: it may be hours of
+ * training.  A folder is left to the trainer's check, which names it.
+ */
+static int check_existing(const args *a)
+{
+    struct stat st;
+    if (a->resume || a->overwrite || stat(a->out, &st) != 0 ||
+        S_ISDIR(st.st_mode)) {
+        return 0;
+    }
+    fprintf(stderr, "nerf-train: %s exists: --resume continues it, "
+            "--overwrite replaces it\n", a->out);
+    return -1;
+}
+
 static int resume_model(const args *a, const nerf_hooks *hooks,
                         nerf_model **m)
 {
     if (a->resume && access(a->out, F_OK) == 0) {
         int rc = nerf_model_load(m, a->out, hooks);
+        if (rc == NERF_OK) {
+            rc = check_preset(a, *m);
+        }
         if (rc == NERF_OK) {
             fprintf(stderr, "nerf-train: resuming %s at step %llu\n", a->out,
                     (unsigned long long)nerf_model_step(*m));
@@ -254,6 +323,9 @@ int main(int argc, char **argv)
         fputs(usage, stderr);
         return 2;
     }
+    if (check_existing(&a) != 0) {
+        return 2;
+    }
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
@@ -303,10 +375,15 @@ int main(int argc, char **argv)
         }
         to.checkpoint_path = a.out;
         to.hooks = &hooks;
-        rc = nerf_trainer_create(&t, m, ds, s, &to);
+        /* Made only now, when nothing but the trainer can fail, and
+         * before its check of MODEL, which needs the folder. */
+        rc = out_make_parent(a.out, "nerf-train") == 0 ? NERF_OK : REPORTED;
+        if (rc == NERF_OK) {
+            rc = nerf_trainer_create(&t, m, ds, s, &to);
+        }
     }
     if (rc != NERF_OK) {
-        if (rc != SETUP_USAGE) {
+        if (rc != SETUP_USAGE && rc != REPORTED) {
             cli_report("nerf-train", rc);
         }
         nerf_dataset_destroy(ds);
@@ -332,11 +409,24 @@ int main(int argc, char **argv)
      * another error may have come before it: only OK and a cancellation
      * are sure to be on disk. */
     int saved = rc == NERF_OK || rc == NERF_ECANCELLED;
-    char note[4200];
-    snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s %s)",
-             (unsigned long long)nerf_model_step(m), stats.psnr,
-             saved ? "saved" : "NOT saved to", a.out);
-    progress_end(&st.bar, note);
+    /* Interrupted, the run is not done: one line says where it stopped
+     * (the bar's line, on a terminal, is ended first). */
+    int stopped = rc == NERF_ECANCELLED && interrupted;
+    if (interrupted && (stopped || rc == NERF_EIO)) {
+        if (st.bar.tty) {
+            fputc('\n', stderr);
+        }
+        fprintf(stderr, "nerf-train: interrupted at step %llu; %s %s%s\n",
+                (unsigned long long)nerf_model_step(m),
+                saved ? "saved" : "NOT saved to", a.out,
+                saved ? " (resume with --resume)" : "");
+    } else {
+        char note[4200];
+        snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s %s)",
+                 (unsigned long long)nerf_model_step(m), stats.psnr,
+                 saved ? "saved" : "NOT saved to", a.out);
+        progress_end(&st.bar, note);
+    }
     if (rc == NERF_EIO) {
         cli_report("nerf-train", rc);
         fprintf(stderr, "nerf-train: the save failed: %s keeps the last "
@@ -346,14 +436,14 @@ int main(int argc, char **argv)
         fprintf(stderr, "nerf-train: stopped after %.0f s as asked; resume "
                 "with --resume\n", a.seconds);
         rc = NERF_OK;
-    } else if (rc == NERF_ECANCELLED) {
-        fprintf(stderr, "nerf-train: interrupted; resume with --resume\n");
-    } else if (rc != NERF_OK) {
+    } else if (rc != NERF_OK && !stopped) {
         cli_report("nerf-train", rc);
     }
     nerf_trainer_destroy(t);
     nerf_sampler_destroy(s);
     nerf_model_destroy(m);
     nerf_dataset_destroy(ds);
-    return rc == NERF_OK ? 0 : 1;
+    /* As a shell reports a program killed by the signal: 130 for
+     * SIGINT. */
+    return stopped ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
 }

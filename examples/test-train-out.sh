@@ -1,7 +1,8 @@
 #!/bin/sh
-# nerf-train --out: a path that cannot be written is refused before any
-# training, and a final save that fails is reported as such (non-zero
-# status, no "saved"), leaving the last good checkpoint in place.
+# nerf-train --out: missing folders are created (saying so), a path that
+# cannot be written is refused before any training, and a final save that
+# fails is reported as such (non-zero status, no "saved"), leaving the
+# last good checkpoint in place.
 #
 #   test-train-out.sh NERF-SCENE NERF-TRAIN
 set -eu
@@ -35,14 +36,23 @@ refuse() {
 }
 : >"$work/a-file"
 refuse "$work/a-file/model.nerf" "Not a directory"
-refuse "$work/no-such-folder/model.nerf" "No such file or directory"
+refuse "$work/a-file/sub/model.nerf" "Not a directory"
 if [ "$(id -u)" -eq 0 ]; then
   echo "skip the read-only folder: root may write into any folder"
 else
   mkdir "$work/read-only"
   chmod 555 "$work/read-only"
   refuse "$work/read-only/model.nerf" "Permission denied"
+  refuse "$work/read-only/sub/model.nerf" "Permission denied"
 fi
+
+# Missing folders, parents included, are made as mkdir -p makes them, and
+# said so.
+"$train" --data "$work/scene" --out "$work/new/deeper/model.nerf" --steps 2 \
+  --batch 64 2>"$work/new.log" || { cat "$work/new.log"; fail "new folder"; }
+grep -q "created the folder $work/new/deeper" "$work/new.log" ||
+  { cat "$work/new.log"; fail "new folder: not said"; }
+[ -f "$work/new/deeper/model.nerf" ] || fail "new folder: no model"
 ls "$work" | grep -q '\.tmp\.' && fail "the check left a temporary file"
 
 # A good checkpoint, then runs whose final save fails: a file size limit

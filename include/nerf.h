@@ -1644,6 +1644,14 @@ typedef struct nerf_train_stats {
  * it and removed, so that a path that cannot be written fails here, not
  * at the first save.
  *
+ * The model records the data it is trained on (image count and size,
+ * scene kind, NDC, mean colour, bounds), and its checkpoints carry the
+ * record: when a model whose record differs from @p dataset is given
+ * (lego's checkpoint resumed on fern), a NERF_LOG_WARN through the hooks
+ * names what differs and both datasets; training goes on, and the record
+ * becomes this dataset's.  A model without a record (new, or loaded from
+ * a checkpoint written before libnerf 0.4) gives no warning.
+ *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid);
  * NERF_EIO (checkpoint_path cannot be written: a missing folder, a path

@@ -34,7 +34,7 @@ echo "== writing the built-in scene to $out/scene"
   --val 0 --test 8
 echo "== training the tiny preset ($out/model.nerf)"
 "$bin/nerf-train" --data "$out/scene" --out "$out/model.nerf" \
-  --preset tiny --steps "${NERF_DEMO_STEPS:-1000}" --batch 256
+  --preset tiny --steps "${NERF_DEMO_STEPS:-1000}" --batch 256 --overwrite
 echo "== evaluating on the 8 held-out test views"
 "$bin/nerf-eval" --model "$out/model.nerf" --data "$out/scene"
 echo "== rendering an orbit to $out/orbit"

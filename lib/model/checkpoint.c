@@ -15,6 +15,7 @@
 
 #include "byteorder.h"
 #include "file_io.h"
+#include "fingerprint.h"
 #include "gemm_bf16.h"
 #include "model.h"
 #include "occupancy.h"
@@ -52,6 +53,11 @@
 /* Required, written only for models whose space is not BOX: a reader that
  * does not know the section would lay the grids over the wrong space. */
 #define TAG_SPACE (TAG_REQUIRED | 10u)
+/* Optional: what data the model was trained on (model/fingerprint.h), for
+ * a warning when it is resumed on other data.  A reader that does not know
+ * it resumes without the warning.  Kept out of the numbered tables below:
+ * it has its own handling. */
+#define TAG_DATA 0x11u
 #define N_REQUIRED_SECTIONS 6
 #define N_SECTIONS 10
 #define OCCUPANCY_INDEX 6
@@ -269,11 +275,24 @@ static unsigned char *put_occupancy(unsigned char *p, const nerf_model *m)
     return p + 4 * g->cells;
 }
 
+static size_t data_size(const nerf_model *m)
+{
+    return m->data.known ? SECTION_HEAD + NERF__FINGERPRINT_SIZE : 0;
+}
+
+static unsigned char *put_data(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_DATA, NERF__FINGERPRINT_SIZE);
+    nerf__fingerprint_store(p, &m->data);
+    return p + NERF__FINGERPRINT_SIZE;
+}
+
 static size_t payload_size(const nerf_model *m)
 {
     return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
            TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
-           TRAINING2_SIZE + occupancy_size(m) + word_sections_size(m);
+           TRAINING2_SIZE + occupancy_size(m) + word_sections_size(m) +
+           data_size(m);
 }
 
 static void build_payload(const nerf_model *m, unsigned char *p)
@@ -288,7 +307,10 @@ static void build_payload(const nerf_model *m, unsigned char *p)
     if (m->grid) {
         p = put_occupancy(p, m);
     }
-    put_word_sections(p, m);
+    p = put_word_sections(p, m);
+    if (m->data.known) {
+        put_data(p, m);
+    }
 }
 
 static void put_header(unsigned char *h, const ckpt_header *hd)
@@ -509,6 +531,8 @@ static int unpack(const nerf__env *env, const char *path,
 typedef struct sections {
     const unsigned char *body[N_SECTIONS];
     uint64_t len[N_SECTIONS];
+    const unsigned char *data; /* TAG_DATA's body, or NULL */
+    uint64_t data_len;
 } sections;
 
 static const char *const section_names[N_SECTIONS] = {
@@ -519,6 +543,15 @@ static const char *const section_names[N_SECTIONS] = {
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
 {
+    if (tag == TAG_DATA) {
+        if (s->data != NULL) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
+                               "data sections)", path);
+        }
+        s->data = body;
+        s->data_len = len;
+        return NERF_OK;
+    }
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS ||
                                             tag == TAG_SPACE
@@ -805,6 +838,13 @@ static int build_model(const nerf__env *env, const char *path,
             nerf_model_destroy(m);
             return rc;
         }
+    }
+    if (s.data != NULL && !nerf__fingerprint_parse(s.data, s.data_len,
+                                                   &m->data)) {
+        nerf_model_destroy(m);
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the data "
+                           "section is too short or holds a value that is "
+                           "not a number)", path);
     }
     get_floats(s.body[2], m->params, m->n_params);
     get_floats(s.body[3], m->adam_m, m->n_params);

@@ -9,6 +9,7 @@
 
 #include "adam.h"
 #include "env.h"
+#include "fingerprint.h"
 #include "network.h"
 
 /* lib/occupancy/occupancy.h: the grid a hash-grid model owns and the
@@ -39,6 +40,10 @@ struct nerf_model {
     /* NERF_MATMUL_BF16: the rounded weights and oneDNN primitives that
      * both networks' products use (mlp/gemm_bf16.h); NULL for fp32. */
     struct nerf__bf16 *bf16;
+    /* The data the model was last trained on, as the trainer recorded it
+     * (or a checkpoint carried it): not known for a model never trained
+     * by a trainer.  Resuming on other data is warned about. */
+    nerf__fingerprint data;
 };
 
 /* Cells per axis of a model's occupancy grid. */

@@ -213,6 +213,7 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
               t->random_bg ? "random" : t->white ? "white" : "black",
               t->march ? 0.0 : (double)t->noise_std, t->opts.precrop_steps,
               t->march ? ", ray marching through the occupancy grid" : "");
+    nerf__trainer_record_data(t);
     *out = t;
     return NERF_OK;
 }

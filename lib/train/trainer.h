@@ -81,4 +81,11 @@ int nerf__trainer_update_grid(nerf_trainer *t);
 int nerf__trainer_grid_density(void *ctx, size_t n, const float *xyz,
                                float *sigma);
 
+/*
+ * Record the trainer's dataset in its model (model->data), first warning
+ * through the trainer's log when the model records other data
+ * (data_record.c).
+ */
+void nerf__trainer_record_data(nerf_trainer *t);
+
 #endif

@@ -1,0 +1,89 @@
+#!/bin/sh
+# nerf-train on an existing MODEL: refused without --resume or --overwrite
+# (nothing trained, MODEL untouched); --overwrite replaces it; --resume
+# continues it, but not with another --preset, and warns when the data is
+# not what MODEL was trained on.
+#
+#   test-train-resume.sh NERF-SCENE NERF-TRAIN
+set -eu
+scene=$1 train=$2
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-train-resume.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+
+"$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+  --test 0 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
+
+# run LOG ARGS...: nerf-train on the scene into model.nerf; status in $status.
+run() {
+  log=$1
+  shift
+  status=0
+  "$train" --data "$work/scene" --out "$work/model.nerf" --batch 64 "$@" \
+    2>"$work/$log" || status=$?
+}
+# refused LOG WORDS: status 2, one line saying WORDS, nothing trained and
+# model.nerf as it was.
+refused() {
+  [ "$status" -eq 2 ] || { cat "$work/$1"; fail "$1: status $status"; }
+  grep -q -- "$2" "$work/$1" || { cat "$work/$1"; fail "$1: message"; }
+  [ "$(wc -l <"$work/$1")" -eq 1 ] || { cat "$work/$1"; fail "$1: not one line"; }
+  cmp -s "$work/model.nerf" "$work/first.nerf" ||
+    fail "$1: model.nerf was changed"
+}
+
+run first.log --steps 2
+[ "$status" -eq 0 ] || { cat "$work/first.log"; fail "first run"; }
+cp "$work/model.nerf" "$work/first.nerf"
+
+run again.log --steps 3
+refused again.log \
+  "model.nerf exists: --resume continues it, --overwrite replaces it"
+
+run both.log --steps 3 --resume --overwrite
+[ "$status" -eq 2 ] || { cat "$work/both.log"; fail "both: status $status"; }
+grep -q "give one" "$work/both.log" || { cat "$work/both.log"; fail "both"; }
+
+# tiny is the default preset; fast is another network.
+run preset.log --steps 3 --resume --preset fast
+refused preset.log "model of the tiny preset, not of --preset fast"
+run same-preset.log --steps 3 --resume --preset tiny
+[ "$status" -eq 0 ] || { cat "$work/same-preset.log"; fail "same preset"; }
+grep -q "resuming $work/model.nerf at step 2" "$work/same-preset.log" ||
+  { cat "$work/same-preset.log"; fail "same preset: not resumed"; }
+
+grep -q "other data" "$work/same-preset.log" &&
+  { cat "$work/same-preset.log"; fail "same data: warned"; }
+
+# Other data: more and larger images; images of the same number and size
+# that show another scene.
+other() {
+  "$scene" --out "$work/$1" --width "$2" --height "$2" --train "$3" \
+    --val 0 --test 0 $4 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
+  status=0
+  "$train" --data "$work/$1" --out "$work/model.nerf" --batch 64 --resume \
+    --steps 100000000 --seconds 0.1 2>"$work/$1.log" || status=$?
+  [ "$status" -eq 0 ] || { cat "$work/$1.log"; fail "$1: status $status"; }
+}
+other larger 24 6 ""
+grep -q "^nerf-train: trainer: the model was trained on other data than this dataset (image count, image size differ): it was trained on 4 images of 16x16 (blender, .*), this dataset has 6 of 24x24 (blender, " \
+  "$work/larger.log" || { cat "$work/larger.log"; fail "larger: warning"; }
+run same-again.log --steps 100000000 --seconds 0.1 --resume
+grep -q "trained on 6 images of 24x24" "$work/same-again.log" ||
+  { cat "$work/same-again.log"; fail "the last data trained on is not kept"; }
+# (model.nerf was last trained on scene: 4 images of 16x16.)
+other unbounded 16 4 "--capture unbounded"
+grep -q "(mean colour, near/far bounds differ): it was trained on 4 images of 16x16 (blender, .*), this dataset has 4 of 16x16 (blender, " \
+  "$work/unbounded.log" ||
+  { cat "$work/unbounded.log"; fail "unbounded: warning"; }
+
+run overwrite.log --steps 1 --overwrite
+[ "$status" -eq 0 ] || { cat "$work/overwrite.log"; fail "overwrite"; }
+grep -q "step 1, .*saved $work/model.nerf" "$work/overwrite.log" ||
+  { cat "$work/overwrite.log"; fail "overwrite: not a new model"; }
+echo "ok   nerf-train on an existing model"
