@@ -140,5 +140,10 @@ render fpsalone --path orbit --frames 2 --fps 10
 [ "$status" -eq 2 ] || fail "--fps without --video: exit $status, not 2"
 grep -q -- '--fps goes with --video' "$work/fpsalone.log" ||
   { cat "$work/fpsalone.log"; fail "no word on --fps alone"; }
-echo "ok   odd sizes, an unwritable video and --fps alone are refused" \
-     "before rendering"
+render skipping --path orbit --frames 2 --width 16 --height 12 \
+  --video "$work/skipping.mp4" --skip-existing
+[ "$status" -eq 2 ] || fail "--video with --skip-existing: exit $status, not 2"
+grep -q -- 'drop --skip-existing' "$work/skipping.log" ||
+  { cat "$work/skipping.log"; fail "no word on --skip-existing"; }
+echo "ok   odd sizes, an unwritable video, --fps alone and --video with" \
+     "--skip-existing are refused before rendering"
