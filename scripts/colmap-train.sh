@@ -78,6 +78,16 @@ if [ ! -d "$photos" ]; then
   echo "$me: $photos: not a folder" >&2
   exit 2
 fi
+# New poses make an old model meaningless, so it is replaced only when
+# asked, and asked before COLMAP's minute rather than after it.
+if [ "$train" = 1 ] && [ -e "$out/model.nerf" ]; then
+  case " $* " in
+    *" --overwrite "*) ;;
+    *) echo "$me: $out/model.nerf exists: add -- --overwrite to replace it" \
+            "with a model of the new reconstruction" >&2
+       exit 2 ;;
+  esac
+fi
 
 # The photos, by name; COLMAP and the loader both see them in images/.
 mkdir -p "$out/images" || exit 1

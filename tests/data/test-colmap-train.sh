@@ -27,6 +27,18 @@ case $out in
 esac
 echo "ok   a missing COLMAP is named"
 
+# An existing model is replaced only when asked, and refused before any
+# COLMAP stage runs (the stand-in COLMAP would fail if it ran).
+mkdir -p "$tmp/out2" && : >"$tmp/out2/model.nerf"
+out=$("$script" --colmap false "$tmp/scene/images" "$tmp/out2" 2>&1)
+rc=$?
+[ $rc = 2 ] || fail "existing model: exit $rc, not 2: $out"
+case $out in
+  *"model.nerf exists: add -- --overwrite"*) ;;
+  *) fail "existing model: message '$out'" ;;
+esac
+echo "ok   an existing model is not replaced unasked"
+
 if [ -z "$colmap" ]; then
   echo "SKIP: COLMAP is not installed (Debian package colmap), so the" \
        "reconstructions are not tried"
