@@ -39,6 +39,16 @@ struct nerf_model {
     /* NERF_MATMUL_BF16: the rounded weights and oneDNN primitives that
      * both networks' products use (mlp/gemm_bf16.h); NULL for fp32. */
     struct nerf__bf16 *bf16;
+    /* Loaded from a weights-only export (nerf_model_export()): adam_m and
+     * adam_v are zeros, not state a run could resume from. */
+    bool weights_only;
+    /* What rendering the model needs, as its trainer recorded it (the
+     * sampling layer's nerf_model_render_settings() reads it; checkpoints
+     * keep it).  Only the fields a render uses are set; valid when
+     * has_render. */
+    bool has_render;
+    nerf_sampler_options render_sampler;
+    uint32_t render_white;
 };
 
 /* Cells per axis of a model's occupancy grid. */

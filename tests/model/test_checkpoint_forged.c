@@ -245,6 +245,83 @@ static void edit_shuffle(payload *p)
     p->s[4] = t;
 }
 
+/* Weights-only files (tag 0x8000000d, empty) have no moment sections. */
+static void edit_marker_with_moments(payload *p)
+{
+    add_section(p, 0x8000000du, "", 0);
+}
+
+static void drop_moments(payload *p)
+{
+    for (int k = 0; k < 2; k++) {
+        free(p->s[3].data);
+        for (int i = 3; i + 1 < p->n; i++) {
+            p->s[i] = p->s[i + 1];
+        }
+        p->n--;
+    }
+}
+
+static void edit_marker_not_empty(payload *p)
+{
+    drop_moments(p);
+    add_section(p, 0x8000000du, "x", 1);
+}
+
+/* The render settings (tag 12): 64 bytes, of which the last 12 are 0. */
+static unsigned char render_section[64];
+
+static void fill_render_section(void)
+{
+    memset(render_section, 0, sizeof render_section);
+    put32(render_section, 32);      /* n_coarse */
+    put32(render_section + 4, 64);  /* n_fine */
+    put32(render_section + 28, 1);  /* white_background */
+    const float t[2] = {2.0f, 6.0f};
+    memcpy(render_section + 32, t, sizeof t); /* little-endian hosts */
+}
+
+static void edit_render_good(payload *p)
+{
+    fill_render_section();
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+static void edit_render_short(payload *p)
+{
+    fill_render_section();
+    add_section(p, 12u, render_section, sizeof render_section - 4);
+}
+
+static void edit_render_reserved(payload *p)
+{
+    fill_render_section();
+    render_section[60] = 1;
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+static void edit_render_white_2(payload *p)
+{
+    fill_render_section();
+    put32(render_section + 28, 2);
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+TEST(forged_weights_only_and_render_sections)
+{
+    forge("weights-only marker with moments", edit_marker_with_moments,
+          NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "weights-only") != NULL);
+    forge("weights-only marker not empty", edit_marker_not_empty,
+          NERF_EFORMAT);
+    forge("no moments, no marker", drop_moments, NERF_EFORMAT);
+    forge("render settings", edit_render_good, NERF_OK);
+    forge("render settings cut short", edit_render_short, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "render settings") != NULL);
+    forge("render settings reserved 1", edit_render_reserved, NERF_EFORMAT);
+    forge("render settings white 2", edit_render_white_2, NERF_EFORMAT);
+}
+
 TEST(forged_payloads)
 {
     forge("width changed", edit_width, NERF_EFORMAT);
@@ -605,6 +682,7 @@ int main(void)
     make_tmpdir();
     RUN(payload_layout_is_as_documented);
     RUN(forged_payloads);
+    RUN(forged_weights_only_and_render_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
     RUN(matmul_section);
