@@ -417,7 +417,7 @@ int main(int argc, char **argv)
     if (rc == NERF_OK) {
         nerf_renderer_options ro;
         NERF_RENDERER_OPTIONS_INIT(&ro);
-        ro.white_background = (uint32_t)setup_white_background(ds);
+        ro.white_background = (uint32_t)setup_background(m, ds);
         ro.hooks = &hooks;
         rc = nerf_renderer_create(&r, m, s, &ro);
     }
