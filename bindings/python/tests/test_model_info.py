@@ -106,6 +106,30 @@ class RenderSettings(TestCase):
         with nerf.Renderer(model, white_background=0) as r:
             self.assertEqual(flat(r.render_image(camera()).rgb), black)
 
+    def test_forward_facing_model_alone(self):
+        """An LLFF model renders through its own NDC frustum on black, as
+        a sampler made from its dataset does."""
+        path = os.path.join(_support.tmpdir(), "ff")
+        nerf.write_scene(path, width=16, height=12, n_train=4, n_test=1,
+                         capture="forward", layout="llff")
+        ds = nerf.Dataset(path, "train")
+        self.assertTrue(ds.is_ndc)
+        model = nerf.Model(preset="tiny")
+        sampler = nerf.Sampler.for_dataset(ds, preset="tiny", n_coarse=8,
+                                           n_fine=8)
+        with nerf.Trainer(model, ds, sampler, batch_rays=64) as t:
+            t.step()
+        so, ro = model.render_settings()
+        self.assertEqual((so.ndc, so.ndc_width, so.ndc_height), (1, 16, 12))
+        self.assertEqual(ro.white_background, 0)
+        cam = nerf.Dataset(path, "test").camera(0)
+        with nerf.Renderer(model, sampler, white_background=0) as r:
+            want = flat(r.render_image(cam).rgb)
+        path = os.path.join(_support.tmpdir(), "ff.nerf")
+        model.save(path)
+        with nerf.Renderer(nerf.Model.load(path)) as r:
+            self.assertEqual(flat(r.render_image(cam).rgb), want)
+
     def test_set_render_settings(self):
         m = nerf.Model(preset="tiny")
         m.set_render_settings(nerf.Sampler(n_coarse=4, n_fine=0, t_near=1,
