@@ -498,8 +498,8 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
 
 /**
  * Since 0.4: save the model like nerf_model_save() but without the Adam
- * moments, which double the file again: the weights, the options, the
- * step, the occupancy grid and the render settings
+ * moments, which hold twice as many floats as the weights: the weights,
+ * the options, the step, the occupancy grid and the render settings
  * (nerf_model_render_settings()), all a render or an evaluation needs.
  * nerf_model_load() reads it like a checkpoint; the model it gives has no
  * optimiser state (nerf_model_contents() lacks NERF_MODEL_HAS_OPTIMIZER),

@@ -220,7 +220,7 @@ class Model(_handle.Handle):
 
     def export(self, path: Any) -> None:
         """Write the weights without the optimiser state
-        (``nerf_model_export``): about a third of a checkpoint, for sharing,
+        (``nerf_model_export``): under half a checkpoint, for sharing,
         rendering and evaluating.  :meth:`load` reads it; a
         :class:`nerf.Trainer` refuses the model it gives."""
         with self._using() as ptr:
