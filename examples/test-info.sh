@@ -49,7 +49,7 @@ $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
 
 # field LOG KEY: the value of a text line "KEY  value".
 field() {
-  sed -n "s/^$2  *//p" "$work/$1"
+  sed -n "s/^$2  *//p" "$work/$1" | sed 's/ (.* MB)$//'
 }
 expect 0 full.txt "^kind *checkpoint" "$info" "$work/model.nerf"
 [ "$(field full.txt preset)" = "tiny" ] || fail "preset: $(field full.txt preset)"

@@ -170,6 +170,9 @@ void model_info_print_text(const cJSON *info, FILE *out)
     for (const cJSON *x = info->child; x; x = x->next) {
         fprintf(out, "%-11s ", x->string);
         print_value(x, out);
+        if (strcmp(x->string, "bytes") == 0 && x->valuedouble >= 1e6) {
+            fprintf(out, " (%.1f MB)", x->valuedouble / 1e6);
+        }
         if (strcmp(x->string, "kind") == 0) {
             fputs(strcmp(x->valuestring, "checkpoint") == 0
                       ? " (training can resume from it)"
