@@ -1,17 +1,84 @@
-/* nerf-info: print the library's version and how it was built. */
+/*
+ * nerf-info: print the library's version and how it was built, or what a
+ * model file holds; write a model's weights-only export.
+ */
 #include <nerf.h>
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
-int main(int argc, char **argv)
+#include "common/cli.h"
+#include "common/model_info.h"
+
+/* Fixed, not argv[0]: an installed program's path says nothing. */
+#define PROGRAM "nerf-info"
+
+static const char usage[] =
+    "usage: nerf-info [MODEL [--json] [--export FILE]]\n"
+    "Without arguments, print libnerf's version and build information.\n"
+    "With MODEL (a file nerf-train wrote), describe it: its preset, encodings\n"
+    "and networks, parameter count, training step, scene space and bound,\n"
+    "matmul mode, what the file holds (a training checkpoint with the\n"
+    "optimiser's moments, or a weights-only export) and the settings it is\n"
+    "rendered with (recorded by training; guessed for older files).\n"
+    "  --json         print the description as one JSON object (default: text)\n"
+    "  --export FILE  write MODEL without its optimiser state to FILE (under half\n"
+    "                 a checkpoint's size), for sharing, rendering\n"
+    "                 and evaluating; nerf-train cannot resume from it.  The\n"
+    "                 description is then FILE's.\n"
+    "examples:\n"
+    "  nerf-info\n"
+    "  nerf-info lego.nerf\n"
+    "  nerf-info lego.nerf --export lego-weights.nerf\n";
+
+typedef struct args {
+    const char *model, *export_to;
+    int json;
+} args;
+
+/* 0: parsed; 1: --help printed; 2: a usage error, reported. */
+static int parse(int argc, char **argv, args *a)
 {
-    if (argc > 1) {
-        FILE *out = strcmp(argv[1], "--help") == 0 ? stdout : stderr;
-        fprintf(out, "usage: %s\nPrint libnerf's version and build information.\n",
-                argv[0]);
-        return out == stdout ? 0 : 2;
+    memset(a, 0, sizeof *a);
+    for (int i = 1; i < argc; i++) {
+        const char *k = argv[i];
+        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
+            fputs(usage, stdout);
+            return 1;
+        }
+        if (strcmp(k, "--json") == 0) {
+            a->json = 1;
+        } else if (strcmp(k, "--export") == 0) {
+            a->export_to = cli_value(argc, argv, &i);
+            if (a->export_to == NULL) {
+                fprintf(stderr, PROGRAM ": --export needs a FILE; see "
+                        PROGRAM " --help\n");
+                return 2;
+            }
+        } else if (k[0] == '-' && k[1] != '\0') {
+            fprintf(stderr, PROGRAM ": unknown option %s; see " PROGRAM
+                    " --help\n", k);
+            return 2;
+        } else if (a->model == NULL) {
+            a->model = k;
+        } else {
+            fprintf(stderr, PROGRAM ": one MODEL at a time (%s and %s); see "
+                    PROGRAM " --help\n", a->model, k);
+            return 2;
+        }
     }
+    if (a->model == NULL && (a->json || a->export_to)) {
+        fprintf(stderr, PROGRAM ": --json and --export describe a MODEL; see "
+                PROGRAM " --help\n");
+        return 2;
+    }
+    return 0;
+}
+
+static int build_info(void)
+{
     printf("%s\n", nerf_build_info());
     if (nerf_version_number() != NERF_VERSION_NUMBER) {
         fprintf(stderr, "warning: built against libnerf %s but running %s\n",
@@ -19,4 +86,58 @@ int main(int argc, char **argv)
         return 1;
     }
     return 0;
+}
+
+static int describe(const args *a)
+{
+    nerf_model *model = NULL;
+    int rc = nerf_model_load(&model, a->model, NULL);
+    if (rc != NERF_OK) {
+        cli_report(PROGRAM, rc);
+        return 1;
+    }
+    const char *shown = a->model;
+    if (a->export_to) {
+        rc = nerf_model_export(model, a->export_to);
+        nerf_model_destroy(model);
+        model = NULL;
+        if (rc == NERF_OK) {
+            /* Describe what was written, read back as a user would. */
+            rc = nerf_model_load(&model, a->export_to, NULL);
+        }
+        if (rc != NERF_OK) {
+            cli_report(PROGRAM, rc);
+            return 1;
+        }
+        shown = a->export_to;
+    }
+    struct stat st;
+    long long bytes = stat(shown, &st) == 0 ? (long long)st.st_size : -1;
+    cJSON *info = model_info(model, shown, bytes);
+    nerf_model_destroy(model);
+    if (info == NULL) {
+        fprintf(stderr, PROGRAM ": out of memory\n");
+        return 1;
+    }
+    if (a->json) {
+        char *text = cJSON_Print(info);
+        if (text) {
+            printf("%s\n", text);
+        }
+        cJSON_free(text);
+    } else {
+        model_info_print_text(info, stdout);
+    }
+    cJSON_Delete(info);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    args a;
+    int rc = parse(argc, argv, &a);
+    if (rc != 0) {
+        return rc == 1 ? 0 : 2;
+    }
+    return a.model ? describe(&a) : build_info();
 }

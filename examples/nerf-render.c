@@ -588,6 +588,15 @@ int main(int argc, char **argv)
     float near = 2.0f, far = 6.0f;
     if (rc == NERF_OK && ds) {
         nerf_dataset_bounds(ds, &near, &far);
+    } else if (rc == NERF_OK) {
+        /* An NDC model's depths are NDC depths, in the range its sampler
+         * samples; the others keep the Blender range. */
+        nerf_sampler_options so;
+        NERF_SAMPLER_OPTIONS_INIT(&so);
+        if (nerf_model_render_settings(m, &so, NULL) == NERF_OK && so.ndc) {
+            near = so.t_near;
+            far = so.t_far;
+        }
     }
     if (a.far > a.near) {
         near = (float)a.near;
@@ -596,7 +605,7 @@ int main(int argc, char **argv)
     if (rc == NERF_OK) {
         nerf_renderer_options ro;
         NERF_RENDERER_OPTIONS_INIT(&ro);
-        ro.white_background = (uint32_t)setup_white_background(ds);
+        ro.white_background = (uint32_t)setup_background(m, ds);
         ro.hooks = &hooks;
         rc = nerf_renderer_create(&r, m, s, &ro);
     }

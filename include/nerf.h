@@ -497,6 +497,38 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
                              const nerf_hooks *hooks);
 
 /**
+ * Since 0.4: save the model like nerf_model_save() but without the Adam
+ * moments, which hold twice as many floats as the weights: the weights,
+ * the options, the step, the occupancy grid and the render settings
+ * (nerf_model_render_settings()), all a render or an evaluation needs.
+ * nerf_model_load() reads it like a checkpoint; the model it gives has no
+ * optimiser state (nerf_model_contents() lacks NERF_MODEL_HAS_OPTIMIZER),
+ * nerf_trainer_create() refuses it, and nerf_model_save() of it writes a
+ * weights-only file again.  libnerf before 0.4 refuses the file with
+ * NERF_EVERSION.
+ * @return as nerf_model_save().
+ */
+NERF_API int nerf_model_export(const nerf_model *model, const char *path);
+
+/** Bits of nerf_model_contents() (since 0.4). */
+#define NERF_MODEL_HAS_OPTIMIZER 0x1u /**< The Adam moments: training can
+                                           resume (every model but one
+                                           loaded from a weights-only
+                                           export). */
+#define NERF_MODEL_HAS_OCCUPANCY 0x2u /**< An occupancy grid that training
+                                           has updated (hash-grid models). */
+#define NERF_MODEL_HAS_RENDER_SETTINGS 0x4u /**< Render settings recorded
+                                           by a trainer or
+                                           nerf_model_set_render_settings(),
+                                           kept by checkpoints. */
+
+/**
+ * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
+ * bits; 0 for NULL.  For a loaded model, which of these its file held.
+ */
+NERF_API uint32_t nerf_model_contents(const nerf_model *model);
+
+/**
  * Create a model with @p opts and fill its weights from a NumPy .npz file
  * holding the state dict of the reference implementation, with names
  * prefixed by network: "coarse.pts_linears.0.weight" ... and "fine." ones
@@ -1109,6 +1141,45 @@ NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
  * is running has no effect.  NULL is a no-op.
  */
 NERF_API void nerf_renderer_cancel(nerf_renderer *renderer);
+
+/**
+ * Since 0.4: record what rendering @p model needs: the sampling fields of
+ * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
+ * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
+ * are composited on white (@p white_background 1) or black (0).
+ * nerf_trainer_create() records those it trains with, and checkpoints keep
+ * them (docs/formats.md), so that nerf_model_render_settings() gives them
+ * back to a caller who knows nothing of the scene.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
+ * would refuse, white_background not 0 or 1); NERF_EVERSION as
+ * nerf_sampler_create().
+ */
+NERF_API int nerf_model_set_render_settings(nerf_model *model,
+                                            const nerf_sampler_options *sampler,
+                                            uint32_t white_background);
+
+/**
+ * Since 0.4: the settings to render @p model with.  Either output may be
+ * NULL; each must be initialised (its struct_size set).  Into @p sampler go
+ * the fields nerf_model_set_render_settings() lists; its seed, perturb
+ * and hooks are kept.  Into @p renderer goes white_background; its other
+ * fields are kept.
+ *
+ * A model without recorded settings (nerf_model_contents() lacks
+ * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
+ * a file of libnerf before 0.4) gets those its shape suggests: the sample
+ * counts of the preset whose networks it has (the reference ones
+ * otherwise; all in one pass without a fine network), ray marching for a
+ * hash-grid model; t in [2, 6] on white for a BOX model (Blender scenes),
+ * NDC depths [0, 1] on black for an NDC one, and [0.05, 10^4] x bound on
+ * black for an UNBOUNDED one.
+ * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
+ * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
+ * forged file).
+ */
+NERF_API int nerf_model_render_settings(const nerf_model *model,
+                                        nerf_sampler_options *sampler,
+                                        nerf_renderer_options *renderer);
 
 /**
  * Render every pixel of @p camera (evaluation: no randomness) into the

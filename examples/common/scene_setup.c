@@ -75,12 +75,37 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
     return NERF_OK;
 }
 
+/* Without a scene to ask, the model says: the settings it was trained
+ * with (guessed from its shape for files from before libnerf 0.4). */
+static int model_sampler(nerf_sampler **out, const nerf_model *model,
+                         uint32_t n_coarse, uint32_t n_fine, float near,
+                         float far, uint64_t seed)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    int rc = nerf_model_render_settings(model, &so, NULL);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    so.n_coarse = n_coarse ? n_coarse : so.n_coarse;
+    so.n_fine = n_fine ? n_fine : so.n_fine;
+    so.seed = seed;
+    if (far > near) {
+        so.t_near = near;
+        so.t_far = far;
+    }
+    return nerf_sampler_create(out, &so);
+}
+
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
                   const nerf_dataset *dataset, uint32_t n_coarse,
                   uint32_t n_fine, float near, float far, uint64_t seed)
 {
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
+    if (dataset == NULL) {
+        return model_sampler(out, model, n_coarse, n_fine, near, far, seed);
+    }
     int preset = setup_model_preset(model);
     if (preset != 0) {
         nerf_sampler_options_preset(&so, preset);
@@ -134,4 +159,16 @@ int setup_white_background(const nerf_dataset *dataset)
 {
     return dataset == NULL ||
            nerf_dataset_get_format(dataset) == NERF_DATASET_BLENDER;
+}
+
+int setup_background(const nerf_model *model, const nerf_dataset *dataset)
+{
+    if (dataset) {
+        return setup_white_background(dataset);
+    }
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    return nerf_model_render_settings(model, NULL, &ro) == NERF_OK
+               ? (int)ro.white_background
+               : 1;
 }

@@ -31,7 +31,9 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
 
 /*
  * A sampler for rendering or training model on dataset (which may be NULL:
- * then a Blender-like scene with near 2, far 6 is assumed).  The sample
+ * then the settings the model records, from its training or, for files
+ * from before libnerf 0.4, guessed from its shape: near 2, far 6 for a
+ * box; see nerf_model_render_settings).  The sample
  * counts follow the model's preset (the reference ones otherwise; a
  * hash-grid model marches through its occupancy grid as the fast preset);
  * n_coarse/n_fine override them when non-zero.  Bounds and NDC follow the
@@ -44,5 +46,9 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
 /* Renders of a dataset's scene are composited as its images were: on white
  * for Blender scenes (and when there is no dataset), on black for LLFF. */
 int setup_white_background(const nerf_dataset *dataset);
+
+/* The same with the model's recorded background when there is no
+ * dataset (white for files from before libnerf 0.4 of box models). */
+int setup_background(const nerf_model *model, const nerf_dataset *dataset);
 
 #endif

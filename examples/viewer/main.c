@@ -132,7 +132,8 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
     if (rc == NERF_OK) {
         nerf_renderer_options ro;
         NERF_RENDERER_OPTIONS_INIT(&ro);
-        ro.white_background = (uint32_t)setup_white_background(v->dataset);
+        ro.white_background = (uint32_t)setup_background(v->model,
+                                                           v->dataset);
         /* The window checks for input after every chunk: small chunks keep
          * it responsive even with the slow reference networks. */
         ro.chunk_rays = a->screenshot ? ro.chunk_rays : 64;

@@ -53,17 +53,29 @@
 /* Required, written only for models whose space is not BOX: a reader that
  * does not know the section would lay the grids over the wrong space. */
 #define TAG_SPACE (TAG_REQUIRED | 10u)
+/* Optional: the sampler settings and background the model was trained
+ * with, for a renderer that knows nothing of its scene.  A reader that does
+ * not know it renders with settings of its own, as before. */
+#define TAG_RENDER 12u
+/* Required, empty: the file is a weights-only export without the Adam
+ * moments.  A reader that does not know it must not take the missing
+ * moments for a corrupt file, nor resume training from zeros. */
+#define TAG_WEIGHTS_ONLY (TAG_REQUIRED | 13u)
 /* Optional: what data the model was trained on (model/fingerprint.h), for
  * a warning when it is resumed on other data.  A reader that does not know
- * it resumes without the warning.  Kept out of the numbered tables below:
- * it has its own handling. */
-#define TAG_DATA 0x11u
+ * it resumes without the warning.  Its body is checked on its own, not
+ * through the tables below, where its index stays empty. */
+#define TAG_DATA 11u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 10
+#define N_SECTIONS 13
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
 #define SPACE_INDEX 9
+#define RENDER_INDEX 11
+#define WEIGHTS_ONLY_INDEX 12
+#define ADAM_M_INDEX 3
+#define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
 #define N_CORE_SECTIONS 5 /* the ones every version has */
 #define SECTION_HEAD 12u /* u32 tag, u64 length */
@@ -74,6 +86,7 @@
 #define N_OPTION2_U32 11  /* and a reserved 0 */
 #define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
 #define TRAINING2_SIZE 8u /* f64 weight decay */
+#define RENDER_SIZE 64u /* 16 u32 words: see put_render */
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
@@ -287,27 +300,66 @@ static unsigned char *put_data(unsigned char *p, const nerf_model *m)
     return p + NERF__FINGERPRINT_SIZE;
 }
 
-static size_t payload_size(const nerf_model *m)
+/*
+ * The render settings: u32 n_coarse, n_fine, lindisp, paper_bins, ndc,
+ * march_steps, max_samples, white_background; f32 t_near, t_far,
+ * ndc_focal; u32 ndc_width, ndc_height; three reserved u32 0.
+ */
+static unsigned char *put_render(unsigned char *p, const nerf_model *m)
 {
-    return N_REQUIRED_SECTIONS * SECTION_HEAD + OPTIONS_SIZE + OPTIONS2_SIZE +
-           TRAINING_SIZE + 3 * 4 * m->n_params + SECTION_HEAD +
-           TRAINING2_SIZE + occupancy_size(m) + word_sections_size(m) +
-           data_size(m);
+    const nerf_sampler_options *o = &m->render_sampler;
+    const uint32_t words[8] = {o->n_coarse, o->n_fine, o->lindisp,
+                               o->paper_bins, o->ndc, o->march_steps,
+                               o->max_samples, m->render_white};
+    p = put_section(p, TAG_RENDER, RENDER_SIZE);
+    for (int i = 0; i < 8; i++) {
+        nerf__store_le32(p + 4 * i, words[i]);
+    }
+    nerf__store_lef32(p + 32, o->t_near);
+    nerf__store_lef32(p + 36, o->t_far);
+    nerf__store_lef32(p + 40, o->ndc_focal);
+    nerf__store_le32(p + 44, o->ndc_width);
+    nerf__store_le32(p + 48, o->ndc_height);
+    memset(p + 52, 0, RENDER_SIZE - 52);
+    return p + RENDER_SIZE;
 }
 
-static void build_payload(const nerf_model *m, unsigned char *p)
+static size_t payload_size(const nerf_model *m, bool weights_only)
+{
+    /* A weights-only file trades the two moment sections for its empty
+     * marker. */
+    const size_t moments = weights_only ? 0 : 2 * (SECTION_HEAD +
+                                                   4 * m->n_params);
+    return (N_REQUIRED_SECTIONS - 2) * SECTION_HEAD + OPTIONS_SIZE +
+           OPTIONS2_SIZE + TRAINING_SIZE + 4 * m->n_params + moments +
+           SECTION_HEAD + TRAINING2_SIZE + occupancy_size(m) +
+           word_sections_size(m) +
+           (m->has_render ? SECTION_HEAD + RENDER_SIZE : 0) +
+           (weights_only ? SECTION_HEAD : 0) + data_size(m);
+}
+
+static void build_payload(const nerf_model *m, bool weights_only,
+                          unsigned char *p)
 {
     p = put_options(p, &m->opts);
     p = put_training(p, m);
     p = put_floats(p, TAG_PARAMS, m->params, m->n_params);
-    p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
-    p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
+    if (!weights_only) {
+        p = put_floats(p, TAG_ADAM_M, m->adam_m, m->n_params);
+        p = put_floats(p, TAG_ADAM_V, m->adam_v, m->n_params);
+    }
     p = put_options2(p, &m->opts);
     p = put_training2(p, m);
     if (m->grid) {
         p = put_occupancy(p, m);
     }
     p = put_word_sections(p, m);
+    if (m->has_render) {
+        p = put_render(p, m);
+    }
+    if (weights_only) {
+        p = put_section(p, TAG_WEIGHTS_ONLY, 0);
+    }
     if (m->data.known) {
         put_data(p, m);
     }
@@ -358,7 +410,8 @@ static int pack(const nerf__env *env, const char *path,
 }
 
 static int write_checkpoint(const nerf_model *m, const char *path,
-                            const unsigned char *payload, size_t size)
+                            bool weights_only, const unsigned char *payload,
+                            size_t size)
 {
     unsigned char *packed = NULL;
     size_t packed_size = 0;
@@ -383,29 +436,44 @@ static int write_checkpoint(const nerf_model *m, const char *path,
     rc = nerf__file_write_atomic(&m->env, path, parts, 2);
     nerf__free(&m->env, packed);
     if (rc == NERF_OK) {
-        nerf__log(&m->env, NERF_LOG_DEBUG, "%s: saved checkpoint (format %u): "
-                  "%zu parameters, step %llu, %zu bytes", path, FORMAT_VERSION,
-                  m->n_params, (unsigned long long)m->step,
+        nerf__log(&m->env, NERF_LOG_DEBUG, "%s: saved %s (format %u): "
+                  "%zu parameters, step %llu, %zu bytes", path,
+                  weights_only ? "weights-only export" : "checkpoint",
+                  FORMAT_VERSION, m->n_params, (unsigned long long)m->step,
                   HEADER_SIZE + packed_size);
     }
     return rc;
 }
 
-NERF_API int nerf_model_save(const nerf_model *model, const char *path)
+static int save(const nerf_model *model, const char *path, bool weights_only,
+                const char *fn)
 {
     if (model == NULL || path == NULL) {
-        return nerf__error(NERF_EINVAL, "nerf_model_save: NULL %s",
+        return nerf__error(NERF_EINVAL, "%s: NULL %s", fn,
                            model ? "path" : "model");
     }
-    size_t size = payload_size(model);
+    /* A model that has no moments must not gain zeros that a later run
+     * would take for its optimiser's state. */
+    weights_only = weights_only || model->weights_only;
+    size_t size = payload_size(model, weights_only);
     unsigned char *payload = nerf__alloc(&model->env, size);
     if (payload == NULL) {
         return nerf__error_prefix(NERF_ENOMEM, path);
     }
-    build_payload(model, payload);
-    int rc = write_checkpoint(model, path, payload, size);
+    build_payload(model, weights_only, payload);
+    int rc = write_checkpoint(model, path, weights_only, payload, size);
     nerf__free(&model->env, payload);
     return rc;
+}
+
+NERF_API int nerf_model_save(const nerf_model *model, const char *path)
+{
+    return save(model, path, false, "nerf_model_save");
+}
+
+NERF_API int nerf_model_export(const nerf_model *model, const char *path)
+{
+    return save(model, path, true, "nerf_model_export");
 }
 
 /* ---- loading: the header ------------------------------------------------ */
@@ -538,7 +606,8 @@ typedef struct sections {
 static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
-    "training state (0.2)", "matmul", "space"};
+    "training state (0.2)", "matmul", "space", "data", "render settings",
+    "weights-only marker"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -554,10 +623,12 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
     }
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS ||
-                                            tag == TAG_SPACE
+                                            tag == TAG_SPACE ||
+                                            tag == TAG_WEIGHTS_ONLY
                                       : tag == TAG_OCCUPANCY ||
                                             tag == TAG_TRAINING2 ||
-                                            tag == TAG_MATMUL;
+                                            tag == TAG_MATMUL ||
+                                            tag == TAG_RENDER;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -604,11 +675,22 @@ static int split_sections(const nerf__env *env, const char *path,
         }
         at += (size_t)len;
     }
+    const bool weights_only = s->body[WEIGHTS_ONLY_INDEX] != NULL;
     for (int i = 0; i < N_CORE_SECTIONS; i++) {
-        if (s->body[i] == NULL) {
+        const bool moment = i == ADAM_M_INDEX || i == ADAM_V_INDEX;
+        if (s->body[i] == NULL && !(weights_only && moment)) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (no "
                                "%s section)", path, section_names[i]);
         }
+        if (s->body[i] != NULL && weights_only && moment) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (a "
+                               "weights-only file with %s)", path,
+                               section_names[i]);
+        }
+    }
+    if (weights_only && s->len[WEIGHTS_ONLY_INDEX] != 0) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                           "weights-only marker is not empty)", path);
     }
     return NERF_OK;
 }
@@ -719,7 +801,7 @@ static int check_shapes(const nerf__env *env, const char *path,
                            (unsigned long long)n, (unsigned long long)need);
     }
     for (int i = 2; i < N_CORE_SECTIONS; i++) {
-        if (s->len[i] / 4 != n || s->len[i] % 4 != 0) {
+        if (s->body[i] != NULL && (s->len[i] / 4 != n || s->len[i] % 4 != 0)) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s "
                                "section holds %llu bytes, expected %llu)",
                                path, section_names[i],
@@ -809,6 +891,56 @@ static void get_floats(const unsigned char *p, float *x, size_t n)
     }
 }
 
+/*
+ * The render settings into the model.  Only what the file format decides
+ * is checked here; the sampler's own checks run when a sampler is made of
+ * them (nerf_model_render_settings()).
+ */
+static int get_render(const char *path, nerf_model *m, const unsigned char *b,
+                      uint64_t len)
+{
+    if (len != RENDER_SIZE) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                           "render settings section has the wrong size)",
+                           path);
+    }
+    uint32_t w[8];
+    for (int i = 0; i < 8; i++) {
+        w[i] = nerf__load_le32(b + 4 * i);
+    }
+    const float t_near = nerf__load_lef32(b + 32);
+    const float t_far = nerf__load_lef32(b + 36);
+    const float focal = nerf__load_lef32(b + 40);
+    bool reserved = true;
+    for (uint32_t at = 52; at < RENDER_SIZE; at += 4) {
+        reserved = reserved && nerf__load_le32(b + at) == 0;
+    }
+    if (!reserved || w[2] > 1 || w[3] > 1 || w[4] > 1 || w[7] > 1 ||
+        !isfinite(t_near) || !isfinite(t_far) || !isfinite(focal)) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                           "render settings section holds values no "
+                           "sampler has)", path);
+    }
+    nerf_sampler_options *o = &m->render_sampler;
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->n_coarse = w[0];
+    o->n_fine = w[1];
+    o->lindisp = w[2];
+    o->paper_bins = w[3];
+    o->ndc = w[4];
+    o->march_steps = w[5];
+    o->max_samples = w[6];
+    o->t_near = t_near;
+    o->t_far = t_far;
+    o->ndc_focal = focal;
+    o->ndc_width = nerf__load_le32(b + 44);
+    o->ndc_height = nerf__load_le32(b + 48);
+    m->render_white = w[7];
+    m->has_render = true;
+    return NERF_OK;
+}
+
 static int build_model(const nerf__env *env, const char *path,
                        const unsigned char *payload, size_t size,
                        nerf_model **out)
@@ -839,6 +971,13 @@ static int build_model(const nerf__env *env, const char *path,
             return rc;
         }
     }
+    if (s.body[RENDER_INDEX] != NULL) {
+        rc = get_render(path, m, s.body[RENDER_INDEX], s.len[RENDER_INDEX]);
+        if (rc != NERF_OK) {
+            nerf_model_destroy(m);
+            return rc;
+        }
+    }
     if (s.data != NULL && !nerf__fingerprint_parse(s.data, s.data_len,
                                                    &m->data)) {
         nerf_model_destroy(m);
@@ -847,8 +986,11 @@ static int build_model(const nerf__env *env, const char *path,
                            "not a number)", path);
     }
     get_floats(s.body[2], m->params, m->n_params);
-    get_floats(s.body[3], m->adam_m, m->n_params);
-    get_floats(s.body[4], m->adam_v, m->n_params);
+    m->weights_only = s.body[WEIGHTS_ONLY_INDEX] != NULL;
+    if (!m->weights_only) {
+        get_floats(s.body[ADAM_M_INDEX], m->adam_m, m->n_params);
+        get_floats(s.body[ADAM_V_INDEX], m->adam_v, m->n_params);
+    }
     nerf__model_weights_changed(m);
     *out = m;
     return NERF_OK;

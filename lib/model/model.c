@@ -463,6 +463,21 @@ NERF_API uint64_t nerf_model_step(const nerf_model *model)
     return model ? model->step : 0;
 }
 
+NERF_API uint32_t nerf_model_contents(const nerf_model *model)
+{
+    if (model == NULL) {
+        return 0;
+    }
+    uint32_t c = model->weights_only ? 0 : NERF_MODEL_HAS_OPTIMIZER;
+    if (model->grid != NULL && model->grid->updates > 0) {
+        c |= NERF_MODEL_HAS_OCCUPANCY;
+    }
+    if (model->has_render) {
+        c |= NERF_MODEL_HAS_RENDER_SETTINGS;
+    }
+    return c;
+}
+
 int nerf__model_network(const nerf_model *m, int network)
 {
     if (network == NERF_NETWORK_COARSE) {

@@ -44,6 +44,16 @@ struct nerf_model {
      * (or a checkpoint carried it): not known for a model never trained
      * by a trainer.  Resuming on other data is warned about. */
     nerf__fingerprint data;
+    /* Loaded from a weights-only export (nerf_model_export()): adam_m and
+     * adam_v are zeros, not state a run could resume from. */
+    bool weights_only;
+    /* What rendering the model needs, as its trainer recorded it (the
+     * sampling layer's nerf_model_render_settings() reads it; checkpoints
+     * keep it).  Only the fields a render uses are set; valid when
+     * has_render. */
+    bool has_render;
+    nerf_sampler_options render_sampler;
+    uint32_t render_white;
 };
 
 /* Cells per axis of a model's occupancy grid. */

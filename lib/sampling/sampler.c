@@ -120,6 +120,11 @@ static int check_options(const void *opts)
     return NERF_OK;
 }
 
+int nerf__sampler_check_options(const nerf_sampler_options *opts)
+{
+    return check_options(opts);
+}
+
 NERF_API int nerf_sampler_create(nerf_sampler **out,
                                  const nerf_sampler_options *opts)
 {

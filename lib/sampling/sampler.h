@@ -33,6 +33,10 @@ enum {
     NERF__STREAM_BACKGROUND = 6 /* the trainer's random backgrounds */
 };
 
+/* The checks nerf_sampler_create() makes of a full options struct:
+ * NERF_OK, or NERF_EINVAL with the message set. */
+int nerf__sampler_check_options(const nerf_sampler_options *opts);
+
 /* Whether the sampler marches through an occupancy grid. */
 static inline bool nerf__sampler_marches(const nerf_sampler *s)
 {

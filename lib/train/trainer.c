@@ -131,6 +131,29 @@ static void setup_render(nerf_trainer *t)
     }
 }
 
+/*
+ * The model keeps what it is trained with, so that its checkpoints render
+ * right for a caller who knows nothing of the scene: the sampler with the
+ * NDC frustum of the training images, and the background its renders
+ * are composited on (with a random background too: that one is only for
+ * the loss).
+ */
+static void record_render_settings(nerf_trainer *t)
+{
+    nerf_sampler_options so = t->sampler->opts;
+    if (so.ndc && !(so.ndc_focal > 0.0f)) {
+        so.ndc_focal = t->setup.ndc_focal;
+        so.ndc_width = (uint32_t)t->setup.ndc_width;
+        so.ndc_height = (uint32_t)t->setup.ndc_height;
+    }
+    if (nerf_model_set_render_settings(t->model, &so, t->white ? 1u : 0u) !=
+        NERF_OK) {
+        /* A created sampler passes the same checks: cannot happen. */
+        nerf__log(&t->env, NERF_LOG_WARN, "trainer: the model does not "
+                  "record its render settings (%s)", nerf_last_error());
+    }
+}
+
 NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
                                  const nerf_dataset *dataset,
                                  const nerf_sampler *sampler,
@@ -155,6 +178,14 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     rc = nerf__render_check_pair(model, sampler, "nerf_trainer_create");
     if (rc != NERF_OK) {
         return rc;
+    }
+    if (model->weights_only) {
+        /* Adam from zero moments at a late step would take steps several
+         * times too large, undoing the training it was meant to extend. */
+        return nerf__error(NERF_EINVAL, "nerf_trainer_create: the model was "
+                           "loaded from a weights-only export, which holds "
+                           "no optimiser state to train on with; resume "
+                           "from the full checkpoint it was exported from");
     }
     nerf_trainer *t = nerf__calloc(&env, 1, sizeof *t);
     if (t == NULL) {
@@ -200,6 +231,7 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
         return rc;
     }
     setup_render(t);
+    record_render_settings(t);
     char per_step[64];
     if (o.batch_samples > 0) {
         snprintf(per_step, sizeof per_step, "up to %u rays of %u samples",

@@ -197,6 +197,11 @@ _Static_assert(NERF_CAMERA_PIXEL_CORNER == 0x1u &&
                NERF_SAMPLE_TRAINING == 0x1u && NERF_PROGRESS_RENDER == 1,
                "render flags renumbered");
 
+_Static_assert(NERF_MODEL_HAS_OPTIMIZER == 0x1u &&
+               NERF_MODEL_HAS_OCCUPANCY == 0x2u &&
+               NERF_MODEL_HAS_RENDER_SETTINGS == 0x4u,
+               "model content bits renumbered");
+
 _Static_assert(NERF_SPLIT_TRAIN == 0 && NERF_SPLIT_VAL == 1 &&
                NERF_SPLIT_TEST == 2, "splits renumbered");
 _Static_assert(NERF_DATASET_BLENDER == 1 && NERF_DATASET_LLFF == 2,

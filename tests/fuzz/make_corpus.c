@@ -182,6 +182,27 @@ static void compact_of(const unsigned char *payload, size_t n,
  * optional section it must skip, and a hash-grid model with its occupancy
  * grid.
  */
+/* The weights-only export of a new model that records render settings
+ * (libnerf 0.4's two sections), in a malloc'd buffer of *n bytes. */
+static unsigned char *export_of(const nerf_model_options *o, size_t *n)
+{
+    nerf_model *model = NULL;
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    char p[1024];
+    out_path(p, sizeof p, "checkpoint", "tmp.ckpt");
+    if (nerf_model_create(&model, o) != NERF_OK ||
+        nerf_model_set_render_settings(model, &so, 1) != NERF_OK ||
+        nerf_model_export(model, p) != NERF_OK) {
+        fprintf(stderr, "make_corpus: %s\n", nerf_last_error());
+        exit(1);
+    }
+    nerf_model_destroy(model);
+    unsigned char *file = slurp(p, n);
+    unlink(p);
+    return file;
+}
+
 static void checkpoint_seeds(void)
 {
     nerf_model_options o;
@@ -204,6 +225,15 @@ static void checkpoint_seeds(void)
     bytes b = {0};
     filter_sections(payload, plain_n, v2_only, 2, NULL, &b);
     save_with("checkpoint", "payload_v1.bin", 1, b.p, b.n);
+
+    size_t export_n, export_plain_n;
+    unsigned char *exported = export_of(&o, &export_n);
+    unsigned char *exported_payload = payload_of(exported, export_n,
+                                                 &export_plain_n);
+    save_with("checkpoint", "payload_export.bin", 1, exported_payload,
+              export_plain_n);
+    free(exported_payload);
+    free(exported);
 
     bytes extra = {0};
     put_le(&extra, 9, 4); /* matmul */

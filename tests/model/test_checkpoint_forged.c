@@ -245,6 +245,83 @@ static void edit_shuffle(payload *p)
     p->s[4] = t;
 }
 
+/* Weights-only files (tag 0x8000000d, empty) have no moment sections. */
+static void edit_marker_with_moments(payload *p)
+{
+    add_section(p, 0x8000000du, "", 0);
+}
+
+static void drop_moments(payload *p)
+{
+    for (int k = 0; k < 2; k++) {
+        free(p->s[3].data);
+        for (int i = 3; i + 1 < p->n; i++) {
+            p->s[i] = p->s[i + 1];
+        }
+        p->n--;
+    }
+}
+
+static void edit_marker_not_empty(payload *p)
+{
+    drop_moments(p);
+    add_section(p, 0x8000000du, "x", 1);
+}
+
+/* The render settings (tag 12): 64 bytes, of which the last 12 are 0. */
+static unsigned char render_section[64];
+
+static void fill_render_section(void)
+{
+    memset(render_section, 0, sizeof render_section);
+    put32(render_section, 32);      /* n_coarse */
+    put32(render_section + 4, 64);  /* n_fine */
+    put32(render_section + 28, 1);  /* white_background */
+    const float t[2] = {2.0f, 6.0f};
+    memcpy(render_section + 32, t, sizeof t); /* little-endian hosts */
+}
+
+static void edit_render_good(payload *p)
+{
+    fill_render_section();
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+static void edit_render_short(payload *p)
+{
+    fill_render_section();
+    add_section(p, 12u, render_section, sizeof render_section - 4);
+}
+
+static void edit_render_reserved(payload *p)
+{
+    fill_render_section();
+    render_section[60] = 1;
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+static void edit_render_white_2(payload *p)
+{
+    fill_render_section();
+    put32(render_section + 28, 2);
+    add_section(p, 12u, render_section, sizeof render_section);
+}
+
+TEST(forged_weights_only_and_render_sections)
+{
+    forge("weights-only marker with moments", edit_marker_with_moments,
+          NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "weights-only") != NULL);
+    forge("weights-only marker not empty", edit_marker_not_empty,
+          NERF_EFORMAT);
+    forge("no moments, no marker", drop_moments, NERF_EFORMAT);
+    forge("render settings", edit_render_good, NERF_OK);
+    forge("render settings cut short", edit_render_short, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "render settings") != NULL);
+    forge("render settings reserved 1", edit_render_reserved, NERF_EFORMAT);
+    forge("render settings white 2", edit_render_white_2, NERF_EFORMAT);
+}
+
 TEST(forged_payloads)
 {
     forge("width changed", edit_width, NERF_EFORMAT);
@@ -608,13 +685,13 @@ static size_t data_len = 48;
 
 static void edit_add_data(payload *p)
 {
-    add_section(p, 0x00000011u, data_body, data_len);
+    add_section(p, 0x0000000Bu, data_body, data_len);
 }
 
 static void edit_add_two_data(payload *p)
 {
-    add_section(p, 0x00000011u, data_body, data_len);
-    add_section(p, 0x00000011u, data_body, data_len);
+    add_section(p, 0x0000000Bu, data_body, data_len);
+    add_section(p, 0x0000000Bu, data_body, data_len);
 }
 
 static const nerf__fingerprint some_data = {
@@ -644,7 +721,7 @@ TEST(data_section)
     payload p;
     split_payload(file, size, &p);
     for (int i = 0; i < p.n; i++) {
-        CHECK(p.s[i].tag != 0x00000011u);
+        CHECK(p.s[i].tag != 0x0000000Bu);
     }
     free_payload(&p);
     free(file);
@@ -665,9 +742,9 @@ TEST(data_section)
     file = slurp(path, &size);
     split_payload(file, size, &p);
     const section *d = &p.s[p.n - 1];
-    CHECK_EQ_INT(d->tag, 0x00000011u);
+    CHECK_EQ_INT(d->tag, 0x0000000Bu);
     CHECK_EQ_INT(d->len, 48);
-    if (d->tag == 0x00000011u && d->len == 48) {
+    if (d->tag == 0x0000000Bu && d->len == 48) {
         const uint32_t u[7] = {100, 400, 300, 800, 600, 2, 1};
         for (int i = 0; i < 7; i++) {
             CHECK_EQ_INT(le32(d->data + 4 * i), u[i]);
@@ -706,6 +783,7 @@ int main(void)
     make_tmpdir();
     RUN(payload_layout_is_as_documented);
     RUN(forged_payloads);
+    RUN(forged_weights_only_and_render_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
     RUN(matmul_section);

@@ -56,12 +56,13 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     ENCODING_HASHGRID, ENCODING_SPHERICAL_HARMONICS,
                     DENSITY_RELU, DENSITY_EXP, MATMUL_BF16, MATMUL_FP32,
                     SPACE_BOX, SPACE_NDC, SPACE_UNBOUNDED,
-                    matmul_supported)
+                    MODEL_HAS_OPTIMIZER, MODEL_HAS_OCCUPANCY,
+                    MODEL_HAS_RENDER_SETTINGS, matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
                      RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       CameraPathOptions, DatasetOptions, Hooks, ModelOptions,
-                      Progress,
+                      Named, Progress,
                       ProgressStruct, RendererOptions, SamplerOptions,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
@@ -79,7 +80,7 @@ __all__ = [
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
     "TrainerOptions", "SceneOptions", "CameraPathOptions", "Hooks",
-    "ProgressStruct", "TrainStatsStruct",
+    "ProgressStruct", "TrainStatsStruct", "Named",
     # Errors.
     "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
     "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",
@@ -98,7 +99,8 @@ __all__ = [
     "PRESET_TINY", "PRESET_FAST",
     "ENCODING_HASHGRID", "ENCODING_SPHERICAL_HARMONICS", "DENSITY_RELU",
     "DENSITY_EXP", "MATMUL_FP32", "MATMUL_BF16", "SPACE_BOX", "SPACE_NDC",
-    "SPACE_UNBOUNDED", "NETWORK_COARSE",
+    "SPACE_UNBOUNDED", "MODEL_HAS_OPTIMIZER", "MODEL_HAS_OCCUPANCY",
+    "MODEL_HAS_RENDER_SETTINGS", "NETWORK_COARSE",
     "NETWORK_FINE", "ENCODING_FREQUENCY", "ENCODING_INCLUDE_INPUT",
     "ENCODING_SCALE_PI", "SAMPLE_TRAINING", "NOISE_AUTO",
     "CAMERA_PIXEL_CORNER", "PROGRESS_RENDER", "PROGRESS_TRAIN",

@@ -100,6 +100,14 @@ _PROTOTYPES = {
     "nerf_model_import_npz": (c_int, [POINTER(ModelP), c_char_p,
                                       POINTER(ModelOptions)], True),
     "nerf_matmul_supported": (c_int, [c_int], False),
+    # Since 0.4: weights-only exports and render settings.
+    "nerf_model_export": (c_int, [ModelP, c_char_p], True),
+    "nerf_model_contents": (c_uint32, [ModelP], False),
+    "nerf_model_set_render_settings": (c_int, [ModelP,
+                                               POINTER(SamplerOptions),
+                                               c_uint32], True),
+    "nerf_model_render_settings": (c_int, [ModelP, POINTER(SamplerOptions),
+                                           POINTER(RendererOptions)], True),
     # Built-in scene.
     "nerf_scene_options_init": (c_int, [POINTER(SceneOptions), c_size_t],
                                 True),

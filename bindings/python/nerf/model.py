@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import ctypes
-from typing import Any, Callable, Optional, Tuple, Union
+from typing import Any, Callable, FrozenSet, Optional, Tuple, Union
 
 from . import _buffers, _handle
 from ._capi import ModelP, lib
 from .core import param_key
-from .structs import ModelOptions
+from .structs import ModelOptions, RendererOptions, SamplerOptions
 
 # nerf_preset
 PRESET_REFERENCE = 1
@@ -41,6 +41,14 @@ SPACE_BOX = 0
 SPACE_NDC = 1
 SPACE_UNBOUNDED = 2
 SPACES = {"box": SPACE_BOX, "ndc": SPACE_NDC, "unbounded": SPACE_UNBOUNDED}
+
+# nerf_model_contents() bits, by the names Model.contents uses.
+MODEL_HAS_OPTIMIZER = 0x1
+MODEL_HAS_OCCUPANCY = 0x2
+MODEL_HAS_RENDER_SETTINGS = 0x4
+CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
+            MODEL_HAS_OCCUPANCY: "occupancy",
+            MODEL_HAS_RENDER_SETTINGS: "render_settings"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -205,9 +213,55 @@ class Model(_handle.Handle):
 
     def save(self, path: Any) -> None:
         """Write a checkpoint (weights, optimiser state and step),
-        atomically replacing ``path`` (``nerf_model_save``)."""
+        atomically replacing ``path`` (``nerf_model_save``).  A model loaded
+        from a weights-only export is saved weights-only again."""
         with self._using() as ptr:
             lib.nerf_model_save(ptr, _handle.fspath(path))
+
+    def export(self, path: Any) -> None:
+        """Write the weights without the optimiser state
+        (``nerf_model_export``): under half a checkpoint, for sharing,
+        rendering and evaluating.  :meth:`load` reads it; a
+        :class:`nerf.Trainer` refuses the model it gives."""
+        with self._using() as ptr:
+            lib.nerf_model_export(ptr, _handle.fspath(path))
+
+    @property
+    def contents(self) -> FrozenSet[str]:
+        """What the model holds beyond its weights
+        (``nerf_model_contents``): ``"optimizer"`` (training can resume;
+        absent for a weights-only export), ``"occupancy"`` (a trained
+        occupancy grid), ``"render_settings"`` (recorded by training)."""
+        with self._using() as ptr:
+            bits = int(lib.nerf_model_contents(ptr))
+        return frozenset(name for bit, name in CONTENTS.items() if bits & bit)
+
+    def render_settings(self) -> Tuple[SamplerOptions, RendererOptions]:
+        """``(SamplerOptions, RendererOptions)`` to render the model with
+        (``nerf_model_render_settings``): those its training recorded, or
+        for a model without them a guess from its shape (Blender-like
+        near 2, far 6 on white for a box model).  :class:`nerf.Renderer`
+        uses them when given no sampler."""
+        so, ro = SamplerOptions(), RendererOptions()
+        with self._using() as ptr:
+            lib.nerf_model_render_settings(ptr, ctypes.byref(so),
+                                           ctypes.byref(ro))
+        return so, ro
+
+    def set_render_settings(self, sampler: Any,
+                            white_background: int) -> None:
+        """Record what rendering the model needs
+        (``nerf_model_set_render_settings``): the sampling fields of
+        ``sampler`` (a :class:`nerf.Sampler` or :class:`SamplerOptions`)
+        and the background (1 white, 0 black).  A :class:`nerf.Trainer`
+        records its own; checkpoints and exports keep them."""
+        opts = getattr(sampler, "options", sampler)
+        if not isinstance(opts, SamplerOptions):
+            raise TypeError("sampler must be a nerf.Sampler or "
+                            "nerf.SamplerOptions")
+        with self._using() as ptr:
+            lib.nerf_model_set_render_settings(ptr, ctypes.byref(opts),
+                                               int(white_background))
 
     @property
     def options(self) -> ModelOptions:

@@ -159,7 +159,11 @@ class Renderer(_handle.ProgressHandle):
     """Draws a model with a sampler's samples (``nerf_renderer``).
 
     ``Renderer(model, sampler, white_background=1, threads=0, ...)``; the
-    keyword fields are those of :class:`nerf.RendererOptions`.  The renderer
+    keyword fields are those of :class:`nerf.RendererOptions`.  Without a
+    sampler, ``Renderer(model)`` renders as the model was trained: its
+    recorded sample counts, bounds, NDC frustum and background
+    (:meth:`nerf.Model.render_settings`; guessed from the model's shape
+    for files from before libnerf 0.4); keyword fields still override.  The renderer
     keeps its model and sampler alive, and reads the model's current
     weights at every call, so training in between is seen.
 
@@ -171,11 +175,16 @@ class Renderer(_handle.ProgressHandle):
 
     _kind = "Renderer"
 
-    def __init__(self, model: Model, sampler: Sampler, *,
+    def __init__(self, model: Model, sampler: Optional[Sampler] = None, *,
                  progress: ProgressFn = None, log: LogFn = None,
                  log_level: Optional[int] = None, **options: Any) -> None:
         if not isinstance(model, Model):
             raise TypeError("model must be a nerf.Model")
+        if sampler is None:
+            # What the model was trained with (Model.render_settings).
+            so, ro = model.render_settings()
+            sampler = Sampler(**so.to_dict())
+            options.setdefault("white_background", ro.white_background)
         if not isinstance(sampler, Sampler):
             raise TypeError("sampler must be a nerf.Sampler")
         opts = RendererOptions(**options)

@@ -115,7 +115,13 @@ class Hooks(_Versioned):
 
 
 class ModelOptions(_Versioned):
-    """``nerf_model_options``: structural settings of a model."""
+    """``nerf_model_options``: structural settings of a model.
+
+    The enum fields (``encoding``, ``encoding_flags``, ``dir_encoding``,
+    ``density_activation``, ``matmul``, ``space``) read as
+    :class:`Named` values, ints shown by name (``encoding='hashgrid'``),
+    and may be set by name or number.
+    """
 
     _c_name_ = "nerf_model_options"
     _c_init_ = "nerf_model_options_init"
@@ -151,6 +157,134 @@ class ModelOptions(_Versioned):
         # Appended in libnerf 0.3: nerf_space (0 = BOX).
         ("space", c_uint32),
     ]
+
+
+class Named(int):
+    """The value of an enum field of an options struct (``encoding``,
+    ``matmul``, ``space``, ...): the int the C API takes, shown by name.
+
+    ``repr`` and ``str`` give the name (``'hashgrid'``), ``.name`` too;
+    it compares equal to its int and to its name, and hashes as its int.
+    """
+
+    #: The names of the values, in C's order (a later name of one value
+    #: is what a name maps back to).
+    _names: Dict[int, str] = {}
+    #: Whether the value is a set of bit flags, shown joined with ``|``.
+    _flags = False
+
+    @property
+    def name(self) -> str:
+        value = int(self)
+        if not self._flags:
+            return self._names.get(value, str(value))
+        parts = [n for bit, n in self._names.items() if value & bit]
+        rest = value & ~sum(self._names)
+        if rest:
+            parts.append(hex(rest))
+        return "|".join(parts) if parts else "none"
+
+    def __repr__(self) -> str:
+        return repr(self.name)
+
+    def __str__(self) -> str:
+        return self.name
+
+    def __eq__(self, other: Any) -> bool:
+        if isinstance(other, str):
+            try:
+                return int(self) == self.key(other)
+            except ValueError:
+                return False
+        return int(self) == other
+
+    def __ne__(self, other: Any) -> bool:
+        return not self.__eq__(other)
+
+    __hash__ = int.__hash__
+
+    @classmethod
+    def key(cls, value: Any) -> int:
+        """The int of a name (or of an int); ValueError names the known
+        ones."""
+        if not isinstance(value, str):
+            return int(value)
+        by_name = {n: v for v, n in cls._names.items()}
+        parts = value.split("|") if cls._flags else [value]
+        total = 0
+        for part in parts:
+            if cls._flags and part == "none":
+                continue
+            if part not in by_name:
+                raise ValueError("unknown %s %r (known: %s)"
+                                 % (cls.__name__, part,
+                                    ", ".join(sorted(set(by_name)))))
+            total |= by_name[part]
+        return total
+
+
+class Encoding(Named):
+    """``nerf_encoding_kind``."""
+    _names = {1: "frequency", 2: "hashgrid", 3: "spherical_harmonics"}
+
+
+class DirEncoding(Named):
+    """``nerf_encoding_kind`` of ``dir_encoding``, where 0 reads as
+    frequency."""
+    _names = {0: "frequency", 1: "frequency", 2: "hashgrid",
+              3: "spherical_harmonics"}
+
+
+class EncodingFlags(Named):
+    """``NERF_ENCODING_*`` flags."""
+    _names = {1: "include_input", 2: "scale_pi"}
+    _flags = True
+
+
+class DensityActivation(Named):
+    """``nerf_density_activation``."""
+    _names = {0: "relu", 1: "exp"}
+
+
+class Matmul(Named):
+    """``nerf_matmul``."""
+    _names = {0: "fp32", 1: "bf16"}
+
+
+class Space(Named):
+    """``nerf_space``."""
+    _names = {0: "box", 1: "ndc", 2: "unbounded"}
+
+
+class _NamedField:
+    """A struct field read as a :class:`Named` and set by name or int;
+    ``offset`` and ``size`` are the ctypes field's."""
+
+    def __init__(self, raw: Any, kind: type) -> None:
+        self._raw = raw
+        self._kind = kind
+
+    offset = property(lambda self: self._raw.offset)
+    size = property(lambda self: self._raw.size)
+
+    def __get__(self, obj: Any, objtype: Any = None) -> Any:
+        if obj is None:
+            return self
+        return self._kind(self._raw.__get__(obj, objtype))
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        self._raw.__set__(obj, self._kind.key(value))
+
+
+def _name_fields(cls: type, kinds: Dict[str, type]) -> None:
+    for name, kind in kinds.items():
+        setattr(cls, name, _NamedField(cls.__dict__[name], kind))
+
+
+_name_fields(ModelOptions, {
+    "encoding": Encoding, "encoding_flags": EncodingFlags,
+    "dir_encoding": DirEncoding, "density_activation": DensityActivation,
+    "matmul": Matmul, "space": Space})
 
 
 class SceneOptions(_Versioned):
