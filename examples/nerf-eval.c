@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
@@ -24,6 +25,12 @@ typedef struct args {
     int json;
 } args;
 
+/* Every option parse() knows, for telling a typo from a mistake. */
+static const char *const options[] = {
+    "--help", "-h", "--json", "--model", "--data", "--split", "--downscale",
+    "--skip", NULL
+};
+
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -32,6 +39,9 @@ static int parse(int argc, char **argv, args *a)
     a->skip = 1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
+        if (cli_check_option("nerf-eval", k, options) != 0) {
+            return -1;
+        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -43,7 +53,7 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-eval: %s needs a value\n", k);
+            cli_bad_value("nerf-eval", k, NULL, NULL);
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -57,18 +67,18 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--skip") == 0) {
             bad = cli_uint(v, 1, 100000, &a->skip);
         } else {
-            fprintf(stderr, "nerf-eval: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_usage_error("nerf-eval", "unknown option '%s'", k);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-eval: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-eval", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL || a->data == NULL) {
-        fprintf(stderr, "nerf-eval: --model and --data are required\n");
+        cli_usage_error("nerf-eval", "--model and --data are required");
         return -1;
     }
     return 0;
@@ -137,7 +147,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     double start = progress_now();

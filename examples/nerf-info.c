@@ -4,13 +4,24 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "common/options.h"
+
+static const char usage[] =
+    "usage: nerf-info\n"
+    "Print libnerf's version and how it was built (compiler, BLAS, SIMD,\n"
+    "optional libraries).  Options: --help.\n"
+    "Examples:\n"
+    "  nerf-info\n";
+
 int main(int argc, char **argv)
 {
+    static const char *const options[] = {"--help", "-h", NULL};
     if (argc > 1) {
-        FILE *out = strcmp(argv[1], "--help") == 0 ? stdout : stderr;
-        fprintf(out, "usage: %s\nPrint libnerf's version and build information.\n",
-                argv[0]);
-        return out == stdout ? 0 : 2;
+        if (cli_check_option("nerf-info", argv[1], options) != 0) {
+            return 2;
+        }
+        fputs(usage, stdout);
+        return 0;
     }
     printf("%s\n", nerf_build_info());
     if (nerf_version_number() != NERF_VERSION_NUMBER) {

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "common/cli.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
@@ -53,6 +54,13 @@ typedef struct args {
  * and the default of --poses files that carry no intrinsics. */
 #define ORBIT_FOV 0.6911112070083618
 
+/* Every option parse() knows, for telling a typo from a mistake. */
+static const char *const options[] = {
+    "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
+    "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
+    "--width", "--height", "--near", "--far", NULL
+};
+
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -62,6 +70,9 @@ static int parse(int argc, char **argv, args *a)
     a->width = a->height = 100;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
+        if (cli_check_option("nerf-render", k, options) != 0) {
+            return -1;
+        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -73,7 +84,7 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-render: %s needs a value\n", k);
+            cli_bad_value("nerf-render", k, NULL, NULL);
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -110,59 +121,59 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_double(v, &a->far);
             a->bounds_given |= 2;
         } else {
-            fprintf(stderr, "nerf-render: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_usage_error("nerf-render", "unknown option '%s'", k);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-render: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-render", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL || a->out == NULL ||
         (a->data == NULL && a->path == NULL && a->poses == NULL)) {
-        fprintf(stderr, "nerf-render: --model, --out and --data, --path or "
-                        "--poses are required\n");
+        cli_usage_error("nerf-render", "--model, --out and --data, --path or "
+                        "--poses are required");
         return -1;
     }
     if (a->path && a->poses) {
-        fprintf(stderr, "nerf-render: --path and --poses exclude each "
-                        "other\n");
+        cli_usage_error("nerf-render", "--path and --poses exclude each "
+                        "other");
         return -1;
     }
     if ((a->focal > 0.0 || a->fov > 0.0) && a->poses == NULL) {
-        fprintf(stderr, "nerf-render: --focal and --fov go with --poses\n");
+        cli_usage_error("nerf-render", "--focal and --fov go with --poses");
         return -1;
     }
     if (a->focal > 0.0 && a->fov > 0.0) {
-        fprintf(stderr, "nerf-render: give --focal or --fov, not both\n");
+        cli_usage_error("nerf-render", "give --focal or --fov, not both");
         return -1;
     }
     /* A file's w and h keep their aspect ratio only as a pair. */
     if (a->poses && a->size_given && a->size_given != 3) {
-        fprintf(stderr, "nerf-render: with --poses, give --width and "
-                        "--height together\n");
+        cli_usage_error("nerf-render", "with --poses, give --width and "
+                        "--height together");
         return -1;
     }
     /* One bound alone would leave the other to a default that may not fit
      * it; a wrong pair would be sampled backwards. */
     if (a->bounds_given && a->bounds_given != 3) {
-        fprintf(stderr, "nerf-render: give --near and --far together\n");
+        cli_usage_error("nerf-render", "give --near and --far together");
         return -1;
     }
     if (a->bounds_given && !(a->near >= 0.0)) {
-        fprintf(stderr, "nerf-render: --near must be at least 0 (got %g)\n",
+        cli_usage_error("nerf-render", "--near must be at least 0 (got %g)",
                 a->near);
         return -1;
     }
     if (a->bounds_given && !(a->near < a->far)) {
-        fprintf(stderr, "nerf-render: --near must be less than --far (got "
-                        "--near %g --far %g)\n", a->near, a->far);
+        cli_usage_error("nerf-render", "--near must be less than --far (got "
+                        "--near %g --far %g)", a->near, a->far);
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
-        fprintf(stderr, "nerf-render: --path spiral needs --data\n");
+        cli_usage_error("nerf-render", "--path spiral needs --data");
         return -1;
     }
     return 0;
@@ -374,7 +385,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     nerf_hooks hooks;

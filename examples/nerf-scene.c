@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/options.h"
 
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
@@ -40,6 +41,13 @@ static const char usage[] =
     "                       may be left out)\n"
     "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
 
+/* Every option main() knows, for telling a typo from a mistake. */
+static const char *const options[] = {
+    "--help", "-h", "--out", "--capture", "--layout", "--jpeg", "--format",
+    "--distortion", "--width", "--height", "--train", "--val", "--test",
+    "--threads", NULL
+};
+
 /* A name of the list, by its index; -1 when it is not there. */
 static int pick(const char *name, const char *const *names, int n)
 {
@@ -58,7 +66,8 @@ static int jpeg_flag(int argc, char **argv, int *i, nerf_scene_options *o)
     uint64_t q = 0;
     if (*i + 1 < argc && argv[*i + 1][0] >= '0' && argv[*i + 1][0] <= '9') {
         if (cli_uint(argv[*i + 1], 1, 100, &q) != 0) {
-            fprintf(stderr, "nerf-scene: --jpeg quality must be 1..100\n");
+            cli_usage_error("nerf-scene", "--jpeg quality must be "
+                                "1..100, not '%s'", argv[*i + 1]);
             return -1;
         }
         o->jpeg_quality = (uint32_t)q;
@@ -108,12 +117,16 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         uint64_t v = 0;
         uint32_t *field = NULL;
+        if (cli_check_option("nerf-scene", a, options) != 0) {
+            return 2;
+        }
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             fputs(usage, stdout);
             return 0;
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
+                cli_bad_value("nerf-scene", a, NULL, "a folder");
                 goto bad;
             }
             continue;
@@ -124,10 +137,12 @@ int main(int argc, char **argv)
             int k = is_capture ? pick(name, captures, 3)
                                : pick(name, layouts, 5);
             if (k < 0) {
-                fprintf(stderr, "nerf-scene: %s needs one of %s\n", a,
+                cli_usage_error("nerf-scene", "%s needs one of %s%s%s%s", a,
                         is_capture ? "object, forward, unbounded"
                                    : "blender, transforms, llff, "
-                                     "colmap-text, colmap-binary");
+                                     "colmap-text, colmap-binary",
+                        name ? ", not '" : "", name ? name : "",
+                        name ? "'" : "");
                 goto bad;
             }
             if (is_capture) {
@@ -149,14 +164,14 @@ int main(int argc, char **argv)
                                      strcmp(f, "jpg") == 0)) {
                 o.image_format = NERF_IMAGE_FORMAT_JPEG;
             } else {
-                fprintf(stderr, "nerf-scene: --format is png or jpeg\n");
+                cli_bad_value("nerf-scene", a, f, "png or jpeg");
                 goto bad;
             }
             continue;
         } else if (strcmp(a, "--distortion") == 0) {
             if (parse_lens(cli_value(argc, argv, &i), &o) != 0) {
-                fprintf(stderr, "nerf-scene: --distortion needs 1 to 5 "
-                        "numbers separated by commas: k1,k2,p1,p2,k3\n");
+                cli_usage_error("nerf-scene", "--distortion needs 1 to 5 "
+                                "numbers separated by commas: k1,k2,p1,p2,k3");
                 goto bad;
             }
             continue;
@@ -173,17 +188,18 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--threads") == 0) {
             field = &o.threads;
         } else {
-            fprintf(stderr, "nerf-scene: unknown argument '%s'\n", a);
+            cli_usage_error("nerf-scene", "unknown option '%s'", a);
             goto bad;
         }
-        if (cli_uint(cli_value(argc, argv, &i), 0, 100000, &v) != 0) {
-            fprintf(stderr, "nerf-scene: %s needs a whole number\n", a);
+        const char *text = cli_value(argc, argv, &i);
+        if (cli_uint(text, 0, 100000, &v) != 0) {
+            cli_bad_value("nerf-scene", a, text, "a whole number 0..100000");
             goto bad;
         }
         *field = (uint32_t)v;
     }
     if (out == NULL) {
-        fprintf(stderr, "nerf-scene: --out is required\n");
+        cli_usage_error("nerf-scene", "--out is required");
         goto bad;
     }
     /* Each capture in its usual layout unless told otherwise. */
@@ -203,6 +219,5 @@ int main(int argc, char **argv)
     }
     return 0;
 bad:
-    fputs(usage, stderr);
     return 2;
 }

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "common/cli.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
@@ -96,6 +97,14 @@ typedef struct args {
     int space;     /* nerf_space; -1: the dataset's */
 } args;
 
+/* Every option parse() knows, for telling a typo from a mistake. */
+static const char *const options[] = {
+    "--help", "-h", "--resume", "--data", "--out", "--preset", "--steps",
+    "--seconds", "--downscale", "--batch", "--seed", "--checkpoint-every",
+    "--lr", "--batch-samples", "--matmul", "--space", "--random-background",
+    NULL
+};
+
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -109,6 +118,9 @@ static int parse(int argc, char **argv, args *a)
     a->space = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
+        if (cli_check_option("nerf-train", k, options) != 0) {
+            return -1;
+        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -120,7 +132,7 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-train: %s needs a value\n", k);
+            cli_bad_value("nerf-train", k, NULL, NULL);
         } else if (strcmp(k, "--data") == 0) {
             a->data = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -164,18 +176,18 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, 1, &on);
             a->random_bg = (int)on;
         } else {
-            fprintf(stderr, "nerf-train: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_usage_error("nerf-train", "unknown option '%s'", k);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-train: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-train", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->data == NULL || a->out == NULL) {
-        fprintf(stderr, "nerf-train: --data and --out are required\n");
+        cli_usage_error("nerf-train", "--data and --out are required");
         return -1;
     }
     if (a->lr == 0.0) {
@@ -251,7 +263,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     nerf_hooks hooks;

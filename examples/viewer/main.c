@@ -6,6 +6,7 @@
 #include <nerf.h>
 
 #include "../common/cli.h"
+#include "../common/options.h"
 #include "../common/scene_setup.h"
 #include "viewer.h"
 
@@ -41,12 +42,21 @@ typedef struct args {
     double quit_after;
 } args;
 
+/* Every option parse() knows, for telling a typo from a mistake. */
+static const char *const options[] = {
+    "--help", "-h", "--model", "--data", "--screenshot", "--downscale",
+    "--width", "--height", "--view", "--quit-after", NULL
+};
+
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
     a->downscale = 1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
+        if (cli_check_option("nerf-viewer", k, options) != 0) {
+            return -1;
+        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -54,7 +64,7 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-viewer: %s needs a value\n", k);
+            cli_bad_value("nerf-viewer", k, NULL, NULL);
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -73,18 +83,18 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--quit-after") == 0) {
             bad = cli_double(v, &a->quit_after) || !(a->quit_after > 0.0);
         } else {
-            fprintf(stderr, "nerf-viewer: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_usage_error("nerf-viewer", "unknown option '%s'", k);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-viewer: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-viewer", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL) {
-        fprintf(stderr, "nerf-viewer: --model is required\n");
+        cli_usage_error("nerf-viewer", "--model is required");
         return -1;
     }
     return 0;
@@ -173,7 +183,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     nerf_hooks hooks;

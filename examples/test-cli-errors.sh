@@ -1,0 +1,66 @@
+#!/bin/sh
+# A mistyped option or a bad value costs the user one line, not a page:
+# every program exits 2 with a single line on stderr that names the
+# option (and the nearest real one) and points to --help, and does no work.
+#
+#   test-cli-errors.sh NERF-SCENE NERF-TRAIN NERF-RENDER NERF-EVAL NERF-INFO
+#                      [NERF-VIEWER]
+set -eu
+scene=$1 train=$2 render=$3 eval=$4 info=$5 viewer=${6:-}
+wrap=${MESON_EXE_WRAPPER:-}
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-cli-errors.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+
+# one PROGRAM WORDS ARGS...: PROGRAM exits 2 with exactly one line on
+# stderr, containing WORDS, and nothing on stdout.
+one() {
+  prog=$1 words=$2
+  shift 2
+  name=$(basename "$prog")
+  status=0
+  $wrap "$prog" "$@" >"$work/out" 2>"$work/err" || status=$?
+  [ "$status" -eq 2 ] || { cat "$work/err"; fail "$name $*: status $status"; }
+  lines=$(wc -l <"$work/err")
+  [ "$lines" -eq 1 ] || { cat "$work/err"; fail "$name $*: $lines lines"; }
+  grep -qF -- "$words" "$work/err" ||
+    { cat "$work/err"; fail "$name $*: no '$words'"; }
+  grep -qF -- "$name --help lists the options" "$work/err" ||
+    { cat "$work/err"; fail "$name $*: no pointer to --help"; }
+  [ ! -s "$work/out" ] || { cat "$work/out"; fail "$name $*: stdout"; }
+}
+
+one "$train" "unknown option '--step' (did you mean --steps?)" \
+  --data "$work/none" --out "$work/m.nerf" --step 5
+one "$train" "did you mean --steps?" --steps 5 -steps 5
+one "$train" "did you mean --checkpoint-every?" --checkpoint 5
+one "$train" "did you mean --preset?" --prest fast
+one "$train" "bad value 'abc' for --steps" --data d --out m --steps abc
+one "$train" "bad value 'huge' for --preset" --preset huge
+one "$train" "--seed needs a value" --data d --out m --seed
+one "$train" "unknown option '--frobnicate';" --frobnicate
+one "$train" "unexpected argument 'scene'" scene
+one "$train" "--data and --out are required"
+one "$render" "did you mean --width?" --widht 8
+one "$render" "did you mean --frames?" --frame 8
+one "$render" "did you mean --downscale?" --downsacle 2
+one "$render" "bad value 'circle' for --path" --path circle
+one "$eval" "did you mean --skip?" --skipp 8
+one "$eval" "did you mean --json?" --jsno
+one "$eval" "bad value 'all' for --split" --split all
+one "$scene" "did you mean --train?" --trian 4
+one "$scene" "did you mean --layout?" --lay llff
+one "$scene" "bad value 'x' for --width" --width x
+one "$scene" "--capture needs one of" --capture indoor
+one "$info" "unknown option '--verbose'" --verbose
+if [ -n "$viewer" ]; then
+  one "$viewer" "did you mean --screenshot?" --screenshoot a.png
+fi
+# Nothing was created on the way.
+[ ! -e "$work/m.nerf" ] || fail "a model was written"
+echo "ok"
