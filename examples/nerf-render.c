@@ -48,6 +48,7 @@ typedef struct args {
     double near, far, focal, fov;
     int depth, size_given;
     int bounds_given; /* 1: --near, 2: --far */
+    int split_given, downscale_given, frames_given;
 } args;
 
 /* The lego scene's horizontal field of view, in radians: --path orbit's,
@@ -104,10 +105,13 @@ static int parse(int argc, char **argv, args *a)
             int split = cli_split(v);
             a->split = (uint64_t)split;
             bad = split < 0;
+            a->split_given = 1;
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
+            a->downscale_given = 1;
         } else if (strcmp(k, "--frames") == 0) {
             bad = cli_uint(v, 1, 100000, &a->frames);
+            a->frames_given = 1;
         } else if (strcmp(k, "--width") == 0) {
             bad = cli_uint(v, 1, 16384, &a->width);
             a->size_given |= 1;
@@ -176,6 +180,34 @@ static int parse(int argc, char **argv, args *a)
         cli_usage_error("nerf-render", "--path spiral needs --data");
         return -1;
     }
+    /* Options that would change nothing are refused rather than ignored:
+     * the user meant something by them. */
+    if (a->frames_given && a->path == NULL) {
+        cli_usage_error("nerf-render", "--frames goes with --path (--data "
+                        "renders each view of its split, --poses each "
+                        "camera of the file)");
+        return -1;
+    }
+    int views_of_data = a->path == NULL && a->poses == NULL;
+    if (a->split_given && !views_of_data) {
+        cli_usage_error("nerf-render", "--split chooses the views of --data "
+                        "to render; with --%s it would change nothing",
+                        a->path ? "path" : "poses");
+        return -1;
+    }
+    int data_size = views_of_data ||
+                    (a->path && strcmp(a->path, "spiral") == 0);
+    if (a->downscale_given && !data_size) {
+        cli_usage_error("nerf-render", "--downscale shrinks the views of "
+                        "--data and --path spiral; with --%s give --width "
+                        "and --height", a->path ? "path orbit" : "poses");
+        return -1;
+    }
+    if (a->downscale_given && a->size_given) {
+        cli_usage_error("nerf-render", "give --downscale or --width/--height, "
+                        "not both");
+        return -1;
+    }
     return 0;
 }
 
@@ -204,6 +236,28 @@ static int load_poses(const args *a, const nerf_hooks *hooks,
     return nerf_camera_path_load(out, a->poses, &o);
 }
 
+/*
+ * A camera of the scene at the size asked for: the intrinsics scale with
+ * the image, so that the view is the same, only sharper or coarser.  With
+ * one side given, the other keeps the camera's aspect ratio.
+ */
+static void resize_camera(const args *a, nerf_camera *cam)
+{
+    double w = (double)cam->width, h = (double)cam->height;
+    double nw = (a->size_given & 1) ? (double)a->width
+                                    : floor(a->height * w / h + 0.5);
+    double nh = (a->size_given & 2) ? (double)a->height
+                                    : floor(a->width * h / w + 0.5);
+    nw = nw < 1.0 ? 1.0 : nw > 16384.0 ? 16384.0 : nw;
+    nh = nh < 1.0 ? 1.0 : nh > 16384.0 ? 16384.0 : nh;
+    cam->fx = (float)(cam->fx * nw / w);
+    cam->cx = (float)(cam->cx * nw / w);
+    cam->fy = (float)(cam->fy * nh / h);
+    cam->cy = (float)(cam->cy * nh / h);
+    cam->width = (uint32_t)nw;
+    cam->height = (uint32_t)nh;
+}
+
 /* Camera `i` of the requested views. */
 static int view_camera(const args *a, const nerf_dataset *ds,
                        const nerf_camera_path *cp, uint32_t i, uint32_t n,
@@ -213,11 +267,13 @@ static int view_camera(const args *a, const nerf_dataset *ds,
     if (cp != NULL) {
         return nerf_camera_path_camera(cp, i, cam);
     }
-    if (a->path == NULL) {
-        return nerf_dataset_camera(ds, i, cam);
-    }
-    if (strcmp(a->path, "spiral") == 0) {
-        return nerf_dataset_spiral_camera(ds, i, n, cam);
+    if (a->path == NULL || strcmp(a->path, "spiral") == 0) {
+        int rc = a->path == NULL ? nerf_dataset_camera(ds, i, cam)
+                                 : nerf_dataset_spiral_camera(ds, i, n, cam);
+        if (rc == NERF_OK && a->size_given) {
+            resize_camera(a, cam);
+        }
+        return rc;
     }
     /* The lego scene's field of view, circling at 30 degrees. */
     const double fov = ORBIT_FOV, elev = 30.0 * 3.14159265358979 / 180;

@@ -113,6 +113,7 @@ int main(int argc, char **argv)
     static const char *const layouts[] = {"blender", "transforms", "llff",
                                           "colmap-text", "colmap-binary"};
     int layout = -1;
+    bool val_given = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         uint64_t v = 0;
@@ -183,6 +184,7 @@ int main(int argc, char **argv)
             field = &o.n_train;
         } else if (strcmp(a, "--val") == 0) {
             field = &o.n_val;
+            val_given = true;
         } else if (strcmp(a, "--test") == 0) {
             field = &o.n_test;
         } else if (strcmp(a, "--threads") == 0) {
@@ -207,6 +209,12 @@ int main(int argc, char **argv)
                : o.capture == NERF_SCENE_CAPTURE_FORWARD
                    ? NERF_SCENE_LAYOUT_LLFF
                    : NERF_SCENE_LAYOUT_BLENDER;
+    if (val_given && o.layout == NERF_SCENE_LAYOUT_LLFF) {
+        cli_usage_error("nerf-scene", "--val: an LLFF layout has no "
+                        "validation views (its loader holds out every 8th "
+                        "view as the test split); give --train and --test");
+        return 2;
+    }
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;

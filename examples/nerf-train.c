@@ -92,6 +92,7 @@ typedef struct args {
     uint64_t steps, downscale, batch, batch_samples, seed, every;
     double lr, seconds;
     int resume;
+    int lr_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (fp32) */
     int space;     /* nerf_space; -1: the dataset's */
@@ -157,6 +158,7 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, UINT32_MAX, &a->every);
         } else if (strcmp(k, "--lr") == 0) {
             bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
+            a->lr_given = 1;
         } else if (strcmp(k, "--batch-samples") == 0) {
             bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
         } else if (strcmp(k, "--matmul") == 0) {
@@ -215,6 +217,10 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
                 fprintf(stderr, "nerf-train: --matmul ignored: the model "
                         "keeps the %s products it was saved with\n",
                         mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
+            }
+            if (a->lr_given) {
+                fprintf(stderr, "nerf-train: --lr ignored: the model keeps "
+                        "the learning-rate schedule it was saved with\n");
             }
             if (a->space >= 0 && (uint32_t)a->space != mo.space) {
                 fprintf(stderr, "nerf-train: --space ignored: the model "

@@ -61,6 +61,23 @@ one "$info" "unknown option '--verbose'" --verbose
 if [ -n "$viewer" ]; then
   one "$viewer" "did you mean --screenshot?" --screenshoot a.png
 fi
+one "$scene" "--val: an LLFF layout has no validation views" \
+  --out "$work/llff" --capture forward --val 2
+[ ! -e "$work/llff" ] || fail "nerf-scene wrote a scene it refused"
+
+# An option that cannot apply is said to be ignored, not dropped silently:
+# a resumed model keeps the learning-rate schedule it was saved with.
+$wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+  --test 1 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
+$wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
+  --batch 64 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
+$wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 3 \
+  --batch 64 --resume --lr 0.1 2>"$work/resume.log" ||
+  { cat "$work/resume.log"; exit 1; }
+grep -qF "nerf-train: --lr ignored" "$work/resume.log" ||
+  { cat "$work/resume.log"; fail "--lr on --resume dropped silently"; }
+rm -f "$work/model.nerf"
+
 # Nothing was created on the way.
 [ ! -e "$work/m.nerf" ] || fail "a model was written"
 echo "ok"
