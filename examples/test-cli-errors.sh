@@ -76,6 +76,39 @@ $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 3 \
   { cat "$work/resume.log"; exit 1; }
 grep -qF "nerf-train: --lr ignored" "$work/resume.log" ||
   { cat "$work/resume.log"; fail "--lr on --resume dropped silently"; }
+
+# failed PROGRAM WORDS ARGS...: PROGRAM exits 1 with WORDS in its message,
+# which must not call a missing or foreign file an input/output error.
+failed() {
+  prog=$1 words=$2
+  shift 2
+  name=$(basename "$prog")
+  status=0
+  $wrap "$prog" "$@" >"$work/out" 2>"$work/err" || status=$?
+  [ "$status" -eq 1 ] || { cat "$work/err"; fail "$name $*: status $status"; }
+  grep -qF -- "$words" "$work/err" ||
+    { cat "$work/err"; fail "$name $*: no '$words'"; }
+  ! grep -q "input/output" "$work/err" ||
+    { cat "$work/err"; fail "$name $*: reads like a failing disk"; }
+}
+mkdir "$work/empty"
+failed "$eval" "nerf-eval: no such file or folder: $work/nope.nerf" \
+  --model "$work/nope.nerf" --data "$work/scene"
+failed "$eval" "not a recognised file or folder: $work/scene: a folder" \
+  --model "$work/scene" --data "$work/scene"
+failed "$eval" "not a libnerf checkpoint" \
+  --model "$work/scene/transforms_train.json" --data "$work/scene"
+failed "$eval" "no such file or folder: $work/nowhere" \
+  --model "$work/model.nerf" --data "$work/nowhere"
+rm "$work/scene/transforms_val.json"
+failed "$eval" "has no val split" \
+  --model "$work/model.nerf" --data "$work/scene" --split val
+failed "$train" "not a recognised file or folder: $work/empty" \
+  --data "$work/empty" --out "$work/other.nerf"
+failed "$train" "not a known dataset layout" \
+  --data "$work/empty" --out "$work/other.nerf"
+failed "$render" "no such file or folder: $work/path.json" \
+  --model "$work/model.nerf" --poses "$work/path.json" --out "$work/frames"
 rm -f "$work/model.nerf"
 
 # Nothing was created on the way.
