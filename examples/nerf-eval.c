@@ -123,14 +123,18 @@ static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         }
         psnr_sum += psnr;
         ssim_sum += ssim;
+        /* The dataset keeps every skip-th view of the split: number them
+         * as the split does, so that view 16 is the split's view 16. */
+        uint64_t view = (uint64_t)i * a->skip;
         if (a->json) {
             cJSON *v = cJSON_CreateObject();
-            cJSON_AddNumberToObject(v, "view", i);
+            cJSON_AddNumberToObject(v, "view", (double)view);
             cJSON_AddNumberToObject(v, "psnr", psnr);
             cJSON_AddNumberToObject(v, "ssim", ssim);
             cJSON_AddItemToArray(per_view, v);
         } else {
-            printf("view %3u  psnr %6.2f  ssim %.4f\n", i, psnr, ssim);
+            printf("view %3llu  psnr %6.2f  ssim %.4f\n",
+                   (unsigned long long)view, psnr, ssim);
         }
         char note[64];
         snprintf(note, sizeof note, "mean psnr %.2f", psnr_sum / (i + 1));
