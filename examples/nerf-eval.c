@@ -12,12 +12,29 @@
 #include "common/scene_setup.h"
 
 static const char usage[] =
-    "usage: nerf-eval --model MODEL --data DIR [--split train|val|test]\n"
-    "                 [--downscale K] [--skip K] [--json]\n"
-    "Render every view of the split (default test) and compare it with the\n"
-    "image: PSNR and SSIM (Gaussian window 11, sigma 1.5) per view and on\n"
-    "average.  With --json, print one JSON object on stdout instead:\n"
-    "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\": [...]}.\n";
+    "usage: nerf-eval --model MODEL --data DIR [--split S] [--downscale K]\n"
+    "                 [--skip K] [--json]\n"
+    "Render every view of a split of the scene MODEL was trained on and\n"
+    "compare it with the scene's image: PSNR (dB, higher is better) and SSIM\n"
+    "(0..1, Gaussian window 11, sigma 1.5) per view and on average.  Views\n"
+    "are numbered by their index in the split: \"view 16\" is its 17th image.\n"
+    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
+    "  --data DIR     the scene (required): Blender, transforms.json, LLFF\n"
+    "                 or COLMAP, as for nerf-train\n"
+    "  --split S      train, val or test (default test)\n"
+    "  --downscale K  load the images K times smaller (default 1: full\n"
+    "                 size); use the value MODEL was trained with\n"
+    "  --skip K       score only every K-th view of the split (views 0, K,\n"
+    "                 2K, ...), to save time, as the reference's \"testskip\"\n"
+    "                 (default 1: every view)\n"
+    "  --json         print one JSON object on stdout instead of the table:\n"
+    "                 {\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
+    "                 [{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)\n"
+    "  --help         print this help and exit\n"
+    "Examples:\n"
+    "  nerf-eval --model lego.nerf --data lego --downscale 8 --skip 8\n"
+    "  nerf-eval --model fern.nerf --data fern --downscale 8 --json \\\n"
+    "      > fern-eval.json\n";
 
 typedef struct args {
     const char *model, *data;

@@ -9,7 +9,9 @@
 static const char usage[] =
     "usage: nerf-info\n"
     "Print libnerf's version and how it was built (compiler, BLAS, SIMD,\n"
-    "optional libraries).  Options: --help.\n"
+    "optional libraries); status 1 if the library found at run time is\n"
+    "not the version the program was built against.\n"
+    "  --help   print this help and exit\n"
     "Examples:\n"
     "  nerf-info\n";
 
