@@ -42,7 +42,7 @@ typedef struct args {
     int json;
 } args;
 
-/* Every option parse() knows, for telling a typo from a mistake. */
+/* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--json", "--model", "--data", "--split", "--downscale",
     "--skip", NULL
@@ -56,9 +56,6 @@ static int parse(int argc, char **argv, args *a)
     a->skip = 1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
-        if (cli_check_option("nerf-eval", k, options) != 0) {
-            return -1;
-        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -70,7 +67,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            cli_bad_value("nerf-eval", k, NULL, NULL);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-eval", k, options) == 0) {
+                cli_bad_value("nerf-eval", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -84,7 +84,7 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--skip") == 0) {
             bad = cli_uint(v, 1, 100000, &a->skip);
         } else {
-            cli_usage_error("nerf-eval", "unknown option '%s'", k);
+            cli_unknown("nerf-eval", k, options);
             return -1;
         }
         if (bad) {

@@ -88,7 +88,7 @@ typedef struct args {
  * and the default of --poses files that carry no intrinsics. */
 #define ORBIT_FOV 0.6911112070083618
 
-/* Every option parse() knows, for telling a typo from a mistake. */
+/* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
     "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
@@ -104,9 +104,6 @@ static int parse(int argc, char **argv, args *a)
     a->width = a->height = 100;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
-        if (cli_check_option("nerf-render", k, options) != 0) {
-            return -1;
-        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -118,7 +115,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            cli_bad_value("nerf-render", k, NULL, NULL);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-render", k, options) == 0) {
+                cli_bad_value("nerf-render", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -158,7 +158,7 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_double(v, &a->far);
             a->bounds_given |= 2;
         } else {
-            cli_usage_error("nerf-render", "unknown option '%s'", k);
+            cli_unknown("nerf-render", k, options);
             return -1;
         }
         if (bad) {

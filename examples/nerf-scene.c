@@ -58,7 +58,7 @@ static const char usage[] =
     "  nerf-scene --out tiny --width 32 --height 32 --train 20 --val 0 \\\n"
     "      --test 4\n";
 
-/* Every option main() knows, for telling a typo from a mistake. */
+/* The options main() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--out", "--capture", "--layout", "--jpeg", "--format",
     "--distortion", "--width", "--height", "--train", "--val", "--test",
@@ -135,9 +135,6 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         uint64_t v = 0;
         uint32_t *field = NULL;
-        if (cli_check_option("nerf-scene", a, options) != 0) {
-            return 2;
-        }
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             fputs(usage, stdout);
             return 0;
@@ -207,7 +204,7 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--threads") == 0) {
             field = &o.threads;
         } else {
-            cli_usage_error("nerf-scene", "unknown option '%s'", a);
+            cli_unknown("nerf-scene", a, options);
             goto bad;
         }
         const char *text = cli_value(argc, argv, &i);

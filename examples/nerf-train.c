@@ -110,7 +110,7 @@ typedef struct args {
     int space;     /* nerf_space; -1: the dataset's */
 } args;
 
-/* Every option parse() knows, for telling a typo from a mistake. */
+/* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--resume", "--data", "--out", "--preset", "--steps",
     "--seconds", "--downscale", "--batch", "--seed", "--checkpoint-every",
@@ -131,9 +131,6 @@ static int parse(int argc, char **argv, args *a)
     a->space = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
-        if (cli_check_option("nerf-train", k, options) != 0) {
-            return -1;
-        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -145,7 +142,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            cli_bad_value("nerf-train", k, NULL, NULL);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-train", k, options) == 0) {
+                cli_bad_value("nerf-train", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--data") == 0) {
             a->data = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -190,7 +190,7 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, 1, &on);
             a->random_bg = (int)on;
         } else {
-            cli_usage_error("nerf-train", "unknown option '%s'", k);
+            cli_unknown("nerf-train", k, options);
             return -1;
         }
         if (bad) {

@@ -60,6 +60,8 @@ one "$scene" "--capture needs one of" --capture indoor
 one "$info" "unknown option '--verbose'" --verbose
 if [ -n "$viewer" ]; then
   one "$viewer" "did you mean --screenshot?" --screenshoot a.png
+  one "$viewer" "--downscale shrinks the images of --data" \
+    --model "$work/m.nerf" --downscale 2
 fi
 one "$scene" "--val: an LLFF layout has no validation views" \
   --out "$work/llff" --capture forward --val 2

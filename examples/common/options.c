@@ -90,6 +90,13 @@ int cli_check_option(const char *program, const char *arg,
             return 0;
         }
     }
+    cli_unknown(program, arg, names);
+    return -1;
+}
+
+void cli_unknown(const char *program, const char *arg,
+                 const char *const *names)
+{
     const char *guess = cli_suggest(arg, names);
     char hint[96] = "";
     if (guess != NULL) {
@@ -98,7 +105,6 @@ int cli_check_option(const char *program, const char *arg,
     fprintf(stderr, "%s: %s '%s'%s; %s --help lists the options\n", program,
             arg[0] == '-' ? "unknown option" : "unexpected argument", arg,
             hint, program);
-    return -1;
 }
 
 void cli_usage_error(const char *program, const char *fmt, ...)

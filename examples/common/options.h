@@ -23,6 +23,11 @@ const char *cli_suggest(const char *arg, const char *const *names);
 int cli_check_option(const char *program, const char *arg,
                      const char *const *names);
 
+/* The message of cli_check_option() for an arg known not to be an option,
+ * from a parser that matched it against its options itself. */
+void cli_unknown(const char *program, const char *arg,
+                 const char *const *names);
+
 /* "PROGRAM: MESSAGE; PROGRAM --help lists the options", one line on
  * stderr; MESSAGE is a printf format without a newline. */
 void cli_usage_error(const char *program, const char *fmt, ...)

@@ -47,11 +47,12 @@ static const char usage[] =
 typedef struct args {
     const char *model, *data, *screenshot;
     uint64_t width, height, downscale;
+    int downscale_given;
     int mode;
     double quit_after;
 } args;
 
-/* Every option parse() knows, for telling a typo from a mistake. */
+/* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--model", "--data", "--screenshot", "--downscale",
     "--width", "--height", "--view", "--quit-after", NULL
@@ -63,9 +64,6 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
-        if (cli_check_option("nerf-viewer", k, options) != 0) {
-            return -1;
-        }
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
             fputs(usage, stdout);
             exit(0);
@@ -73,7 +71,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            cli_bad_value("nerf-viewer", k, NULL, NULL);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-viewer", k, options) == 0) {
+                cli_bad_value("nerf-viewer", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -82,6 +83,7 @@ static int parse(int argc, char **argv, args *a)
             a->screenshot = v;
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
+            a->downscale_given = 1;
         } else if (strcmp(k, "--width") == 0) {
             bad = cli_uint(v, 1, 16384, &a->width);
         } else if (strcmp(k, "--height") == 0) {
@@ -92,7 +94,7 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--quit-after") == 0) {
             bad = cli_double(v, &a->quit_after) || !(a->quit_after > 0.0);
         } else {
-            cli_usage_error("nerf-viewer", "unknown option '%s'", k);
+            cli_unknown("nerf-viewer", k, options);
             return -1;
         }
         if (bad) {
@@ -104,6 +106,11 @@ static int parse(int argc, char **argv, args *a)
     }
     if (a->model == NULL) {
         cli_usage_error("nerf-viewer", "--model is required");
+        return -1;
+    }
+    if (a->downscale_given && a->data == NULL) {
+        cli_usage_error("nerf-viewer", "--downscale shrinks the images of "
+                        "--data; without --data, give --width/--height");
         return -1;
     }
     return 0;
