@@ -12,6 +12,7 @@
 #include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+#include "common/video.h"
 
 static const char usage[] =
     "usage: nerf-render --model MODEL --out DIR\n"
@@ -19,6 +20,7 @@ static const char usage[] =
     "                    | --path orbit|spiral [--frames N] [--data DIR]\n"
     "                    | --poses FILE [--focal F | --fov DEG] [--data DIR])\n"
     "                   [--width W] [--height H] [--depth] [--near T --far T]\n"
+    "                   [--video FILE.mp4 [--fps N]]\n"
     "Render views of MODEL and write them to DIR (created if missing) as\n"
     "r_NNN.png, NNN counting from 000 in the order of the views.\n"
     "  --model MODEL  the checkpoint nerf-train saved (required)\n"
@@ -66,10 +68,16 @@ static const char usage[] =
     "                 depth map's scale), given together, 0 <= T_near <\n"
     "                 T_far (NDC depths within [0, 1] for an LLFF scene);\n"
     "                 default the scene's bounds with --data, else 2 and 6\n"
+    "  --video FILE   also write the views, in order, as an MP4 video\n"
+    "                 (H.264, or MPEG-4 part 2 if FFmpeg lacks libx264);\n"
+    "                 all views must share one even width and height.  A\n"
+    "                 build without FFmpeg's libraries says so and writes\n"
+    "                 the PNGs only (default none: PNGs only)\n"
+    "  --fps N        frames a second of the video (default 30)\n"
     "  --help         print this help and exit\n"
     "Examples:\n"
     "  nerf-render --model lego.nerf --out lego-orbit --path orbit \\\n"
-    "      --frames 40 --width 200 --height 200\n"
+    "      --frames 40 --width 200 --height 200 --video lego-orbit.mp4\n"
     "  nerf-render --model fern.nerf --data fern --downscale 8 \\\n"
     "      --path spiral --frames 60 --depth --out fern-spiral\n"
     "  nerf-render --model lego.nerf --data lego --split test --width 200 \\\n"
@@ -82,6 +90,9 @@ typedef struct args {
     int depth, size_given;
     int bounds_given; /* 1: --near, 2: --far */
     int split_given, downscale_given, frames_given;
+    const char *video; /* NULL: PNG frames only */
+    uint64_t fps;
+    int fps_given;
 } args;
 
 /* The lego scene's horizontal field of view, in radians: --path orbit's,
@@ -92,7 +103,7 @@ typedef struct args {
 static const char *const options[] = {
     "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
     "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
-    "--width", "--height", "--near", "--far", NULL
+    "--width", "--height", "--near", "--far", "--video", "--fps", NULL
 };
 
 static int parse(int argc, char **argv, args *a)
@@ -102,6 +113,7 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     a->frames = 40;
     a->width = a->height = 100;
+    a->fps = 30;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
@@ -151,6 +163,11 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--height") == 0) {
             bad = cli_uint(v, 1, 16384, &a->height);
             a->size_given |= 2;
+        } else if (strcmp(k, "--video") == 0) {
+            a->video = v;
+        } else if (strcmp(k, "--fps") == 0) {
+            bad = cli_uint(v, 1, 1000, &a->fps);
+            a->fps_given = 1;
         } else if (strcmp(k, "--near") == 0) {
             bad = cli_double(v, &a->near);
             a->bounds_given |= 1;
@@ -207,6 +224,10 @@ static int parse(int argc, char **argv, args *a)
     if (a->bounds_given && !(a->near < a->far)) {
         cli_usage_error("nerf-render", "--near must be less than --far (got "
                         "--near %g --far %g)", a->near, a->far);
+        return -1;
+    }
+    if (a->fps_given && a->video == NULL) {
+        cli_usage_error("nerf-render", "--fps goes with --video");
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
@@ -412,6 +433,34 @@ static int write_view(const args *a, const nerf_camera *cam, uint32_t i,
     return rc;
 }
 
+/*
+ * A video holds frames of one size, even in both directions; checked on
+ * every view before anything is rendered.  lw x lh is the size of the
+ * views before view i (0 x 0 for the first).
+ */
+static int video_mismatch(const args *a, const nerf_camera *cam, uint32_t i,
+                          uint32_t lw, uint32_t lh)
+{
+    if (a->video == NULL) {
+        return 0;
+    }
+    if (i > 0 && (cam->width != lw || cam->height != lh)) {
+        fprintf(stderr, "nerf-render: --video needs views of one size, but "
+                        "view %u is %ux%u and the ones before %ux%u\n",
+                (unsigned)i, (unsigned)cam->width, (unsigned)cam->height,
+                (unsigned)lw, (unsigned)lh);
+        return 1;
+    }
+    if (cam->width % 2 != 0 || cam->height % 2 != 0) {
+        fprintf(stderr, "nerf-render: --video needs an even width and "
+                        "height (the codecs keep colour at half "
+                        "resolution), but the views are %ux%u\n",
+                (unsigned)cam->width, (unsigned)cam->height);
+        return 1;
+    }
+    return 0;
+}
+
 static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
                       const nerf_camera_path *cp, float near, float far)
 {
@@ -429,6 +478,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (rc != NERF_OK) {
             return rc;
         }
+        if (video_mismatch(a, &cam, i, lw, lh)) {
+            return REPORTED;
+        }
         size_t pixels = (size_t)cam.width * cam.height;
         total += pixels;
         if (pixels > largest) {
@@ -441,6 +493,16 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     if (alloc_outputs(&o, largest, lw, lh, a->depth) != 0) {
         free_outputs(&o);
         return REPORTED;
+    }
+    /* Opened before the first view, so that a file that cannot be made
+     * costs no rendering. */
+    video *vid = NULL;
+    if (a->video != NULL) {
+        vid = video_open("nerf-render", a->video, lw, lh, (unsigned)a->fps);
+        if (vid == NULL) {
+            free_outputs(&o);
+            return REPORTED;
+        }
     }
     render_progress rp;
     rp.before = 0;
@@ -457,14 +519,31 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (rc == NERF_OK) {
             rc = write_view(a, &cam, i, &o, near, far);
         }
+        if (rc == NERF_OK && vid != NULL && video_write(vid, o.rgb) != 0) {
+            rc = REPORTED;
+        }
         rp.before += (uint64_t)cam.width * cam.height;
     }
     free_outputs(&o);
+    char codec[64] = "";
+    if (vid != NULL) {
+        snprintf(codec, sizeof codec, "%s", video_codec(vid));
+        if (rc != NERF_OK) {
+            video_discard(vid);
+        } else if (video_finish(vid) != 0) {
+            rc = REPORTED;
+        }
+    }
     if (rc == NERF_OK) {
         char note[4200];
         snprintf(note, sizeof note, "%u view%s in %s", (unsigned)n,
                  n == 1 ? "" : "s", a->out);
         progress_end(&rp.bar, note);
+        if (a->video != NULL) {
+            fprintf(stderr, "nerf-render: wrote %s: %u frames of %ux%u at "
+                            "%u fps, %s\n", a->video, (unsigned)n,
+                    (unsigned)lw, (unsigned)lh, (unsigned)a->fps, codec);
+        }
     }
     return rc;
 }
@@ -480,6 +559,12 @@ int main(int argc, char **argv)
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-render";
+    if (a.video != NULL && !video_supported()) {
+        fprintf(stderr, "nerf-render: this build has no video output "
+                        "(FFmpeg's libraries were not found at build time); "
+                        "the frames are written as PNG in %s\n", a.out);
+        a.video = NULL;
+    }
     if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
         fprintf(stderr, "nerf-render: %s: %s\n", a.out, strerror(errno));
         return 1;

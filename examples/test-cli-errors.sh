@@ -50,6 +50,7 @@ one "$render" "did you mean --width?" --widht 8
 one "$render" "did you mean --frames?" --frame 8
 one "$render" "did you mean --downscale?" --downsacle 2
 one "$render" "bad value 'circle' for --path" --path circle
+one "$render" "did you mean --video?" --vidoe orbit.mp4
 one "$eval" "did you mean --skip?" --skipp 8
 one "$eval" "did you mean --json?" --jsno
 one "$eval" "bad value 'all' for --split" --split all

@@ -56,7 +56,7 @@ help "$train" --preset --steps --seconds --downscale --batch --seed --lr \
 grep -q "^  --data DIR" "$work/help" || fail "nerf-train: --data unexplained"
 grep -q "^  --out MODEL" "$work/help" || fail "nerf-train: --out unexplained"
 help "$render" --split --downscale --frames --focal --fov --width --height \
-  --depth --near
+  --depth --near --video --fps
 for opt in --model --out --data "--path orbit" "--path spiral" --poses; do
   [ -n "$(entry "$opt")" ] || fail "nerf-render: $opt unexplained"
 done

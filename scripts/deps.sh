@@ -23,8 +23,13 @@ NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev libjpeg-dev zlib1g-dev
 # Optional packages: the test command installs them when it can (as root,
 # from the configured apt sources) and carries on without them otherwise;
 # the demo does not need them.  colmap (COLMAP, photos to poses) serves
-# scripts/colmap-train.sh; its test is skipped without it.
-NERF_DEB_OPTIONAL=(colmap)
+# scripts/colmap-train.sh; its test is skipped without it.  FFmpeg's
+# libraries (meson option video) let nerf-render --video write MP4 files,
+# and the ffmpeg package's ffprobe and ffmpeg let the test check them;
+# without the libraries that test is skipped.
+NERF_DEB_OPTIONAL=(colmap
+                   libavcodec-dev libavformat-dev libavutil-dev
+                   libswscale-dev ffmpeg)
 
 # Options of build/release, shared by both scripts so that running one after
 # the other reuses the build instead of reconfiguring it back and forth.

@@ -11,6 +11,14 @@
 # libnerf needs its runtime in the programs too.  Skipped (77) without
 # pkg-config, meson or a C or C++ compiler.
 #
+# Then, as a user of the installed tree does, with an empty environment
+# (no LD_LIBRARY_PATH, no ldconfig): the staged nerf-info and
+# `nerf-train --help` must start (their install rpath finds the staged
+# library; NERF_EXAMPLES=false skips them for a build without examples),
+# and the compile line of docs/tutorial-c.md (NERF_TUTORIAL_DOC), taken
+# from the document, must build examples/tutorial.c (NERF_TUTORIAL_SRC)
+# into a program that starts with the staged library.
+#
 # In a cross build tests/abi/meson.build sets CC and CXX to the cross
 # compilers and PKG_CONFIG_LIBDIR to the host machine's .pc files, and
 # passes as WRAPPER the command that runs host programs (qemu-user); the C
@@ -105,3 +113,83 @@ echo "ok   C99 -pedantic program built with pkg-config prints $printed"
 "$cxx" -std=c++17 -pedantic -Wall -Wextra -Werror $san $cflags \
   "$cxx_example" -o "$scratch/nerf_orbit" $libs
 echo "ok   C++17 example $(basename "$cxx_example") built with pkg-config"
+
+if [ $# -gt 0 ]; then
+  echo "cross build: not running the installed programs or the tutorial"
+  exit 0
+fi
+
+# The installed programs, started as from a shell with nothing set up.
+if [ "${NERF_EXAMPLES:-true}" = true ]; then
+  for prog in nerf-info nerf-train; do
+    path=$(find "$stage" -type f -name "$prog" | head -n 1)
+    if [ -z "$path" ]; then
+      echo "$prog was not installed under $stage"
+      exit 1
+    fi
+    set -- "$path"
+    [ "$prog" = nerf-train ] && set -- "$path" --help
+    if ! env -i "$@" >"$scratch/$prog.out" 2>&1; then
+      echo "the installed $* failed to run:"
+      cat "$scratch/$prog.out"
+      exit 1
+    fi
+  done
+  if ! grep -q "$version" "$scratch/nerf-info.out"; then
+    echo "the installed nerf-info did not print version $version:"
+    cat "$scratch/nerf-info.out"
+    exit 1
+  fi
+  echo "ok   installed nerf-info and nerf-train --help run with an empty" \
+       "environment"
+else
+  echo "examples disabled: not running installed programs"
+fi
+
+# docs/tutorial-c.md's command, as written there (continuation lines
+# joined), with this build's compiler and sanitizer.
+doc=${NERF_TUTORIAL_DOC:-}
+src=${NERF_TUTORIAL_SRC:-}
+if [ -z "$doc" ] || [ -z "$src" ]; then
+  echo "NERF_TUTORIAL_DOC or NERF_TUTORIAL_SRC not set: not building the" \
+       "tutorial"
+  exit 1
+fi
+line=$(awk '
+  /^```/ { inblock = !inblock; next }
+  inblock && !found && /^cc .*tutorial\.c/ { found = 1 }
+  found && inblock {
+    cont = sub(/\\$/, "")
+    printf "%s ", $0
+    if (!cont) exit
+  }' "$doc")
+case $line in
+  "cc "*) ;;
+  *) echo "no 'cc ... tutorial.c' command in $doc"; exit 1 ;;
+esac
+echo "tutorial-c.md: $line"
+mkdir -p "$scratch/tutorial"
+cp "$src" "$scratch/tutorial/tutorial.c"
+line="$cc $san ${line#cc }"
+(cd "$scratch/tutorial" && eval "$line")
+# Without arguments it prints its usage and exits 2, once the dynamic
+# linker has found libnerf (a training run is the 'tutorial' test's job);
+# a missing library stops it before main with status 127.
+status=0
+(cd "$scratch/tutorial" && env -i ./tutorial >run.log 2>&1) || status=$?
+if [ "$status" -ne 2 ] || ! grep -q '^usage: tutorial' \
+     "$scratch/tutorial/run.log"; then
+  echo "the tutorial built with the documented command did not start" \
+       "(exit $status):"
+  cat "$scratch/tutorial/run.log"
+  exit 1
+fi
+if command -v ldd >/dev/null 2>&1; then
+  loaded=$(env -i ldd "$scratch/tutorial/tutorial" | grep libnerf)
+  case $loaded in
+    *"$libdir"/*) ;;
+    *) echo "the tutorial's libnerf is not the staged one: $loaded"; exit 1 ;;
+  esac
+fi
+echo "ok   docs/tutorial-c.md's command builds a tutorial that starts with" \
+     "an empty environment"

@@ -42,7 +42,7 @@ case $out in
 esac
 echo "ok   a failed reconstruction is named"
 
-fern=${NERF_DATA_DIR:-}/fern
+fern=${NERF_DATA_DIR:-${NERF_DEFAULT_DATA_DIR:-}}/fern
 if [ "${NERF_TEST_COLMAP_FERN:-0}" != 1 ]; then
   echo "ok   (fern's reconstruction not tried: NERF_TEST_COLMAP_FERN=1" \
        "asks for it)"
@@ -53,7 +53,10 @@ if [ ! -f "$fern/poses_bounds.npy" ] || [ ! -d "$fern/images_8" ]; then
   exit 0
 fi
 "$script" --colmap "$colmap" --nerf-train "$train" "$fern/images_8" \
-  "$tmp/fern" -- --steps 1 --batch 64 || fail "fern: colmap-train failed"
+  "$tmp/fern" -- --space ndc --steps 1 --batch 64 2>"$tmp/fern.log" ||
+  { cat "$tmp/fern.log"; fail "fern: colmap-train failed"; }
+grep -q "forward-facing.*NDC rays" "$tmp/fern.log" ||
+  { cat "$tmp/fern.log"; fail "fern: --space ndc did not place it forward-facing"; }
 [ -f "$tmp/fern/model.nerf" ] || fail "fern: no model.nerf"
 report=$(/usr/bin/python3 "$compare" "$tmp/fern/sparse/0" "$fern") ||
   fail "fern: compare-poses failed"
@@ -65,4 +68,5 @@ rot = float(re.search(r"rotation error \(deg\): mean [0-9.]+, max ([0-9.]+)", te
 pos = float(re.search(r"position error .*max ([0-9.]+)", text).group(1))
 sys.exit(0 if rot < 2.0 and pos < 0.02 else 1)' ||
   fail "fern: COLMAP poses disagree with poses_bounds.npy"
-echo "ok   fern: COLMAP poses agree with poses_bounds.npy; one step trained"
+echo "ok   fern: COLMAP poses agree with poses_bounds.npy; one step trained" \
+  "in NDC"

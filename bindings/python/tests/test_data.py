@@ -40,6 +40,15 @@ class Scene(TestCase):
             self.assertTrue(ds.is_ndc)
             self.assertEqual(len(ds), 7)
             self.assertEqual(ds.image_size, (16, 12))
+        cm = os.path.join(_support.tmpdir(), "forward-colmap")
+        nerf.write_scene(cm, width=16, height=12, n_train=8,
+                         capture="forward", layout="colmap-binary")
+        with nerf.Dataset.load(cm, "train") as ds:
+            self.assertEqual((ds.format, ds.space[0]),
+                             ("colmap", "unbounded"))
+        with nerf.Dataset.load(cm, "train", forward_facing=1) as ds:
+            self.assertEqual((ds.format, ds.space[0], ds.is_ndc),
+                             ("colmap", "ndc", True))
         out = os.path.join(_support.tmpdir(), "unbounded")
         nerf.write_scene(out, width=16, height=12, n_train=2, n_val=1,
                          n_test=1, capture=nerf.SCENE_CAPTURE_UNBOUNDED)
