@@ -7,22 +7,46 @@
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
 static const char usage[] =
-    "usage: nerf-eval --model MODEL --data DIR [--split train|val|test]\n"
-    "                 [--downscale K] [--skip K] [--json]\n"
-    "Render every view of the split (default test) and compare it with the\n"
-    "image: PSNR and SSIM (Gaussian window 11, sigma 1.5) per view and on\n"
-    "average.  With --json, print one JSON object on stdout instead:\n"
-    "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\": [...]}.\n";
+    "usage: nerf-eval --model MODEL --data DIR [--split S] [--downscale K]\n"
+    "                 [--skip K] [--json]\n"
+    "Render every view of a split of the scene MODEL was trained on and\n"
+    "compare it with the scene's image: PSNR (dB, higher is better) and SSIM\n"
+    "(0..1, Gaussian window 11, sigma 1.5) per view and on average.  Views\n"
+    "are numbered by their index in the split: \"view 16\" is its 17th image.\n"
+    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
+    "  --data DIR     the scene (required): Blender, transforms.json, LLFF\n"
+    "                 or COLMAP, as for nerf-train\n"
+    "  --split S      train, val or test (default test)\n"
+    "  --downscale K  load the images K times smaller (default 1: full\n"
+    "                 size); use the value MODEL was trained with\n"
+    "  --skip K       score only every K-th view of the split (views 0, K,\n"
+    "                 2K, ...), to save time, as the reference's \"testskip\"\n"
+    "                 (default 1: every view)\n"
+    "  --json         print one JSON object on stdout instead of the table:\n"
+    "                 {\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
+    "                 [{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)\n"
+    "  --help         print this help and exit\n"
+    "Examples:\n"
+    "  nerf-eval --model lego.nerf --data lego --downscale 8 --skip 8\n"
+    "  nerf-eval --model fern.nerf --data fern --downscale 8 --json \\\n"
+    "      > fern-eval.json\n";
 
 typedef struct args {
     const char *model, *data;
     uint64_t split, downscale, skip;
     int json;
 } args;
+
+/* The options parse() knows, to suggest for a mistyped one. */
+static const char *const options[] = {
+    "--help", "-h", "--json", "--model", "--data", "--split", "--downscale",
+    "--skip", NULL
+};
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -43,7 +67,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-eval: %s needs a value\n", k);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-eval", k, options) == 0) {
+                cli_bad_value("nerf-eval", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -57,18 +84,18 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--skip") == 0) {
             bad = cli_uint(v, 1, 100000, &a->skip);
         } else {
-            fprintf(stderr, "nerf-eval: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_unknown("nerf-eval", k, options);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-eval: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-eval", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL || a->data == NULL) {
-        fprintf(stderr, "nerf-eval: --model and --data are required\n");
+        cli_usage_error("nerf-eval", "--model and --data are required");
         return -1;
     }
     return 0;
@@ -113,14 +140,18 @@ static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         }
         psnr_sum += psnr;
         ssim_sum += ssim;
+        /* The dataset keeps every skip-th view of the split: number them
+         * as the split does, so that view 16 is the split's view 16. */
+        uint64_t view = (uint64_t)i * a->skip;
         if (a->json) {
             cJSON *v = cJSON_CreateObject();
-            cJSON_AddNumberToObject(v, "view", i);
+            cJSON_AddNumberToObject(v, "view", (double)view);
             cJSON_AddNumberToObject(v, "psnr", psnr);
             cJSON_AddNumberToObject(v, "ssim", ssim);
             cJSON_AddItemToArray(per_view, v);
         } else {
-            printf("view %3u  psnr %6.2f  ssim %.4f\n", i, psnr, ssim);
+            printf("view %3llu  psnr %6.2f  ssim %.4f\n",
+                   (unsigned long long)view, psnr, ssim);
         }
         char note[64];
         snprintf(note, sizeof note, "mean psnr %.2f", psnr_sum / (i + 1));
@@ -137,7 +168,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     double start = progress_now();

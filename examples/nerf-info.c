@@ -11,6 +11,7 @@
 
 #include "common/cli.h"
 #include "common/model_info.h"
+#include "common/options.h"
 
 /* Fixed, not argv[0]: an installed program's path says nothing. */
 #define PROGRAM "nerf-info"
@@ -28,10 +29,16 @@ static const char usage[] =
     "                 a checkpoint's size), for sharing, rendering\n"
     "                 and evaluating; nerf-train cannot resume from it.  The\n"
     "                 description is then FILE's.\n"
-    "examples:\n"
+    "  --help         print this help and exit\n"
+    "Status 1 if the library found at run time is not the version the\n"
+    "program was built against.\n"
+    "Examples:\n"
     "  nerf-info\n"
     "  nerf-info lego.nerf\n"
     "  nerf-info lego.nerf --export lego-weights.nerf\n";
+
+static const char *const options[] = {"--help", "-h", "--json", "--export",
+                                      NULL};
 
 typedef struct args {
     const char *model, *export_to;
@@ -53,19 +60,17 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--export") == 0) {
             a->export_to = cli_value(argc, argv, &i);
             if (a->export_to == NULL) {
-                fprintf(stderr, PROGRAM ": --export needs a FILE; see "
-                        PROGRAM " --help\n");
+                cli_bad_value(PROGRAM, k, NULL, "a FILE");
                 return 2;
             }
         } else if (k[0] == '-' && k[1] != '\0') {
-            fprintf(stderr, PROGRAM ": unknown option %s; see " PROGRAM
-                    " --help\n", k);
+            cli_unknown(PROGRAM, k, options);
             return 2;
         } else if (a->model == NULL) {
             a->model = k;
         } else {
-            fprintf(stderr, PROGRAM ": one MODEL at a time (%s and %s); see "
-                    PROGRAM " --help\n", a->model, k);
+            cli_usage_error(PROGRAM, "one MODEL at a time (%s and %s)",
+                            a->model, k);
             return 2;
         }
     }

@@ -10,51 +10,86 @@
 
 #include "common/cli.h"
 #include "common/out_folder.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 #include "common/video.h"
 
 static const char usage[] =
     "usage: nerf-render --model MODEL --out DIR\n"
-    "                   (--data DIR [--split train|val|test] [--downscale K]\n"
-    "                    | --path orbit|spiral --frames N [--width W]\n"
-    "                      [--height H] [--data DIR]\n"
-    "                    | --poses FILE [--width W --height H]\n"
-    "                      [--focal F | --fov DEG] [--data DIR])\n"
-    "                   [--depth] [--near T --far T] [--skip-existing]\n"
-    "                   [--video FILE.mp4 [--fps N]]\n"
-    "Render views of MODEL and write them to DIR as r_NNN.png (and\n"
-    "depth_NNN.png, opacity_NNN.png with --depth).  DIR is created if\n"
-    "missing.\n"
-    "  --data DIR    the scene's cameras (and bounds): render every view of\n"
-    "                its split (default test)\n"
-    "  --path orbit  a circle at 30 degrees elevation, radius 4, around the\n"
-    "                origin, as for Blender scenes (default 100x100 pixels)\n"
-    "  --path spiral the reference's spiral path of an LLFF scene (needs\n"
-    "                --data)\n"
-    "  --poses FILE  a camera path: a .npy of N camera-to-world matrices,\n"
-    "                shape (N,3,4), (N,4,4), (N,12) or (N,16), float32 or\n"
-    "                float64, OpenGL axes; or a transforms.json-style file\n"
-    "                (camera_angle_x or fl_x, optional w and h,\n"
-    "                frames[].transform_matrix).  Size: --width/--height,\n"
-    "                else the file's w and h, else 100x100.  Intrinsics:\n"
-    "                --focal (pixels) or --fov (horizontal, degrees), else\n"
-    "                the file's, else --fov 39.6 (as --path orbit).  With\n"
-    "                --data, the scene gives bounds, background and NDC.\n"
-    "  --near T --far T  the range of depths sampled along each ray, given\n"
-    "                together, 0 <= T_near < T_far (NDC depths within [0, 1]\n"
-    "                for an LLFF scene); default the scene's, else 2 and 6\n"
-    "  --video FILE  also write the views, in order, as an MP4 video (H.264,\n"
-    "                or MPEG-4 part 2 if FFmpeg lacks libx264); all views\n"
-    "                must share one even width and height.  A build without\n"
-    "                FFmpeg's libraries says so and writes the PNGs only\n"
-    "  --fps N       frames a second of the video (default 30)\n"
+    "                   (--data DIR [--split S] [--downscale K]\n"
+    "                    | --path orbit|spiral [--frames N] [--data DIR]\n"
+    "                    | --poses FILE [--focal F | --fov DEG] [--data DIR])\n"
+    "                   [--width W] [--height H] [--depth] [--near T --far T]\n"
+    "                   [--skip-existing] [--video FILE.mp4 [--fps N]]\n"
+    "Render views of MODEL and write them to DIR (created if missing) as\n"
+    "r_NNN.png, NNN counting from 000 in the order of the views.\n"
+    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
+    "  --out DIR      the folder of the images (required)\n"
+    "  --data DIR     the scene MODEL was trained on.  Alone: render each\n"
+    "                 view of its --split with the scene's own cameras.  With\n"
+    "                 --path or --poses it only gives the bounds, the\n"
+    "                 background and the placement (NDC for LLFF); without\n"
+    "                 it, those MODEL recorded in training (nerf-info shows\n"
+    "                 them; guessed from its shape for older files).\n"
+    "  --split S      with --data alone: train, val or test (default test)\n"
+    "  --downscale K  with --data alone or --path spiral: load the scene's\n"
+    "                 images and cameras K times smaller (default 1)\n"
+    "  --path orbit   a circle of --frames views at 30 degrees elevation,\n"
+    "                 radius 4, around the origin, as for Blender scenes\n"
+    "  --path spiral  the reference's spiral path of a forward-facing (LLFF)\n"
+    "                 scene, two turns around its average pose (needs --data)\n"
+    "  --frames N     views along --path (default 40)\n"
+    "  --poses FILE   a camera path: a .npy of N camera-to-world matrices,\n"
+    "                 shape (N,3,4), (N,4,4), (N,12) or (N,16), float32 or\n"
+    "                 float64, OpenGL axes; or a transforms.json-style file\n"
+    "                 (camera_angle_x or fl_x, optional w and h,\n"
+    "                 frames[].transform_matrix)\n"
+    "  --focal F      with --poses: focal length in pixels (default: the\n"
+    "                 file's, else --fov 39.6)\n"
+    "  --fov DEG      with --poses: horizontal field of view in degrees\n"
+    "                 (default: the file's, else 39.6, as --path orbit)\n"
+    "  --width W      image width in pixels.  Default: 100 for --path orbit;\n"
+    "                 the scene's for --data and --path spiral (whose focal\n"
+    "                 length and centre scale with the size: the same view,\n"
+    "                 sharper or coarser); for --poses the file's w, else\n"
+    "                 100.  Given alone, the height keeps the aspect ratio\n"
+    "                 (except with --poses, which needs both).\n"
+    "  --height H     image height in pixels; defaults as --width\n"
+    "  --depth        also write depth_NNN.png and opacity_NNN.png (default\n"
+    "                 off).  depth_NNN.png is 8-bit grey: the expected depth\n"
+    "                 of each pixel's visible content (the sum of w t over\n"
+    "                 the ray divided by its opacity) mapped linearly from\n"
+    "                 --near (white, 255) to --far (black, 0); pixels of\n"
+    "                 opacity below 0.001 are black.  Grey level v is depth\n"
+    "                 near + (1 - v / 255) (far - near), in units of t along\n"
+    "                 the ray (NDC depth, 0..1, for an LLFF scene).\n"
+    "                 opacity_NNN.png: 255 where the ray is fully absorbed,\n"
+    "                 0 where it sees only the background.\n"
+    "  --near T --far T  the range of depths sampled along each ray (and the\n"
+    "                 depth map's scale), given together, 0 <= T_near <\n"
+    "                 T_far (NDC depths within [0, 1] for an LLFF scene);\n"
+    "                 default the scene's bounds with --data, else 2 and 6\n"
+    "  --video FILE   also write the views, in order, as an MP4 video\n"
+    "                 (H.264, or MPEG-4 part 2 if FFmpeg lacks libx264);\n"
+    "                 all views must share one even width and height.  A\n"
+    "                 build without FFmpeg's libraries says so and writes\n"
+    "                 the PNGs only (default none: PNGs only)\n"
+    "  --fps N        frames a second of the video (default 30)\n"
     "  --skip-existing  render only the views whose files are not in DIR\n"
-    "                yet: the same command again finishes a render that\n"
-    "                was stopped\n"
+    "                 yet: the same command again finishes a render that\n"
+    "                 was stopped (default off: render every view)\n"
+    "  --help         print this help and exit\n"
     "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
     "written), says which views are written and exits with status 130\n"
-    "(SIGTERM: 143).\n";
+    "(SIGTERM: 143).\n"
+    "Examples:\n"
+    "  nerf-render --model lego.nerf --out lego-orbit --path orbit \\\n"
+    "      --frames 40 --width 200 --height 200 --video lego-orbit.mp4\n"
+    "  nerf-render --model fern.nerf --data fern --downscale 8 \\\n"
+    "      --path spiral --frames 60 --depth --out fern-spiral\n"
+    "  nerf-render --model lego.nerf --data lego --split test --width 200 \\\n"
+    "      --out lego-test\n";
 
 typedef struct args {
     const char *model, *out, *data, *path, *poses;
@@ -62,6 +97,7 @@ typedef struct args {
     double near, far, focal, fov;
     int depth, size_given, skip_existing;
     int bounds_given; /* 1: --near, 2: --far */
+    int split_given, downscale_given, frames_given;
     const char *video; /* NULL: PNG frames only */
     uint64_t fps;
     int fps_given;
@@ -70,6 +106,14 @@ typedef struct args {
 /* The lego scene's horizontal field of view, in radians: --path orbit's,
  * and the default of --poses files that carry no intrinsics. */
 #define ORBIT_FOV 0.6911112070083618
+
+/* The options parse() knows, to suggest for a mistyped one. */
+static const char *const options[] = {
+    "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
+    "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
+    "--width", "--height", "--near", "--far", "--video", "--fps",
+    "--skip-existing", NULL
+};
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -96,7 +140,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-render: %s needs a value\n", k);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-render", k, options) == 0) {
+                cli_bad_value("nerf-render", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -116,10 +163,13 @@ static int parse(int argc, char **argv, args *a)
             int split = cli_split(v);
             a->split = (uint64_t)split;
             bad = split < 0;
+            a->split_given = 1;
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
+            a->downscale_given = 1;
         } else if (strcmp(k, "--frames") == 0) {
             bad = cli_uint(v, 1, 100000, &a->frames);
+            a->frames_given = 1;
         } else if (strcmp(k, "--width") == 0) {
             bad = cli_uint(v, 1, 16384, &a->width);
             a->size_given |= 1;
@@ -138,69 +188,97 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_double(v, &a->far);
             a->bounds_given |= 2;
         } else {
-            fprintf(stderr, "nerf-render: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_unknown("nerf-render", k, options);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-render: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-render", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL || a->out == NULL ||
         (a->data == NULL && a->path == NULL && a->poses == NULL)) {
-        fprintf(stderr, "nerf-render: --model, --out and --data, --path or "
-                        "--poses are required\n");
+        cli_usage_error("nerf-render", "--model, --out and --data, --path or "
+                        "--poses are required");
         return -1;
     }
     if (a->path && a->poses) {
-        fprintf(stderr, "nerf-render: --path and --poses exclude each "
-                        "other\n");
+        cli_usage_error("nerf-render", "--path and --poses exclude each "
+                        "other");
         return -1;
     }
     if ((a->focal > 0.0 || a->fov > 0.0) && a->poses == NULL) {
-        fprintf(stderr, "nerf-render: --focal and --fov go with --poses\n");
+        cli_usage_error("nerf-render", "--focal and --fov go with --poses");
         return -1;
     }
     if (a->focal > 0.0 && a->fov > 0.0) {
-        fprintf(stderr, "nerf-render: give --focal or --fov, not both\n");
+        cli_usage_error("nerf-render", "give --focal or --fov, not both");
         return -1;
     }
     /* A file's w and h keep their aspect ratio only as a pair. */
     if (a->poses && a->size_given && a->size_given != 3) {
-        fprintf(stderr, "nerf-render: with --poses, give --width and "
-                        "--height together\n");
+        cli_usage_error("nerf-render", "with --poses, give --width and "
+                        "--height together");
         return -1;
     }
     /* One bound alone would leave the other to a default that may not fit
      * it; a wrong pair would be sampled backwards. */
     if (a->bounds_given && a->bounds_given != 3) {
-        fprintf(stderr, "nerf-render: give --near and --far together\n");
+        cli_usage_error("nerf-render", "give --near and --far together");
         return -1;
     }
     if (a->bounds_given && !(a->near >= 0.0)) {
-        fprintf(stderr, "nerf-render: --near must be at least 0 (got %g)\n",
+        cli_usage_error("nerf-render", "--near must be at least 0 (got %g)",
                 a->near);
         return -1;
     }
     if (a->bounds_given && !(a->near < a->far)) {
-        fprintf(stderr, "nerf-render: --near must be less than --far (got "
-                        "--near %g --far %g)\n", a->near, a->far);
+        cli_usage_error("nerf-render", "--near must be less than --far (got "
+                        "--near %g --far %g)", a->near, a->far);
         return -1;
     }
     if (a->fps_given && a->video == NULL) {
-        fprintf(stderr, "nerf-render: --fps goes with --video\n");
+        cli_usage_error("nerf-render", "--fps goes with --video");
         return -1;
     }
     if (a->video != NULL && a->skip_existing) {
         /* The video is encoded from the views this run renders. */
-        fprintf(stderr, "nerf-render: --video needs every view rendered: "
-                "drop --skip-existing\n");
+        cli_usage_error("nerf-render", "--video needs every view rendered: "
+                        "drop --skip-existing");
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
-        fprintf(stderr, "nerf-render: --path spiral needs --data\n");
+        cli_usage_error("nerf-render", "--path spiral needs --data");
+        return -1;
+    }
+    /* Options that would change nothing are refused rather than ignored:
+     * the user meant something by them. */
+    if (a->frames_given && a->path == NULL) {
+        cli_usage_error("nerf-render", "--frames goes with --path (--data "
+                        "renders each view of its split, --poses each "
+                        "camera of the file)");
+        return -1;
+    }
+    int views_of_data = a->path == NULL && a->poses == NULL;
+    if (a->split_given && !views_of_data) {
+        cli_usage_error("nerf-render", "--split chooses the views of --data "
+                        "to render; with --%s it would change nothing",
+                        a->path ? "path" : "poses");
+        return -1;
+    }
+    int data_size = views_of_data ||
+                    (a->path && strcmp(a->path, "spiral") == 0);
+    if (a->downscale_given && !data_size) {
+        cli_usage_error("nerf-render", "--downscale shrinks the views of "
+                        "--data and --path spiral; with --%s give --width "
+                        "and --height", a->path ? "path orbit" : "poses");
+        return -1;
+    }
+    if (a->downscale_given && a->size_given) {
+        cli_usage_error("nerf-render", "give --downscale or --width/--height, "
+                        "not both");
         return -1;
     }
     return 0;
@@ -231,6 +309,28 @@ static int load_poses(const args *a, const nerf_hooks *hooks,
     return nerf_camera_path_load(out, a->poses, &o);
 }
 
+/*
+ * A camera of the scene at the size asked for: the intrinsics scale with
+ * the image, so that the view is the same, only sharper or coarser.  With
+ * one side given, the other keeps the camera's aspect ratio.
+ */
+static void resize_camera(const args *a, nerf_camera *cam)
+{
+    double w = (double)cam->width, h = (double)cam->height;
+    double nw = (a->size_given & 1) ? (double)a->width
+                                    : floor(a->height * w / h + 0.5);
+    double nh = (a->size_given & 2) ? (double)a->height
+                                    : floor(a->width * h / w + 0.5);
+    nw = nw < 1.0 ? 1.0 : nw > 16384.0 ? 16384.0 : nw;
+    nh = nh < 1.0 ? 1.0 : nh > 16384.0 ? 16384.0 : nh;
+    cam->fx = (float)(cam->fx * nw / w);
+    cam->cx = (float)(cam->cx * nw / w);
+    cam->fy = (float)(cam->fy * nh / h);
+    cam->cy = (float)(cam->cy * nh / h);
+    cam->width = (uint32_t)nw;
+    cam->height = (uint32_t)nh;
+}
+
 /* Camera `i` of the requested views. */
 static int view_camera(const args *a, const nerf_dataset *ds,
                        const nerf_camera_path *cp, uint32_t i, uint32_t n,
@@ -240,11 +340,13 @@ static int view_camera(const args *a, const nerf_dataset *ds,
     if (cp != NULL) {
         return nerf_camera_path_camera(cp, i, cam);
     }
-    if (a->path == NULL) {
-        return nerf_dataset_camera(ds, i, cam);
-    }
-    if (strcmp(a->path, "spiral") == 0) {
-        return nerf_dataset_spiral_camera(ds, i, n, cam);
+    if (a->path == NULL || strcmp(a->path, "spiral") == 0) {
+        int rc = a->path == NULL ? nerf_dataset_camera(ds, i, cam)
+                                 : nerf_dataset_spiral_camera(ds, i, n, cam);
+        if (rc == NERF_OK && a->size_given) {
+            resize_camera(a, cam);
+        }
+        return rc;
     }
     /* The lego scene's field of view, circling at 30 degrees. */
     const double fov = ORBIT_FOV, elev = 30.0 * 3.14159265358979 / 180;
@@ -551,7 +653,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     nerf_hooks hooks;

@@ -7,15 +7,28 @@
 
 #include "common/cli.h"
 #include "common/out_folder.h"
+#include "common/options.h"
 
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
     "                  [--val N] [--test N] [--threads N]\n"
     "                  [--capture object|forward|unbounded]\n"
-    "                  [--layout blender|llff|colmap-text|colmap-binary]\n"
+    "                  [--layout blender|transforms|llff|colmap-text|\n"
+    "                            colmap-binary]\n"
     "                  [--format png|jpeg] [--jpeg [QUALITY]]\n"
     "                  [--distortion K1,K2,P1,P2,K3]\n"
-    "Write libnerf's built-in scene (a few coloured solids) to DIR.\n"
+    "Write libnerf's built-in scene (a few coloured solids) to DIR, rendered\n"
+    "exactly, as a dataset the other programs read: a scene to try them on\n"
+    "without downloading one.\n"
+    "  --out DIR            the folder to write (required)\n"
+    "  --width W            image width in pixels, 8..4096 (default 100)\n"
+    "  --height H           image height in pixels, 8..4096 (default 100)\n"
+    "  --train N            training views (default 100)\n"
+    "  --val N              validation views (default 8; none in --layout\n"
+    "                       llff)\n"
+    "  --test N             test views, on a circle at 30 degrees\n"
+    "                       (default 16)\n"
+    "  --threads N          worker threads (default 0: all cores)\n"
     "  --capture object     the solids alone on a transparent background,\n"
     "                       from a hemisphere of views (the default)\n"
     "  --capture forward    forward-facing photos, as LLFF's: the solids on\n"
@@ -25,6 +38,8 @@ static const char usage[] =
     "                       within a far backdrop (40 units away)\n"
     "  --layout blender     transforms_{train,val,test}.json and PNGs (the\n"
     "                       default for object and unbounded)\n"
+    "  --layout transforms  one instant-ngp transforms.json with every view\n"
+    "                       (fl_x, fl_y, cx, cy, w, h, the lens, aabb_scale)\n"
     "  --layout llff        poses_bounds.npy and images/ (the default for\n"
     "                       forward, and only for it): --train + --test\n"
     "                       views, every 8th held out by the loader\n"
@@ -34,12 +49,22 @@ static const char usage[] =
     "  --format png|jpeg    the views' files: PNG (default; RGBA for object)\n"
     "                       or JPEG (RGB, on white for object)\n"
     "  --jpeg [QUALITY]     JPEG files of quality 1..100 (default 95)\n"
-    "  --layout transforms  one instant-ngp transforms.json with every view\n"
-    "                       (fl_x, fl_y, cx, cy, w, h, the lens, aabb_scale)\n"
     "  --distortion K1,...  photograph through that lens (OpenCV's model, as\n"
     "                       nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
-    "                       may be left out)\n"
-    "Defaults: 100x100 images, 100 train, 8 val and 16 test views.\n";
+    "                       may be left out; default none: a pinhole camera)\n"
+    "  --help               print this help and exit\n"
+    "Examples:\n"
+    "  nerf-scene --out scene\n"
+    "  nerf-scene --out fern-like --capture forward --width 160 --height 120\n"
+    "  nerf-scene --out tiny --width 32 --height 32 --train 20 --val 0 \\\n"
+    "      --test 4\n";
+
+/* The options main() knows, to suggest for a mistyped one. */
+static const char *const options[] = {
+    "--help", "-h", "--out", "--capture", "--layout", "--jpeg", "--format",
+    "--distortion", "--width", "--height", "--train", "--val", "--test",
+    "--threads", NULL
+};
 
 /* A name of the list, by its index; -1 when it is not there. */
 static int pick(const char *name, const char *const *names, int n)
@@ -59,7 +84,8 @@ static int jpeg_flag(int argc, char **argv, int *i, nerf_scene_options *o)
     uint64_t q = 0;
     if (*i + 1 < argc && argv[*i + 1][0] >= '0' && argv[*i + 1][0] <= '9') {
         if (cli_uint(argv[*i + 1], 1, 100, &q) != 0) {
-            fprintf(stderr, "nerf-scene: --jpeg quality must be 1..100\n");
+            cli_usage_error("nerf-scene", "--jpeg quality must be "
+                                "1..100, not '%s'", argv[*i + 1]);
             return -1;
         }
         o->jpeg_quality = (uint32_t)q;
@@ -105,6 +131,7 @@ int main(int argc, char **argv)
     static const char *const layouts[] = {"blender", "transforms", "llff",
                                           "colmap-text", "colmap-binary"};
     int layout = -1;
+    bool val_given = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         uint64_t v = 0;
@@ -115,6 +142,7 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
+                cli_bad_value("nerf-scene", a, NULL, "a folder");
                 goto bad;
             }
             continue;
@@ -125,10 +153,12 @@ int main(int argc, char **argv)
             int k = is_capture ? pick(name, captures, 3)
                                : pick(name, layouts, 5);
             if (k < 0) {
-                fprintf(stderr, "nerf-scene: %s needs one of %s\n", a,
+                cli_usage_error("nerf-scene", "%s needs one of %s%s%s%s", a,
                         is_capture ? "object, forward, unbounded"
                                    : "blender, transforms, llff, "
-                                     "colmap-text, colmap-binary");
+                                     "colmap-text, colmap-binary",
+                        name ? ", not '" : "", name ? name : "",
+                        name ? "'" : "");
                 goto bad;
             }
             if (is_capture) {
@@ -150,14 +180,14 @@ int main(int argc, char **argv)
                                      strcmp(f, "jpg") == 0)) {
                 o.image_format = NERF_IMAGE_FORMAT_JPEG;
             } else {
-                fprintf(stderr, "nerf-scene: --format is png or jpeg\n");
+                cli_bad_value("nerf-scene", a, f, "png or jpeg");
                 goto bad;
             }
             continue;
         } else if (strcmp(a, "--distortion") == 0) {
             if (parse_lens(cli_value(argc, argv, &i), &o) != 0) {
-                fprintf(stderr, "nerf-scene: --distortion needs 1 to 5 "
-                        "numbers separated by commas: k1,k2,p1,p2,k3\n");
+                cli_usage_error("nerf-scene", "--distortion needs 1 to 5 "
+                                "numbers separated by commas: k1,k2,p1,p2,k3");
                 goto bad;
             }
             continue;
@@ -169,22 +199,24 @@ int main(int argc, char **argv)
             field = &o.n_train;
         } else if (strcmp(a, "--val") == 0) {
             field = &o.n_val;
+            val_given = true;
         } else if (strcmp(a, "--test") == 0) {
             field = &o.n_test;
         } else if (strcmp(a, "--threads") == 0) {
             field = &o.threads;
         } else {
-            fprintf(stderr, "nerf-scene: unknown argument '%s'\n", a);
+            cli_unknown("nerf-scene", a, options);
             goto bad;
         }
-        if (cli_uint(cli_value(argc, argv, &i), 0, 100000, &v) != 0) {
-            fprintf(stderr, "nerf-scene: %s needs a whole number\n", a);
+        const char *text = cli_value(argc, argv, &i);
+        if (cli_uint(text, 0, 100000, &v) != 0) {
+            cli_bad_value("nerf-scene", a, text, "a whole number 0..100000");
             goto bad;
         }
         *field = (uint32_t)v;
     }
     if (out == NULL) {
-        fprintf(stderr, "nerf-scene: --out is required\n");
+        cli_usage_error("nerf-scene", "--out is required");
         goto bad;
     }
     /* Each capture in its usual layout unless told otherwise. */
@@ -192,6 +224,12 @@ int main(int argc, char **argv)
                : o.capture == NERF_SCENE_CAPTURE_FORWARD
                    ? NERF_SCENE_LAYOUT_LLFF
                    : NERF_SCENE_LAYOUT_BLENDER;
+    if (val_given && o.layout == NERF_SCENE_LAYOUT_LLFF) {
+        cli_usage_error("nerf-scene", "--val: an LLFF layout has no "
+                        "validation views (its loader holds out every 8th "
+                        "view as the test split); give --train and --test");
+        return 2;
+    }
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
@@ -209,6 +247,5 @@ int main(int argc, char **argv)
     }
     return 0;
 bad:
-    fputs(usage, stderr);
     return 2;
 }

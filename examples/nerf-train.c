@@ -10,6 +10,7 @@
 
 #include "common/cli.h"
 #include "common/out_folder.h"
+#include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
@@ -24,23 +25,28 @@ static const char usage[] =
     "instant-ngp transforms.json split every 8th frame, LLFF\n"
     "poses_bounds.npy, or a COLMAP model in sparse/0/ beside images/,\n"
     "detected from the folder) and save it to MODEL.\n"
+    "  --data DIR    the scene (required)\n"
+    "  --out MODEL   the checkpoint to write (required)\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
     "                CPU), tiny (default) or fast (hash grid and small MLPs)\n"
     "  --steps N     train until the model has taken N steps (default 2000)\n"
     "  --seconds S   also stop after S seconds of training, saving MODEL\n"
+    "                (default none: no time limit)\n"
     "  --downscale K load images K times smaller (default 1)\n"
     "  --batch N     rays per step (default 1024)\n"
     "  --seed N      seed of initialisation and sampling (default 0)\n"
     "  --lr RATE     initial learning rate, decaying tenfold over the run\n"
     "                (default 5e-4 for reference, 5e-3 for tiny, 1e-2 for\n"
     "                fast)\n"
-    "  --checkpoint-every N  save MODEL every N steps (default 500)\n"
+    "  --checkpoint-every N  save MODEL every N steps (default 500; 0: only\n"
+    "                at the end)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
-    "                batch and seed give the same result as an unbroken run);\n"
-    "                a --preset other than MODEL's is refused, and data\n"
-    "                unlike what MODEL was trained on is warned about\n"
-    "  --overwrite   replace MODEL if it exists (without --resume or\n"
-    "                --overwrite, an existing MODEL is refused)\n"
+    "                batch and seed give the same result as an unbroken run;\n"
+    "                default off: start afresh); a --preset other than\n"
+    "                MODEL's is refused, and data unlike what MODEL was\n"
+    "                trained on is warned about\n"
+    "  --overwrite   replace MODEL if it exists (default off: without\n"
+    "                --resume or --overwrite, an existing MODEL is refused)\n"
     "  --batch-samples N  a step takes rays until their samples reach N\n"
     "                (--batch is then the most rays a step takes; default 0:\n"
     "                always --batch rays)\n"
@@ -59,11 +65,18 @@ static const char usage[] =
     "                COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
     "                on a COLMAP folder places it as LLFF places a\n"
     "                forward-facing capture (any preset)\n"
+    "  --help        print this help and exit\n"
     "Ctrl-C (SIGINT) stops after the current step, saves MODEL and exits\n"
     "with status 130 (SIGTERM: 143).\n"
     "MODEL's folder is created if missing; MODEL is tried before training\n"
     "(a file is created beside it and removed); a save that fails leaves\n"
-    "the last good MODEL in place, says so and makes the status 1.\n";
+    "the last good MODEL in place, says so and makes the status 1.\n"
+    "Examples:\n"
+    "  nerf-scene --out scene && nerf-train --data scene --out scene.nerf\n"
+    "  nerf-train --data lego --downscale 8 --out lego.nerf --steps 1000 \\\n"
+    "      --batch 512\n"
+    "  nerf-train --data fern --downscale 8 --out fern.nerf --preset fast \\\n"
+    "      --steps 4400 --seconds 600\n";
 
 static volatile sig_atomic_t interrupted;
 
@@ -103,10 +116,19 @@ typedef struct args {
     double lr, seconds;
     int resume, overwrite;
     int preset_given;
+    int lr_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (fp32) */
     int space;     /* nerf_space; -1: the dataset's */
 } args;
+
+/* The options parse() knows, to suggest for a mistyped one. */
+static const char *const options[] = {
+    "--help", "-h", "--resume", "--overwrite", "--data", "--out",
+    "--preset", "--steps", "--seconds", "--downscale", "--batch", "--seed",
+    "--checkpoint-every", "--lr", "--batch-samples", "--matmul", "--space",
+    "--random-background", NULL
+};
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -136,7 +158,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-train: %s needs a value\n", k);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-train", k, options) == 0) {
+                cli_bad_value("nerf-train", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--data") == 0) {
             a->data = v;
         } else if (strcmp(k, "--out") == 0) {
@@ -162,6 +187,7 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, UINT32_MAX, &a->every);
         } else if (strcmp(k, "--lr") == 0) {
             bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
+            a->lr_given = 1;
         } else if (strcmp(k, "--batch-samples") == 0) {
             bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
         } else if (strcmp(k, "--matmul") == 0) {
@@ -181,23 +207,23 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, 1, &on);
             a->random_bg = (int)on;
         } else {
-            fprintf(stderr, "nerf-train: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_unknown("nerf-train", k, options);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-train: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-train", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->data == NULL || a->out == NULL) {
-        fprintf(stderr, "nerf-train: --data and --out are required\n");
+        cli_usage_error("nerf-train", "--data and --out are required");
         return -1;
     }
     if (a->resume && a->overwrite) {
-        fprintf(stderr, "nerf-train: --resume continues MODEL, --overwrite "
-                "replaces it: give one\n");
+        cli_usage_error("nerf-train", "--resume continues MODEL, "
+                        "--overwrite replaces it: give one");
         return -1;
     }
     if (a->lr == 0.0) {
@@ -273,6 +299,10 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
                         "keeps the %s products it was saved with\n",
                         mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
             }
+            if (a->lr_given) {
+                fprintf(stderr, "nerf-train: --lr ignored: the model keeps "
+                        "the learning-rate schedule it was saved with\n");
+            }
             if (a->space >= 0 && (uint32_t)a->space != mo.space) {
                 fprintf(stderr, "nerf-train: --space ignored: the model "
                         "keeps the space it was created with\n");
@@ -320,7 +350,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     if (check_existing(&a) != 0) {

@@ -35,7 +35,7 @@ expect() {
 # Without arguments: the build, as before.
 expect 0 build.log "libnerf" "$info"
 # Usage errors: one line naming the program, not its build path.
-expect 2 bad.log "^nerf-info: unknown option --bogus; see nerf-info --help" \
+expect 2 bad.log "^nerf-info: unknown option '--bogus'.*nerf-info --help" \
   "$info" --bogus
 [ "$(wc -l <"$work/bad.log")" -eq 1 ] || { cat "$work/bad.log"; fail "bad.log"; }
 expect 2 two.log "one MODEL at a time" "$info" a.nerf b.nerf

@@ -70,7 +70,16 @@ typedef enum nerf_status {
     NERF_EIO = -4,          /**< A file could not be opened, read or written. */
     NERF_EFORMAT = -5,      /**< A file or buffer is malformed or corrupted. */
     NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the call. */
-    NERF_EVERSION = -7      /**< Unsupported struct or file version. */
+    NERF_EVERSION = -7,     /**< Unsupported struct or file version. */
+    /* Since 0.4.  Before, both were NERF_EIO (and a file that is not a
+     * checkpoint NERF_EFORMAT). */
+    NERF_ENOENT = -8,       /**< No such file or folder: a path to read
+                                 does not exist. */
+    NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the
+                                 kind asked for: a folder in no known
+                                 dataset layout, a file that is not a
+                                 libnerf checkpoint, a folder where a file
+                                 is expected or a file where a folder is. */
 } nerf_status;
 
 /**
@@ -489,9 +498,10 @@ NERF_API int nerf_model_save(const nerf_model *model, const char *path);
  * not available: its weights are fp32 either way, and a warning goes to
  * the log.
  * @param hooks allocation and logging for the new model; NULL = defaults.
- * @return NERF_OK; NERF_EIO (cannot open or read); NERF_EFORMAT (not a
- * checkpoint, truncated or corrupted); NERF_EVERSION (written by a newer
- * libnerf); NERF_ENOMEM; NERF_EINVAL.
+ * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
+ * checkpoint, or a folder); NERF_EIO (cannot open or read);
+ * NERF_EFORMAT (truncated or corrupted checkpoint); NERF_EVERSION
+ * (written by a newer libnerf); NERF_ENOMEM; NERF_EINVAL.
  */
 NERF_API int nerf_model_load(nerf_model **out, const char *path,
                              const nerf_hooks *hooks);
@@ -533,7 +543,8 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model);
  * holding the state dict of the reference implementation, with names
  * prefixed by network: "coarse.pts_linears.0.weight" ... and "fine." ones
  * (see docs/formats.md).  Optimiser state starts at zero.
- * @return NERF_OK; NERF_EIO; NERF_EFORMAT (not an npz, bad member, missing
+ * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (a
+ * folder); NERF_EIO; NERF_EFORMAT (not an npz, bad member, missing
  * name, shape that does not match @p opts); NERF_EINVAL; NERF_ENOMEM.
  */
 NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
@@ -843,6 +854,7 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
  * for a file that gives none, no focal or fov_x for a .npy file);
  * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (a folder);
  * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
  * or malformed file, npy dtype, order or shape not listed above, no
  * frames or more than 100000, missing field, NaN or infinite values,
@@ -1271,8 +1283,9 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
  * libpng premultiplies those by alpha, so the colour of a fully
  * transparent 16-bit pixel reads as 0.
  *
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_EIO (the file cannot
- * be opened or read); NERF_EFORMAT (not a PNG, truncated, corrupted, or a
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (not
+ * a PNG, truncated, corrupted, or a
  * side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages start with
  * the path.  Reentrant.
  */
@@ -1288,8 +1301,9 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
  * width and height are those of the upright picture, swapped for 5 to 8).
  *
  * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_EIO (the file cannot
- * be opened or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EIO (the file cannot be opened or read); NERF_EFORMAT
+ * (neither a PNG nor a JPEG, truncated or
  * corrupted data (JPEG decoder warnings about the data count as errors),
  * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
  * to 8, a side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages
@@ -1497,7 +1511,9 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * larger than the images, an LLFF or transforms.json split left empty by
  * llff_holdout, forward_facing on a Blender scene);
  * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_EIO (folder, file or image missing or unreadable); NERF_EFORMAT
+ * NERF_ENOENT (no such folder, or a file or image of the scene missing);
+ * NERF_EUNRECOGNISED (a file, or a folder in no known layout); NERF_EIO
+ * (a file or image unreadable); NERF_EFORMAT
  * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
  * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
  * infinite values, entries beyond 1e6, a degenerate rotation, a focal

@@ -6,6 +6,7 @@
 #include <nerf.h>
 
 #include "../common/cli.h"
+#include "../common/options.h"
 #include "../common/scene_setup.h"
 #include "viewer.h"
 
@@ -14,22 +15,31 @@ static const char usage[] =
     "                   [--width W] [--height H] [--view rgb|depth|opacity]\n"
     "                   [--screenshot FILE] [--quit-after SECONDS]\n"
     "Show MODEL in a window, rendered from a camera you move with the mouse.\n"
+    "  --model MODEL   the checkpoint nerf-train saved (required)\n"
     "  --data DIR      the scene MODEL was trained on: its cameras choose\n"
     "                  the start view, its bounds the samples (Blender-like\n"
     "                  scenes circle the origin; LLFF scenes start at the\n"
-    "                  first camera).  Without it: a Blender-like scene.\n"
+    "                  first camera).  Default none: a Blender-like scene.\n"
+    "  --downscale K   with --data: load its images K times smaller\n"
+    "                  (default 1)\n"
     "  --width W, --height H  image size (default 256 wide, the data's\n"
     "                  aspect ratio); rendering on the CPU is slow, keep it\n"
     "                  small\n"
-    "  --view MODE     what to show first (default rgb)\n"
+    "  --view MODE     what to show first: rgb, depth or opacity (default\n"
+    "                  rgb)\n"
     "  --screenshot FILE  render the start view to FILE (PNG) and exit,\n"
-    "                  without opening a window\n"
+    "                  without opening a window (default: open one)\n"
     "  --quit-after S  close the window after S seconds and print what was\n"
-    "                  rendered (for tests)\n"
+    "                  rendered (for tests; default: stay open)\n"
+    "  --help          print this help and exit\n"
     "Mouse: left drag orbits, right drag or shift + left drag pans, the\n"
     "wheel zooms.  Keys: 1 colour, 2 depth, 3 opacity, r reset the view,\n"
     "q or Esc quit.  While the view moves it is drawn at a reduced\n"
-    "resolution, then refined when it stops.\n";
+    "resolution, then refined when it stops.\n"
+    "Examples:\n"
+    "  nerf-viewer --model lego.nerf\n"
+    "  nerf-viewer --model fern.nerf --data fern --downscale 8 --width 320\n"
+    "  nerf-viewer --model lego.nerf --screenshot lego.png --view depth\n";
 
 /* Default image width when none is given. */
 #define DEFAULT_WIDTH 256
@@ -37,9 +47,16 @@ static const char usage[] =
 typedef struct args {
     const char *model, *data, *screenshot;
     uint64_t width, height, downscale;
+    int downscale_given;
     int mode;
     double quit_after;
 } args;
+
+/* The options parse() knows, to suggest for a mistyped one. */
+static const char *const options[] = {
+    "--help", "-h", "--model", "--data", "--screenshot", "--downscale",
+    "--width", "--height", "--view", "--quit-after", NULL
+};
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -54,7 +71,10 @@ static int parse(int argc, char **argv, args *a)
         const char *v = cli_value(argc, argv, &i);
         int bad = v == NULL;
         if (bad) {
-            fprintf(stderr, "nerf-viewer: %s needs a value\n", k);
+            /* A flag parse() does not know reaches here too. */
+            if (cli_check_option("nerf-viewer", k, options) == 0) {
+                cli_bad_value("nerf-viewer", k, NULL, NULL);
+            }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
         } else if (strcmp(k, "--data") == 0) {
@@ -63,6 +83,7 @@ static int parse(int argc, char **argv, args *a)
             a->screenshot = v;
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
+            a->downscale_given = 1;
         } else if (strcmp(k, "--width") == 0) {
             bad = cli_uint(v, 1, 16384, &a->width);
         } else if (strcmp(k, "--height") == 0) {
@@ -73,18 +94,23 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--quit-after") == 0) {
             bad = cli_double(v, &a->quit_after) || !(a->quit_after > 0.0);
         } else {
-            fprintf(stderr, "nerf-viewer: unknown argument '%s'\n", k);
-            bad = 1;
+            cli_unknown("nerf-viewer", k, options);
+            return -1;
         }
         if (bad) {
             if (v) {
-                fprintf(stderr, "nerf-viewer: bad value '%s' for %s\n", v, k);
+                cli_bad_value("nerf-viewer", k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL) {
-        fprintf(stderr, "nerf-viewer: --model is required\n");
+        cli_usage_error("nerf-viewer", "--model is required");
+        return -1;
+    }
+    if (a->downscale_given && a->data == NULL) {
+        cli_usage_error("nerf-viewer", "--downscale shrinks the images of "
+                        "--data; without --data, give --width/--height");
         return -1;
     }
     return 0;
@@ -174,7 +200,6 @@ int main(int argc, char **argv)
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
-        fputs(usage, stderr);
         return 2;
     }
     nerf_hooks hooks;

@@ -20,6 +20,8 @@ NERF_API const char *nerf_status_string(int status)
     case NERF_EFORMAT: return "malformed data";
     case NERF_ECANCELLED: return "cancelled";
     case NERF_EVERSION: return "unsupported version";
+    case NERF_ENOENT: return "no such file or folder";
+    case NERF_EUNRECOGNISED: return "not a recognised file or folder";
     default: return "unknown status";
     }
 }

@@ -93,10 +93,13 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
         if (strerror_r(errno, text, sizeof text) != 0) {
             snprintf(text, sizeof text, "error %d", errno);
         }
-        return nerf__error(NERF_EIO, "%s: cannot open: %s", dir, text);
+        int status = errno == ENOENT || errno == ENOTDIR ? NERF_ENOENT
+                                                         : NERF_EIO;
+        return nerf__error(status, "%s: cannot open: %s", dir, text);
     }
     if (!S_ISDIR(st.st_mode)) {
-        return nerf__error(NERF_EIO, "%s: not a folder", dir);
+        return nerf__error(NERF_EUNRECOGNISED, "%s: a file, not a dataset "
+                           "folder", dir);
     }
     char name[64];
     snprintf(name, sizeof name, "transforms_%s.json", split_names[cfg->split]);
@@ -127,7 +130,23 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
     if (colmap) {
         return nerf__colmap_load(ds, dir, cfg);
     }
-    return nerf__error(NERF_EIO, "%s: no %s, transforms.json, "
+    /* A Blender scene without the split asked for lacks a file; only a
+     * folder with none of them is not a dataset. */
+    for (int k = 0; k < 3; k++) {
+        char other[64];
+        bool found = false;
+        snprintf(other, sizeof other, "transforms_%s.json", split_names[k]);
+        rc = is_file(&ds->env, dir, other, &found);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        if (found) {
+            return nerf__error(NERF_ENOENT, "%s: no %s: this Blender scene "
+                               "has no %s split (it has %s)", dir, name,
+                               split_names[cfg->split], other);
+        }
+    }
+    return nerf__error(NERF_EUNRECOGNISED, "%s: no %s, transforms.json, "
                        "poses_bounds.npy or COLMAP model (sparse/0/ or "
                        "sparse/): not a known dataset layout", dir, name);
 }

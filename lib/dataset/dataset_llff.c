@@ -1,5 +1,6 @@
 /* LLFF / "Real Forward-Facing" scenes: poses_bounds.npy and an image folder. */
 #include <dirent.h>
+#include <errno.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -156,8 +157,9 @@ static int list_images(llff_ctx *c)
 {
     DIR *d = opendir(c->image_dir);
     if (d == NULL) {
-        return nerf__error(NERF_EIO, "%s: cannot open the folder",
-                           c->image_dir);
+        return nerf__error(errno == ENOENT || errno == ENOTDIR ? NERF_ENOENT
+                                                               : NERF_EIO,
+                           "%s: cannot open the folder", c->image_dir);
     }
     int rc = NERF_OK;
     size_t cap = 0;

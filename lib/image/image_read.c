@@ -25,7 +25,9 @@ int nerf__image_read_rgba(const nerf__env *env, const char *path,
         if (strerror_r(errno, text, sizeof text) != 0) {
             snprintf(text, sizeof text, "error %d", errno);
         }
-        return nerf__error(NERF_EIO, "%s: cannot open: %s", path, text);
+        return nerf__error(errno == ENOENT || errno == ENOTDIR ? NERF_ENOENT
+                                                               : NERF_EIO,
+                           "%s: cannot open: %s", path, text);
     }
     unsigned char head[8] = {0};
     size_t got = fread(head, 1, sizeof head, f);

@@ -115,7 +115,9 @@ int nerf__png_read_rgba(const nerf__env *env, const char *path,
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
         char text[128];
-        return nerf__error(NERF_EIO, "%s: cannot open: %s", path,
+        int status = errno == ENOENT || errno == ENOTDIR ? NERF_ENOENT
+                                                         : NERF_EIO;
+        return nerf__error(status, "%s: cannot open: %s", path,
                            describe_errno(errno, text, sizeof text));
     }
     png_image img;

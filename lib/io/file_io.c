@@ -32,6 +32,15 @@ static int io_error(const char *path, const char *what, int err)
                        describe(err, text, sizeof text));
 }
 
+/* A file to read that is not there is not an input/output failure. */
+static int open_error(const char *path, int err)
+{
+    if (err == ENOENT || err == ENOTDIR) {
+        return nerf__error(NERF_ENOENT, "%s: cannot open", path);
+    }
+    return io_error(path, "cannot open", err);
+}
+
 /* Read exactly size bytes; a short file is an error. */
 static int read_all(int fd, const char *path, unsigned char *buf, size_t size)
 {
@@ -57,7 +66,9 @@ static int check_size(const char *path, const struct stat *st,
                       uint64_t max_size, size_t *size_out)
 {
     if (!S_ISREG(st->st_mode)) {
-        return nerf__error(NERF_EIO, "%s: not a regular file", path);
+        return nerf__error(NERF_EUNRECOGNISED, "%s: %s", path,
+                           S_ISDIR(st->st_mode) ? "a folder, not a file"
+                                                : "not a regular file");
     }
     uint64_t size = (uint64_t)st->st_size;
     if (size > max_size || size > SIZE_MAX - 1) {
@@ -77,7 +88,7 @@ int nerf__file_read(const nerf__env *env, const char *path, uint64_t max_size,
     *size_out = 0;
     int fd = open(path, O_RDONLY | O_CLOEXEC);
     if (fd < 0) {
-        return io_error(path, "cannot open", errno);
+        return open_error(path, errno);
     }
     struct stat st;
     size_t size = 0;

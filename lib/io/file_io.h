@@ -15,7 +15,8 @@
  * it with nerf__free).  A file larger than max_size is refused, so that a
  * stray multi-gigabyte file cannot exhaust memory.  *data_out is never
  * NULL on success, even for an empty file.
- * Returns NERF_OK; NERF_EIO (cannot open or read, not a regular file);
+ * Returns NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (a
+ * folder or another non-regular file); NERF_EIO (cannot open or read);
  * NERF_EFORMAT (larger than max_size); NERF_ENOMEM.
  */
 int nerf__file_read(const nerf__env *env, const char *path, uint64_t max_size,

@@ -489,7 +489,8 @@ static int check_frame(const char *path, const unsigned char *b, size_t size)
 {
     size_t cmp = size < MAGIC_LEN ? size : MAGIC_LEN;
     if (memcmp(b, MAGIC, cmp) != 0) {
-        return nerf__error(NERF_EFORMAT, "%s: not a libnerf checkpoint", path);
+        return nerf__error(NERF_EUNRECOGNISED, "%s: not a libnerf "
+                           "checkpoint (a model file)", path);
     }
     if (size < HEADER_FRAME) {
         return truncated(path, size, HEADER_SIZE);

@@ -10,7 +10,8 @@ TEST(status_strings)
 {
     static const int codes[] = {NERF_OK, NERF_ERROR, NERF_EINVAL, NERF_ENOMEM,
                                 NERF_EIO, NERF_EFORMAT, NERF_ECANCELLED,
-                                NERF_EVERSION};
+                                NERF_EVERSION, NERF_ENOENT,
+                                NERF_EUNRECOGNISED};
     for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
         const char *s = nerf_status_string(codes[i]);
         CHECK(s != NULL && s[0] != '\0');
@@ -21,6 +22,11 @@ TEST(status_strings)
     }
     CHECK(strcmp(nerf_status_string(-1000), "unknown status") == 0);
     CHECK(strcmp(nerf_status_string(NERF_EINVAL), "invalid argument") == 0);
+    /* A missing file or a folder that is no dataset is not a failing
+     * disk: their names must not say "input/output". */
+    CHECK(strcmp(nerf_status_string(NERF_ENOENT), "no such file or folder")
+          == 0);
+    CHECK(strstr(nerf_status_string(NERF_EUNRECOGNISED), "not a") != NULL);
 }
 
 TEST(last_error_names_what_failed)

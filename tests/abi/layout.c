@@ -184,7 +184,8 @@ SIZE(nerf_train_stats, 64);
 /* Status codes and enum values are ABI too. */
 _Static_assert(NERF_OK == 0 && NERF_ERROR == -1 && NERF_EINVAL == -2 &&
                NERF_ENOMEM == -3 && NERF_EIO == -4 && NERF_EFORMAT == -5 &&
-               NERF_ECANCELLED == -6 && NERF_EVERSION == -7,
+               NERF_ECANCELLED == -6 && NERF_EVERSION == -7 &&
+               NERF_ENOENT == -8 && NERF_EUNRECOGNISED == -9,
                "status codes renumbered");
 _Static_assert(NERF_PARAM_LEARNING_RATE == 100 && NERF_PARAM_ADAM_EPS == 105,
                "parameter keys renumbered");

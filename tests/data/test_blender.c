@@ -307,7 +307,7 @@ TEST(skip_and_missing_images)
     nerf_dataset_destroy(ds);
 
     o.skip = 1;
-    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_ENOENT);
     CHECK(ds == NULL);
     CHECK(fx_has(nerf_last_error(), "train/r_1.png"));
 
@@ -703,11 +703,11 @@ TEST(folders_and_options)
     nerf_dataset *ds = NULL;
     char p[1024];
     fx_path(p, sizeof p, tmp, "nowhere");
-    CHECK_EQ_INT(nerf_dataset_load(&ds, p, NULL), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, p, NULL), NERF_ENOENT);
     CHECK(fx_has(nerf_last_error(), "nowhere"));
     fx_path(p, sizeof p, tmp, "empty");
     mkdir(p, 0777);
-    CHECK_EQ_INT(nerf_dataset_load(&ds, p, NULL), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, p, NULL), NERF_EUNRECOGNISED);
     CHECK(fx_has(nerf_last_error(), "not a known dataset layout"));
     CHECK_EQ_INT(nerf_dataset_load(NULL, p, NULL), NERF_EINVAL);
     CHECK_EQ_INT(nerf_dataset_load(&ds, NULL, NULL), NERF_EINVAL);
@@ -717,8 +717,9 @@ TEST(folders_and_options)
     nerf_dataset_options o;
     NERF_DATASET_OPTIONS_INIT(&o);
     o.split = NERF_SPLIT_VAL; /* no transforms_val.json */
-    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_ENOENT);
     CHECK(fx_has(nerf_last_error(), "transforms_val.json"));
+    CHECK(fx_has(nerf_last_error(), "has no val split"));
     uint32_t *fields[] = {&o.split, &o.downscale, &o.skip,
                           &o.white_background, &o.skip_missing,
                           &o.forward_facing};

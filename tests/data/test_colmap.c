@@ -556,7 +556,7 @@ TEST(unknown_folder_names_colmap)
     fx_path(dir, sizeof dir, tmp, "empty");
     mkdir(dir, 0777);
     nerf_dataset *ds = NULL;
-    CHECK(nerf_dataset_load(&ds, dir, NULL) == NERF_EIO);
+    CHECK(nerf_dataset_load(&ds, dir, NULL) == NERF_EUNRECOGNISED);
     CHECK(fx_has(nerf_last_error(), "COLMAP"));
 }
 

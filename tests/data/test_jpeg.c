@@ -224,7 +224,7 @@ TEST(bad_files)
     fx_write_bytes(path, "", 0);
     expect_read_error(path, NERF_EFORMAT, "not a PNG or JPEG file");
     fx_path(path, sizeof path, tmp, "missing.jpg");
-    expect_read_error(path, NERF_EIO, "cannot open");
+    expect_read_error(path, NERF_ENOENT, "cannot open");
     /* CMYK (Adobe) JPEGs have no RGB conversion in libjpeg: refused. */
     fx_path(path, sizeof path, tmp, "cmyk.jpg");
     fx_write_jpeg(path, W, H, JCS_CMYK, px, 90, 0, NULL, 0);

@@ -212,7 +212,7 @@ static void expect_read_error(const char *name, int status, const char *what)
 TEST(bad_files)
 {
     char p[1024];
-    expect_read_error("missing.png", NERF_EIO, "cannot open");
+    expect_read_error("missing.png", NERF_ENOENT, "cannot open");
 
     path_of(p, "empty.png");
     fx_write_bytes(p, "", 0);

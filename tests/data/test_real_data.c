@@ -73,7 +73,7 @@ TEST(lego_val)
 
     /* Without skip the missing val images are reported, by name. */
     o.skip = 1;
-    CHECK_EQ_INT(nerf_dataset_load(&ds, lego, &o), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, lego, &o), NERF_ENOENT);
     CHECK(strstr(nerf_last_error(), "val/r_1.png") != NULL);
     o.skip_missing = 1;
     CHECK_OK(nerf_dataset_load(&ds, lego, &o));

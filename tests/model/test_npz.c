@@ -501,7 +501,7 @@ TEST(not_an_archive)
     free(b.p);
     expect_import_fails("text file", path, NERF_EFORMAT, "not a zip archive");
     temp_path(path, sizeof path, "missing.npz");
-    expect_import_fails("missing file", path, NERF_EIO, "cannot open");
+    expect_import_fails("missing file", path, NERF_ENOENT, "cannot open");
 
     nerf_model_options o;
     tiny_options(&o, true);

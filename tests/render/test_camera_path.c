@@ -241,7 +241,7 @@ TEST(npy_bad)
     fx_write_npy(p, "<f8", "False", "(2, 16)", flat, sizeof flat);
     expect_failure("degenerate.npy", &o, NERF_EFORMAT,
                    "pose 1 has a degenerate rotation");
-    expect_failure("missing.npy", &o, NERF_EIO, "missing.npy");
+    expect_failure("missing.npy", &o, NERF_ENOENT, "missing.npy");
 }
 
 /* A Blender test split: camera_angle_x, no image size. */

@@ -50,6 +50,7 @@ from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
                      NerfNoMemory, NerfVersionError)
+from .errors import ENOENT, EUNRECOGNISED, NerfNotFound, NerfUnrecognised
 from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     ENCODING_SCALE_PI, NETWORK_COARSE, NETWORK_FINE,
                     PRESET_FAST, PRESET_REFERENCE, PRESET_TINY, Model,
@@ -85,7 +86,7 @@ __all__ = [
     "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
     "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",
     "OK", "ERROR", "EINVAL", "ENOMEM", "EIO", "EFORMAT", "ECANCELLED",
-    "EVERSION",
+    "EVERSION", "ENOENT", "EUNRECOGNISED", "NerfNotFound", "NerfUnrecognised",
     # Process-wide functions.
     "version", "version_number", "version_string", "build_info",
     "library_path", "status_string", "last_error", "clear_error",

@@ -9,12 +9,19 @@ callers can catch exactly what they expect::
 
     try:
         model = nerf.Model.load("missing.nerf")
-    except nerf.NerfIOError as err:
-        print(err.code == nerf.EIO, err.message)
+    except FileNotFoundError as err:     # nerf.NerfNotFound
+        print(err.code == nerf.ENOENT, err.message)
+
+A missing file raises :class:`NerfNotFound`, which is both a
+:class:`NerfIOError` (what it was before libnerf 0.4) and Python's
+``FileNotFoundError``; a file or folder of the wrong kind (not a
+checkpoint, no known dataset layout) raises :class:`NerfUnrecognised`, a
+:class:`NerfFormatError`.
 """
 
 from __future__ import annotations
 
+import errno as _errno
 from typing import Dict, Optional, Type
 
 # The values of enum nerf_status; fixed forever by the C API.
@@ -26,6 +33,8 @@ EIO = -4
 EFORMAT = -5
 ECANCELLED = -6
 EVERSION = -7
+ENOENT = -8
+EUNRECOGNISED = -9
 
 
 class NerfError(Exception):
@@ -82,6 +91,29 @@ class NerfFormatError(NerfError):
     status = EFORMAT
 
 
+class NerfNotFound(NerfIOError, FileNotFoundError):
+    """NERF_ENOENT: no such file or folder.
+
+    Also a ``FileNotFoundError`` (``errno`` is ``errno.ENOENT``), so code
+    that handles missing files the Python way handles it; ``code`` stays
+    the libnerf status.
+    """
+    status = ENOENT
+
+    def __init__(self, code: int, message: str = "",
+                 function: Optional[str] = None) -> None:
+        super().__init__(code, message, function)
+        self.errno = _errno.ENOENT
+        self.strerror = self.message
+
+
+class NerfUnrecognised(NerfFormatError):
+    """NERF_EUNRECOGNISED: the file or folder is not the kind asked for
+    (no known dataset layout, not a libnerf checkpoint, a folder where a
+    file belongs)."""
+    status = EUNRECOGNISED
+
+
 class NerfCancelled(NerfError):
     """NERF_ECANCELLED: a progress callback or ``cancel()`` stopped a call."""
     status = ECANCELLED
@@ -96,7 +128,7 @@ _BY_STATUS: Dict[int, Type[NerfError]] = {
     cls.status: cls
     for cls in (NerfInternalError, NerfInvalidArgument, NerfNoMemory,
                 NerfIOError, NerfFormatError, NerfCancelled,
-                NerfVersionError)
+                NerfVersionError, NerfNotFound, NerfUnrecognised)
 }
 
 # Filled in by _capi once the library is loaded; until then the binding's
@@ -108,6 +140,8 @@ _FALLBACK_TEXT = {
     OK: "success", ERROR: "internal error", EINVAL: "invalid argument",
     ENOMEM: "out of memory", EIO: "I/O error", EFORMAT: "malformed data",
     ECANCELLED: "cancelled", EVERSION: "unsupported version",
+    ENOENT: "no such file or folder",
+    EUNRECOGNISED: "not a recognised file or folder",
 }
 
 

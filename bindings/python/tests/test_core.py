@@ -1,10 +1,12 @@
 """Process-wide functions, error mapping, logging and declaration coverage."""
 
+import errno
 import os
 import pickle
 import re
 import subprocess
 import sys
+import tempfile
 import threading
 
 import _support
@@ -37,7 +39,7 @@ class Errors(TestCase):
     def test_status_strings(self):
         self.assertEqual(nerf.status_string(nerf.EINVAL), "invalid argument")
         self.assertEqual(nerf.status_string(-1000), "unknown status")
-        for code in range(nerf.EVERSION, nerf.OK + 1):
+        for code in range(nerf.EUNRECOGNISED, nerf.OK + 1):
             self.assertTrue(nerf.status_string(code))
 
     def test_codes_and_classes(self):
@@ -47,7 +49,9 @@ class Errors(TestCase):
                  (nerf.EIO, nerf.NerfIOError),
                  (nerf.EFORMAT, nerf.NerfFormatError),
                  (nerf.ECANCELLED, nerf.NerfCancelled),
-                 (nerf.EVERSION, nerf.NerfVersionError)]
+                 (nerf.EVERSION, nerf.NerfVersionError),
+                 (nerf.ENOENT, nerf.NerfNotFound),
+                 (nerf.EUNRECOGNISED, nerf.NerfUnrecognised)]
         for code, cls in pairs:
             err = errors.error_for_status(code, "boom", "nerf_x")
             self.assertIs(type(err), cls)
@@ -63,6 +67,35 @@ class Errors(TestCase):
         err = errors.error_for_status(-99)
         self.assertIs(type(err), nerf.NerfError)
         self.assertEqual(err.message, "unknown status")
+
+    def test_missing_and_unrecognised_files(self):
+        # A missing file is Python's FileNotFoundError (and still the
+        # NerfIOError it was before 0.4); a file or folder of the wrong
+        # kind is a NerfFormatError; neither reads as an I/O failure.
+        self.assertEqual(nerf.status_string(nerf.ENOENT),
+                         "no such file or folder")
+        with tempfile.TemporaryDirectory() as tmp:
+            missing = os.path.join(tmp, "nope.nerf")
+            with self.assertRaises(FileNotFoundError) as ctx:
+                nerf.Model.load(missing)
+            err = ctx.exception
+            self.assertIsInstance(err, nerf.NerfNotFound)
+            self.assertIsInstance(err, nerf.NerfIOError)
+            self.assertEqual(err.code, nerf.ENOENT)
+            self.assertEqual(err.errno, errno.ENOENT)
+            self.assertIn("nope.nerf", str(err))
+            with self.assertRaises(FileNotFoundError):
+                nerf.Dataset(os.path.join(tmp, "no-scene"))
+            with self.assertRaises(nerf.NerfUnrecognised) as ctx:
+                nerf.Dataset(tmp)
+            self.assertIsInstance(ctx.exception, nerf.NerfFormatError)
+            self.assertIn("not a known dataset layout", str(ctx.exception))
+            other = os.path.join(tmp, "photo.nerf")
+            with open(other, "wb") as f:
+                f.write(b"\x89PNG\r\n\x1a\n not a model")
+            with self.assertRaises(nerf.NerfUnrecognised) as ctx:
+                nerf.Model.load(other)
+            self.assertIn("not a libnerf checkpoint", str(ctx.exception))
 
     def test_pickle(self):
         err = errors.error_for_status(nerf.EIO, "x.png: cannot open")

@@ -115,7 +115,7 @@ class Datasets(TestCase):
 
     def test_errors_name_the_file(self):
         missing = os.path.join(_support.tmpdir(), "no-scene")
-        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "no-scene"):
+        with self.assertNerfError(nerf.NerfNotFound, nerf.ENOENT, "no-scene"):
             nerf.Dataset(missing)
         broken = os.path.join(_support.tmpdir(), "broken")
         shutil.copytree(_support.scene_dir(), broken)
@@ -222,7 +222,7 @@ class CameraPaths(TestCase):
         with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT,
                                   "nan.npy", "NaN"):
             nerf.load_camera_path(nan, width=8, height=8, fov_x=50)
-        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "absent.json"):
+        with self.assertNerfError(nerf.NerfNotFound, nerf.ENOENT, "absent.json"):
             nerf.load_camera_path(os.path.join(d, "absent.json"))
         with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
                                   "not both"):
@@ -264,7 +264,7 @@ class Png(TestCase):
 
     def test_errors(self):
         missing = os.path.join(_support.tmpdir(), "missing.png")
-        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, missing):
+        with self.assertNerfError(nerf.NerfNotFound, nerf.ENOENT, missing):
             nerf.read_png(missing)
         junk = os.path.join(_support.tmpdir(), "junk.png")
         with open(junk, "wb") as f:

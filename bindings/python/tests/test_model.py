@@ -202,12 +202,12 @@ class SaveLoad(TestCase):
 
     def test_load_errors(self):
         missing = os.path.join(_support.tmpdir(), "missing.nerf")
-        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, missing):
+        with self.assertNerfError(nerf.NerfNotFound, nerf.ENOENT, missing):
             nerf.Model.load(missing)
         junk = os.path.join(_support.tmpdir(), "junk.nerf")
         with open(junk, "wb") as f:
             f.write(b"this is not a checkpoint at all, just text" * 4)
-        with self.assertNerfError(nerf.NerfFormatError, nerf.EFORMAT, junk):
+        with self.assertNerfError(nerf.NerfUnrecognised, nerf.EUNRECOGNISED, junk):
             nerf.Model.load(junk)
         with nerf.Model(preset="tiny") as m:
             bad = os.path.join(_support.tmpdir(), "no-dir", "m.nerf")
@@ -218,7 +218,7 @@ class SaveLoad(TestCase):
 class ImportNpz(TestCase):
     def test_errors(self):
         missing = os.path.join(_support.tmpdir(), "missing.npz")
-        with self.assertNerfError(nerf.NerfIOError, nerf.EIO, missing):
+        with self.assertNerfError(nerf.NerfNotFound, nerf.ENOENT, missing):
             nerf.Model.import_npz(missing, preset="tiny")
         junk = os.path.join(_support.tmpdir(), "junk.npz")
         with open(junk, "wb") as f:

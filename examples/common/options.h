@@ -1,0 +1,45 @@
+/*
+ * One-line command-line errors shared by the example programs: an unknown
+ * option names the nearest known one, and every mistake points to --help
+ * instead of printing all of it.
+ */
+#ifndef NERF_EXAMPLES_OPTIONS_H
+#define NERF_EXAMPLES_OPTIONS_H
+
+/*
+ * The option of names (a NULL-terminated list, each "--name") that arg
+ * most likely misspells, by edit distance (a swap of two neighbouring
+ * letters counts as one edit) or as an abbreviation; NULL when none is
+ * near enough to suggest.
+ */
+const char *cli_suggest(const char *arg, const char *const *names);
+
+/*
+ * 0 if arg is one of names; else prints, as one line on stderr,
+ * "PROGRAM: unknown option 'ARG' (did you mean --X?); PROGRAM --help
+ * lists the options" (or "unexpected argument" for a word that is not an
+ * option) and returns -1.
+ */
+int cli_check_option(const char *program, const char *arg,
+                     const char *const *names);
+
+/* The message of cli_check_option() for an arg known not to be an option,
+ * from a parser that matched it against its options itself. */
+void cli_unknown(const char *program, const char *arg,
+                 const char *const *names);
+
+/* "PROGRAM: MESSAGE; PROGRAM --help lists the options", one line on
+ * stderr; MESSAGE is a printf format without a newline. */
+void cli_usage_error(const char *program, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* "PROGRAM: bad value 'VALUE' for OPTION (EXPECTED); PROGRAM --help ...",
+ * or "PROGRAM: OPTION needs a value (EXPECTED)" when value is NULL;
+ * expected may be NULL. */
+void cli_bad_value(const char *program, const char *option, const char *value,
+                   const char *expected);
+
+#endif
