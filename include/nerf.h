@@ -1434,15 +1434,16 @@ typedef struct nerf_dataset_options {
                                     and val are empty); a single
                                     transforms.json serves every frame to
                                     every split. */
-    uint32_t forward_facing;   /**< COLMAP: 1 places the scene as LLFF
-                                    places a forward-facing capture
-                                    (recentred on the average pose, the
-                                    nearest sparse-point depth at 1/0.75)
-                                    for NDC rays, with the spiral path;
-                                    nerf_dataset_space() then says NDC.
-                                    0 (default): unbounded.  LLFF scenes
-                                    are forward-facing either way; a
-                                    Blender scene with 1 is refused. */
+    uint32_t forward_facing;   /**< Since 0.4.  COLMAP: 1 places the
+                                    scene as LLFF places a forward-facing
+                                    capture (recentred on the average
+                                    pose, the nearest sparse-point depth
+                                    at 1/0.75) for NDC rays, with the
+                                    spiral path; nerf_dataset_space()
+                                    then says NDC.  0 (default):
+                                    unbounded.  LLFF scenes are
+                                    forward-facing either way; a Blender
+                                    scene with 1 is refused. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
 
