@@ -1117,13 +1117,22 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
  * Create a renderer that draws @p model with the samples of @p sampler.
  * @p opts is copied; NULL means the defaults.
  *
- * The renderer references @p model and @p sampler without owning them:
- * both must outlive it.  It reads the model's current weights at every
- * call, so training between renders is seen.  One model and one sampler may
- * serve several renderers.
+ * Since 0.4, @p sampler may be NULL: the renderer then makes (and owns) a
+ * sampler from the model's render settings (nerf_model_render_settings():
+ * those its trainer recorded, else those its shape suggests), and when
+ * @p opts is NULL too, it composites on the model's background as well,
+ * so that nerf_renderer_create(&r, model, NULL, NULL) renders a model as
+ * it was trained without the caller knowing its preset or scene.
  *
- * @return NERF_OK; NERF_EINVAL (NULL model or sampler, out-of-range
+ * The renderer references @p model and a given @p sampler without owning
+ * them: both must outlive it.  It reads the model's current weights at
+ * every call, so training between renders is seen.  One model and one
+ * sampler may serve several renderers.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL model, out-of-range
  * options, a marching sampler with a model that has no occupancy grid);
+ * with a NULL sampler, NERF_EFORMAT for recorded settings no sampler
+ * accepts (a forged file), as nerf_model_render_settings();
  * NERF_EVERSION for an options struct from a newer header with non-zero
  * unknown fields; NERF_ENOMEM.
  */

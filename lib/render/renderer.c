@@ -66,6 +66,21 @@ static int check_options(const void *opts)
     return NERF_OK;
 }
 
+/*
+ * The sampler of a caller who gave none: the model's render settings, and
+ * with no options either, its background too, so that a model renders as
+ * it was trained without the caller knowing how.
+ */
+static int own_sampler(const nerf_model *model, nerf_renderer_options *o,
+                       bool background, nerf_sampler **out)
+{
+    nerf_sampler_options so;
+    nerf_sampler_options_init(&so, sizeof so);
+    so.hooks = o->hooks;
+    int rc = nerf_model_render_settings(model, &so, background ? o : NULL);
+    return rc == NERF_OK ? nerf_sampler_create(out, &so) : rc;
+}
+
 NERF_API int nerf_renderer_create(nerf_renderer **out,
                                   const nerf_model *model,
                                   const nerf_sampler *sampler,
@@ -75,30 +90,35 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
         return nerf__error(NERF_EINVAL, "nerf_renderer_create: out is NULL");
     }
     *out = NULL;
-    if (model == NULL || sampler == NULL) {
-        return nerf__error(NERF_EINVAL, "nerf_renderer_create: model and "
-                           "sampler must not be NULL");
+    if (model == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_renderer_create: model must "
+                           "not be NULL");
     }
     nerf_renderer_options o;
     renderer_defaults(&o);
     nerf__env env;
-    int rc = nerf__render_check_pair(model, sampler, "nerf_renderer_create");
-    if (rc == NERF_OK) {
-        rc = nerf__options_open(&o, sizeof o, opts, "nerf_renderer_options",
+    int rc = nerf__options_open(&o, sizeof o, opts, "nerf_renderer_options",
                                 check_options, &o.hooks, &env);
+    nerf_sampler *owned = NULL;
+    if (rc == NERF_OK && sampler == NULL) {
+        rc = own_sampler(model, &o, opts == NULL, &owned);
+        sampler = owned;
     }
-    if (rc != NERF_OK) {
-        return rc;
+    if (rc == NERF_OK) {
+        rc = nerf__render_check_pair(model, sampler, "nerf_renderer_create");
     }
-    nerf_renderer *r = nerf__calloc(&env, 1, sizeof *r);
+    nerf_renderer *r = rc == NERF_OK ? nerf__calloc(&env, 1, sizeof *r)
+                                     : NULL;
     if (r == NULL) {
-        return NERF_ENOMEM;
+        nerf_sampler_destroy(owned);
+        return rc == NERF_OK ? NERF_ENOMEM : rc;
     }
     r->env = env;
     r->opts = o;
     r->opts.hooks = NULL;
     r->model = model;
     r->sampler = sampler;
+    r->own_sampler = owned;
     if (o.raw_noise_std == NERF_NOISE_AUTO) {
         /* The reference trains forward-facing scenes with noise std 1 and
          * Blender scenes without. */
@@ -135,6 +155,7 @@ NERF_API void nerf_renderer_destroy(nerf_renderer *renderer)
         nerf__free(&env, renderer->workers[i]);
     }
     nerf__free(&env, renderer->workers);
+    nerf_sampler_destroy(renderer->own_sampler);
     nerf__free(&env, renderer);
 }
 

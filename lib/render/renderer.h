@@ -37,6 +37,8 @@ struct nerf_renderer {
     nerf_renderer_options opts; /* as created; opts.hooks is NULL */
     const nerf_model *model;
     const nerf_sampler *sampler;
+    nerf_sampler *own_sampler;  /* made from the model's render settings
+                                   when the caller gave none; else NULL */
     float noise_std;            /* raw_noise_std resolved */
     uint32_t threads;           /* resolved, >= 1 */
     size_t chunk;               /* rays per chunk, a multiple of the block */

@@ -207,12 +207,86 @@ TEST(recorded_settings_travel_with_the_model)
     nerf_model_destroy(m);
 }
 
+/* A w x h render of m from z = 4 looking at the origin, by renderer r. */
+static void render(nerf_renderer *r, float *rgb, uint32_t w, uint32_t h)
+{
+    nerf_camera cam;
+    NERF_CAMERA_INIT(&cam);
+    cam.width = w;
+    cam.height = h;
+    cam.fx = cam.fy = 10.0;
+    cam.cx = 0.5 * w;
+    cam.cy = 0.5 * h;
+    const double c2w[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 4};
+    for (int i = 0; i < 12; i++) {
+        cam.c2w[i] = c2w[i];
+    }
+    CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
+                                        (size_t)w * h));
+}
+
+/*
+ * nerf_renderer_create() without a sampler renders as the model was
+ * trained: the same pixels as a sampler and background the caller made
+ * from its settings, and with options given, the options' background.
+ */
+TEST(renderer_without_a_sampler_uses_the_model)
+{
+    enum { W = 6, H = 5, N = 3 * W * H };
+    nerf_model *m = model_of(NERF_PRESET_TINY, NERF_SPACE_BOX);
+    if (m == NULL) {
+        return;
+    }
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    so.n_coarse = 16;
+    so.n_fine = 8;
+    so.t_near = 3.0f;
+    so.t_far = 5.0f;
+    CHECK_OK(nerf_model_set_render_settings(m, &so, 1));
+    nerf_sampler *s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &so));
+    nerf_renderer_options white, black;
+    NERF_RENDERER_OPTIONS_INIT(&white);
+    NERF_RENDERER_OPTIONS_INIT(&black);
+    white.white_background = 1;
+    nerf_renderer *want = NULL, *got = NULL, *given = NULL, *dark = NULL;
+    CHECK_OK(nerf_renderer_create(&want, m, s, &white));
+    CHECK_OK(nerf_renderer_create(&got, m, NULL, NULL));
+    CHECK_OK(nerf_renderer_create(&given, m, NULL, &black));
+    CHECK_OK(nerf_renderer_create(&dark, m, s, &black));
+    static float a[N], b[N], c[N], d[N];
+    if (want && got && given && dark) {
+        render(want, a, W, H);
+        render(got, b, W, H);
+        render(given, c, W, H);
+        render(dark, d, W, H);
+        CHECK(memcmp(a, b, sizeof a) == 0);
+        CHECK(memcmp(c, d, sizeof c) == 0);
+        /* An untrained model is partly transparent: backgrounds show. */
+        CHECK(memcmp(a, c, sizeof a) != 0);
+    }
+    nerf_renderer_destroy(want);
+    nerf_renderer_destroy(got);
+    nerf_renderer_destroy(given);
+    nerf_renderer_destroy(dark);
+    /* Settings no sampler takes (a forged file): no renderer. */
+    m->render_sampler.t_far = 1.0f;
+    nerf_renderer *bad = NULL;
+    CHECK_EQ_INT(nerf_renderer_create(&bad, m, NULL, NULL), NERF_EFORMAT);
+    CHECK(bad == NULL);
+    CHECK_EQ_INT(nerf_renderer_create(&bad, NULL, s, NULL), NERF_EINVAL);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     make_tmpdir();
     RUN(export_holds_the_weights_without_the_moments);
     RUN(guessed_settings);
     RUN(recorded_settings_travel_with_the_model);
+    RUN(renderer_without_a_sampler_uses_the_model);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }
