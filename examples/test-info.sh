@@ -56,8 +56,10 @@ expect 0 full.txt "^kind *checkpoint" "$info" "$work/model.nerf"
 [ "$(field full.txt step)" = "2" ] || fail "step: $(field full.txt step)"
 [ "$(field full.txt matmul)" = "fp32" ] || fail "matmul"
 [ "$(field full.txt space)" = "box" ] || fail "space"
-[ "$(field full.txt holds)" = "weights, optimiser moments, render settings" ] ||
+[ "$(field full.txt holds)" = "weights, optimiser moments, render settings, data record" ] ||
   fail "holds: $(field full.txt holds)"
+field full.txt data | grep -q "^4 images of 16x16 (blender, mean colour" ||
+  fail "data: $(field full.txt data)"
 field full.txt encoding | grep -q "positions frequency, frequencies 10" ||
   fail "encoding: $(field full.txt encoding)"
 field full.txt render | grep -q "recorded in training, n_coarse 32, n_fine 64, near 2, far 6, ndc no, background white" ||
@@ -71,7 +73,7 @@ echo "checkpoint $full bytes, weights-only export $part bytes"
 [ "$full" = "$(wc -c <"$work/model.nerf")" ] || fail "checkpoint size"
 [ "$part" = "$(wc -c <"$work/weights.nerf")" ] || fail "export size"
 [ $((2 * part)) -lt "$full" ] || fail "the export is not smaller"
-[ "$(field export.txt holds)" = "weights, render settings" ] ||
+[ "$(field export.txt holds)" = "weights, render settings, data record" ] ||
   fail "export holds: $(field export.txt holds)"
 [ "$(field export.txt parameters)" = "$(field full.txt parameters)" ] ||
   fail "parameters"

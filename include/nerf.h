@@ -531,12 +531,30 @@ NERF_API int nerf_model_export(const nerf_model *model, const char *path);
                                            by a trainer or
                                            nerf_model_set_render_settings(),
                                            kept by checkpoints. */
+#define NERF_MODEL_HAS_DATA_RECORD 0x8u /**< What data a trainer last
+                                           trained the model on
+                                           (nerf_model_training_data()),
+                                           kept by checkpoints. */
 
 /**
  * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
  * bits; 0 for NULL.  For a loaded model, which of these its file held.
  */
 NERF_API uint32_t nerf_model_contents(const nerf_model *model);
+
+/**
+ * Since 0.4: a one-line description of the data @p model was last trained
+ * on, as its trainer recorded it: image count and size, the files' size
+ * when downscaled, the scene's format, NDC, mean colour and bounds ("100
+ * images of 100x100 from 800x800 files (blender, mean colour 0.85 0.83
+ * 0.80, near 2 far 6)"), into @p buf (at most @p size bytes with the
+ * terminating NUL; truncated to fit).  An empty string when nothing is
+ * recorded (nerf_model_contents() lacks NERF_MODEL_HAS_DATA_RECORD).
+ * nerf_trainer_create() warns when it is given data unlike this record.
+ * @return NERF_OK, or NERF_EINVAL (NULL model or buffer, size 0).
+ */
+NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
+                                      size_t size);
 
 /**
  * Create a model with @p opts and fill its weights from a NumPy .npz file

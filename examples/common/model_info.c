@@ -140,6 +140,13 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
     if (c & NERF_MODEL_HAS_RENDER_SETTINGS) {
         cJSON_AddItemToArray(holds, cJSON_CreateString("render settings"));
     }
+    if (c & NERF_MODEL_HAS_DATA_RECORD) {
+        char data[256];
+        cJSON_AddItemToArray(holds, cJSON_CreateString("data record"));
+        if (nerf_model_training_data(model, data, sizeof data) == NERF_OK) {
+            cJSON_AddStringToObject(o, "data", data);
+        }
+    }
     cJSON_AddItemToObject(o, "render", render_object(model));
     return o;
 }

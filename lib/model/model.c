@@ -475,7 +475,24 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model)
     if (model->has_render) {
         c |= NERF_MODEL_HAS_RENDER_SETTINGS;
     }
+    if (model->data.known) {
+        c |= NERF_MODEL_HAS_DATA_RECORD;
+    }
     return c;
+}
+
+NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
+                                      size_t size)
+{
+    if (model == NULL || buf == NULL || size == 0) {
+        return nerf__error(NERF_EINVAL, "nerf_model_training_data: NULL "
+                           "model or buffer, or size 0");
+    }
+    buf[0] = '\0';
+    if (model->data.known) {
+        nerf__fingerprint_describe(&model->data, 1, buf, size);
+    }
+    return NERF_OK;
 }
 
 int nerf__model_network(const nerf_model *m, int network)

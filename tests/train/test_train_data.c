@@ -66,9 +66,21 @@ TEST(recorded_and_saved)
 {
     nerf_model *m = tiny_model(1);
     CHECK(m && !m->data.known);
+    char said[256] = "x";
+    CHECK_OK(nerf_model_training_data(m, said, sizeof said));
+    CHECK_EQ_INT((int)strlen(said), 0);
+    CHECK_EQ_INT(nerf_model_contents(m) & NERF_MODEL_HAS_DATA_RECORD, 0);
     train_on(m, a.train);
     CHECK_EQ_INT(n_warnings, 0);
     CHECK(m->data.known);
+    CHECK_EQ_INT(nerf_model_contents(m) & NERF_MODEL_HAS_DATA_RECORD,
+                 NERF_MODEL_HAS_DATA_RECORD);
+    CHECK_OK(nerf_model_training_data(m, said, sizeof said));
+    CHECK(strncmp(said, "4 images of 16x16 (blender", 26) == 0);
+    CHECK_OK(nerf_model_training_data(m, said, 8)); /* truncated */
+    CHECK_EQ_INT((int)strlen(said), 7);
+    CHECK_EQ_INT(nerf_model_training_data(m, said, 0), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_training_data(NULL, said, 8), NERF_EINVAL);
     CHECK_EQ_INT(m->data.count, 4);
     CHECK_EQ_INT(m->data.width, 16);
     CHECK_EQ_INT(m->data.kind, NERF__FINGERPRINT_BLENDER);

@@ -103,6 +103,7 @@ _PROTOTYPES = {
     # Since 0.4: weights-only exports and render settings.
     "nerf_model_export": (c_int, [ModelP, c_char_p], True),
     "nerf_model_contents": (c_uint32, [ModelP], False),
+    "nerf_model_training_data": (c_int, [ModelP, c_char_p, c_size_t], True),
     "nerf_model_set_render_settings": (c_int, [ModelP,
                                                POINTER(SamplerOptions),
                                                c_uint32], True),

@@ -46,9 +46,11 @@ SPACES = {"box": SPACE_BOX, "ndc": SPACE_NDC, "unbounded": SPACE_UNBOUNDED}
 MODEL_HAS_OPTIMIZER = 0x1
 MODEL_HAS_OCCUPANCY = 0x2
 MODEL_HAS_RENDER_SETTINGS = 0x4
+MODEL_HAS_DATA_RECORD = 0x8
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
-            MODEL_HAS_RENDER_SETTINGS: "render_settings"}
+            MODEL_HAS_RENDER_SETTINGS: "render_settings",
+            MODEL_HAS_DATA_RECORD: "data_record"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -231,10 +233,22 @@ class Model(_handle.Handle):
         """What the model holds beyond its weights
         (``nerf_model_contents``): ``"optimizer"`` (training can resume;
         absent for a weights-only export), ``"occupancy"`` (a trained
-        occupancy grid), ``"render_settings"`` (recorded by training)."""
+        occupancy grid), ``"render_settings"`` (recorded by training),
+        ``"data_record"`` (what data training last used:
+        :attr:`training_data`)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)
+
+    @property
+    def training_data(self) -> str:
+        """One line on the data a trainer last trained the model on
+        (``nerf_model_training_data``): image count and size, format, mean
+        colour and bounds; "" when nothing is recorded."""
+        buf = ctypes.create_string_buffer(512)
+        with self._using() as ptr:
+            lib.nerf_model_training_data(ptr, buf, len(buf))
+        return buf.value.decode("utf-8", "replace")
 
     def render_settings(self) -> Tuple[SamplerOptions, RendererOptions]:
         """``(SamplerOptions, RendererOptions)`` to render the model with
