@@ -6,6 +6,8 @@
 #   test-out-folder.sh NERF-SCENE NERF-TRAIN NERF-RENDER
 set -eu
 scene=$1 train=$2 render=$3
+# Cross builds run the programs through an emulator (qemu-user).
+wrap=${MESON_EXE_WRAPPER:-}
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-render-out.XXXXXX")
 trap 'chmod -R u+w "$work"; rm -rf "$work"' EXIT
@@ -15,15 +17,15 @@ fail() {
   exit 1
 }
 
-"$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
+$wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
   --test 0 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
-"$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
+$wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
   --batch 64 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
 
 # render OUT: nerf-render of two small views into OUT; status in $status.
 render() {
   status=0
-  "$render" --model "$work/model.nerf" --out "$1" --path orbit --frames 2 \
+  $wrap "$render" --model "$work/model.nerf" --out "$1" --path orbit --frames 2 \
     --width 8 --height 8 2>"$work/render.log" || status=$?
 }
 
@@ -60,7 +62,7 @@ fi
 # nerf-scene renders its views before writing them: a file in the way is
 # found first.
 status=0
-"$scene" --out "$work/a-file" --width 8 --height 8 --train 1 --val 0 \
+$wrap "$scene" --out "$work/a-file" --width 8 --height 8 --train 1 --val 0 \
   --test 0 2>"$work/scene.log" || status=$?
 [ "$status" -eq 1 ] || { cat "$work/scene.log"; fail "scene: status $status"; }
 grep -q "^nerf-scene: $work/a-file: cannot be written: it is not a folder\$" \
@@ -69,7 +71,7 @@ if grep -q "wrote" "$work/scene.log"; then
   cat "$work/scene.log"
   fail "scene: rendered before refusing"
 fi
-"$scene" --out "$work/new/scene" --width 8 --height 8 --train 1 --val 0 \
+$wrap "$scene" --out "$work/new/scene" --width 8 --height 8 --train 1 --val 0 \
   --test 0 2>"$work/scene.log" || { cat "$work/scene.log"; fail "scene"; }
 grep -q "created the folder $work/new/scene\$" "$work/scene.log" ||
   { cat "$work/scene.log"; fail "scene: new folder not said"; }
