@@ -24,11 +24,6 @@ int setup_model_preset(const nerf_model *model)
     return 0;
 }
 
-/* How far an unbounded scene's rays are marched, in units of the central
- * cube's half side: the contracted march takes about as many samples to
- * any distance, and this is as far as float t stays precise enough. */
-#define UNBOUNDED_FAR 1e4f
-
 uint32_t setup_forward_facing(const nerf_model *model, int space)
 {
     if (model == NULL) {
@@ -75,11 +70,15 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
     return NERF_OK;
 }
 
-/* Without a scene to ask, the model says: the settings it was trained
- * with (guessed from its shape for files from before libnerf 0.4). */
-static int model_sampler(nerf_sampler **out, const nerf_model *model,
-                         uint32_t n_coarse, uint32_t n_fine, float near,
-                         float far, uint64_t seed)
+/*
+ * The model says how it is sampled: the settings it was trained with
+ * (guessed from its shape for files from before libnerf 0.4).  A scene,
+ * when there is one, says where: its bounds and NDC frustum, except that
+ * a contracted scene is marched as far as the model's settings reach.
+ */
+int setup_sampler(nerf_sampler **out, const nerf_model *model,
+                  const nerf_dataset *dataset, uint32_t n_coarse,
+                  uint32_t n_fine, float near, float far, uint64_t seed)
 {
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
@@ -90,48 +89,21 @@ static int model_sampler(nerf_sampler **out, const nerf_model *model,
     so.n_coarse = n_coarse ? n_coarse : so.n_coarse;
     so.n_fine = n_fine ? n_fine : so.n_fine;
     so.seed = seed;
-    if (far > near) {
-        so.t_near = near;
-        so.t_far = far;
-    }
-    return nerf_sampler_create(out, &so);
-}
-
-int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, uint32_t n_coarse,
-                  uint32_t n_fine, float near, float far, uint64_t seed)
-{
-    nerf_sampler_options so;
-    NERF_SAMPLER_OPTIONS_INIT(&so);
-    if (dataset == NULL) {
-        return model_sampler(out, model, n_coarse, n_fine, near, far, seed);
-    }
-    int preset = setup_model_preset(model);
-    if (preset != 0) {
-        nerf_sampler_options_preset(&so, preset);
-    }
-    nerf_model_options mo;
-    NERF_MODEL_OPTIONS_INIT(&mo);
-    nerf_model_get_options(model, &mo);
-    if (mo.encoding == NERF_ENCODING_HASHGRID) {
-        /* Any hash-grid model has an occupancy grid to march through,
-         * whatever its layer sizes. */
-        nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
-    }
-    if (!mo.use_fine && n_fine == 0) {
-        /* The paper's "no hierarchical sampling" ablation: 256 coarse. */
-        so.n_coarse = so.n_coarse + so.n_fine;
-        so.n_fine = 0;
-    }
-    so.n_coarse = n_coarse ? n_coarse : so.n_coarse;
-    so.n_fine = n_fine ? n_fine : so.n_fine;
-    so.seed = seed;
     if (dataset) {
-        int rc = nerf_dataset_bounds(dataset, &so.t_near, &so.t_far);
+        float t_far = so.t_far;
+        rc = nerf_dataset_bounds(dataset, &so.t_near, &so.t_far);
         if (rc != NERF_OK) {
             return rc;
         }
+        nerf_model_options mo;
+        NERF_MODEL_OPTIONS_INIT(&mo);
+        nerf_model_get_options(model, &mo);
+        if (mo.space == NERF_SPACE_UNBOUNDED) {
+            so.t_far = t_far;
+        }
         so.ndc = (uint32_t)nerf_dataset_is_ndc(dataset);
+        so.ndc_focal = 0.0f;
+        so.ndc_width = so.ndc_height = 0;
         nerf_camera cam;
         NERF_CAMERA_INIT(&cam);
         if (so.ndc && nerf_dataset_camera(dataset, 0, &cam) == NERF_OK) {
@@ -141,12 +113,6 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
             so.ndc_width = cam.width;
             so.ndc_height = cam.height;
         }
-    }
-    if (mo.space == NERF_SPACE_UNBOUNDED) {
-        /* A contracted scene reaches to infinity: march to far beyond the
-         * cameras, where the far field's few samples cost little. */
-        so.t_near = dataset ? so.t_near : 0.05f * mo.bound;
-        so.t_far = UNBOUNDED_FAR * mo.bound;
     }
     if (far > near) {
         so.t_near = near;

@@ -30,14 +30,14 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program);
 
 /*
- * A sampler for rendering or training model on dataset (which may be NULL:
- * then the settings the model records, from its training or, for files
- * from before libnerf 0.4, guessed from its shape: near 2, far 6 for a
- * box; see nerf_model_render_settings).  The sample
- * counts follow the model's preset (the reference ones otherwise; a
- * hash-grid model marches through its occupancy grid as the fast preset);
- * n_coarse/n_fine override them when non-zero.  Bounds and NDC follow the
- * dataset; near/far override the bounds when far > near.
+ * A sampler for rendering or training model on dataset (which may be
+ * NULL).  Sampling follows the settings the model records, from its
+ * training or, for a new model or a file from before libnerf 0.4, guessed
+ * from its shape (nerf_model_render_settings(): the preset's counts, or
+ * marching for a hash-grid model); n_coarse/n_fine override the counts
+ * when non-zero.  Bounds and NDC follow the dataset when there is one
+ * (an unbounded model keeps its far reach), else the model's settings;
+ * near/far override the bounds when far > near.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
                   const nerf_dataset *dataset, uint32_t n_coarse,

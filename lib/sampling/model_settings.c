@@ -14,8 +14,10 @@
 #include "options.h"
 #include "sampler.h"
 
-/* How far an unbounded scene is rendered when no trainer said, in units
- * of the central cube's half side (the programs' choice as well). */
+/* How far an unbounded scene is marched when no trainer said, in units of
+ * the central cube's half side: the contracted march takes about as many
+ * samples to any distance, and this is as far as float t stays precise
+ * enough.  The programs train with it too (examples/common). */
 #define UNBOUNDED_NEAR 0.05f
 #define UNBOUNDED_FAR 1e4f
 
