@@ -233,10 +233,12 @@ static double percentile(const depth_of *v, size_t n, double q)
  * optical axis, at least MIN_DEPTH in front of it) of the sparse points
  * whose track holds it, in the placed units, into range (2 per image; NAN
  * for an image that sees none).  Track entries naming an image the model
- * does not have are skipped.  *seen counts the images with depths.
+ * does not have are skipped.  *seen counts the images with depths;
+ * widest gets the least low and the largest high percentile of them.
  */
 static int depth_ranges(colmap_ctx *c, const id_index *ids, double q_lo,
-                        double q_hi, double *range, size_t *seen)
+                        double q_hi, double *range, size_t *seen,
+                        double widest[2])
 {
     size_t n = c->m.n_images;
     depth_of *d = nerf__calloc(&c->ds->env, c->m.n_track ? c->m.n_track : 1,
@@ -274,6 +276,8 @@ static int depth_ranges(colmap_ctx *c, const id_index *ids, double q_lo,
         range[i] = NAN;
     }
     *seen = 0;
+    widest[0] = INFINITY;
+    widest[1] = 0.0;
     for (size_t first = 0; first < nd;) {
         size_t last = first;
         while (last < nd && d[last].image == d[first].image) {
@@ -282,6 +286,8 @@ static int depth_ranges(colmap_ctx *c, const id_index *ids, double q_lo,
         range[2 * d[first].image] = percentile(d + first, last - first, q_lo);
         range[2 * d[first].image + 1] = percentile(d + first, last - first,
                                                    q_hi);
+        widest[0] = fmin(widest[0], range[2 * d[first].image]);
+        widest[1] = fmax(widest[1], range[2 * d[first].image + 1]);
         (*seen)++;
         first = last;
     }
@@ -300,16 +306,11 @@ static int bounds(colmap_ctx *c, const id_index *ids)
     if (range == NULL) {
         return NERF_ENOMEM;
     }
-    int rc = depth_ranges(c, ids, 0.01, 0.99, range, &seen);
-    double lo = INFINITY, hi = 0.0;
-    for (size_t i = 0; i < n && rc == NERF_OK; i++) {
-        if (!isnan(range[2 * i])) {
-            lo = range[2 * i] < lo ? range[2 * i] : lo;
-            hi = range[2 * i + 1] > hi ? range[2 * i + 1] : hi;
-        }
-    }
+    double w[2] = {INFINITY, 0.0};
+    int rc = depth_ranges(c, ids, 0.01, 0.99, range, &seen, w);
+    double lo = w[0], hi = w[1];
     nerf__free(&c->ds->env, range);
-    if (seen == 0 || !(hi > lo)) {
+    if (rc != NERF_OK || seen == 0 || !(hi > lo)) {
         c->near = DEFAULT_NEAR;
         c->far = DEFAULT_FAR;
     } else {
@@ -370,8 +371,9 @@ static int place_forward(colmap_ctx *c, const id_index *ids)
     raw_poses(c);
     double *range = nerf__calloc(env, 2 * n, sizeof *range);
     double *scratch = nerf__calloc(env, n, sizeof *scratch);
+    double w[2];
     int rc = range && scratch ? depth_ranges(c, ids, 0.001, 0.999, range,
-                                             &seen)
+                                             &seen, w)
                               : NERF_ENOMEM;
     if (rc == NERF_OK && seen == 0) {
         rc = nerf__error(NERF_EFORMAT, "%s: a forward-facing scene needs "
@@ -380,13 +382,7 @@ static int place_forward(colmap_ctx *c, const id_index *ids)
                          c->has_points ? c->paths[2] : c->paths[1]);
     }
     if (rc == NERF_OK) {
-        double lo = INFINITY, hi = 0.0;
-        for (size_t i = 0; i < n; i++) {
-            if (!isnan(range[2 * i])) {
-                lo = range[2 * i] < lo ? range[2 * i] : lo;
-                hi = range[2 * i + 1] > hi ? range[2 * i + 1] : hi;
-            }
-        }
+        double lo = w[0], hi = w[1];
         for (size_t i = 0; i < n; i++) {
             if (isnan(range[2 * i])) {
                 range[2 * i] = lo;
