@@ -29,9 +29,15 @@ static const char usage[] =
     "  --out MODEL   the checkpoint to write (required)\n"
     "  --preset      network and samples: reference (the paper's; slow on a\n"
     "                CPU), tiny (default) or fast (hash grid and small MLPs)\n"
-    "  --steps N     train until the model has taken N steps (default 2000)\n"
-    "  --seconds S   also stop after S seconds of training, saving MODEL\n"
-    "                (default none: no time limit)\n"
+    "  --steps N     train until the model has taken N steps, the learning\n"
+    "                rate decaying over them (default 2000; --resume: the\n"
+    "                steps MODEL was given)\n"
+    "  --seconds S   without --steps: train for S seconds, the learning\n"
+    "                rate decaying over the steps that time allows (it\n"
+    "                holds for the first quarter while the step rate is\n"
+    "                measured; the fitted length is saved in MODEL, so\n"
+    "                --resume continues the same run bit for bit); with\n"
+    "                --steps: stop at whichever comes first (default none)\n"
     "  --downscale K load images K times smaller (default 1)\n"
     "  --batch N     rays per step (default 1024)\n"
     "  --seed N      seed of initialisation and sampling (default 0)\n"
@@ -75,6 +81,7 @@ static const char usage[] =
     "  nerf-scene --out scene && nerf-train --data scene --out scene.nerf\n"
     "  nerf-train --data lego --downscale 8 --out lego.nerf --steps 1000 \\\n"
     "      --batch 512\n"
+    "  nerf-train --data lego --out lego.nerf --preset fast --seconds 600\n"
     "  nerf-train --data fern --downscale 8 --out fern.nerf --preset fast \\\n"
     "      --steps 4400 --seconds 600\n";
 
@@ -92,7 +99,7 @@ static void on_signal(int sig)
 typedef struct run_state {
     progress bar;
     uint64_t first_step;
-    double seconds;  /* time budget, 0 = none */
+    double seconds;  /* time limit beside --steps, 0 = none */
     int out_of_time;
 } run_state;
 
@@ -102,6 +109,11 @@ static int on_progress(const nerf_progress *p, void *user)
     char note[96];
     snprintf(note, sizeof note, "step %llu loss %.5f psnr %.2f",
              (unsigned long long)(st->first_step + p->done), p->loss, p->psnr);
+    /* Under a budget the total is a projection until the schedule is
+     * fitted, then the fitted length. */
+    if (p->total > 0) {
+        st->bar.total = p->total > p->done ? p->total : p->done;
+    }
     progress_update(&st->bar, p->done, note);
     if (st->seconds > 0.0 && p->elapsed >= st->seconds) {
         st->out_of_time = 1;
@@ -116,6 +128,7 @@ typedef struct args {
     double lr, seconds;
     int resume, overwrite;
     int preset_given;
+    int steps_given;
     int lr_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (fp32) */
@@ -175,6 +188,7 @@ static int parse(int argc, char **argv, args *a)
             a->preset_given = 1;
         } else if (strcmp(k, "--steps") == 0) {
             bad = cli_uint(v, 1, UINT64_C(1) << 40, &a->steps);
+            a->steps_given = 1;
         } else if (strcmp(k, "--seconds") == 0) {
             bad = cli_double(v, &a->seconds) || !(a->seconds > 0.0);
         } else if (strcmp(k, "--downscale") == 0) {
@@ -345,6 +359,75 @@ static int create_model(const args *a, const nerf_hooks *hooks,
     return rc;
 }
 
+/* How the run ends: at a step count, or at a length fitted to --seconds
+ * (nerf_trainer_run_for()). */
+typedef struct plan {
+    int budget;      /* 1: nerf_trainer_run_for(--seconds) */
+    uint64_t target; /* otherwise: the step to train to */
+} plan;
+
+static int plan_run(const args *a, const nerf_model *m, plan *p)
+{
+    memset(p, 0, sizeof *p);
+    const uint64_t step = nerf_model_step(m);
+    nerf_schedule sc;
+    memset(&sc, 0, sizeof sc);
+    sc.struct_size = sizeof sc;
+    nerf_model_schedule(m, &sc);
+    if (a->steps_given) {
+        p->target = a->steps;
+    } else if (a->seconds > 0.0 &&
+               (step == 0 || sc.state != NERF_SCHEDULE_STEPS)) {
+        p->budget = 1;
+    } else if (sc.state == NERF_SCHEDULE_MEASURING) {
+        fprintf(stderr, "nerf-train: %s was saved while its schedule was "
+                "being fitted to a time budget: give --seconds (the time "
+                "left) or --steps\n", a->out);
+        return SETUP_USAGE;
+    } else if (step > 0) {
+        /* A resumed run goes on to the length it was given. */
+        p->target = sc.total_steps;
+    } else {
+        p->target = a->steps;
+    }
+    if (p->budget) {
+        if (sc.state == NERF_SCHEDULE_FITTED) {
+            fprintf(stderr, "nerf-train: training on to the %llu steps "
+                    "fitted to its budget, for at most %g s\n",
+                    (unsigned long long)sc.total_steps, a->seconds);
+        } else {
+            fprintf(stderr, "nerf-train: training for %g s: the learning "
+                    "rate holds for the first quarter, then decays over "
+                    "the steps the measured rate allows\n", a->seconds);
+        }
+    } else if (a->seconds > 0.0 && p->target > step) {
+        fprintf(stderr, "nerf-train: stopping at step %llu or after %g s, "
+                "whichever comes first\n", (unsigned long long)p->target,
+                a->seconds);
+    }
+    return NERF_OK;
+}
+
+/* After a budget's run: where it stopped, if short of the fitted length. */
+static void report_budget(const nerf_model *m, int rc)
+{
+    nerf_schedule sc;
+    memset(&sc, 0, sizeof sc);
+    sc.struct_size = sizeof sc;
+    nerf_model_schedule(m, &sc);
+    if (sc.state != NERF_SCHEDULE_FITTED) {
+        return;
+    }
+    /* The fit itself is logged by the trainer when it happens. */
+    if (rc == NERF_ECANCELLED && nerf_model_step(m) < sc.total_steps) {
+        fprintf(stderr, "nerf-train: out of time at step %llu of %llu (the "
+                "steps ran slower than measured); --resume trains on to "
+                "%llu\n", (unsigned long long)nerf_model_step(m),
+                (unsigned long long)sc.total_steps,
+                (unsigned long long)sc.total_steps);
+    }
+}
+
 int main(int argc, char **argv)
 {
     cli_blas_single_thread();
@@ -422,17 +505,31 @@ int main(int argc, char **argv)
     }
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
+    plan pl;
+    rc = plan_run(&a, m, &pl);
+    if (rc != NERF_OK) {
+        nerf_trainer_destroy(t);
+        nerf_dataset_destroy(ds);
+        nerf_model_destroy(m);
+        nerf_sampler_destroy(s);
+        return 2;
+    }
     run_state st;
     st.first_step = nerf_model_step(m);
-    st.seconds = a.seconds;
+    /* nerf_trainer_run_for() keeps its own time. */
+    st.seconds = pl.budget ? 0.0 : a.seconds;
     st.out_of_time = 0;
-    uint64_t todo = a.steps > st.first_step ? a.steps - st.first_step : 0;
-    progress_begin(&st.bar, "nerf-train", todo);
+    uint64_t todo = pl.target > st.first_step ? pl.target - st.first_step : 0;
+    progress_begin(&st.bar, "nerf-train", pl.budget ? 1 : todo);
     nerf_trainer_set_progress(t, on_progress, &st);
     nerf_train_stats stats;
     memset(&stats, 0, sizeof stats);
     stats.struct_size = sizeof stats;
-    rc = todo ? nerf_trainer_run(t, todo, &stats) : NERF_OK;
+    if (pl.budget) {
+        rc = nerf_trainer_run_for(t, a.seconds, &stats);
+    } else {
+        rc = todo ? nerf_trainer_run(t, todo, &stats) : NERF_OK;
+    }
     /* The run ends with a save whatever stopped it; EIO means a save
      * failed (nerf_trainer_run() lets it outrank a cancellation), and
      * another error may have come before it: only OK and a cancellation
@@ -451,10 +548,21 @@ int main(int argc, char **argv)
                 saved ? " (resume with --resume)" : "");
     } else {
         char note[4200];
-        snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s %s)",
-                 (unsigned long long)nerf_model_step(m), stats.psnr,
-                 saved ? "saved" : "NOT saved to", a.out);
+        if (stats.step == 0 && rc == NERF_OK) {
+            snprintf(note, sizeof note, "(already at step %llu: nothing to "
+                     "train)", (unsigned long long)nerf_model_step(m));
+        } else {
+            snprintf(note, sizeof note, "(step %llu, train psnr %.2f dB, %s "
+                     "%s)", (unsigned long long)nerf_model_step(m), stats.psnr,
+                     saved ? "saved" : "NOT saved to", a.out);
+        }
         progress_end(&st.bar, note);
+    }
+    if (pl.budget && !interrupted) {
+        report_budget(m, rc);
+        if (rc == NERF_ECANCELLED) {
+            rc = NERF_OK; /* the budget was kept */
+        }
     }
     if (rc == NERF_EIO) {
         cli_report("nerf-train", rc);
@@ -462,9 +570,14 @@ int main(int argc, char **argv)
                 "checkpoint written whole, if any; steps since are lost\n",
                 a.out);
     } else if (rc == NERF_ECANCELLED && st.out_of_time && !interrupted) {
-        fprintf(stderr, "nerf-train: stopped after %.0f s as asked; resume "
-                "with --resume\n", a.seconds);
+        fprintf(stderr, "nerf-train: stopped after %g s as asked, at step "
+                "%llu before step %llu; resume with --resume\n", a.seconds,
+                (unsigned long long)nerf_model_step(m),
+                (unsigned long long)pl.target);
         rc = NERF_OK;
+    } else if (rc == NERF_OK && st.seconds > 0.0 && todo > 0) {
+        fprintf(stderr, "nerf-train: reached step %llu before the %g s "
+                "limit\n", (unsigned long long)pl.target, a.seconds);
     } else if (rc != NERF_OK && !stopped) {
         cli_report("nerf-train", rc);
     }

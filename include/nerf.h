@@ -456,7 +456,13 @@ typedef enum nerf_param {
      * table): weight_decay * w is added to each layer parameter's
      * gradient.  Default 0; 1e-6 for hash-grid models, as Mueller et al.
      * train them. */
-    NERF_PARAM_WEIGHT_DECAY = 106
+    NERF_PARAM_WEIGHT_DECAY = 106,
+    /** Since 0.5.  The rate holds at LEARNING_RATE until this step, then
+     * decays exponentially to LEARNING_RATE_FINAL at DECAY_STEPS:
+     * lr(t) = lr0 (lr1/lr0)^((t - start) / (steps - start)) for t > start.
+     * Default 0 (the paper's schedule).  nerf_trainer_run_for() sets it
+     * to the step where it fits the schedule to its time budget. */
+    NERF_PARAM_DECAY_START = 107
 } nerf_param;
 
 /**
@@ -481,6 +487,46 @@ NERF_API int nerf_model_get_param(const nerf_model *model, int param,
  * 0 for NULL.
  */
 NERF_API double nerf_model_learning_rate(const nerf_model *model);
+
+/** Since 0.5.  What a model's learning-rate schedule is (nerf_schedule). */
+typedef enum nerf_schedule_state {
+    /** Set by its parameters alone: a decay over DECAY_STEPS (from
+     * DECAY_START), as nerf-train --steps sets it. */
+    NERF_SCHEDULE_STEPS = 0,
+    /** nerf_trainer_run_for() is measuring the step rate, the rate held
+     * at LEARNING_RATE, and has not fixed the run's length yet (a model
+     * saved then resumes by measuring again). */
+    NERF_SCHEDULE_MEASURING = 1,
+    /** nerf_trainer_run_for() fixed the run's length: the schedule decays
+     * from fit_step to total_steps, and training to total_steps is
+     * deterministic and resumes bit for bit like a --steps run. */
+    NERF_SCHEDULE_FITTED = 2
+} nerf_schedule_state;
+
+/**
+ * Since 0.5.  How a model's schedule came about; saved in checkpoints.
+ * Versioned: set struct_size (sizeof) before passing it.
+ */
+typedef struct nerf_schedule {
+    uint32_t struct_size;    /**< Set by the caller. */
+    uint32_t state;          /**< A nerf_schedule_state. */
+    double budget_seconds;   /**< The time budget the schedule was (or is
+                                  being) fitted to; 0 for STEPS. */
+    double steps_per_second; /**< FITTED: the step rate measured before
+                                  the fit; else 0. */
+    uint64_t fit_step;       /**< FITTED: the step at which the length was
+                                  fixed (DECAY_START); else 0. */
+    uint64_t total_steps;    /**< FITTED: the run's length (DECAY_STEPS):
+                                  where nerf_trainer_run_for() stops;
+                                  STEPS: DECAY_STEPS; MEASURING: 0. */
+} nerf_schedule;
+
+/**
+ * Since 0.5.  Fill @p out with the model's schedule.
+ * @return NERF_OK, or NERF_EINVAL for a NULL argument or a struct_size
+ * too small for struct_size and state.
+ */
+NERF_API int nerf_model_schedule(const nerf_model *model, nerf_schedule *out);
 
 /**
  * Save the model, its optimiser state and training step to @p path in
@@ -1808,6 +1854,41 @@ NERF_API int nerf_trainer_step(nerf_trainer *trainer,
  */
 NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
                               nerf_train_stats *stats_out);
+
+/**
+ * Since 0.5.  Train for about @p seconds of wall time, the learning rate
+ * decaying over the steps that time allows, rather than over a step count
+ * guessed beforehand.
+ *
+ * A model whose schedule is not FITTED (see nerf_model_schedule()) starts
+ * by measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for
+ * a quarter of @p seconds, takes the step rate over the last third of that
+ * time (steps get faster as a marching sampler's occupancy grid learns
+ * where the scene is, so the latest rate is the best guess of the rest),
+ * and fixes the run's length: the steps taken plus that rate times the
+ * time left.  It sets NERF_PARAM_DECAY_START to the current step and
+ * NERF_PARAM_DECAY_STEPS to that length, records the fit in the model
+ * (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
+ * trains to the length.  From the fit on, the run is a plain schedule:
+ * a model saved after it, loaded and given to nerf_trainer_run_for() or
+ * nerf_trainer_run() continues bit for bit to the same end, and two runs
+ * that fixed the same length train the same weights.  A FITTED model
+ * trains on to its recorded length without measuring again.
+ *
+ * The run ends at the fitted length (NERF_OK).  Should steps turn slower
+ * than measured, it ends when @p seconds and a tenth have passed
+ * (NERF_ECANCELLED, the error message saying so); the model is then a
+ * step of the same deterministic run, which a later call continues.
+ * Progress reports (NERF_PROGRESS_TRAIN) give done in steps of this call
+ * and total as the steps this call will take: projected from the rate so
+ * far while measuring, fixed after.  Checkpoints are saved as by
+ * nerf_trainer_run().
+ *
+ * @param seconds the budget, > 0 and finite, counted from this call.
+ * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds.
+ */
+NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
+                                  nerf_train_stats *stats_out);
 
 /**
  * Set (or with NULL clear) the progress callback of nerf_trainer_run().

@@ -1,3 +1,4 @@
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -105,6 +106,36 @@ static cJSON *render_object(const nerf_model *model)
     return r;
 }
 
+/* The learning-rate schedule: its rates, and how its length was set. */
+static cJSON *schedule_object(const nerf_model *model)
+{
+    nerf_schedule sc;
+    memset(&sc, 0, sizeof sc);
+    sc.struct_size = sizeof sc;
+    nerf_model_schedule(model, &sc);
+    double lr0 = 0.0, lr1 = 0.0, start = 0.0;
+    nerf_model_get_param(model, NERF_PARAM_LEARNING_RATE, &lr0);
+    nerf_model_get_param(model, NERF_PARAM_LEARNING_RATE_FINAL, &lr1);
+    nerf_model_get_param(model, NERF_PARAM_DECAY_START, &start);
+    cJSON *o = cJSON_CreateObject();
+    static const char *const kinds[] = {"steps", "measuring", "fitted"};
+    cJSON_AddStringToObject(o, "kind", sc.state < 3 ? kinds[sc.state] : "?");
+    cJSON_AddNumberToObject(o, "lr", lr0);
+    cJSON_AddNumberToObject(o, "lr_final", lr1);
+    if (sc.state != NERF_SCHEDULE_MEASURING) {
+        cJSON_AddNumberToObject(o, "decay_start", start);
+        cJSON_AddNumberToObject(o, "steps", (double)sc.total_steps);
+    }
+    if (sc.state != NERF_SCHEDULE_STEPS) {
+        cJSON_AddNumberToObject(o, "budget_seconds", sc.budget_seconds);
+    }
+    if (sc.state == NERF_SCHEDULE_FITTED) {
+        cJSON_AddNumberToObject(o, "steps_per_second",
+                                round(sc.steps_per_second * 10.0) / 10.0);
+    }
+    return o;
+}
+
 cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
 {
     nerf_model_options mo;
@@ -123,6 +154,7 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
     cJSON_AddNumberToObject(o, "parameters",
                             (double)nerf_model_param_count(model));
     cJSON_AddNumberToObject(o, "step", (double)nerf_model_step(model));
+    cJSON_AddItemToObject(o, "schedule", schedule_object(model));
     cJSON_AddStringToObject(o, "space", space_name(mo.space));
     if (mo.encoding == NERF_ENCODING_HASHGRID) {
         cJSON_AddNumberToObject(o, "bound", mo.bound);

@@ -8,7 +8,14 @@
 
 double nerf__adam_rate(const nerf__adam *hp, uint64_t step)
 {
-    return hp->lr * pow(hp->lr_final / hp->lr, (double)step / hp->decay_steps);
+    const double t = (double)step;
+    if (t <= hp->decay_start) {
+        return hp->lr;
+    }
+    /* Subtracting a decay_start of 0 leaves both terms exact, so a plain
+     * schedule gives the rates it gave before decay_start existed. */
+    const double span = fmax(hp->decay_steps - hp->decay_start, 1.0);
+    return hp->lr * pow(hp->lr_final / hp->lr, (t - hp->decay_start) / span);
 }
 
 typedef struct adam_job {

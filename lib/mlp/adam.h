@@ -11,10 +11,16 @@ typedef struct nerf__adam {
     double decay_steps;
     double beta1, beta2, eps;
     double weight_decay; /* L2 on the ranges updated with NERF__ADAM_DECAY */
+    /* The rate holds at lr until this step, then decays to lr_final at
+     * decay_steps: a time budget measures its step rate at lr before it
+     * knows over how many steps to decay (0: decay from the start). */
+    double decay_start;
 } nerf__adam;
 
-/* lr(step) = lr (lr_final / lr)^(step / decay_steps), continuing past it
- * as the reference does. */
+/* lr(step) = lr (lr_final / lr)^((step - decay_start) / (decay_steps -
+ * decay_start)) from decay_start on (lr before), continuing past
+ * decay_steps as the reference does.  With decay_start 0, the paper's
+ * lr (lr_final / lr)^(step / decay_steps). */
 double nerf__adam_rate(const nerf__adam *hp, uint64_t step);
 
 /* How nerf__adam_update() treats its range. */

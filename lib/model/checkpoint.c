@@ -19,6 +19,7 @@
 #include "gemm_bf16.h"
 #include "model.h"
 #include "occupancy.h"
+#include "schedule.h"
 
 #define MAGIC "NERFCKPT"
 #define MAGIC_LEN 8
@@ -66,14 +67,19 @@
  * it resumes without the warning.  Its body is checked on its own, not
  * through the tables below, where its index stays empty. */
 #define TAG_DATA 11u
+/* Required, written only for a model trained under a time budget
+ * (model/schedule.h): a reader that does not know it would resume on
+ * another learning-rate schedule. */
+#define TAG_SCHEDULE (TAG_REQUIRED | 14u)
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 13
+#define N_SECTIONS 14
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
 #define SPACE_INDEX 9
 #define RENDER_INDEX 11
 #define WEIGHTS_ONLY_INDEX 12
+#define SCHEDULE_INDEX 13
 #define ADAM_M_INDEX 3
 #define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
@@ -324,6 +330,18 @@ static unsigned char *put_render(unsigned char *p, const nerf_model *m)
     return p + RENDER_SIZE;
 }
 
+static bool has_schedule(const nerf_model *m)
+{
+    return nerf__schedule_saved(&m->schedule, m->adam.decay_start);
+}
+
+static unsigned char *put_schedule(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_SCHEDULE, NERF__SCHEDULE_SIZE);
+    nerf__schedule_store(p, &m->schedule, m->adam.decay_start);
+    return p + NERF__SCHEDULE_SIZE;
+}
+
 static size_t payload_size(const nerf_model *m, bool weights_only)
 {
     /* A weights-only file trades the two moment sections for its empty
@@ -335,7 +353,8 @@ static size_t payload_size(const nerf_model *m, bool weights_only)
            SECTION_HEAD + TRAINING2_SIZE + occupancy_size(m) +
            word_sections_size(m) +
            (m->has_render ? SECTION_HEAD + RENDER_SIZE : 0) +
-           (weights_only ? SECTION_HEAD : 0) + data_size(m);
+           (weights_only ? SECTION_HEAD : 0) + data_size(m) +
+           (has_schedule(m) ? SECTION_HEAD + NERF__SCHEDULE_SIZE : 0);
 }
 
 static void build_payload(const nerf_model *m, bool weights_only,
@@ -361,7 +380,10 @@ static void build_payload(const nerf_model *m, bool weights_only,
         p = put_section(p, TAG_WEIGHTS_ONLY, 0);
     }
     if (m->data.known) {
-        put_data(p, m);
+        p = put_data(p, m);
+    }
+    if (has_schedule(m)) {
+        put_schedule(p, m);
     }
 }
 
@@ -608,7 +630,7 @@ static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
     "training state (0.2)", "matmul", "space", "data", "render settings",
-    "weights-only marker"};
+    "weights-only marker", "schedule"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -625,7 +647,8 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
     uint32_t index = (tag & ~TAG_REQUIRED) - 1;
     bool known = (tag & TAG_REQUIRED) ? index < N_REQUIRED_SECTIONS ||
                                             tag == TAG_SPACE ||
-                                            tag == TAG_WEIGHTS_ONLY
+                                            tag == TAG_WEIGHTS_ONLY ||
+                                            tag == TAG_SCHEDULE
                                       : tag == TAG_OCCUPANCY ||
                                             tag == TAG_TRAINING2 ||
                                             tag == TAG_MATMUL ||
@@ -977,6 +1000,16 @@ static int build_model(const nerf__env *env, const char *path,
         if (rc != NERF_OK) {
             nerf_model_destroy(m);
             return rc;
+        }
+    }
+    if (s.body[SCHEDULE_INDEX] != NULL) {
+        const char *bad = nerf__schedule_parse(
+            s.body[SCHEDULE_INDEX], s.len[SCHEDULE_INDEX], &m->schedule,
+            &m->adam.decay_start);
+        if (bad != NULL) {
+            nerf_model_destroy(m);
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (%s)",
+                               path, bad);
         }
     }
     if (s.data != NULL && !nerf__fingerprint_parse(s.data, s.data_len,

@@ -342,9 +342,9 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
     if (opts->encoding == NERF_ENCODING_HASHGRID) {
         /* Mueller et al.'s Adam: beta2 0.99 and a tiny eps, which the
          * rarely touched hash entries need to move at all. */
-        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15, 1e-6};
+        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15, 1e-6, 0.0};
     } else {
-        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0};
+        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0, 0.0};
     }
     float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
     for (int i = 0; i < 4; i++) {

@@ -11,6 +11,7 @@
 #include "env.h"
 #include "fingerprint.h"
 #include "network.h"
+#include "schedule.h"
 
 /* lib/occupancy/occupancy.h: the grid a hash-grid model owns and the
  * samplers below the renderer march through. */
@@ -33,6 +34,9 @@ struct nerf_model {
      * them as it reads them, so that training needs no separate pass. */
     bool grads_dirty;
     nerf__adam adam;
+    /* How the schedule in adam came about: a time budget's fit, or plain
+     * parameters (schedule.h). */
+    nerf__schedule schedule;
     /* Hash-grid models: the occupancy grid over [-bound, bound]^3 that a
      * marching sampler skips empty space with (NULL otherwise).  Its EMA
      * and update counter are training state, saved in checkpoints. */

@@ -1,5 +1,6 @@
 /* Enum-keyed training hyperparameters of a model. */
 #include <math.h>
+#include <string.h>
 
 #include "model.h"
 
@@ -17,6 +18,7 @@ static const param_info params[] = {
     {NERF_PARAM_ADAM_BETA2, 0.0, 0.9999999, offsetof(nerf__adam, beta2)},
     {NERF_PARAM_ADAM_EPS, 1e-30, 1.0, offsetof(nerf__adam, eps)},
     {NERF_PARAM_WEIGHT_DECAY, 0.0, 1.0, offsetof(nerf__adam, weight_decay)},
+    {NERF_PARAM_DECAY_START, 0.0, 1e15, offsetof(nerf__adam, decay_start)},
 };
 
 static const param_info *find(int key)
@@ -57,6 +59,10 @@ NERF_API int nerf_model_set_param(nerf_model *model, int param, double value)
                            "%g is outside [%g, %g]", param, value, p->min, p->max);
     }
     *(double *)((char *)&model->adam + p->offset) = value;
+    if (param == NERF_PARAM_DECAY_STEPS || param == NERF_PARAM_DECAY_START) {
+        /* A schedule set by hand replaces one fitted to a budget. */
+        memset(&model->schedule, 0, sizeof model->schedule);
+    }
     return NERF_OK;
 }
 

@@ -166,50 +166,59 @@ static int save_checkpoint(nerf_trainer *t)
     return rc;
 }
 
-NERF_API int nerf_trainer_run(nerf_trainer *t, uint64_t n_steps,
-                              nerf_train_stats *stats_out)
+void nerf__run_begin(nerf_trainer *t, nerf__run *r, uint64_t total)
 {
-    if (t == NULL) {
-        return nerf__error(NERF_EINVAL, "nerf_trainer_run: trainer is NULL");
-    }
     atomic_store(&t->cancel, 0);
-    const double start = seconds();
-    nerf_train_stats s;
-    memset(&s, 0, sizeof s);
-    int rc = NERF_OK;
-    for (uint64_t i = 0; i < n_steps && rc == NERF_OK; i++) {
-        rc = step(t, &s);
-        if (rc != NERF_OK) {
-            break;
-        }
-        fill_stats(stats_out, &s);
-        uint32_t every = t->opts.checkpoint_every;
-        if (every > 0 && s.step % every == 0) {
-            rc = save_checkpoint(t);
-        }
-        if (rc == NERF_OK && t->progress) {
-            nerf_progress p;
-            memset(&p, 0, sizeof p);
-            p.struct_size = sizeof p;
-            p.kind = NERF_PROGRESS_TRAIN;
-            p.done = i + 1;
-            p.total = n_steps;
-            p.elapsed = seconds() - start;
-            p.loss = s.loss;
-            p.psnr = s.psnr;
-            if (t->progress(&p, t->progress_user) != 0) {
-                atomic_store(&t->cancel, 1);
-            }
-        }
-        if (rc == NERF_OK && atomic_load(&t->cancel)) {
-            rc = nerf__error(NERF_ECANCELLED, "nerf_trainer_run: cancelled "
-                             "at step %llu", (unsigned long long)s.step);
+    memset(r, 0, sizeof *r);
+    r->start = seconds();
+    r->total = total;
+}
+
+double nerf__run_elapsed(const nerf__run *r)
+{
+    return seconds() - r->start;
+}
+
+int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out)
+{
+    int rc = step(t, &r->last);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    r->done++;
+    fill_stats(stats_out, &r->last);
+    uint32_t every = t->opts.checkpoint_every;
+    if (every > 0 && r->last.step % every == 0) {
+        rc = save_checkpoint(t);
+    }
+    if (rc == NERF_OK && t->progress) {
+        nerf_progress p;
+        memset(&p, 0, sizeof p);
+        p.struct_size = sizeof p;
+        p.kind = NERF_PROGRESS_TRAIN;
+        p.done = r->done;
+        p.total = r->total;
+        p.elapsed = nerf__run_elapsed(r);
+        p.loss = r->last.loss;
+        p.psnr = r->last.psnr;
+        if (t->progress(&p, t->progress_user) != 0) {
+            atomic_store(&t->cancel, 1);
         }
     }
+    if (rc == NERF_OK && atomic_load(&t->cancel)) {
+        rc = nerf__error(NERF_ECANCELLED, "nerf_trainer_run: cancelled "
+                         "at step %llu", (unsigned long long)r->last.step);
+    }
+    return rc;
+}
+
+int nerf__run_end(nerf_trainer *t, const nerf__run *r, int rc)
+{
     /* A checkpoint at the end too, cancelled or not, so that no finished
      * step is lost. */
-    if (t->checkpoint_path && s.step > 0 &&
-        (t->opts.checkpoint_every == 0 || s.step % t->opts.checkpoint_every)) {
+    const uint64_t at = r->last.step;
+    if (t->checkpoint_path && r->done > 0 &&
+        (t->opts.checkpoint_every == 0 || at % t->opts.checkpoint_every)) {
         int save_rc = save_checkpoint(t);
         /* A failed save outranks a cancellation: the caller asked for the
          * stop, but must learn that the steps since the last checkpoint
@@ -220,4 +229,19 @@ NERF_API int nerf_trainer_run(nerf_trainer *t, uint64_t n_steps,
         }
     }
     return rc;
+}
+
+NERF_API int nerf_trainer_run(nerf_trainer *t, uint64_t n_steps,
+                              nerf_train_stats *stats_out)
+{
+    if (t == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_run: trainer is NULL");
+    }
+    nerf__run r;
+    nerf__run_begin(t, &r, n_steps);
+    int rc = NERF_OK;
+    while (r.done < n_steps && rc == NERF_OK) {
+        rc = nerf__run_step(t, &r, stats_out);
+    }
+    return nerf__run_end(t, &r, rc);
 }

@@ -82,6 +82,24 @@ int nerf__trainer_grid_density(void *ctx, size_t n, const float *xyz,
                                float *sigma);
 
 /*
+ * A run of steps (nerf_trainer_run(), nerf_trainer_run_for()): each step
+ * followed by the periodic checkpoint, the progress report (done of
+ * total) and the cancellation check, and a final save at the end.
+ */
+typedef struct nerf__run {
+    double start;            /* monotonic seconds */
+    uint64_t done, total;    /* steps taken by this run; total reported */
+    nerf_train_stats last;   /* of the last step */
+} nerf__run;
+
+void nerf__run_begin(nerf_trainer *t, nerf__run *r, uint64_t total);
+double nerf__run_elapsed(const nerf__run *r);
+/* One step and what follows it; NERF_ECANCELLED when asked to stop. */
+int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out);
+/* The final save, folded into the run's status rc. */
+int nerf__run_end(nerf_trainer *t, const nerf__run *r, int rc);
+
+/*
  * Record the trainer's dataset in its model (model->data), first warning
  * through the trainer's log when the model records other data
  * (data_record.c).

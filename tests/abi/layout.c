@@ -179,6 +179,15 @@ FROZEN(nerf_train_stats, samples_per_ray, 48);
 FROZEN(nerf_train_stats, rays, 56);
 SIZE(nerf_train_stats, 64);
 
+/* Since 0.5. */
+FROZEN(nerf_schedule, struct_size, 0);
+FROZEN(nerf_schedule, state, 4);
+FROZEN(nerf_schedule, budget_seconds, 8);
+FROZEN(nerf_schedule, steps_per_second, 16);
+FROZEN(nerf_schedule, fit_step, 24);
+FROZEN(nerf_schedule, total_steps, 32);
+SIZE(nerf_schedule, 40);
+
 #endif
 
 /* Status codes and enum values are ABI too. */

@@ -307,6 +307,63 @@ static void edit_render_white_2(payload *p)
     add_section(p, 12u, render_section, sizeof render_section);
 }
 
+/* The schedule (required tag 14): u32 state, u32 0, f64 decay start,
+ * f64 budget, f64 rate, u64 fit step, u64 total. */
+static unsigned char schedule_section[48];
+
+static void fill_schedule_section(uint32_t state, double start,
+                                  uint64_t fit, uint64_t total)
+{
+    memset(schedule_section, 0, sizeof schedule_section);
+    put32(schedule_section, state);
+    const double f[3] = {start, 600.0, 25.0};
+    memcpy(schedule_section + 8, f, sizeof f); /* little-endian hosts */
+    memcpy(schedule_section + 32, &fit, 8);
+    memcpy(schedule_section + 40, &total, 8);
+}
+
+static void edit_schedule_short(payload *p)
+{
+    fill_schedule_section(2, 10.0, 10, 100);
+    add_section(p, 0x8000000eu, schedule_section, 40);
+}
+
+static void edit_schedule_state_3(payload *p)
+{
+    fill_schedule_section(3, 10.0, 10, 100);
+    add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
+}
+
+static void edit_schedule_fit_past_total(payload *p)
+{
+    fill_schedule_section(2, 10.0, 200, 100);
+    add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
+}
+
+static void edit_schedule_nan_start(payload *p)
+{
+    fill_schedule_section(2, NAN, 10, 100);
+    add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
+}
+
+static void edit_schedule_twice(payload *p)
+{
+    fill_schedule_section(1, 0.0, 0, 0);
+    add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
+    add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
+}
+
+TEST(forged_schedule_sections)
+{
+    forge("schedule cut short", edit_schedule_short, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "schedule") != NULL);
+    forge("schedule state 3", edit_schedule_state_3, NERF_EFORMAT);
+    forge("schedule fit past its total", edit_schedule_fit_past_total,
+          NERF_EFORMAT);
+    forge("schedule NaN start", edit_schedule_nan_start, NERF_EFORMAT);
+    forge("two schedules", edit_schedule_twice, NERF_EFORMAT);
+}
+
 TEST(forged_weights_only_and_render_sections)
 {
     forge("weights-only marker with moments", edit_marker_with_moments,
@@ -784,6 +841,7 @@ int main(void)
     RUN(payload_layout_is_as_documented);
     RUN(forged_payloads);
     RUN(forged_weights_only_and_render_sections);
+    RUN(forged_schedule_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
     RUN(matmul_section);

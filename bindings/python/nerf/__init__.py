@@ -32,7 +32,8 @@ from ._buffers import HAVE_NUMPY
 from ._loader import EXPECTED_MAJOR
 from .core import (LOG_DEBUG, LOG_ERROR, LOG_INFO, LOG_WARN, PARAMS,
                    PARAM_ADAM_BETA1, PARAM_ADAM_BETA2, PARAM_ADAM_EPS,
-                   PARAM_WEIGHT_DECAY, PARAM_DECAY_STEPS, PARAM_LEARNING_RATE,
+                   PARAM_WEIGHT_DECAY, PARAM_DECAY_STEPS, PARAM_DECAY_START,
+                   PARAM_LEARNING_RATE,
                    PARAM_LEARNING_RATE_FINAL, build_info, clear_error,
                    last_error, library_path, log_stderr, log_to_stderr,
                    param_bounds, set_log_handler, status_string, version,
@@ -97,7 +98,7 @@ __all__ = [
     "HAVE_NUMPY", "EXPECTED_MAJOR", "LOG_ERROR", "LOG_WARN", "LOG_INFO",
     "LOG_DEBUG", "PARAMS", "PARAM_LEARNING_RATE", "PARAM_LEARNING_RATE_FINAL",
     "PARAM_DECAY_STEPS", "PARAM_ADAM_BETA1", "PARAM_ADAM_BETA2",
-    "PARAM_ADAM_EPS", "PARAM_WEIGHT_DECAY", "PRESET_REFERENCE",
+    "PARAM_ADAM_EPS", "PARAM_WEIGHT_DECAY", "PARAM_DECAY_START", "PRESET_REFERENCE",
     "PRESET_TINY", "PRESET_FAST",
     "ENCODING_HASHGRID", "ENCODING_SPHERICAL_HARMONICS", "DENSITY_RELU",
     "DENSITY_EXP", "MATMUL_FP32", "MATMUL_BF16", "SPACE_BOX", "SPACE_NDC",

@@ -19,8 +19,8 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
 from . import _loader, errors
 from .structs import (LOG_CB, Camera, CameraPathOptions, DatasetOptions,
                       Hooks, ModelOptions, ProgressStruct, RendererOptions,
-                      SamplerOptions, SceneOptions, TrainerOptions,
-                      TrainStatsStruct)
+                      SamplerOptions, SceneOptions, ScheduleStruct,
+                      TrainerOptions, TrainStatsStruct)
 
 
 class _Opaque(ctypes.Structure):
@@ -109,6 +109,8 @@ _PROTOTYPES = {
                                                c_uint32], True),
     "nerf_model_render_settings": (c_int, [ModelP, POINTER(SamplerOptions),
                                            POINTER(RendererOptions)], True),
+    # Since 0.5: schedules fitted to a time budget.
+    "nerf_model_schedule": (c_int, [ModelP, POINTER(ScheduleStruct)], True),
     # Built-in scene.
     "nerf_scene_options_init": (c_int, [POINTER(SceneOptions), c_size_t],
                                 True),
@@ -193,6 +195,8 @@ _PROTOTYPES = {
     "nerf_trainer_set_progress": (c_int, [TrainerP, PROGRESS_CB, c_void_p],
                                   True),
     "nerf_trainer_cancel": (None, [TrainerP], False),
+    "nerf_trainer_run_for": (c_int, [TrainerP, c_double,
+                                     POINTER(TrainStatsStruct)], True),
 }
 
 

@@ -23,6 +23,7 @@ PARAM_ADAM_BETA1 = 103
 PARAM_ADAM_BETA2 = 104
 PARAM_ADAM_EPS = 105
 PARAM_WEIGHT_DECAY = 106
+PARAM_DECAY_START = 107  # since libnerf 0.5
 
 #: Parameter names accepted wherever a parameter key is expected.
 PARAMS = {
@@ -33,6 +34,7 @@ PARAMS = {
     "adam_beta2": PARAM_ADAM_BETA2,
     "adam_eps": PARAM_ADAM_EPS,
     "weight_decay": PARAM_WEIGHT_DECAY,
+    "decay_start": PARAM_DECAY_START,
 }
 
 

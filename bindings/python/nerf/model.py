@@ -8,7 +8,8 @@ from typing import Any, Callable, FrozenSet, Optional, Tuple, Union
 from . import _buffers, _handle
 from ._capi import ModelP, lib
 from .core import param_key
-from .structs import ModelOptions, RendererOptions, SamplerOptions
+from .structs import (ModelOptions, RendererOptions, SamplerOptions,
+                      ScheduleStruct)
 
 # nerf_preset
 PRESET_REFERENCE = 1
@@ -249,6 +250,25 @@ class Model(_handle.Handle):
         with self._using() as ptr:
             lib.nerf_model_training_data(ptr, buf, len(buf))
         return buf.value.decode("utf-8", "replace")
+
+    @property
+    def schedule(self) -> dict:
+        """How the learning-rate schedule came about
+        (``nerf_model_schedule``): ``state`` ("steps", "measuring" or
+        "fitted"), ``budget_seconds``, ``steps_per_second``, ``fit_step``
+        and ``total_steps`` (the step a budget's run, or a ``--steps`` run,
+        ends at)."""
+        sc = ScheduleStruct()
+        with self._using() as ptr:
+            lib.nerf_model_schedule(ptr, ctypes.byref(sc))
+        states = ("steps", "measuring", "fitted")
+        return {
+            "state": states[sc.state] if sc.state < 3 else int(sc.state),
+            "budget_seconds": sc.budget_seconds,
+            "steps_per_second": sc.steps_per_second,
+            "fit_step": int(sc.fit_step),
+            "total_steps": int(sc.total_steps),
+        }
 
     def render_settings(self) -> Tuple[SamplerOptions, RendererOptions]:
         """``(SamplerOptions, RendererOptions)`` to render the model with

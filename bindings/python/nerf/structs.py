@@ -467,6 +467,21 @@ class TrainStatsStruct(_Versioned):
     ]
 
 
+class ScheduleStruct(_Versioned):
+    """``nerf_schedule``: how a model's learning-rate schedule came about
+    (since libnerf 0.5)."""
+
+    _c_name_ = "nerf_schedule"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("state", c_uint32),
+        ("budget_seconds", c_double),
+        ("steps_per_second", c_double),
+        ("fit_step", c_uint64),
+        ("total_steps", c_uint64),
+    ]
+
+
 def read_covered(struct: ctypes.Structure, size: int) -> Dict[str, Any]:
     """Fields of a library-filled struct that ``size`` bytes cover; fields
     beyond it (an older library) are left out."""
@@ -654,4 +669,5 @@ class Camera(_Versioned):
 #: Every struct mirror, for the layout test.
 ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
-               TrainerOptions, TrainStatsStruct, CameraPathOptions)
+               TrainerOptions, TrainStatsStruct, CameraPathOptions,
+               ScheduleStruct)

@@ -88,6 +88,26 @@ class Trainer(_handle.ProgressHandle):
                            ctypes.byref(stats), progress=progress)
         return TrainStats.from_struct(stats)
 
+    def run_for(self, seconds: float,
+                progress: ProgressFn = None) -> TrainStats:
+        """Train for about ``seconds`` of wall time, the learning rate
+        decaying over the steps that time allows (``nerf_trainer_run_for``):
+        the rate holds for the first quarter while the step rate is
+        measured, then the run's length is fixed and recorded in the model
+        (:attr:`nerf.Model.schedule`), so that a saved model resumes bit for
+        bit.  A model already fitted trains on to its recorded length.
+
+        Returns the figures of the last step.  Raises NerfCancelled when the
+        callback or :meth:`cancel` stopped the run, or when the steps ran so
+        much slower than measured that a tenth past ``seconds`` passed (a
+        later call trains on to the recorded length).
+        """
+        stats = TrainStatsStruct()
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_trainer_run_for, ptr, float(seconds),
+                           ctypes.byref(stats), progress=progress)
+        return TrainStats.from_struct(stats)
+
     def cancel(self) -> None:
         """Ask a running :meth:`run` to stop after its current step.
         Thread-safe; a no-op when nothing runs or the trainer is closed."""

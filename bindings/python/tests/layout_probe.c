@@ -207,6 +207,15 @@ static void structs(void)
     FIELD(nerf_train_stats, rays);
     end_struct();
 
+    BEGIN(nerf_schedule);
+    FIELD(nerf_schedule, struct_size);
+    FIELD(nerf_schedule, state);
+    FIELD(nerf_schedule, budget_seconds);
+    FIELD(nerf_schedule, steps_per_second);
+    FIELD(nerf_schedule, fit_step);
+    FIELD(nerf_schedule, total_steps);
+    end_struct();
+
     BEGIN(nerf_camera_path_options);
     FIELD(nerf_camera_path_options, struct_size);
     FIELD(nerf_camera_path_options, width);

@@ -96,6 +96,31 @@ class Training(TestCase):
         with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "missing-dir"):
             trainer(model, ds, sampler, checkpoint_path=bad)
 
+    def test_run_for_fits_and_records_the_schedule(self):
+        ds, model, sampler = _support.tiny_setup(seed=2)
+        self.assertEqual(model.schedule["state"], "steps")
+        self.assertEqual(nerf.PARAMS["decay_start"], nerf.PARAM_DECAY_START)
+        with trainer(model, ds, sampler) as t:
+            try:
+                t.run_for(0.4)
+            except nerf.NerfCancelled:
+                # Out of time on a busy machine: the run goes on to the
+                # recorded length.
+                t.run_for(30.0)
+            sc = model.schedule
+            self.assertEqual(sc["state"], "fitted")
+            self.assertEqual(sc["budget_seconds"], 0.4)
+            self.assertGreater(sc["steps_per_second"], 0)
+            self.assertEqual(model.step, sc["total_steps"])
+            self.assertEqual(model.get_param("decay_start"), sc["fit_step"])
+            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                      "positive finite"):
+                t.run_for(0.0)
+        # A schedule set by hand replaces the fitted one.
+        model.set_param("decay_steps", 500)
+        self.assertEqual(model.schedule["state"], "steps")
+        self.assertEqual(model.schedule["total_steps"], 500)
+
 
 class Callbacks(TestCase):
     def setUp(self):

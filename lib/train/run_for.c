@@ -1,0 +1,123 @@
+/*
+ * Training to a time budget (nerf_trainer_run_for()): measure the step
+ * rate with the learning rate held, then fix the run's length and decay
+ * over it.  Only the moment of the fit depends on the clock; what it
+ * fixes is recorded in the model, so everything after it is as
+ * deterministic as a run of a given step count.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "error.h"
+#include "model.h"
+#include "trainer.h"
+
+/* Share of the budget spent measuring before the fit. */
+#define MEASURE_SHARE 0.25
+/* The rate is taken over the last third of the measuring time: steps of a
+ * marching sampler get faster for minutes as the occupancy grid learns
+ * where the scene is (on lego, about 11 steps/s in the first minute and
+ * 30 after five), so the latest rate is the best guess of the rest. */
+#define WINDOW_START (MEASURE_SHARE * 2.0 / 3.0)
+/* A run whose steps turn slower than measured stops this far past the
+ * budget rather than running on without bound. */
+#define OVERRUN 1.1
+/* Held there while measuring, the rate stays at LEARNING_RATE. */
+#define NO_DECAY 1e15
+
+/* The steps the rest of the budget allows at `rate` steps/s. */
+static uint64_t steps_for(double rate, double seconds_left)
+{
+    const double n = floor(rate * fmax(seconds_left, 0.0));
+    return n < 1e12 ? (uint64_t)n : (uint64_t)1e12;
+}
+
+/* Measure until a share of the budget has passed, then fix the length. */
+static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
+                           nerf_train_stats *stats_out)
+{
+    nerf_model *m = t->model;
+    nerf__schedule *sc = &m->schedule;
+    memset(sc, 0, sizeof *sc);
+    sc->state = NERF_SCHEDULE_MEASURING;
+    sc->budget = budget;
+    m->adam.decay_start = NO_DECAY;
+    m->adam.decay_steps = NO_DECAY;
+    double mark_time = 0.0;
+    uint64_t mark_done = 0;
+    bool marked = false;
+    double elapsed = 0.0;
+    int rc = NERF_OK;
+    while (rc == NERF_OK && (r->done == 0 || elapsed < MEASURE_SHARE * budget)) {
+        /* The steps this call is likely to take, for progress bars. */
+        r->total = r->done == 0 ? 0
+                                : r->done + steps_for((double)r->done / elapsed,
+                                                      budget - elapsed);
+        rc = nerf__run_step(t, r, stats_out);
+        elapsed = nerf__run_elapsed(r);
+        if (!marked && elapsed >= WINDOW_START * budget) {
+            marked = true;
+            mark_time = elapsed;
+            mark_done = r->done;
+        }
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    /* One step may outlast the whole window: then the rate since the
+     * start is all there is. */
+    const double rate = r->done > mark_done && elapsed > mark_time
+                            ? (double)(r->done - mark_done) / (elapsed - mark_time)
+                            : (double)r->done / elapsed;
+    sc->state = NERF_SCHEDULE_FITTED;
+    sc->rate = rate;
+    sc->fit_step = m->step;
+    sc->total = m->step + steps_for(rate, budget - elapsed);
+    m->adam.decay_start = (double)sc->fit_step;
+    m->adam.decay_steps = fmax((double)sc->total, 1.0);
+    nerf__log(&t->env, NERF_LOG_INFO, "trainer: %.1f steps/s after %.0f s: "
+              "the learning rate decays from step %llu to %llu, fitted to "
+              "a budget of %g s", rate, elapsed,
+              (unsigned long long)sc->fit_step, (unsigned long long)sc->total,
+              budget);
+    return NERF_OK;
+}
+
+NERF_API int nerf_trainer_run_for(nerf_trainer *t, double seconds,
+                                  nerf_train_stats *stats_out)
+{
+    if (t == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_trainer_run_for: trainer is "
+                           "NULL");
+    }
+    if (!(seconds > 0.0 && seconds <= 1e12)) { /* also rejects NaN */
+        return nerf__error(NERF_EINVAL, "nerf_trainer_run_for: a budget of "
+                           "%g s is not a positive finite time", seconds);
+    }
+    nerf_model *m = t->model;
+    const nerf__schedule *sc = &m->schedule;
+    nerf__run r;
+    nerf__run_begin(t, &r, sc->state == NERF_SCHEDULE_FITTED &&
+                               sc->total > m->step
+                           ? sc->total - m->step
+                           : 0);
+    int rc = NERF_OK;
+    if (sc->state != NERF_SCHEDULE_FITTED) {
+        rc = measure_and_fit(t, &r, seconds, stats_out);
+        r.total = r.done + (sc->total - m->step);
+    }
+    while (rc == NERF_OK && m->step < sc->total) {
+        const double elapsed = nerf__run_elapsed(&r);
+        if (elapsed > OVERRUN * seconds) {
+            rc = nerf__error(NERF_ECANCELLED, "nerf_trainer_run_for: out of "
+                             "time at step %llu of the fitted %llu (%.1f s "
+                             "of a %g s budget): the steps ran slower than "
+                             "measured; training on continues the same run",
+                             (unsigned long long)m->step,
+                             (unsigned long long)sc->total, elapsed, seconds);
+            break;
+        }
+        rc = nerf__run_step(t, &r, stats_out);
+    }
+    return nerf__run_end(t, &r, rc);
+}

@@ -1,0 +1,246 @@
+/* Training to a time budget: the measured fit, the held rate, the recorded
+ * length, and resuming bit for bit after the fit. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "model.h"
+#include "train_fixture.h"
+
+static fixture fx;
+
+static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s)
+{
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 32;
+    nerf_trainer *t = NULL;
+    if (nerf_trainer_create(&t, m, fx.train, s, &o) != NERF_OK) {
+        printf("  nerf_trainer_create: %s\n", nerf_last_error());
+    }
+    return t;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static nerf_schedule schedule_of(const nerf_model *m)
+{
+    nerf_schedule sc;
+    memset(&sc, 0, sizeof sc);
+    sc.struct_size = sizeof sc;
+    CHECK_OK(nerf_model_schedule(m, &sc));
+    return sc;
+}
+
+static double param(const nerf_model *m, int key)
+{
+    double v = -1.0;
+    CHECK_OK(nerf_model_get_param(m, key, &v));
+    return v;
+}
+
+/* What a progress callback saw of the schedule, and where it stops. */
+typedef struct watch {
+    nerf_model *m;
+    int measuring_steps, measuring_at_lr0;
+    int fitted_seen;
+    uint64_t stop_after_fit; /* cancel this many steps after the fit */
+    int stop_at_first;       /* cancel at the first report */
+} watch;
+
+static int on_progress(const nerf_progress *p, void *user)
+{
+    watch *w = user;
+    nerf_schedule sc = schedule_of(w->m);
+    if (sc.state == NERF_SCHEDULE_MEASURING) {
+        w->measuring_steps++;
+        w->measuring_at_lr0 += nerf_model_learning_rate(w->m) ==
+                               param(w->m, NERF_PARAM_LEARNING_RATE);
+    } else if (sc.state == NERF_SCHEDULE_FITTED) {
+        w->fitted_seen = 1;
+        CHECK(p->total >= p->done);
+        if (w->stop_after_fit &&
+            nerf_model_step(w->m) >= sc.fit_step + w->stop_after_fit) {
+            return 1;
+        }
+    }
+    return w->stop_at_first;
+}
+
+TEST(fits_the_length_and_ends_there)
+{
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(2);
+    nerf_trainer *t = make_trainer(m, s);
+    CHECK(schedule_of(m).state == NERF_SCHEDULE_STEPS);
+    watch w = {.m = m};
+    nerf_trainer_set_progress(t, on_progress, &w);
+    const double budget = 0.5, t0 = now();
+    int rc = nerf_trainer_run_for(t, budget, NULL);
+    const double took = now() - t0;
+    nerf_schedule sc = schedule_of(m);
+    /* On a busy machine the steps after the fit can run slower than those
+     * measured: the run then stops a tenth past the budget, and a second
+     * call trains on to the fitted length. */
+    if (rc == NERF_ECANCELLED) {
+        CHECK(strstr(nerf_last_error(), "out of time") != NULL);
+        CHECK(nerf_model_step(m) < sc.total_steps);
+        printf("  out of time at step %llu: going on\n",
+               (unsigned long long)nerf_model_step(m));
+        nerf_trainer_set_progress(t, NULL, NULL);
+        rc = nerf_trainer_run_for(t, 30.0, NULL);
+    }
+    CHECK_OK(rc);
+    CHECK(sc.state == NERF_SCHEDULE_FITTED);
+    CHECK(sc.budget_seconds == budget);
+    CHECK(sc.steps_per_second > 0.0);
+    CHECK(sc.fit_step > 0 && sc.fit_step < sc.total_steps);
+    CHECK(nerf_model_step(m) == sc.total_steps);
+    CHECK(param(m, NERF_PARAM_DECAY_START) == (double)sc.fit_step);
+    CHECK(param(m, NERF_PARAM_DECAY_STEPS) == (double)sc.total_steps);
+    /* The rate held through the measuring, and decayed to the final one
+     * by the end. */
+    CHECK(w.measuring_steps > 0 && w.measuring_at_lr0 == w.measuring_steps);
+    CHECK(w.fitted_seen);
+    CHECK(fabs(nerf_model_learning_rate(m) /
+                   param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
+    /* Never past the budget and its tenth by more than a step and the
+     * bookkeeping around it. */
+    CHECK(took < 1.1 * budget + 1.0);
+    printf("  %llu steps, fitted at %llu (%.0f steps/s), in %.2f s of %.2f\n",
+           (unsigned long long)sc.total_steps, (unsigned long long)sc.fit_step,
+           sc.steps_per_second, took, budget);
+    /* A fitted model is done: another call takes no step. */
+    CHECK_OK(nerf_trainer_run_for(t, budget, NULL));
+    CHECK(nerf_model_step(m) == sc.total_steps);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+TEST(resume_after_the_fit_is_bit_identical)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/budget.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(3);
+    nerf_model *whole = tiny_model(4);
+    nerf_trainer *t = make_trainer(whole, s);
+    watch w = {.m = whole, .stop_after_fit = 3};
+    nerf_trainer_set_progress(t, on_progress, &w);
+    CHECK(nerf_trainer_run_for(t, 0.5, NULL) == NERF_ECANCELLED);
+    nerf_schedule cut = schedule_of(whole);
+    CHECK(cut.state == NERF_SCHEDULE_FITTED);
+    CHECK(nerf_model_step(whole) < cut.total_steps);
+    CHECK_OK(nerf_model_save(whole, path));
+    /* The unbroken run: on to the recorded length, whatever the budget. */
+    nerf_trainer_set_progress(t, NULL, NULL);
+    CHECK_OK(nerf_trainer_run_for(t, 30.0, NULL));
+    CHECK(nerf_model_step(whole) == cut.total_steps);
+    nerf_trainer_destroy(t);
+
+    nerf_model *resumed = NULL;
+    CHECK_OK(nerf_model_load(&resumed, path, NULL));
+    if (resumed) {
+        nerf_schedule sc = schedule_of(resumed);
+        CHECK(sc.state == NERF_SCHEDULE_FITTED && sc.total_steps == cut.total_steps &&
+              sc.fit_step == cut.fit_step &&
+              sc.steps_per_second == cut.steps_per_second &&
+              sc.budget_seconds == cut.budget_seconds);
+        CHECK(param(resumed, NERF_PARAM_DECAY_START) == (double)cut.fit_step);
+        t = make_trainer(resumed, s);
+        CHECK_OK(nerf_trainer_run_for(t, 30.0, NULL));
+        nerf_trainer_destroy(t);
+        CHECK(nerf_model_step(resumed) == cut.total_steps);
+        CHECK(memcmp(whole->params, resumed->params,
+                     whole->n_params * sizeof(float)) == 0);
+        CHECK(memcmp(whole->adam_v, resumed->adam_v,
+                     whole->n_params * sizeof(float)) == 0);
+    }
+    nerf_model_destroy(resumed);
+    nerf_model_destroy(whole);
+    nerf_sampler_destroy(s);
+}
+
+/* Saved before its fit, a model measures again when resumed. */
+TEST(measuring_resumes_by_measuring)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/measuring.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(5);
+    nerf_model *m = tiny_model(6);
+    nerf_trainer *t = make_trainer(m, s);
+    watch w = {.m = m, .stop_at_first = 1};
+    nerf_trainer_set_progress(t, on_progress, &w);
+    CHECK(nerf_trainer_run_for(t, 5.0, NULL) == NERF_ECANCELLED);
+    CHECK(schedule_of(m).state == NERF_SCHEDULE_MEASURING);
+    CHECK_OK(nerf_model_save(m, path));
+    nerf_trainer_destroy(t);
+    nerf_model *resumed = NULL;
+    CHECK_OK(nerf_model_load(&resumed, path, NULL));
+    if (resumed) {
+        nerf_schedule sc = schedule_of(resumed);
+        CHECK(sc.state == NERF_SCHEDULE_MEASURING && sc.budget_seconds == 5.0);
+        CHECK(nerf_model_learning_rate(resumed) ==
+              param(resumed, NERF_PARAM_LEARNING_RATE));
+        t = make_trainer(resumed, s);
+        CHECK_OK(nerf_trainer_run_for(t, 0.3, NULL));
+        nerf_trainer_destroy(t);
+        sc = schedule_of(resumed);
+        CHECK(sc.state == NERF_SCHEDULE_FITTED && sc.budget_seconds == 0.3);
+        CHECK(nerf_model_step(resumed) == sc.total_steps);
+    }
+    nerf_model_destroy(resumed);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+TEST(plain_schedule_and_bad_arguments)
+{
+    nerf_sampler *s = tiny_sampler(7);
+    nerf_model *m = tiny_model(8);
+    CHECK_OK(nerf_model_set_param(m, NERF_PARAM_DECAY_STEPS, 1234.0));
+    nerf_schedule sc = schedule_of(m);
+    CHECK(sc.state == NERF_SCHEDULE_STEPS && sc.total_steps == 1234 &&
+          sc.fit_step == 0 && sc.budget_seconds == 0.0);
+    /* An older caller's smaller struct gets its fields only. */
+    nerf_schedule small;
+    memset(&small, 0xff, sizeof small);
+    small.struct_size = 8;
+    CHECK_OK(nerf_model_schedule(m, &small));
+    CHECK(small.state == NERF_SCHEDULE_STEPS);
+    CHECK(small.total_steps == UINT64_MAX);
+    small.struct_size = 4;
+    CHECK(nerf_model_schedule(m, &small) == NERF_EINVAL);
+    CHECK(nerf_model_schedule(NULL, &sc) == NERF_EINVAL);
+    nerf_trainer *t = make_trainer(m, s);
+    const double bad[] = {0.0, -1.0, NAN, INFINITY};
+    for (int i = 0; i < 4; i++) {
+        CHECK(nerf_trainer_run_for(t, bad[i], NULL) == NERF_EINVAL);
+    }
+    CHECK(strstr(nerf_last_error(), "not a positive finite time") != NULL);
+    CHECK(nerf_trainer_run_for(NULL, 1.0, NULL) == NERF_EINVAL);
+    CHECK(nerf_model_step(m) == 0);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+int main(void)
+{
+    if (fixture_open(&fx, 16, 4, 0) != NERF_OK) {
+        printf("fixture: %s\n", nerf_last_error());
+        return 1;
+    }
+    RUN(fits_the_length_and_ends_there);
+    RUN(resume_after_the_fit_is_bit_identical);
+    RUN(measuring_resumes_by_measuring);
+    RUN(plain_schedule_and_bad_arguments);
+    fixture_close(&fx);
+    HARNESS_EXIT();
+}
