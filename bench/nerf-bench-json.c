@@ -33,6 +33,43 @@ static void add_memory(cJSON *o, const figures *f, const run_info *ri)
     }
 }
 
+/* The step's floor, part by part (seconds per step). */
+static cJSON *floor_json(const figures *f)
+{
+    const fast_floor *fl = &f->floor;
+    if (!fl->ok) {
+        return cJSON_CreateNull();
+    }
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "method",
+                            "hash grid: 8 corner reads and 8 gradient adds "
+                            "per sample and level at the random-access cost "
+                            "measured on the model's tables, all threads; "
+                            "mlp: forward + dX + dW products at the fp32 FMA "
+                            "peak; optimiser: Adam over the touched "
+                            "parameters; grid: a refresh's density queries "
+                            "per step; share = sum / mean step");
+    cJSON_AddNumberToObject(o, "peak_gflops", fl->peak_gflops);
+    cJSON_AddStringToObject(o, "peak_isa", fl->isa);
+    cJSON_AddNumberToObject(o, "threads", fl->threads);
+    cJSON *r = cJSON_AddArrayToObject(o, "level_read_ns");
+    cJSON *w = cJSON_AddArrayToObject(o, "level_add_ns");
+    for (uint32_t l = 0; l < fl->levels; l++) {
+        cJSON_AddItemToArray(r, cJSON_CreateNumber(fl->level_read_ns[l]));
+        cJSON_AddItemToArray(w, cJSON_CreateNumber(fl->level_write_ns[l]));
+    }
+    cJSON_AddNumberToObject(o, "touched_params", (double)fl->touched);
+    cJSON *sec = cJSON_AddObjectToObject(o, "seconds");
+    cJSON_AddNumberToObject(sec, "encoding", fl->encoding);
+    cJSON_AddNumberToObject(sec, "mlp", fl->mlp);
+    cJSON_AddNumberToObject(sec, "optimiser", fl->optimiser);
+    cJSON_AddNumberToObject(sec, "grid", fl->grid);
+    cJSON_AddNumberToObject(sec, "sum", fl->sum);
+    cJSON_AddNumberToObject(o, "fast_floor_share",
+                            fl->sum / (f->train_seconds / f->train_steps));
+    return o;
+}
+
 /* Seconds per step of each part, and shares of their sum. */
 static cJSON *breakdown_json(const figures *f)
 {
@@ -171,6 +208,7 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
             "blocks");
         cJSON_AddItemToObject(o, "train_step_breakdown",
                               breakdown_json(f));
+        cJSON_AddItemToObject(o, "train_step_floor", floor_json(f));
         add_memory(o, f, ri);
         return o;
     }

@@ -279,6 +279,75 @@ static void c_bd_samples(char *b, size_t s, const preset_setup *p,
     }
     snprintf(b, s, "%zu, %d rounds", f->bd.samples, f->bd.rounds);
 }
+/* The floor of a marching step's part, and the measured part's share of
+ * it (100%: the part runs at its floor). */
+static void floor_cell(char *b, size_t s, const figures *f, double floor,
+                       double measured)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    snprintf(b, s, "%.2f ms (%.0f%%)", 1e3 * floor,
+             measured > 0.0 ? 100.0 * floor / measured : 0.0);
+}
+static void c_peak(char *b, size_t s, const preset_setup *p, const figures *f)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    snprintf(b, s, "%.0f GFLOP/s, %s x %u", f->floor.peak_gflops,
+             f->floor.isa, f->floor.threads);
+}
+static void c_access(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    const fast_floor *fl = &f->floor;
+    if (!fl->ok || fl->levels == 0) {
+        snprintf(b, s, "-");
+        return;
+    }
+    const uint32_t last = fl->levels - 1;
+    snprintf(b, s, "%.2f/%.2f .. %.2f/%.2f ns", fl->level_read_ns[0],
+             fl->level_write_ns[0], fl->level_read_ns[last],
+             fl->level_write_ns[last]);
+}
+static void c_fl_enc(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    floor_cell(b, s, f, f->floor.encoding,
+               f->bd.hash_fw + f->bd.hash_bw);
+}
+static void c_fl_mlp(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    floor_cell(b, s, f, f->floor.mlp, shares_of(&f->bd).mlp);
+}
+static void c_fl_opt(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    floor_cell(b, s, f, f->floor.optimiser, shares_of(&f->bd).optimiser);
+}
+static void c_fl_grid(char *b, size_t s, const preset_setup *p,
+                      const figures *f)
+{
+    floor_cell(b, s, f, f->floor.grid, shares_of(&f->bd).grid);
+}
+static void c_fl_sum(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    floor_cell(b, s, f, f->floor.sum, f->train_seconds / f->train_steps);
+}
+static void c_fl_touched(char *b, size_t s, const preset_setup *p,
+                         const figures *f)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    snprintf(b, s, "%zu", f->floor.touched);
+}
 static void c_prims(char *b, size_t s, const preset_setup *p,
                     const figures *f)
 {
@@ -410,6 +479,14 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, label, c_gridup, ps, fs, n);
         row(out, "  sum of the parts", c_bd_sum, ps, fs, n);
         row(out, "  timed on samples", c_bd_samples, ps, fs, n);
+        row(out, "step floor: fp32 FMA peak", c_peak, ps, fs, n);
+        row(out, "  hash read/add, level 0 .. last", c_access, ps, fs, n);
+        row(out, "  encoding (hash fwd + bwd)", c_fl_enc, ps, fs, n);
+        row(out, "  MLP at peak", c_fl_mlp, ps, fs, n);
+        row(out, "  optimiser (touched params)", c_fl_opt, ps, fs, n);
+        row(out, "  parameters touched", c_fl_touched, ps, fs, n);
+        row(out, "  grid refresh", c_fl_grid, ps, fs, n);
+        row(out, "  floor / fast_floor_share", c_fl_sum, ps, fs, n);
     }
 
     if (ri->data) {
@@ -460,6 +537,18 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "one refresh / %u.  The "
                 "rest of the step (ray drawing, loss, direction copies) is "
                 "the gap to 100%%.\n",
+                NERF__GRID_EVERY);
+        fprintf(out,
+                "fast, step floor: what the same step must cost at least "
+                "here (nerf-bench-floor.c, docs/performance.md): the hash "
+                "grid's 8 corner reads and 8 gradient adds per sample and "
+                "level at the random-access cost measured on the model's "
+                "own tables with every thread issuing independent "
+                "accesses; the network's forward, dX and dW products at "
+                "the measured fp32 FMA peak; Adam over the parameters the "
+                "step touched; a refresh's density queries / %u.  In "
+                "brackets: floor / measured part (100%%: at the floor); "
+                "fast_floor_share = floor sum / mean step.\n",
                 NERF__GRID_EVERY);
     }
     for (int i = 0; i < n; i++) {

@@ -117,6 +117,13 @@ static int measure(preset_setup *p, const nerf_dataset *ds,
                     p->name);
         }
     }
+    if (!failed && p->march) {
+        fprintf(stderr, "nerf-bench: %s: measuring the step's floor...\n",
+                p->name);
+        if (measure_floor(kept, &f->bd, &f->floor) != 0) {
+            failed = "the step's floor";
+        }
+    }
     nerf_trainer_destroy(kept);
     f->bf16_primitives = p->model->bf16 ? nerf__bf16_primitives(p->model->bf16)
                                         : 0;

@@ -143,6 +143,26 @@ typedef struct step_shares {
 int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd);
 step_shares shares_of(const step_breakdown *b);
 
+/* ---- the fast step's floor (nerf-bench-floor.c, nerf-bench-peak.c) ------ */
+
+/* What the step of the breakdown must cost at least, part by part, in
+ * seconds per step (nerf-bench-floor.c says how each is measured). */
+typedef struct fast_floor {
+    bool ok;
+    double peak_gflops; /* fp32 multiply-adds, all threads */
+    const char *isa;    /* the kernel the peak was measured with */
+    uint32_t threads, levels;
+    double level_read_ns[NERF__HASHGRID_MAX_LEVELS];  /* per access, */
+    double level_write_ns[NERF__HASHGRID_MAX_LEVELS]; /* all threads */
+    size_t touched; /* parameters the step's backward gave a gradient */
+    double encoding, mlp, optimiser, grid, sum;
+} fast_floor;
+
+/* GFLOP/s of fp32 fused multiply-adds on every thread of the pool. */
+double peak_gflops(const char **isa_out);
+/* After time_breakdown() on the same trainer; writes the model. */
+int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
+
 /* ---- the figures of one preset ------------------------------------------ */
 
 typedef struct figures {
@@ -171,8 +191,9 @@ typedef struct figures {
     uint64_t render_rays;
     double render_seconds, render_rays_per_s;
     double render_samples_per_ray, render_samples_per_s;
-    /* marching: where a training step's time goes */
+    /* marching: where a training step's time goes, and its floor */
     step_breakdown bd;
+    fast_floor floor;
     /* memory */
     rss_result rss;
     bool rss_skipped;

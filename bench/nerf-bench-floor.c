@@ -1,0 +1,267 @@
+/*
+ * The fast step's floor: what a training step on the last step's samples
+ * must cost at least on this machine, part by part, measured rather than
+ * taken from a data sheet.
+ *
+ *  - Encoding: every sample reads the 8 corners of its cell at each of
+ *    the hash grid's levels and, going backward, adds a gradient to each.
+ *    The floor is that many random reads (and read-modify-writes) of one
+ *    entry, timed on the model's own tables level by level with every
+ *    thread issuing independent accesses, so that the memory system keeps
+ *    as many in flight as it can (memory-level parallelism, not
+ *    bandwidth, bounds a random gather).  Corners that neighbouring
+ *    samples share can come from cache, so a real step may beat this
+ *    figure on coarse levels; on the hashed levels (2^19 entries of 8
+ *    bytes, 4 MiB each) its accesses are as random as these.
+ *  - MLP: the network's products, forward and the two backward ones (dX,
+ *    dW), at the machine's peak multiply-add rate (nerf-bench-peak.c).
+ *  - Optimiser: an Adam update of the parameters the step touched (hash
+ *    entries with a gradient, and the layers) at the rate of a dense pass
+ *    that streams every parameter in memory order: 16 bytes read and 16
+ *    written per parameter, no more.
+ *  - Grid refresh: the density of the cells a refresh evaluates (per
+ *    step: a sixteenth of them), as encoding reads plus the density
+ *    layers' products.
+ * Compositing and ray drawing get no floor: they are a few percent of the
+ * step.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nerf-bench.h"
+
+#define ACCESSES_PER_BLOCK ((size_t)1 << 20)
+#define MAX_BLOCKS 64
+
+static uint64_t next_random(uint64_t *s)
+{
+    /* xorshift64*: the bench's own stream, independent of the library's. */
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return *s * UINT64_C(2685821657736338717);
+}
+
+typedef struct access_job {
+    float *table;       /* a level's entries, `features` floats each */
+    uint32_t features;
+    const uint32_t *idx; /* ACCESSES_PER_BLOCK entry indices per block */
+    bool write;
+    float sink[MAX_BLOCKS];
+} access_job;
+
+/* Independent reads (or read-modify-writes) of the listed entries. */
+static void access_block(void *ctx, size_t block)
+{
+    access_job *j = ctx;
+    const uint32_t *idx = j->idx + block * ACCESSES_PER_BLOCK;
+    const uint32_t f = j->features;
+    float *t = j->table;
+    float s = 0.0f;
+    if (j->write) {
+        for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
+            float *e = t + (size_t)idx[i] * f;
+            for (uint32_t k = 0; k < f; k++) {
+                e[k] += 1e-30f;
+            }
+        }
+    } else {
+        for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
+            const float *e = t + (size_t)idx[i] * f;
+            for (uint32_t k = 0; k < f; k++) {
+                s += e[k];
+            }
+        }
+    }
+    j->sink[block % MAX_BLOCKS] = s;
+}
+
+/*
+ * Seconds per access, all threads together, on `entries` entries of
+ * `table`: the best of three runs.  Block b draws entries congruent to b
+ * modulo the block count, so that concurrent writes never meet.
+ */
+static double time_accesses(float *table, uint32_t entries, uint32_t features,
+                            bool write, uint32_t *idx, size_t blocks,
+                            uint64_t *seed)
+{
+    const uint32_t per = entries / (uint32_t)blocks;
+    if (per == 0) {
+        return 0.0;
+    }
+    for (size_t b = 0; b < blocks; b++) {
+        for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
+            uint32_t e = (uint32_t)(next_random(seed) % per);
+            idx[b * ACCESSES_PER_BLOCK + i] = e * (uint32_t)blocks + (uint32_t)b;
+        }
+    }
+    access_job j;
+    memset(&j, 0, sizeof j);
+    j.table = table;
+    j.features = features;
+    j.idx = idx;
+    j.write = write;
+    double best = INFINITY;
+    for (int run = 0; run < 3; run++) {
+        double t0 = now();
+        nerf__parallel_blocks(blocks, (size_t)1 << 30, access_block, &j);
+        best = fmin(best, now() - t0);
+    }
+    return best / ((double)ACCESSES_PER_BLOCK * (double)blocks);
+}
+
+typedef struct adam_job {
+    size_t begin, n, per_block;
+    float *p, *g, *m, *v;
+    float b1, b2, step, eps;
+} adam_job;
+
+/* Adam on a contiguous part of the parameters, gradients zeroed. */
+static void adam_block(void *ctx, size_t block)
+{
+    adam_job *j = ctx;
+    const size_t begin = j->begin + block * j->per_block;
+    const size_t end = j->begin + (block + 1) * j->per_block < j->begin + j->n
+                           ? j->begin + (block + 1) * j->per_block
+                           : j->begin + j->n;
+    float *restrict p = j->p, *restrict g = j->g;
+    float *restrict m = j->m, *restrict v = j->v;
+    for (size_t k = begin; k < end; k++) {
+        const float gk = g[k];
+        const float mk = j->b1 * m[k] + (1.0f - j->b1) * gk;
+        const float vk = j->b2 * v[k] + (1.0f - j->b2) * gk * gk;
+        m[k] = mk;
+        v[k] = vk;
+        p[k] -= j->step * mk / (sqrtf(vk) + j->eps);
+        g[k] = 0.0f;
+    }
+}
+
+/* Parameters of network 0 the step's backward touched: every layer
+ * parameter, and each hash-table float whose entry got a gradient. */
+static size_t touched_params(const nerf_model *m, const nerf__network *net,
+                             const nerf__hashgrid *hg)
+{
+    const float *g = m->grads;
+    const size_t table = net->pos_params, table_end = table + hg->count;
+    size_t k = net->count - hg->count;
+    for (size_t i = table; i < table_end; i += hg->features) {
+        bool take = false;
+        for (size_t f = 0; f < hg->features; f++) {
+            take = take || g[i + f] != 0.0f;
+        }
+        k += take ? hg->features : 0;
+    }
+    return k;
+}
+
+/*
+ * Seconds of a dense Adam pass over all of network 0's parameters, in
+ * memory order on every thread: the best of three, after an untimed pass
+ * that applies the step's real gradients.  The floor of an update of the
+ * touched parameters alone is its share of this pass: the same bytes per
+ * parameter, at the rate of a pass that streams them.
+ */
+static double time_dense_adam(nerf_model *m, const nerf__network *net,
+                              size_t blocks)
+{
+    adam_job j;
+    memset(&j, 0, sizeof j);
+    j.begin = net->offset;
+    j.n = net->count;
+    j.per_block = (net->count + blocks - 1) / blocks;
+    j.p = m->params;
+    j.g = m->grads;
+    j.m = m->adam_m;
+    j.v = m->adam_v;
+    j.b1 = (float)m->adam.beta1;
+    j.b2 = (float)m->adam.beta2;
+    j.eps = (float)m->adam.eps;
+    j.step = (float)nerf__adam_rate(&m->adam, m->step);
+    double best = INFINITY;
+    for (int run = 0; run < 4; run++) {
+        double t0 = now();
+        nerf__parallel_blocks(blocks, (size_t)1 << 30, adam_block, &j);
+        if (run > 0) {
+            best = fmin(best, now() - t0);
+        }
+    }
+    return best;
+}
+
+/* FLOPs of the density layers alone (trunk and head), per sample. */
+static double density_flops(const nerf__network *net)
+{
+    double f = 2.0 * net->head.in * net->head.out;
+    for (uint32_t i = 0; i < net->depth; i++) {
+        f += 2.0 * net->trunk[i].in * net->trunk[i].out;
+    }
+    return f;
+}
+
+int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
+{
+    memset(fl, 0, sizeof *fl);
+    nerf_model *m = t->model;
+    nerf__batch *b = &t->batch;
+    const nerf__network *net = &m->nets[0];
+    if (!bd->ok || net->pos_enc.kind != NERF_ENCODING_HASHGRID) {
+        return -1;
+    }
+    const nerf__hashgrid *hg = &net->pos_enc.u.hash;
+    const size_t blocks = nerf__parallel_threads() < MAX_BLOCKS
+                              ? nerf__parallel_threads()
+                              : MAX_BLOCKS;
+    const double n = (double)bd->samples;
+    fl->threads = (uint32_t)blocks;
+    fl->peak_gflops = peak_gflops(&fl->isa);
+
+    /* The encoding's reads and adds, level by level on the real tables
+     * (the gradients are cleared below). */
+    uint32_t *idx = malloc(blocks * ACCESSES_PER_BLOCK * sizeof *idx);
+    if (idx == NULL) {
+        return -1;
+    }
+    uint64_t seed = UINT64_C(0x9E3779B97F4A7C15);
+    double read_per_sample = 0.0, write_per_sample = 0.0;
+    fl->levels = hg->levels;
+    for (uint32_t l = 0; l < hg->levels; l++) {
+        const size_t at = net->pos_params + hg->offset[l];
+        const double r = time_accesses(m->params + at, hg->entries[l],
+                                       hg->features, false, idx, blocks, &seed);
+        const double w = time_accesses(m->grads + at, hg->entries[l],
+                                       hg->features, true, idx, blocks, &seed);
+        fl->level_read_ns[l] = 1e9 * r;
+        fl->level_write_ns[l] = 1e9 * w;
+        read_per_sample += 8.0 * r;
+        write_per_sample += 8.0 * w;
+    }
+    free(idx);
+    nerf__model_clear_grad(m);
+    fl->encoding = n * (read_per_sample + write_per_sample);
+
+    const double peak = 1e9 * fl->peak_gflops;
+    fl->mlp = n * 3.0 * nerf__network_flops_per_sample(net) / peak;
+
+    /* The step's own gradients, from the last step's samples as the
+     * breakdown ran them, to see which parameters a step touches. */
+    int rc = nerf__model_forward(m, 0, &b->ws[0], bd->samples, b->march_points,
+                                 b->m_dirs, b->m_rgb, b->m_sigma);
+    if (rc == NERF_OK) {
+        rc = nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+    }
+    if (rc != NERF_OK) {
+        nerf__model_clear_grad(m);
+        return -1;
+    }
+    fl->touched = touched_params(m, net, hg);
+    fl->optimiser = time_dense_adam(m, net, blocks) * (double)fl->touched /
+                    (double)net->count;
+
+    const double cells = (double)bd->grid_cells_evaluated / NERF__GRID_EVERY;
+    fl->grid = cells * (read_per_sample + density_flops(net) / peak);
+    fl->sum = fl->encoding + fl->mlp + fl->optimiser + fl->grid;
+    fl->ok = true;
+    return 0;
+}
