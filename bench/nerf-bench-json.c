@@ -222,6 +222,11 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
     const double runs[2] = {f->runs[0].gflops_step, f->runs[1].gflops_step};
     cJSON_AddItemToObject(o, "sgemm_gflops_runs",
                           cJSON_CreateDoubleArray(runs, 2));
+    cJSON_AddNumberToObject(o, "sgemm_square_gflops", f->gemm_square);
+    cJSON_AddNumberToObject(o, "sgemm_square_side", SQUARE_SIDE);
+    cJSON_AddNumberToObject(o, "train_square_share",
+                            f->train_rays_per_s * f->flops_train_ray * 1e-9 /
+                                f->gemm_square);
     cJSON_AddNumberToObject(o, "train_sgemm_bound_rays_per_s", train_bound(f));
     cJSON_AddNumberToObject(o, "render_sgemm_bound_rays_per_s",
                             render_bound(f));

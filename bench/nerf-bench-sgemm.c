@@ -272,6 +272,26 @@ int sgemm_time(const preset_setup *p, double budget, gemm_timing *out,
     return rc;
 }
 
+/*
+ * cblas_sgemm on square side x side x side products, the shape BLAS
+ * libraries are tuned for: the rate the step's own shapes could reach if
+ * they were as friendly (issue 19, part 6).  Run for `budget` seconds.
+ */
+double sgemm_square_gflops(int side, double budget)
+{
+    gemm_list *l = malloc(sizeof *l);
+    if (l == NULL) {
+        return 0.0;
+    }
+    l->count = 0;
+    push(l, (gemm_call){false, false, side, side, side, side, side, side,
+                        0.0f, false});
+    gemm_timing t;
+    double rate = time_products(l, budget, &t) == 0 ? t.gflops_step : 0.0;
+    free(l);
+    return rate;
+}
+
 /* The rays/s the better sgemm rates allow: a step or a render that did
  * nothing but its products, at those rates. */
 double train_bound(const figures *f)

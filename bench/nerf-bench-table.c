@@ -114,6 +114,22 @@ static void c_gemm_fw(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "%.1f", f->gemm.gflops_forward);
     }
 }
+static void c_gemm_square(char *b, size_t s, const preset_setup *p,
+                          const figures *f)
+{
+    if (!no_bound(b, s, p)) {
+        snprintf(b, s, "%.1f", f->gemm_square);
+    }
+}
+static void c_square_share(char *b, size_t s, const preset_setup *p,
+                           const figures *f)
+{
+    if (!no_bound(b, s, p)) {
+        snprintf(b, s, "%.1f%%", 100.0 * f->train_rays_per_s *
+                                     f->flops_train_ray * 1e-9 /
+                                     f->gemm_square);
+    }
+}
 static void c_warmup(char *b, size_t s, const preset_setup *p,
                      const figures *f)
 {
@@ -430,6 +446,7 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     for (int i = 0; i < n; i++) {
         any_march = any_march || (fs[i].ran && ps[i].march);
     }
+    char label[64];
     row(out, "network (trunk, view branch)", c_net, ps, fs, n);
     row(out, "samples per ray (coarse + fine)", c_samples, ps, fs, n);
     row(out, "FLOPs per sample, forward", c_fl_sample, ps, fs, n);
@@ -438,7 +455,8 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "sgemm GFLOP/s, step products", c_gemm, ps, fs, n);
     row(out, "  the two runs", c_gemm_runs, ps, fs, n);
     row(out, "sgemm GFLOP/s, forward products", c_gemm_fw, ps, fs, n);
-    char label[64];
+    snprintf(label, sizeof label, "sgemm GFLOP/s, square %d", SQUARE_SIDE);
+    row(out, label, c_gemm_square, ps, fs, n);
     snprintf(label, sizeof label, "train rays/s (%u-ray steps)", BATCH_RAYS);
     row(out, label, c_train, ps, fs, n);
     row(out, "  train samples/s", c_train_sps, ps, fs, n);
@@ -454,6 +472,7 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "  GFLOP/s", c_train_gf, ps, fs, n);
     row(out, "  sgemm-bound rays/s", c_train_bound, ps, fs, n);
     row(out, "  train_sgemm_share", c_train_share, ps, fs, n);
+    row(out, "  train_square_share", c_square_share, ps, fs, n);
     row(out, "render rays/s", c_render, ps, fs, n);
     row(out, "  render samples/s", c_render_sps, ps, fs, n);
     row(out, "  network samples per ray", c_render_spr, ps, fs, n);

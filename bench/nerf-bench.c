@@ -102,6 +102,7 @@ static int measure(preset_setup *p, const nerf_dataset *ds,
         if (sgemm_time(p, budget, &f->runs[1], &f->gemm_calls) != 0) {
             failed = "sgemm: out of memory";
         }
+        f->gemm_square = sgemm_square_gflops(SQUARE_SIDE, budget / 2.0);
     }
     if (!failed && p->march) {
         fprintf(stderr,

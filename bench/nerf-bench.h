@@ -16,6 +16,8 @@
 #include "nerf_internal.h"
 
 #define BATCH_RAYS 1024u
+/* The side of the square products nerf-bench sets beside the step's. */
+#define SQUARE_SIDE 256
 #define MIN_TRAIN_STEPS 2
 /* The fast preset's trainer refreshes every cell of the occupancy grid
  * every NERF__GRID_EVERY steps up to step NERF__GRID_WARMUP and a
@@ -173,6 +175,7 @@ typedef struct figures {
     /* sgemm (not for marching presets) */
     gemm_timing gemm;    /* the better of the two runs, rate by rate */
     gemm_timing runs[2]; /* before training, after rendering */
+    double gemm_square;  /* cblas_sgemm GFLOP/s at square SQUARE_SIDE */
     int gemm_calls;
     /* training */
     int train_ok, warmup_steps, train_steps;
@@ -207,6 +210,7 @@ typedef struct figures {
 int sgemm_flops(const preset_setup *p, figures *f);
 int sgemm_time(const preset_setup *p, double budget, gemm_timing *out,
                int *calls);
+double sgemm_square_gflops(int side, double budget);
 double train_bound(const figures *f);
 double render_bound(const figures *f);
 
