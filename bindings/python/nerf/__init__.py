@@ -61,10 +61,10 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     MODEL_HAS_RENDER_SETTINGS, MODEL_HAS_DATA_RECORD,
                     matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
-                     RenderResult, Renderer, Sampler)
+                     DepthResult, PointCloud, RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       CameraPathOptions, DatasetOptions, Hooks, ModelOptions,
-                      Named, Progress,
+                      Named, PointsOptions, Progress,
                       ProgressStruct, RendererOptions, SamplerOptions,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
@@ -76,13 +76,13 @@ __version__ = version_string()
 __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
-    "RenderResult", "Progress", "TrainStats",
+    "RenderResult", "Progress", "TrainStats", "DepthResult", "PointCloud",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
     "TrainerOptions", "SceneOptions", "CameraPathOptions", "Hooks",
-    "ProgressStruct", "TrainStatsStruct", "Named",
+    "ProgressStruct", "TrainStatsStruct", "Named", "PointsOptions",
     # Errors.
     "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
     "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",
