@@ -45,7 +45,8 @@ from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
                    SCENE_LAYOUT_COLMAP_BINARY, SCENE_LAYOUT_COLMAP_TEXT,
                    SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
-                   read_image, read_png, ssim, write_png, write_scene)
+                   read_image, read_png, ssim, write_npy, write_png,
+                   write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
@@ -78,6 +79,7 @@ __all__ = [
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats", "DepthResult", "PointCloud",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
+    "write_npy",
     "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",

@@ -111,6 +111,30 @@ class Depth(TestCase):
             self.assertTrue(arr.flags.owndata and arr.flags.c_contiguous)
 
 
+class Npy(TestCase):
+    def test_write_npy(self):
+        path = os.path.join(_support.tmpdir(), "a.npy")
+        nerf.write_npy(path, [[1.5, -2.0, 0.25], [3.0, 4.0, 5.0]])
+        with open(path, "rb") as f:
+            blob = f.read()
+        self.assertEqual(blob[:8], b"\x93NUMPY\x01\x00")
+        self.assertIn(b"'shape': (2, 3)", blob[:128])
+        self.assertEqual(struct.unpack("<6f", blob[128:]),
+                         (1.5, -2.0, 0.25, 3.0, 4.0, 5.0))
+        if nerf.HAVE_NUMPY:
+            import numpy as np
+            self.assertEqual(np.load(path).tolist(),
+                             [[1.5, -2.0, 0.25], [3.0, 4.0, 5.0]])
+        nerf.write_npy(path, [1.0] * 6, shape=(1, 2, 3))
+        with open(path, "rb") as f:
+            self.assertIn(b"'shape': (1, 2, 3)", f.read(128))
+        with self.assertRaises(ValueError):
+            nerf.write_npy(path, [1.0] * 6, shape=(4,))
+        with self.assertNerfError(nerf.NerfIOError, nerf.EIO,
+                                  "/nonexistent-dir/a.npy"):
+            nerf.write_npy("/nonexistent-dir/a.npy", [1.0])
+
+
 class Points(TestCase):
     @classmethod
     def setUpClass(cls):
