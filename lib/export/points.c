@@ -297,7 +297,11 @@ static int render_views(nerf_points *pts, nerf_renderer *r,
     view_buf v = {block, block + 3 * most, block + 4 * most,
                   block + 5 * most, block + 6 * most, block + 9 * most,
                   block + 12 * most};
-    collect_state st = {0, 1, 2 * o->max_points};
+    /* A cap beyond what memory could hold never binds; keep 2 max from
+     * overflowing. */
+    const uint64_t huge = UINT64_MAX / 4;
+    collect_state st = {0, 1, o->max_points < huge ? 2 * o->max_points
+                                                   : 2 * huge};
     relay->done_before = 0;
     for (size_t k = 0; k < n_cams && rc == NERF_OK; k++) {
         nerf_camera cam;
