@@ -17,10 +17,12 @@
 #include "export.h"
 
 static const char depth_usage[] =
-    "usage: nerf-export depth --model MODEL --data DIR --out DIR\n"
-    "                         [--split S] [--skip K] [--downscale K]\n"
+    "usage: nerf-export depth --model MODEL --out DIR\n"
+    "                         (--data DIR [--split S] [--skip K]\n"
+    "                          [--downscale K] | --poses FILE [--data DIR])\n"
     "                         [--png | --no-png]\n"
-    "Render the views of a split of the scene MODEL was trained on and write\n"
+    "Render the views of a split of the scene MODEL was trained on (or the\n"
+    "cameras of a file) and write\n"
     "for each, into DIR (created if missing), float32 NumPy arrays of shape\n"
     "(height, width), row 0 at the top (docs/formats.md):\n"
     "  NNN_distance.npy  distance in world units from the camera centre to\n"
@@ -31,9 +33,16 @@ static const char depth_usage[] =
     "  NNN_opacity.npy   sum(w) in [0, 1]: 0 sees only the background\n"
     "Both depths are 0 where the opacity is 0.  For a forward-facing (LLFF,\n"
     "NDC) model the NDC depth is converted back to world units.  NNN is the\n"
-    "view's index in the split (000, K, 2K, ... with --skip K).\n"
+    "view's index in the split (000, K, 2K, ... with --skip K) or in the\n"
+    "file.\n"
     "  --model MODEL  the checkpoint nerf-train saved (required)\n"
-    "  --data DIR     the scene MODEL was trained on (required)\n"
+    "  --data DIR     the scene MODEL was trained on: its views (default:\n"
+    "                 required unless --poses gives the views); with\n"
+    "                 --poses only its bounds, background and placement\n"
+    "  --poses FILE   render the cameras of a camera path file instead, as\n"
+    "                 nerf-render --poses reads it; the file must give the\n"
+    "                 image size and intrinsics (a transforms.json with w,\n"
+    "                 h and camera_angle_x or fl_x) (default none)\n"
     "  --out DIR      the output folder (required)\n"
     "  --split S      train, val or test (default test)\n"
     "  --skip K       only every K-th view of the split (default 1: all)\n"
@@ -51,18 +60,25 @@ static const char depth_usage[] =
     "  python3 -c \"import numpy; d = numpy.load('lego-depth/000_zdepth.npy')\"\n";
 
 static const char points_usage[] =
-    "usage: nerf-export points --model MODEL --data DIR --out FILE.ply\n"
-    "                          [--split S] [--skip K] [--downscale K]\n"
+    "usage: nerf-export points --model MODEL --out FILE.ply\n"
+    "                          (--data DIR [--split S] [--skip K]\n"
+    "                           [--downscale K] | --poses FILE [--data DIR])\n"
     "                          [--max-points N] [--stride K] [--opacity T]\n"
     "                          [--ascii]\n"
-    "Render the views of a split of the scene MODEL was trained on and write\n"
+    "Render the views of a split of the scene MODEL was trained on (or the\n"
+    "cameras of a file) and write\n"
     "one point per ray whose opacity reaches T, at the ray's expected\n"
     "termination point, with the ray's colour and a normal estimated from\n"
     "the neighbouring rays' points (0 0 0 where none can be: at the image's\n"
     "depth discontinuities and beside rays without a point), as a PLY file\n"
     "(written to a temporary name, then renamed).\n"
     "  --model MODEL   the checkpoint nerf-train saved (required)\n"
-    "  --data DIR      the scene MODEL was trained on (required)\n"
+    "  --data DIR      the scene MODEL was trained on: its views (default:\n"
+    "                  required unless --poses gives the views); with\n"
+    "                  --poses only its bounds, background and placement\n"
+    "  --poses FILE    use the cameras of a camera path file instead, as\n"
+    "                  nerf-render --poses reads it; the file must give the\n"
+    "                  image size and intrinsics (default none)\n"
     "  --out FILE      the PLY file (required; its folder is made if missing)\n"
     "  --split S       train, val or test (default train)\n"
     "  --skip K        only every K-th view of the split (default 1: all)\n"
@@ -95,8 +111,9 @@ static void on_signal(int sig)
 
 typedef struct args {
     const char *program;
-    const char *model, *data, *out;
+    const char *model, *data, *out, *poses;
     uint64_t split, skip, downscale;
+    int data_options; /* --split, --skip or --downscale given */
     /* depth */
     int png;
     /* points */
@@ -107,12 +124,13 @@ typedef struct args {
 
 static const char *const depth_options[] = {
     "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
-    "--downscale", "--png", "--no-png", NULL
+    "--downscale", "--png", "--no-png", "--poses", NULL
 };
 
 static const char *const points_options[] = {
     "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
-    "--downscale", "--max-points", "--stride", "--opacity", "--ascii", NULL
+    "--downscale", "--max-points", "--stride", "--opacity", "--ascii",
+    "--poses", NULL
 };
 
 /* 0, 1 after --help, -1 after a usage error (printed). */
@@ -149,17 +167,22 @@ static int parse(int argc, char **argv, args *a, int points)
             a->data = v;
         } else if (strcmp(k, "--out") == 0) {
             a->out = v;
+        } else if (strcmp(k, "--poses") == 0) {
+            a->poses = v;
         } else if (strcmp(k, "--split") == 0) {
             int split = cli_split(v);
             a->split = (uint64_t)split;
             bad = split < 0;
             expected = "train, val or test";
+            a->data_options = 1;
         } else if (strcmp(k, "--skip") == 0) {
             bad = cli_uint(v, 1, 100000, &a->skip);
             expected = "1..100000";
+            a->data_options = 1;
         } else if (strcmp(k, "--downscale") == 0) {
             bad = cli_uint(v, 1, 256, &a->downscale);
             expected = "1..256";
+            a->data_options = 1;
         } else if (points && strcmp(k, "--max-points") == 0) {
             bad = cli_uint(v, 1, UINT64_MAX / 2, &a->max_points);
             expected = "a whole number >= 1";
@@ -179,8 +202,17 @@ static int parse(int argc, char **argv, args *a, int points)
             return -1;
         }
     }
-    if (a->model == NULL || a->data == NULL || a->out == NULL) {
-        cli_usage_error(prog, "--model, --data and --out are required");
+    if (a->model == NULL || a->out == NULL ||
+        (a->data == NULL && a->poses == NULL)) {
+        cli_usage_error(prog, "--model, --out and --data or --poses are "
+                        "required");
+        return -1;
+    }
+    /* Refused rather than ignored: the user meant something by them. */
+    if (a->poses && a->data_options) {
+        cli_usage_error(prog, "--split, --skip and --downscale choose the "
+                        "views of --data; with --poses they would change "
+                        "nothing");
         return -1;
     }
     return 0;
@@ -191,10 +223,31 @@ static int parse(int argc, char **argv, args *a, int points)
 typedef struct views {
     nerf_hooks hooks;
     nerf_model *model;
-    nerf_dataset *ds;
+    nerf_dataset *ds;          /* NULL with --poses alone */
+    nerf_camera_path *poses;   /* NULL without --poses */
     nerf_sampler *sampler;
     nerf_renderer *renderer;
 } views;
+
+static uint32_t view_count(const views *v)
+{
+    return v->poses ? nerf_camera_path_count(v->poses)
+                    : nerf_dataset_count(v->ds);
+}
+
+static int view_camera(const views *v, uint32_t i, nerf_camera *cam)
+{
+    NERF_CAMERA_INIT(cam);
+    return v->poses ? nerf_camera_path_camera(v->poses, i, cam)
+                    : nerf_dataset_camera(v->ds, i, cam);
+}
+
+/* The number of view i in the file names: its index in the split (which
+ * --skip thins) or in the file. */
+static uint64_t view_number(const args *a, uint32_t i)
+{
+    return a->poses ? i : (uint64_t)i * a->skip;
+}
 
 static int open_views(const args *a, views *v)
 {
@@ -203,7 +256,13 @@ static int open_views(const args *a, views *v)
     v->hooks.log_cb = cli_log;
     v->hooks.log_user = (void *)a->program;
     int rc = nerf_model_load(&v->model, a->model, &v->hooks);
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && a->poses) {
+        nerf_camera_path_options po;
+        NERF_CAMERA_PATH_OPTIONS_INIT(&po);
+        po.hooks = &v->hooks;
+        rc = nerf_camera_path_load(&v->poses, a->poses, &po);
+    }
+    if (rc == NERF_OK && a->data) {
         nerf_dataset_options dopt;
         NERF_DATASET_OPTIONS_INIT(&dopt);
         dopt.split = (uint32_t)a->split;
@@ -213,9 +272,9 @@ static int open_views(const args *a, views *v)
         dopt.hooks = &v->hooks;
         rc = nerf_dataset_load(&v->ds, a->data, &dopt);
     }
-    if (rc == NERF_OK && nerf_dataset_count(v->ds) == 0) {
-        fprintf(stderr, "%s: %s: the split has no views\n", a->program,
-                a->data);
+    if (rc == NERF_OK && view_count(v) == 0) {
+        fprintf(stderr, "%s: %s: no views to render\n", a->program,
+                a->poses ? a->poses : a->data);
         return REPORTED;
     }
     if (rc == NERF_OK) {
@@ -236,6 +295,7 @@ static void close_views(views *v)
     nerf_renderer_destroy(v->renderer);
     nerf_sampler_destroy(v->sampler);
     nerf_dataset_destroy(v->ds);
+    nerf_camera_path_destroy(v->poses);
     nerf_model_destroy(v->model);
 }
 
@@ -303,13 +363,12 @@ static int write_previews(const args *a, uint64_t view, float *z,
 
 static int depth_views(const args *a, views *v)
 {
-    uint32_t n = nerf_dataset_count(v->ds), w = 0, h = 0;
+    uint32_t n = view_count(v), w = 0, h = 0;
     size_t largest = 0;
     uint64_t total = 0;
     for (uint32_t i = 0; i < n; i++) {
         nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        int rc = nerf_dataset_camera(v->ds, i, &cam);
+        int rc = view_camera(v, i, &cam);
         if (rc != NERF_OK) {
             return rc;
         }
@@ -324,9 +383,16 @@ static int depth_views(const args *a, views *v)
         return REPORTED;
     }
     float *dist = buf, *z = buf + largest, *op = buf + 2 * largest;
-    float near = 2.0f, far = 6.0f;
-    nerf_dataset_bounds(v->ds, &near, &far);
-    const int ndc = nerf_dataset_is_ndc(v->ds) == 1;
+    /* The previews' scale: the sampler's range, the scene's bounds. */
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_model_render_settings(v->model, &so, NULL);
+    float near = so.t_near, far = so.t_far;
+    int ndc = so.ndc != 0;
+    if (v->ds) {
+        nerf_dataset_bounds(v->ds, &near, &far);
+        ndc = nerf_dataset_is_ndc(v->ds) == 1;
+    }
     bar_state b;
     b.before = 0;
     progress_begin(&b.bar, a->program, total);
@@ -334,16 +400,14 @@ static int depth_views(const args *a, views *v)
     int rc = NERF_OK;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
         nerf_camera cam;
-        NERF_CAMERA_INIT(&cam);
-        rc = nerf_dataset_camera(v->ds, i, &cam);
+        rc = view_camera(v, i, &cam);
         w = cam.width;
         h = cam.height;
         if (rc == NERF_OK) {
             rc = nerf_renderer_render_depth(v->renderer, &cam, NULL, dist, z,
                                             op, largest);
         }
-        /* Numbered as in the split, whatever --skip leaves out. */
-        uint64_t view = (uint64_t)i * a->skip;
+        uint64_t view = view_number(a, i);
         if (rc == NERF_OK) {
             rc = write_npy(a->out, view, "distance", dist, w, h);
         }
@@ -431,7 +495,7 @@ int export_points(int argc, char **argv)
     }
     views v;
     int rc = open_views(&a, &v);
-    uint32_t n = rc == NERF_OK ? nerf_dataset_count(v.ds) : 0;
+    uint32_t n = rc == NERF_OK ? view_count(&v) : 0;
     nerf_camera *cams = n ? calloc(n, sizeof *cams) : NULL;
     if (rc == NERF_OK && cams == NULL) {
         fprintf(stderr, "%s: out of memory\n", a.program);
@@ -439,8 +503,7 @@ int export_points(int argc, char **argv)
     }
     uint64_t total = 0;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
-        NERF_CAMERA_INIT(&cams[i]);
-        rc = nerf_dataset_camera(v.ds, i, &cams[i]);
+        rc = view_camera(&v, i, &cams[i]);
         uint64_t s = a.stride;
         total += ((cams[i].width + s - 1) / s) * ((cams[i].height + s - 1) / s);
     }

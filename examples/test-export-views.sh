@@ -80,6 +80,25 @@ else
   echo "note: no python3 with numpy: the depth arrays' values are not checked"
 fi
 
+# --poses: the cameras of a file (here two, 10 x 8), numbered in it; no
+# --data needed (the model's recorded settings serve).
+cat >"$work/poses.json" <<'JSON'
+{"camera_angle_x": 0.6911, "w": 10, "h": 8, "frames": [
+ {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]},
+ {"transform_matrix": [[1,0,0,0],[0,0,-1,-4],[0,1,0,0],[0,0,0,1]]}]}
+JSON
+$wrap "$export" depth --model "$work/model.nerf" --poses "$work/poses.json" \
+  --out "$work/depth3" --no-png 2>"$work/depth3.log" ||
+  { cat "$work/depth3.log"; exit 1; }
+head -c 128 "$work/depth3/001_distance.npy" | grep -q "'shape': (8, 10)" ||
+  fail "--poses: 001_distance.npy is not 8 x 10"
+[ ! -e "$work/depth3/002_distance.npy" ] || fail "--poses: a third view"
+$wrap "$export" points --model "$work/model.nerf" --poses "$work/poses.json" \
+  --data "$work/scene" --opacity 0 --out "$work/poses.ply" \
+  2>"$work/points3.log" || { cat "$work/points3.log"; exit 1; }
+grep -q "points from 2 views" "$work/points3.log" ||
+  { cat "$work/points3.log"; fail "--poses: not the file's 2 views"; }
+
 # points: a capped binary cloud, then ASCII.
 $wrap "$export" points --model "$work/model.nerf" --data "$work/scene" \
   --out "$work/pc/cloud.ply" --max-points 50 --opacity 0.1 \
@@ -123,8 +142,10 @@ usage 2 "bad value '1.5' for --opacity" points $m --out "$work/bad.ply" \
 usage 2 "bad value '0' for --max-points" points $m --out "$work/bad.ply" \
   --max-points 0
 usage 2 "did you mean --stride" points $m --out "$work/bad.ply" --strid 2
-usage 2 "--model, --data and --out are required" points --model \
-  "$work/model.nerf" --out "$work/bad.ply"
+usage 2 "--model, --out and --data or --poses are required" points \
+  --model "$work/model.nerf" --out "$work/bad.ply"
+usage 2 "with --poses they would change nothing" points $m \
+  --poses "$work/poses.json" --split test --out "$work/bad.ply"
 usage 2 "did you mean points" pionts $m --out "$work/bad.ply"
 usage 2 "a subcommand is required"
 usage 2 "did you mean --skip" depth $m --out "$work/bad" --skp 2
