@@ -1903,6 +1903,188 @@ NERF_API int nerf_trainer_set_progress(nerf_trainer *trainer,
  */
 NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
 
+/* ------------------------------------------------------------------------ */
+/* Point clouds and depth (Since 0.5)                                       */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Since 0.5: render every pixel of @p camera as nerf_renderer_render_image()
+ * does, with the depth in world units instead of the raw sum(w t).
+ *
+ * Both depths are those of the expected termination point of the ray
+ * given that it stops in the scene: with weights w_i at depths t_i along
+ * the camera's unnormalised ray d (whose camera-space z is -1), the point
+ * o + s d with s = sum(w t) / sum(w), i.e. divided by the opacity.  The
+ * raw, undivided value is distance x opacity (exactly so: both are 0 where
+ * the opacity is 0).
+ *
+ * For an NDC sampler (forward-facing scenes), t is an NDC depth; s is the
+ * world-space ray parameter of the point that the expected NDC depth
+ * sum(w t) / sum(w) maps back to, on the same ray (the NDC warp keeps
+ * rays straight), so both outputs are world units there too.  An expected
+ * NDC depth of 1 or more (the point at infinity) gives +inf.
+ *
+ * @param rgb_out        height x width x 3 floats, as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param distance_out   height x width floats: s |d|, the distance in
+ *                       world units from the camera centre (the ray's
+ *                       origin) to the point, along the ray; 0 where the
+ *                       opacity is 0.  May be NULL.
+ * @param zdepth_out     height x width floats: s, the point's depth along
+ *                       the camera's optical axis (minus its camera-space
+ *                       z), in world units; 0 where the opacity is 0.  May
+ *                       be NULL.
+ * @param opacity_out    height x width floats, sum(w), as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param pixel_capacity pixels each non-NULL buffer can hold.
+ * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
+ * is NULL); NERF_ENOMEM.
+ * Not reentrant for one renderer.
+ */
+NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
+                                        const nerf_camera *camera,
+                                        float *rgb_out, float *distance_out,
+                                        float *zdepth_out,
+                                        float *opacity_out,
+                                        size_t pixel_capacity);
+
+/**
+ * Since 0.5: write @p data, an array of @p ndim (1..4) dimensions of the
+ * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
+ * dtype '<f4', the header NumPy itself writes), through a temporary file
+ * renamed into place.  numpy.load() reads it back.
+ * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
+ * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
+ * Reentrant.
+ */
+NERF_API int nerf_npy_write_float(const char *path, const float *data,
+                                  const size_t *shape, uint32_t ndim);
+
+/**
+ * Since 0.5: a point cloud: read-only arrays owned by the handle.
+ */
+typedef struct nerf_points nerf_points;
+
+/** Since 0.5: default nerf_points_options.opacity_threshold. */
+#define NERF_POINTS_DEFAULT_OPACITY 0.9f
+/** Since 0.5: default nerf_points_options.max_points. */
+#define NERF_POINTS_DEFAULT_MAX 1000000u
+
+/**
+ * Since 0.5: how nerf_points_from_views() turns rendered views into
+ * points.  Versioned: fill with nerf_points_options_init().
+ */
+typedef struct nerf_points_options {
+    uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
+    float opacity_threshold;   /**< A ray gives a point when its opacity is
+                                    >= this, in [0, 1]; default
+                                    NERF_POINTS_DEFAULT_OPACITY (0.9).  0
+                                    keeps every ray but those of opacity 0
+                                    (which have no depth). */
+    uint64_t max_points;       /**< At most this many points, >= 1; default
+                                    NERF_POINTS_DEFAULT_MAX (10^6).  Beyond
+                                    it the points are thinned evenly in ray
+                                    order (see nerf_points_from_views()). */
+    uint32_t stride;           /**< Render each view at 1/stride of its
+                                    resolution over the same field of view
+                                    (one ray per stride x stride pixels),
+                                    1..1024; default 1. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging of the point
+                                    cloud; NULL = defaults. */
+    nerf_progress_cb progress; /**< NULL, or called on the calling thread
+                                    after every chunk of rays (kind
+                                    NERF_PROGRESS_RENDER; done and total
+                                    count the rays of all views); nonzero
+                                    cancels: NERF_ECANCELLED. */
+    void *progress_user;       /**< Passed to progress. */
+} nerf_points_options;
+
+/**
+ * Since 0.5: fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_points_options_init(nerf_points_options *opts,
+                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
+
+/**
+ * Since 0.5: a point cloud from the expected depth of rendered views.
+ *
+ * Each view of @p cameras (scaled down by the stride: width and height
+ * divided by it, rounded up, focal lengths and principal point divided by
+ * it) is rendered with @p renderer as nerf_renderer_render_depth() does.
+ * Every ray whose opacity reaches the threshold and whose depth is finite
+ * gives one point at o + s d (the expected termination point), coloured
+ * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
+ *
+ * Normals: from the points of the pixel's right and lower neighbours in
+ * the same view (the left or upper one at the image's last column or row):
+ * the cross product of the differences to them, normalised and oriented
+ * toward the camera.  A point gets the normal (0, 0, 0), meaning none,
+ * when such a neighbour is missing (no point there) or lies across a depth
+ * discontinuity: its distance from the camera differs from the point's by
+ * more than 5% x stride of the point's distance.
+ *
+ * Thinning: when the views give more than max_points points, the points,
+ * taken in ray order (views in order, pixels row by row), are thinned
+ * evenly: while collecting, every other point is dropped whenever the
+ * count would pass 2 max_points (so memory stays bounded), and the
+ * remaining n > max_points points are reduced to the points of index
+ * floor(k n / max_points), k = 0 .. max_points - 1.  The result depends
+ * only on the inputs, not on threads or chunking.
+ *
+ * The renderer's own progress callback is not called during this call.
+ *
+ * @param out      the new point cloud (*out is NULL on failure).
+ * @param renderer any renderer; its threads render the views.
+ * @param cameras  @p n_cameras cameras, each initialised (struct_size set).
+ * @param opts     NULL for the defaults.
+ * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
+ * n_cameras 0, an invalid camera, options out of range);
+ * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ */
+NERF_API int nerf_points_from_views(nerf_points **out,
+                                    nerf_renderer *renderer,
+                                    const nerf_camera *cameras,
+                                    size_t n_cameras,
+                                    const nerf_points_options *opts);
+
+/** Since 0.5: the number of points; 0 for NULL. */
+NERF_API size_t nerf_points_count(const nerf_points *points);
+
+/**
+ * Since 0.5: the point cloud's arrays, valid until nerf_points_destroy():
+ * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
+ * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
+ * estimated).  Any output may be NULL.  With no points they are NULL.
+ * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
+ */
+NERF_API int nerf_points_arrays(const nerf_points *points,
+                                const float **positions,
+                                const uint8_t **colours,
+                                const float **normals);
+
+/** Since 0.5: formats of nerf_points_write(). */
+typedef enum nerf_points_format {
+    NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
+    NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
+} nerf_points_format;
+
+/**
+ * Since 0.5: write @p points to @p path as a PLY file with one "vertex"
+ * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
+ * and uchar red, green, blue, through a temporary file renamed into place.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
+ * (the file cannot be written, named); NERF_ENOMEM.
+ */
+NERF_API int nerf_points_write(const nerf_points *points, const char *path,
+                               int format);
+
+/** Since 0.5: release a point cloud.  NULL is a no-op. */
+NERF_API void nerf_points_destroy(nerf_points *points);
+
 #ifdef __cplusplus
 }
 #endif

@@ -63,4 +63,12 @@ void nerf__npy_format_shape(const size_t *shape, uint32_t ndim, char *buf,
 int nerf__npy_write_f8(const nerf__env *env, const char *path,
                        const double *data, size_t rows, size_t cols);
 
+/*
+ * Write floats of the given shape (ndim 0..NERF__NPY_MAX_DIMS, C order) as
+ * a version 1.0 '<f4' .npy, as nerf__npy_write_f8 does.
+ */
+int nerf__npy_write_f4(const nerf__env *env, const char *path,
+                       const float *data, const size_t *shape,
+                       uint32_t ndim);
+
 #endif

@@ -20,3 +20,4 @@ nerf_param nerf_abi_param;
 nerf_progress_kind nerf_abi_progress_kind;
 nerf_split nerf_abi_split;
 nerf_dataset_format nerf_abi_dataset_format;
+nerf_points_format nerf_abi_points_format;

@@ -141,6 +141,17 @@ FROZEN(nerf_renderer_options, reserved0, 20);
 FROZEN(nerf_renderer_options, hooks, 24);
 SIZE(nerf_renderer_options, 32);
 
+/* Since 0.5. */
+FROZEN(nerf_points_options, struct_size, 0);
+FROZEN(nerf_points_options, opacity_threshold, 4);
+FROZEN(nerf_points_options, max_points, 8);
+FROZEN(nerf_points_options, stride, 16);
+FROZEN(nerf_points_options, reserved0, 20);
+FROZEN(nerf_points_options, hooks, 24);
+FROZEN(nerf_points_options, progress, 32);
+FROZEN(nerf_points_options, progress_user, 40);
+SIZE(nerf_points_options, 48);
+
 FROZEN(nerf_dataset_options, struct_size, 0);
 FROZEN(nerf_dataset_options, split, 4);
 FROZEN(nerf_dataset_options, downscale, 8);
@@ -218,6 +229,8 @@ _Static_assert(NERF_SPLIT_TRAIN == 0 && NERF_SPLIT_VAL == 1 &&
 _Static_assert(NERF_DATASET_BLENDER == 1 && NERF_DATASET_LLFF == 2,
                "dataset formats renumbered");
 _Static_assert(NERF_IMAGE_MAX_SIDE == 16384, "image size limit changed");
+_Static_assert(NERF_POINTS_PLY_BINARY == 0 && NERF_POINTS_PLY_ASCII == 1,
+               "point cloud formats renumbered");
 
 int main(void)
 {

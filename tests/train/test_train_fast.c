@@ -10,6 +10,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "field.h"
 #include "model.h"
 #include "occupancy.h"
 #include "renderer.h"
@@ -320,6 +321,67 @@ TEST(batch_samples_takes_rays_up_to_a_budget)
     CHECK(t == NULL);
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/*
+ * The trained model's world-unit depth (nerf_renderer_render_depth) finds
+ * the scene's true surface: on the test views' pixels that both the model
+ * and the exact field see as opaque, its z depth against the field's
+ * expected depth (nerf__scene_render_ray: the same t along the same
+ * rays), median and 90th percentile of the difference in scene units.
+ */
+#define MAX_MEDIAN_DEPTH_ERR 0.05
+#define MAX_P90_DEPTH_ERR 0.2
+
+TEST(depth_finds_the_scene_surface)
+{
+    if (trained == NULL) {
+        FAILF("no trained model");
+        return;
+    }
+    uint32_t w, h;
+    nerf_dataset_image_size(fx.test, &w, &h);
+    const size_t px = (size_t)w * h;
+    float *z = malloc(px * sizeof(float)), *op = malloc(px * sizeof(float));
+    float *o = malloc(3 * px * sizeof(float));
+    float *d = malloc(3 * px * sizeof(float));
+    float *err = malloc(N_TEST * px * sizeof(float));
+    nerf_renderer *r = make_renderer(trained, sampler);
+    size_t n = 0;
+    for (uint32_t v = 0; v < nerf_dataset_count(fx.test); v++) {
+        nerf_camera cam;
+        NERF_CAMERA_INIT(&cam);
+        CHECK_OK(nerf_dataset_camera(fx.test, v, &cam));
+        CHECK_OK(nerf_renderer_render_depth(r, &cam, NULL, NULL, z, op, px));
+        CHECK_OK(nerf_camera_rays(&cam, 0, px, o, d));
+        for (size_t k = 0; k < px; k++) {
+            float rgb[3], depth;
+            float a = nerf__scene_render_ray(o + 3 * k, d + 3 * k, 2.0f, 6.0f,
+                                             rgb, &depth);
+            if (a > 0.95f && op[k] > 0.95f) {
+                err[n++] = fabsf(z[k] - depth / a);
+            }
+        }
+    }
+    CHECK(n > px / 4);
+    qsort(err, n, sizeof *err, cmp_float);
+    double median = n ? err[n / 2] : 1e9, p90 = n ? err[n * 9 / 10] : 1e9;
+    printf("     depth against the true surface on %zu pixels: median "
+           "%.4f, 90th percentile %.4f scene units\n", n, median, p90);
+    CHECK(median < MAX_MEDIAN_DEPTH_ERR);
+    CHECK(p90 < MAX_P90_DEPTH_ERR);
+    nerf_renderer_destroy(r);
+    free(z);
+    free(op);
+    free(o);
+    free(d);
+    free(err);
+}
+
 int main(void)
 {
     const int width = env_int("NERF_TEST_WIDTH", WIDTH);
@@ -330,6 +392,7 @@ int main(void)
     RUN(fast_preset_learns_the_builtin_scene);
     RUN(skipping_is_rendering_empty_cells_as_empty);
     RUN(no_sample_in_an_empty_cell);
+    RUN(depth_finds_the_scene_surface);
     RUN(batch_samples_takes_rays_up_to_a_budget);
     nerf_model_destroy(trained);
     nerf_sampler_destroy(sampler);

@@ -46,7 +46,8 @@ from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
                    SCENE_LAYOUT_COLMAP_BINARY, SCENE_LAYOUT_COLMAP_TEXT,
                    SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
-                   read_image, read_png, ssim, write_png, write_scene)
+                   read_image, read_png, ssim, write_npy, write_png,
+                   write_scene)
 from .errors import (ECANCELLED, EFORMAT, EINVAL, EIO, ENOMEM, ERROR,
                      EVERSION, OK, NerfCancelled, NerfError, NerfFormatError,
                      NerfInternalError, NerfInvalidArgument, NerfIOError,
@@ -62,10 +63,10 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     MODEL_HAS_RENDER_SETTINGS, MODEL_HAS_DATA_RECORD,
                     matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
-                     RenderResult, Renderer, Sampler)
+                     DepthResult, PointCloud, RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       CameraPathOptions, DatasetOptions, Hooks, ModelOptions,
-                      Named, Progress,
+                      Named, PointsOptions, Progress,
                       ProgressStruct, RendererOptions, SamplerOptions,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
@@ -77,13 +78,14 @@ __version__ = version_string()
 __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
-    "RenderResult", "Progress", "TrainStats",
+    "RenderResult", "Progress", "TrainStats", "DepthResult", "PointCloud",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
+    "write_npy",
     "load_camera_path",
     # Option structs.
     "ModelOptions", "SamplerOptions", "RendererOptions", "DatasetOptions",
     "TrainerOptions", "SceneOptions", "CameraPathOptions", "Hooks",
-    "ProgressStruct", "TrainStatsStruct", "Named",
+    "ProgressStruct", "TrainStatsStruct", "Named", "PointsOptions",
     # Errors.
     "NerfError", "NerfInternalError", "NerfInvalidArgument", "NerfNoMemory",
     "NerfIOError", "NerfFormatError", "NerfCancelled", "NerfVersionError",

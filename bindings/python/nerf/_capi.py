@@ -18,9 +18,9 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
 
 from . import _loader, errors
 from .structs import (LOG_CB, Camera, CameraPathOptions, DatasetOptions,
-                      Hooks, ModelOptions, ProgressStruct, RendererOptions,
-                      SamplerOptions, SceneOptions, ScheduleStruct,
-                      TrainerOptions, TrainStatsStruct)
+                      Hooks, ModelOptions, PointsOptions, ProgressStruct,
+                      RendererOptions, SamplerOptions, SceneOptions,
+                      ScheduleStruct, TrainerOptions, TrainStatsStruct)
 
 
 class _Opaque(ctypes.Structure):
@@ -52,12 +52,17 @@ class nerf_camera_path(_Opaque):
     pass
 
 
+class nerf_points(_Opaque):
+    pass
+
+
 ModelP = POINTER(nerf_model)
 SamplerP = POINTER(nerf_sampler)
 RendererP = POINTER(nerf_renderer)
 DatasetP = POINTER(nerf_dataset)
 TrainerP = POINTER(nerf_trainer)
 CameraPathP = POINTER(nerf_camera_path)
+PointsP = POINTER(nerf_points)
 
 PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
 
@@ -156,6 +161,22 @@ _PROTOTYPES = {
                                               c_size_t], True),
     "nerf_renderer_render_rays": (c_int, [RendererP, c_size_t, _F, _F, _F, _F,
                                           _F], True),
+    # Point clouds and depth (libnerf 0.5).
+    "nerf_renderer_render_depth": (c_int, [RendererP, POINTER(Camera), _F,
+                                           _F, _F, _F, c_size_t], True),
+    "nerf_npy_write_float": (c_int, [c_char_p, _F, POINTER(c_size_t),
+                                     c_uint32], True),
+    "nerf_points_options_init": (c_int, [POINTER(PointsOptions), c_size_t],
+                                 True),
+    "nerf_points_from_views": (c_int, [POINTER(PointsP), RendererP,
+                                       POINTER(Camera), c_size_t,
+                                       POINTER(PointsOptions)], True),
+    "nerf_points_count": (c_size_t, [PointsP], False),
+    "nerf_points_arrays": (c_int, [PointsP, POINTER(_F),
+                                   POINTER(POINTER(c_uint8)), POINTER(_F)],
+                           True),
+    "nerf_points_write": (c_int, [PointsP, c_char_p, c_int], True),
+    "nerf_points_destroy": (None, [PointsP], False),
     # Images and metrics.
     "nerf_image_read": (c_int, [c_char_p, _U32, _U32, POINTER(_F)], True),
     "nerf_image_read_png": (c_int, [c_char_p, _U32, _U32, POINTER(_F)], True),

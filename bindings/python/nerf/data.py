@@ -345,6 +345,24 @@ def write_png(path: Any, pixels: Any, width: Optional[int] = None,
     lib.nerf_image_write_png(_handle.fspath(path), w, h, c, buf.ptr)
 
 
+def write_npy(path: Any, values: Any, shape: Optional[Any] = None) -> None:
+    """Write float data as a float32 NumPy ``.npy`` file with the library's
+    own writer (``nerf_npy_write_float``, libnerf 0.5), through a temporary
+    file renamed into place.  The shape (1 to 4 dimensions) is the
+    array's, unless given; ``numpy.load`` reads the file back."""
+    buf = _buffers.as_float_input(values, "values")
+    dims = tuple(int(s) for s in (shape if shape is not None else buf.shape))
+    count = 1
+    for d in dims:
+        count *= d
+    if not 1 <= len(dims) <= 4 or count != buf.size:
+        raise ValueError("write_npy: shape %r does not fit %d values (1 to 4 "
+                         "dimensions)" % (dims, buf.size))
+    c_shape = (ctypes.c_size_t * len(dims))(*dims)
+    lib.nerf_npy_write_float(_handle.fspath(path), buf.ptr, c_shape,
+                             len(dims))
+
+
 def psnr(a: Any, b: Any) -> float:
     """Peak signal-to-noise ratio in dB of two images in [0, 1] of any
     (equal) layout; ``inf`` for identical images (``nerf_psnr``)."""

@@ -6,9 +6,11 @@ import ctypes
 from typing import Any, Callable, NamedTuple, Optional, Union
 
 from . import _buffers, _handle
-from ._capi import RendererP, SamplerP, lib
+from ._capi import PointsP, RendererP, SamplerP, lib
 from .model import Model, preset_key
-from .structs import Camera, Progress, RendererOptions, SamplerOptions
+from .structs import (POINTS_PLY_ASCII, POINTS_PLY_BINARY, Camera,
+                      PointsOptions, Progress, RendererOptions,
+                      SamplerOptions)
 
 #: Flag of the sampling calls: random placement as in training.
 SAMPLE_TRAINING = 0x1
@@ -146,6 +148,64 @@ class RenderResult(NamedTuple):
     rgb: Any
     depth: Any
     opacity: Any
+
+
+class DepthResult(NamedTuple):
+    """What :meth:`Renderer.render_depth` returns; outputs not asked for
+    are None.  ``distance`` and ``zdepth`` are in world units (see
+    ``nerf_renderer_render_depth``)."""
+
+    rgb: Any
+    distance: Any
+    zdepth: Any
+    opacity: Any
+
+
+class PointCloud(_handle.Handle):
+    """A point cloud (``nerf_points``), made by :meth:`Renderer.points`.
+
+    ``positions`` (n x 3 float32, world units), ``colours`` (n x 3 uint8)
+    and ``normals`` (n x 3 float32, unit length or 0 0 0 where none could
+    be estimated) are copies of the C arrays, made once, so they stay valid
+    after :meth:`close`.  :meth:`write` saves the cloud as PLY.
+    """
+
+    _kind = "PointCloud"
+
+    def __init__(self, res: Any) -> None:
+        super().__init__(res)
+        with self._using() as ptr:
+            n = int(lib.nerf_points_count(ptr))
+            pos = ctypes.POINTER(ctypes.c_float)()
+            nrm = ctypes.POINTER(ctypes.c_float)()
+            col = ctypes.POINTER(ctypes.c_uint8)()
+            lib.nerf_points_arrays(ptr, ctypes.byref(pos), ctypes.byref(col),
+                                   ctypes.byref(nrm))
+            self.positions = _copy_out(pos, n, ctypes.c_float)
+            self.normals = _copy_out(nrm, n, ctypes.c_float)
+            self.colours = _copy_out(col, n, ctypes.c_uint8)
+        self.count = n
+
+    def __len__(self) -> int:
+        return self.count
+
+    def write(self, path: Any, ascii: bool = False) -> None:
+        """Write the cloud to ``path`` as PLY, binary little-endian (or
+        ASCII), through a temporary file renamed into place."""
+        with self._using() as ptr:
+            lib.nerf_points_write(ptr, _handle.fspath(path),
+                                  POINTS_PLY_ASCII if ascii
+                                  else POINTS_PLY_BINARY)
+
+
+def _copy_out(ptr: Any, n: int, ctype: Any) -> Any:
+    """n x 3 values of ctype at ptr, copied into a new array."""
+    is_float = ctype is ctypes.c_float
+    out = (_buffers.FloatOutput((n, 3)) if is_float
+           else _buffers.Uint8Output((n, 3)))
+    if n:
+        ctypes.memmove(out.ptr, ptr, 3 * n * ctypes.sizeof(ctype))
+    return out.release()
 
 
 def _camera_arg(camera: Any) -> Camera:
@@ -290,3 +350,67 @@ class Renderer(_handle.ProgressHandle):
             self._slot.run(lib.nerf_renderer_render_rays, ptr, n, o.ptr,
                            d.ptr, *ptrs, progress=progress)
         return RenderResult(*(x.release() if x else None for x in outs))
+
+    def render_depth(self, camera: Camera, *, rgb: bool = True,
+                     distance: bool = True, zdepth: bool = True,
+                     opacity: bool = True,
+                     progress: ProgressFn = None) -> DepthResult:
+        """Render every pixel of ``camera`` with depths in world units
+        (``nerf_renderer_render_depth``, libnerf 0.5).
+
+        ``distance``: from the camera centre to the ray's expected
+        termination point (sum(w t) / sum(w) along the ray, times |d|);
+        ``zdepth``: the same point's depth along the optical axis.  Both
+        are 0 where the opacity is 0; an NDC model's depths are converted
+        to world units.  The arrays are those the library wrote into: no
+        copy is made.
+
+        Returns:
+            DepthResult: ``rgb`` height x width x 3, the others height x
+            width float32; those not asked for are None.
+        """
+        cam = _camera_arg(camera)
+        if not (rgb or distance or zdepth or opacity):
+            raise ValueError("render_depth: ask for at least one output")
+        h, w = int(cam.height), int(cam.width)
+        outs = [_buffers.FloatOutput((h, w, 3)) if rgb else None,
+                _buffers.FloatOutput((h, w)) if distance else None,
+                _buffers.FloatOutput((h, w)) if zdepth else None,
+                _buffers.FloatOutput((h, w)) if opacity else None]
+        ptrs = [o.ptr if o else None for o in outs]
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_renderer_render_depth, ptr,
+                           ctypes.byref(cam), *ptrs, h * w,
+                           progress=progress)
+        return DepthResult(*(o.release() if o else None for o in outs))
+
+    def points(self, cameras: Any, *, opacity_threshold: Optional[float] = None,
+               max_points: Optional[int] = None, stride: int = 1,
+               progress: ProgressFn = None) -> PointCloud:
+        """A point cloud from the expected depth of the views of
+        ``cameras`` (one :class:`nerf.Camera` or a sequence of them):
+        one point per ray whose opacity reaches ``opacity_threshold``
+        (default 0.9), at most ``max_points`` (default 10^6, thinned
+        evenly), one ray per ``stride`` x ``stride`` pixels
+        (``nerf_points_from_views``, libnerf 0.5).  ``progress`` reports
+        rays over all views; a true return value cancels."""
+        cams = [cameras] if isinstance(cameras, Camera) else list(cameras)
+        if not cams:
+            raise ValueError("points: no cameras")
+        for cam in cams:
+            _camera_arg(cam)
+        arr = (Camera * len(cams))(*cams)
+        opts = PointsOptions(stride=stride)
+        if opacity_threshold is not None:
+            opts.opacity_threshold = float(opacity_threshold)
+        if max_points is not None:
+            opts.max_points = int(max_points)
+        opts.progress = ctypes.cast(self._slot.thunk, ctypes.c_void_p)
+        out = PointsP()
+        with self._using() as ptr:
+            self._slot.run(lib.nerf_points_from_views, ctypes.byref(out),
+                           ptr, arr, len(cams), ctypes.byref(opts),
+                           progress=progress)
+        res = _handle._Resource("PointCloud", out,
+                                _handle.destroyer("nerf_points_destroy"))
+        return PointCloud(res)

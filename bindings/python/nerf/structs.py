@@ -359,6 +359,25 @@ class RendererOptions(_Versioned):
     ]
 
 
+class PointsOptions(_Versioned):
+    """``nerf_points_options`` (libnerf 0.5): how rendered views become a
+    point cloud (see :meth:`nerf.Renderer.points`)."""
+
+    _c_name_ = "nerf_points_options"
+    _c_init_ = "nerf_points_options_init"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("opacity_threshold", c_float),
+        ("max_points", c_uint64),
+        ("stride", c_uint32),
+        ("reserved0", c_uint32),
+        ("hooks", POINTER(Hooks)),
+        # A nerf_progress_cb; the binding sets it to its progress thunk.
+        ("progress", c_void_p),
+        ("progress_user", c_void_p),
+    ]
+
+
 class CameraPathOptions(_Versioned):
     """``nerf_camera_path_options``: how a camera path file becomes
     cameras (see :func:`nerf.load_camera_path`)."""
@@ -497,6 +516,10 @@ def read_covered(struct: ctypes.Structure, size: int) -> Dict[str, Any]:
 PROGRESS_RENDER = 1
 PROGRESS_TRAIN = 2
 PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train"}
+
+# nerf_points_format (libnerf 0.5)
+POINTS_PLY_BINARY = 0
+POINTS_PLY_ASCII = 1
 
 
 @dataclass(frozen=True)
@@ -670,4 +693,4 @@ class Camera(_Versioned):
 ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
                TrainerOptions, TrainStatsStruct, CameraPathOptions,
-               ScheduleStruct)
+               ScheduleStruct, PointsOptions)

@@ -168,6 +168,17 @@ static void structs(void)
     FIELD(nerf_renderer_options, hooks);
     end_struct();
 
+    BEGIN(nerf_points_options);
+    FIELD(nerf_points_options, struct_size);
+    FIELD(nerf_points_options, opacity_threshold);
+    FIELD(nerf_points_options, max_points);
+    FIELD(nerf_points_options, stride);
+    FIELD(nerf_points_options, reserved0);
+    FIELD(nerf_points_options, hooks);
+    FIELD(nerf_points_options, progress);
+    FIELD(nerf_points_options, progress_user);
+    end_struct();
+
     BEGIN(nerf_dataset_options);
     FIELD(nerf_dataset_options, struct_size);
     FIELD(nerf_dataset_options, split);

@@ -1,0 +1,540 @@
+/*
+ * nerf-export depth and nerf-export points: world-unit depth maps and
+ * point clouds from rendered views of a model, the scene's own cameras.
+ */
+#include <nerf.h>
+
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/cli.h"
+#include "common/options.h"
+#include "common/out_folder.h"
+#include "common/progress.h"
+#include "common/scene_setup.h"
+#include "export.h"
+
+static const char depth_usage[] =
+    "usage: nerf-export depth --model MODEL --out DIR\n"
+    "                         (--data DIR [--split S] [--skip K]\n"
+    "                          [--downscale K] | --poses FILE [--data DIR])\n"
+    "                         [--png | --no-png]\n"
+    "Render the views of a split of the scene MODEL was trained on (or the\n"
+    "cameras of a file) and write\n"
+    "for each, into DIR (created if missing), float32 NumPy arrays of shape\n"
+    "(height, width), row 0 at the top (docs/formats.md):\n"
+    "  NNN_distance.npy  distance in world units from the camera centre to\n"
+    "                    the ray's expected termination point (sum(w t) /\n"
+    "                    sum(w) along the ray, so divided by the opacity)\n"
+    "  NNN_zdepth.npy    the same point's depth along the camera's optical\n"
+    "                    axis (camera-space -z), world units\n"
+    "  NNN_opacity.npy   sum(w) in [0, 1]: 0 sees only the background\n"
+    "Both depths are 0 where the opacity is 0.  For a forward-facing (LLFF,\n"
+    "NDC) model the NDC depth is converted back to world units.  NNN is the\n"
+    "view's index in the split (000, K, 2K, ... with --skip K) or in the\n"
+    "file.\n"
+    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
+    "  --data DIR     the scene MODEL was trained on: its views (default:\n"
+    "                 required unless --poses gives the views); with\n"
+    "                 --poses only its bounds, background and placement\n"
+    "  --poses FILE   render the cameras of a camera path file instead, as\n"
+    "                 nerf-render --poses reads it; the file must give the\n"
+    "                 image size and intrinsics (a transforms.json with w,\n"
+    "                 h and camera_angle_x or fl_x) (default none)\n"
+    "  --out DIR      the output folder (required)\n"
+    "  --split S      train, val or test (default test)\n"
+    "  --skip K       only every K-th view of the split (default 1: all)\n"
+    "  --downscale K  load the scene's cameras K times smaller (default 1)\n"
+    "  --png          also write 8-bit previews, as nerf-render --depth does:\n"
+    "                 NNN_depth.png (z depth from the scene's near bound,\n"
+    "                 white, to its far bound, black; black where the\n"
+    "                 opacity is below 0.001) and NNN_opacity.png (the\n"
+    "                 default)\n"
+    "  --no-png       write the .npy arrays only\n"
+    "  --help         print this help and exit\n"
+    "Examples:\n"
+    "  nerf-export depth --model lego.nerf --data lego --downscale 4 \\\n"
+    "      --skip 10 --out lego-depth\n"
+    "  python3 -c \"import numpy; d = numpy.load('lego-depth/000_zdepth.npy')\"\n";
+
+static const char points_usage[] =
+    "usage: nerf-export points --model MODEL --out FILE.ply\n"
+    "                          (--data DIR [--split S] [--skip K]\n"
+    "                           [--downscale K] | --poses FILE [--data DIR])\n"
+    "                          [--max-points N] [--stride K] [--opacity T]\n"
+    "                          [--ascii]\n"
+    "Render the views of a split of the scene MODEL was trained on (or the\n"
+    "cameras of a file) and write\n"
+    "one point per ray whose opacity reaches T, at the ray's expected\n"
+    "termination point, with the ray's colour and a normal estimated from\n"
+    "the neighbouring rays' points (0 0 0 where none can be: at the image's\n"
+    "depth discontinuities and beside rays without a point), as a PLY file\n"
+    "(written to a temporary name, then renamed).\n"
+    "  --model MODEL   the checkpoint nerf-train saved (required)\n"
+    "  --data DIR      the scene MODEL was trained on: its views (default:\n"
+    "                  required unless --poses gives the views); with\n"
+    "                  --poses only its bounds, background and placement\n"
+    "  --poses FILE    use the cameras of a camera path file instead, as\n"
+    "                  nerf-render --poses reads it; the file must give the\n"
+    "                  image size and intrinsics (default none)\n"
+    "  --out FILE      the PLY file (required; its folder is made if missing)\n"
+    "  --split S       train, val or test (default train)\n"
+    "  --skip K        only every K-th view of the split (default 1: all)\n"
+    "  --downscale K   load the scene's cameras K times smaller (default 1)\n"
+    "  --max-points N  at most N points, thinned evenly in ray order\n"
+    "                  (default 1000000)\n"
+    "  --stride K      one ray per K x K pixels of each view (default 1)\n"
+    "  --opacity T     the least opacity of a ray that gives a point, in\n"
+    "                  [0, 1] (default 0.9)\n"
+    "  --ascii         an ASCII PLY (default binary little-endian)\n"
+    "  --help          print this help and exit\n"
+    "Ctrl-C stops at once; nothing is written.\n"
+    "Examples:\n"
+    "  nerf-export points --model lego.nerf --data lego --downscale 2 \\\n"
+    "      --stride 2 --out lego-points.ply\n"
+    "  nerf-export points --model fern.nerf --data fern --downscale 8 \\\n"
+    "      --opacity 0.5 --ascii --out fern.ply\n";
+
+/* Stopped by a signal, and said so. */
+#define INTERRUPTED 2
+/* A failure already described on stderr. */
+#define REPORTED 1
+
+static volatile sig_atomic_t interrupted;
+
+static void on_signal(int sig)
+{
+    interrupted = sig;
+}
+
+typedef struct args {
+    const char *program;
+    const char *model, *data, *out, *poses;
+    uint64_t split, skip, downscale;
+    int data_options; /* --split, --skip or --downscale given */
+    /* depth */
+    int png;
+    /* points */
+    uint64_t max_points, stride;
+    double opacity;
+    int ascii;
+} args;
+
+static const char *const depth_options[] = {
+    "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
+    "--downscale", "--png", "--no-png", "--poses", NULL
+};
+
+static const char *const points_options[] = {
+    "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
+    "--downscale", "--max-points", "--stride", "--opacity", "--ascii",
+    "--poses", NULL
+};
+
+/* 0, 1 after --help, -1 after a usage error (printed). */
+static int parse(int argc, char **argv, args *a, int points)
+{
+    const char *prog = a->program;
+    const char *const *names = points ? points_options : depth_options;
+    for (int i = 1; i < argc; i++) {
+        const char *k = argv[i];
+        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
+            fputs(points ? points_usage : depth_usage, stdout);
+            return 1;
+        }
+        if (!points && (strcmp(k, "--png") == 0 ||
+                        strcmp(k, "--no-png") == 0)) {
+            a->png = strcmp(k, "--png") == 0;
+            continue;
+        }
+        if (points && strcmp(k, "--ascii") == 0) {
+            a->ascii = 1;
+            continue;
+        }
+        const char *v = cli_value(argc, argv, &i);
+        int bad = v == NULL;
+        const char *expected = NULL;
+        if (bad) {
+            if (cli_check_option(prog, k, names) == 0) {
+                cli_bad_value(prog, k, NULL, NULL);
+            }
+            return -1;
+        } else if (strcmp(k, "--model") == 0) {
+            a->model = v;
+        } else if (strcmp(k, "--data") == 0) {
+            a->data = v;
+        } else if (strcmp(k, "--out") == 0) {
+            a->out = v;
+        } else if (strcmp(k, "--poses") == 0) {
+            a->poses = v;
+        } else if (strcmp(k, "--split") == 0) {
+            int split = cli_split(v);
+            a->split = (uint64_t)split;
+            bad = split < 0;
+            expected = "train, val or test";
+            a->data_options = 1;
+        } else if (strcmp(k, "--skip") == 0) {
+            bad = cli_uint(v, 1, 100000, &a->skip);
+            expected = "1..100000";
+            a->data_options = 1;
+        } else if (strcmp(k, "--downscale") == 0) {
+            bad = cli_uint(v, 1, 256, &a->downscale);
+            expected = "1..256";
+            a->data_options = 1;
+        } else if (points && strcmp(k, "--max-points") == 0) {
+            bad = cli_uint(v, 1, UINT64_MAX / 2, &a->max_points);
+            expected = "a whole number >= 1";
+        } else if (points && strcmp(k, "--stride") == 0) {
+            bad = cli_uint(v, 1, 1024, &a->stride);
+            expected = "1..1024";
+        } else if (points && strcmp(k, "--opacity") == 0) {
+            bad = cli_double(v, &a->opacity) ||
+                  !(a->opacity >= 0.0 && a->opacity <= 1.0);
+            expected = "a number in [0, 1]";
+        } else {
+            cli_unknown(prog, k, names);
+            return -1;
+        }
+        if (bad) {
+            cli_bad_value(prog, k, v, expected);
+            return -1;
+        }
+    }
+    if (a->model == NULL || a->out == NULL ||
+        (a->data == NULL && a->poses == NULL)) {
+        cli_usage_error(prog, "--model, --out and --data or --poses are "
+                        "required");
+        return -1;
+    }
+    /* Refused rather than ignored: the user meant something by them. */
+    if (a->poses && a->data_options) {
+        cli_usage_error(prog, "--split, --skip and --downscale choose the "
+                        "views of --data; with --poses they would change "
+                        "nothing");
+        return -1;
+    }
+    return 0;
+}
+
+/* What both subcommands render with: the model, the scene's views and a
+ * renderer set up as nerf-render sets it up for them. */
+typedef struct views {
+    nerf_hooks hooks;
+    nerf_model *model;
+    nerf_dataset *ds;          /* NULL with --poses alone */
+    nerf_camera_path *poses;   /* NULL without --poses */
+    nerf_sampler *sampler;
+    nerf_renderer *renderer;
+} views;
+
+static uint32_t view_count(const views *v)
+{
+    return v->poses ? nerf_camera_path_count(v->poses)
+                    : nerf_dataset_count(v->ds);
+}
+
+static int view_camera(const views *v, uint32_t i, nerf_camera *cam)
+{
+    NERF_CAMERA_INIT(cam);
+    return v->poses ? nerf_camera_path_camera(v->poses, i, cam)
+                    : nerf_dataset_camera(v->ds, i, cam);
+}
+
+/* The number of view i in the file names: its index in the split (which
+ * --skip thins) or in the file. */
+static uint64_t view_number(const args *a, uint32_t i)
+{
+    return a->poses ? i : (uint64_t)i * a->skip;
+}
+
+static int open_views(const args *a, views *v)
+{
+    memset(v, 0, sizeof *v);
+    NERF_HOOKS_INIT(&v->hooks);
+    v->hooks.log_cb = cli_log;
+    v->hooks.log_user = (void *)a->program;
+    int rc = nerf_model_load(&v->model, a->model, &v->hooks);
+    if (rc == NERF_OK && a->poses) {
+        nerf_camera_path_options po;
+        NERF_CAMERA_PATH_OPTIONS_INIT(&po);
+        po.hooks = &v->hooks;
+        rc = nerf_camera_path_load(&v->poses, a->poses, &po);
+    }
+    if (rc == NERF_OK && a->data) {
+        nerf_dataset_options dopt;
+        NERF_DATASET_OPTIONS_INIT(&dopt);
+        dopt.split = (uint32_t)a->split;
+        dopt.skip = (uint32_t)a->skip;
+        dopt.downscale = (uint32_t)a->downscale;
+        dopt.forward_facing = setup_forward_facing(v->model, -1);
+        dopt.hooks = &v->hooks;
+        rc = nerf_dataset_load(&v->ds, a->data, &dopt);
+    }
+    if (rc == NERF_OK && view_count(v) == 0) {
+        fprintf(stderr, "%s: %s: no views to render\n", a->program,
+                a->poses ? a->poses : a->data);
+        return REPORTED;
+    }
+    if (rc == NERF_OK) {
+        rc = setup_sampler(&v->sampler, v->model, v->ds, 0, 0, 0.0f, 0.0f, 0);
+    }
+    if (rc == NERF_OK) {
+        nerf_renderer_options ro;
+        NERF_RENDERER_OPTIONS_INIT(&ro);
+        ro.white_background = (uint32_t)setup_background(v->model, v->ds);
+        ro.hooks = &v->hooks;
+        rc = nerf_renderer_create(&v->renderer, v->model, v->sampler, &ro);
+    }
+    return rc;
+}
+
+static void close_views(views *v)
+{
+    nerf_renderer_destroy(v->renderer);
+    nerf_sampler_destroy(v->sampler);
+    nerf_dataset_destroy(v->ds);
+    nerf_camera_path_destroy(v->poses);
+    nerf_model_destroy(v->model);
+}
+
+/* The exit status of a run that ended with rc. */
+static int finish(const args *a, int rc)
+{
+    if (rc == NERF_ECANCELLED && interrupted) {
+        fprintf(stderr, "\n%s: interrupted\n", a->program);
+        return 128 + interrupted;
+    }
+    if (rc != NERF_OK && rc != REPORTED) {
+        cli_report(a->program, rc);
+    }
+    return rc == NERF_OK ? 0 : 1;
+}
+
+typedef struct bar_state {
+    progress bar;
+    uint64_t before; /* pixels of the views already rendered */
+} bar_state;
+
+static int on_depth_progress(const nerf_progress *p, void *user)
+{
+    bar_state *b = user;
+    progress_update(&b->bar, b->before + p->done, "pixels");
+    return interrupted ? 1 : 0;
+}
+
+static int on_points_progress(const nerf_progress *p, void *user)
+{
+    progress_update(user, p->done, "rays");
+    return interrupted ? 1 : 0;
+}
+
+static int write_npy(const char *dir, uint64_t view, const char *kind,
+                     const float *data, uint32_t w, uint32_t h)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%03llu_%s.npy", dir,
+             (unsigned long long)view, kind);
+    const size_t shape[2] = {h, w};
+    return nerf_npy_write_float(path, data, shape, 2);
+}
+
+/* The previews of nerf-render --depth, from the z depth. */
+static int write_previews(const args *a, uint64_t view, float *z,
+                          const float *opacity, uint32_t w, uint32_t h,
+                          float near, float far, int ndc)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%03llu_opacity.png", a->out,
+             (unsigned long long)view);
+    int rc = nerf_image_write_png(path, w, h, 1, opacity);
+    for (size_t k = 0; k < (size_t)w * h; k++) {
+        /* An NDC scene's bounds are NDC depths: 1 - 1 / z for a camera
+         * looking down the scene's -z, as LLFF poses nearly do. */
+        float d = opacity[k] > 1e-3f ? (ndc ? 1.0f - 1.0f / z[k] : z[k])
+                                     : far;
+        z[k] = 1.0f - (d - near) / (far - near);
+    }
+    snprintf(path, sizeof path, "%s/%03llu_depth.png", a->out,
+             (unsigned long long)view);
+    return rc == NERF_OK ? nerf_image_write_png(path, w, h, 1, z) : rc;
+}
+
+static int depth_views(const args *a, views *v)
+{
+    uint32_t n = view_count(v), w = 0, h = 0;
+    size_t largest = 0;
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        nerf_camera cam;
+        int rc = view_camera(v, i, &cam);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        size_t px = (size_t)cam.width * cam.height;
+        largest = px > largest ? px : largest;
+        total += px;
+    }
+    float *buf = malloc(largest * 3 * sizeof(float));
+    if (buf == NULL) {
+        fprintf(stderr, "%s: cannot allocate the buffers of %zu pixels\n",
+                a->program, largest);
+        return REPORTED;
+    }
+    float *dist = buf, *z = buf + largest, *op = buf + 2 * largest;
+    /* The previews' scale: the sampler's range, the scene's bounds. */
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_model_render_settings(v->model, &so, NULL);
+    float near = so.t_near, far = so.t_far;
+    int ndc = so.ndc != 0;
+    if (v->ds) {
+        nerf_dataset_bounds(v->ds, &near, &far);
+        ndc = nerf_dataset_is_ndc(v->ds) == 1;
+    }
+    bar_state b;
+    b.before = 0;
+    progress_begin(&b.bar, a->program, total);
+    nerf_renderer_set_progress(v->renderer, on_depth_progress, &b);
+    int rc = NERF_OK;
+    for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        nerf_camera cam;
+        rc = view_camera(v, i, &cam);
+        w = cam.width;
+        h = cam.height;
+        if (rc == NERF_OK) {
+            rc = nerf_renderer_render_depth(v->renderer, &cam, NULL, dist, z,
+                                            op, largest);
+        }
+        uint64_t view = view_number(a, i);
+        if (rc == NERF_OK) {
+            rc = write_npy(a->out, view, "distance", dist, w, h);
+        }
+        if (rc == NERF_OK) {
+            rc = write_npy(a->out, view, "zdepth", z, w, h);
+        }
+        if (rc == NERF_OK) {
+            rc = write_npy(a->out, view, "opacity", op, w, h);
+        }
+        if (rc == NERF_OK && a->png) {
+            rc = write_previews(a, view, z, op, w, h, near, far, ndc);
+        }
+        b.before += (uint64_t)w * h;
+    }
+    free(buf);
+    if (rc == NERF_OK) {
+        char note[4200];
+        snprintf(note, sizeof note, "%u view%s in %s", n, n == 1 ? "" : "s",
+                 a->out);
+        progress_end(&b.bar, note);
+    }
+    return rc;
+}
+
+int export_depth(int argc, char **argv)
+{
+    args a;
+    memset(&a, 0, sizeof a);
+    a.program = "nerf-export depth";
+    a.split = NERF_SPLIT_TEST;
+    a.skip = 1;
+    a.downscale = 1;
+    a.png = 1;
+    int p = parse(argc, argv, &a, 0);
+    if (p != 0) {
+        return p > 0 ? 0 : 2;
+    }
+    if (out_ready_folder(a.out, a.program) != 0) {
+        return 1;
+    }
+    views v;
+    int rc = open_views(&a, &v);
+    if (rc == NERF_OK) {
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
+        rc = depth_views(&a, &v);
+    }
+    close_views(&v);
+    return finish(&a, rc);
+}
+
+/* The folder of file, ready and writable before any rendering. */
+static int ready_parent(const args *a)
+{
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s", a->out);
+    char *slash = strrchr(dir, '/');
+    if (slash == NULL) {
+        snprintf(dir, sizeof dir, ".");
+    } else if (slash == dir) {
+        dir[1] = '\0';
+    } else {
+        *slash = '\0';
+    }
+    return out_ready_folder(dir, a->program);
+}
+
+int export_points(int argc, char **argv)
+{
+    args a;
+    memset(&a, 0, sizeof a);
+    a.program = "nerf-export points";
+    a.split = NERF_SPLIT_TRAIN;
+    a.skip = 1;
+    a.downscale = 1;
+    a.max_points = NERF_POINTS_DEFAULT_MAX;
+    a.stride = 1;
+    a.opacity = NERF_POINTS_DEFAULT_OPACITY;
+    int p = parse(argc, argv, &a, 1);
+    if (p != 0) {
+        return p > 0 ? 0 : 2;
+    }
+    if (ready_parent(&a) != 0) {
+        return 1;
+    }
+    views v;
+    int rc = open_views(&a, &v);
+    uint32_t n = rc == NERF_OK ? view_count(&v) : 0;
+    nerf_camera *cams = n ? calloc(n, sizeof *cams) : NULL;
+    if (rc == NERF_OK && cams == NULL) {
+        fprintf(stderr, "%s: out of memory\n", a.program);
+        rc = REPORTED;
+    }
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
+        rc = view_camera(&v, i, &cams[i]);
+        uint64_t s = a.stride;
+        total += ((cams[i].width + s - 1) / s) * ((cams[i].height + s - 1) / s);
+    }
+    nerf_points *pts = NULL;
+    progress bar;
+    if (rc == NERF_OK) {
+        nerf_points_options po;
+        NERF_POINTS_OPTIONS_INIT(&po);
+        po.opacity_threshold = (float)a.opacity;
+        po.max_points = a.max_points;
+        po.stride = (uint32_t)a.stride;
+        po.hooks = &v.hooks;
+        po.progress = on_points_progress;
+        po.progress_user = &bar;
+        progress_begin(&bar, a.program, total);
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
+        rc = nerf_points_from_views(&pts, v.renderer, cams, n, &po);
+    }
+    if (rc == NERF_OK) {
+        rc = nerf_points_write(pts, a.out, a.ascii ? NERF_POINTS_PLY_ASCII
+                                                   : NERF_POINTS_PLY_BINARY);
+    }
+    if (rc == NERF_OK) {
+        char note[4300];
+        snprintf(note, sizeof note, "%zu points from %u view%s in %s",
+                 nerf_points_count(pts), n, n == 1 ? "" : "s", a.out);
+        progress_end(&bar, note);
+    }
+    nerf_points_destroy(pts);
+    free(cams);
+    close_views(&v);
+    return finish(&a, rc);
+}
