@@ -21,3 +21,4 @@ nerf_progress_kind nerf_abi_progress_kind;
 nerf_split nerf_abi_split;
 nerf_dataset_format nerf_abi_dataset_format;
 nerf_points_format nerf_abi_points_format;
+nerf_schedule_state nerf_abi_schedule_state;
