@@ -63,4 +63,13 @@ void nerf__npy_format_shape(const size_t *shape, uint32_t ndim, char *buf,
 int nerf__npy_write_f8(const nerf__env *env, const char *path,
                        const double *data, size_t rows, size_t cols);
 
+/*
+ * Write the float32 array data (C order, shape[0..ndim)) to path as a
+ * version 1.0 .npy, '<f4', through nerf__file_write_atomic.  Returns
+ * NERF_OK; NERF_EINVAL (ndim > NERF__NPY_MAX_DIMS); NERF_EIO (named
+ * path); NERF_ENOMEM.
+ */
+int nerf__npy_write_f4(const nerf__env *env, const char *path,
+                       const float *data, const size_t *shape, uint32_t ndim);
+
 #endif
