@@ -1885,6 +1885,7 @@ typedef struct nerf_mesh_options {
                                  default 0 (keep all). */
     uint32_t threads;       /**< At most this many threads sample the
                                  density; 0 (the default): every core. */
+    uint32_t reserved0;     /**< Must be 0. */
     nerf_progress_cb progress; /**< NULL, or called after each plane of
                                  samples (kind NERF_PROGRESS_GEOMETRY);
                                  nonzero cancels with NERF_ECANCELLED. */

@@ -71,6 +71,9 @@ int nerf__geometry_setup(const nerf_model *model, const nerf_mesh_options *opts,
         return nerf__error(NERF_EINVAL, "%s: keep_largest must be 0 or 1",
                            who);
     }
+    if (o->reserved0 != 0) {
+        return nerf__error(NERF_EINVAL, "%s: reserved0 must be 0", who);
+    }
     if (o->threads > 1024) {
         return nerf__error(NERF_EINVAL, "%s: threads %u is out of range "
                            "(0..1024)", who, (unsigned)o->threads);

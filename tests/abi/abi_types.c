@@ -20,3 +20,5 @@ nerf_param nerf_abi_param;
 nerf_progress_kind nerf_abi_progress_kind;
 nerf_split nerf_abi_split;
 nerf_dataset_format nerf_abi_dataset_format;
+nerf_mesh_colour nerf_abi_mesh_colour;
+nerf_mesh_format nerf_abi_mesh_format;
