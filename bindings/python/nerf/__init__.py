@@ -69,6 +69,8 @@ from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
 from .train import Trainer
+from .mesh import (MESH_COLOUR_NONE, MESH_COLOUR_NORMAL, Mesh)
+from .structs import MeshOptions, PROGRESS_GEOMETRY
 
 #: The version of the loaded library, "major.minor.patch".
 __version__ = version_string()
@@ -76,7 +78,7 @@ __version__ = version_string()
 __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
-    "RenderResult", "Progress", "TrainStats",
+    "RenderResult", "Progress", "TrainStats", "Mesh", "MeshOptions",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "load_camera_path",
     # Option structs.
@@ -114,5 +116,6 @@ __all__ = [
     "SCENE_LAYOUT_TRANSFORMS", "SCENE_LAYOUT_LLFF",
     "SCENE_LAYOUT_COLMAP_TEXT", "SCENE_LAYOUT_COLMAP_BINARY",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
+    "MESH_COLOUR_NONE", "MESH_COLOUR_NORMAL", "PROGRESS_GEOMETRY",
 ]
 
