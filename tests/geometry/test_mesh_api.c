@@ -398,6 +398,98 @@ TEST(density_grid)
     nerf_model_destroy(m);
 }
 
+TEST(ndc_back_to_world)
+{
+    /* A forward-facing model: its mesh is made in NDC, and with the NDC
+     * frustum in its render settings each vertex goes back to the world
+     * point that the NDC warp takes to it, faces rewound. */
+    nerf_model_options mo;
+    nerf_model_options_init(&mo, sizeof mo);
+    CHECK_OK(nerf_model_options_preset(&mo, NERF_PRESET_FAST));
+    mo.space = NERF_SPACE_NDC;
+    mo.hash_log2_size = 12;
+    mo.hash_levels = 4;
+    mo.seed = 2;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &mo));
+    if (m == NULL) {
+        return;
+    }
+    nerf_mesh_options o;
+    nerf_mesh_options_init(&o, sizeof o);
+    o.resolution = 10;
+    o.colour = NERF_MESH_COLOUR_NONE;
+    /* The density of random weights varies little: cut at its median. */
+    const float box[6] = {-1, -1, -0.9f, 1, 1, 0.8f};
+    memcpy(o.box, box, sizeof box);
+    float pts[3 * 64], sigma[64];
+    for (int i = 0; i < 64; i++) {
+        pts[3 * i] = -0.9f + 0.028f * i;
+        pts[3 * i + 1] = 0.5f - 0.015f * i;
+        pts[3 * i + 2] = -0.8f + 0.025f * i;
+    }
+    float dirs[3 * 64] = {0};
+    for (int i = 0; i < 64; i++) {
+        dirs[3 * i + 2] = -1.0f;
+    }
+    CHECK_OK(nerf_model_query(m, NERF_NETWORK_COARSE, 64, pts, dirs, NULL, sigma));
+    float sorted[64];
+    memcpy(sorted, sigma, sizeof sorted);
+    for (int i = 1; i < 64; i++) {
+        for (int j = i; j > 0 && sorted[j - 1] > sorted[j]; j--) {
+            float t = sorted[j];
+            sorted[j] = sorted[j - 1];
+            sorted[j - 1] = t;
+        }
+    }
+    o.threshold = sorted[32];
+    nerf_mesh *ndc = NULL, *world = NULL;
+    CHECK_OK(nerf_mesh_extract(&ndc, m, &o));
+    nerf_sampler_options so;
+    nerf_sampler_options_init(&so, sizeof so);
+    CHECK_OK(nerf_sampler_options_preset(&so, NERF_PRESET_FAST));
+    so.ndc = 1;
+    so.t_near = 0.0f;
+    so.t_far = 1.0f;
+    so.ndc_focal = 50.0f;
+    so.ndc_width = 80;
+    so.ndc_height = 60;
+    CHECK_OK(nerf_model_set_render_settings(m, &so, 0));
+    CHECK_OK(nerf_mesh_extract(&world, m, &o));
+    const size_t nv = nerf_mesh_vertex_count(ndc), nf = nerf_mesh_face_count(ndc);
+    CHECK(nf > 0);
+    CHECK_EQ_INT(nerf_mesh_vertex_count(world), nv);
+    CHECK_EQ_INT(nerf_mesh_face_count(world), nf);
+    if (nf == 0 || nerf_mesh_face_count(world) != nf) {
+        nerf_mesh_destroy(ndc);
+        nerf_mesh_destroy(world);
+        nerf_model_destroy(m);
+        return;
+    }
+    size_t off = 0;
+    for (size_t i = 0; i < nv; i++) {
+        const float *w = nerf_mesh_vertices(world) + 3 * i;
+        const float *n = nerf_mesh_vertices(ndc) + 3 * i;
+        /* The warp of camera/ndc.c with the near plane at depth 1. */
+        const double x = -2.0 * 50.0 / 80.0 * w[0] / w[2];
+        const double y = -2.0 * 50.0 / 60.0 * w[1] / w[2];
+        const double z = 1.0 + 2.0 / w[2];
+        off += !(w[2] < 0.0f && fabs(x - n[0]) < 1e-4 &&
+                 fabs(y - n[1]) < 1e-4 && fabs(z - n[2]) < 1e-4);
+    }
+    CHECK_EQ_INT(off, 0);
+    const uint32_t *fa = nerf_mesh_faces(ndc), *fb = nerf_mesh_faces(world);
+    size_t unwound = 0;
+    for (size_t f = 0; f < nf; f++) {
+        unwound += !(fa[3 * f] == fb[3 * f] && fa[3 * f + 1] == fb[3 * f + 2] &&
+                     fa[3 * f + 2] == fb[3 * f + 1]);
+    }
+    CHECK_EQ_INT(unwound, 0);
+    nerf_mesh_destroy(ndc);
+    nerf_mesh_destroy(world);
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     RUN(known_density);
@@ -407,5 +499,6 @@ int main(void)
     RUN(bad_arguments);
     RUN(files);
     RUN(density_grid);
+    RUN(ndc_back_to_world);
     HARNESS_EXIT();
 }
