@@ -1831,7 +1831,8 @@ NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
 
 /**
  * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
- * Read-only arrays, valid until nerf_mesh_destroy().
+ * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
+ * number of threads may read one mesh and write it at the same time.
  */
 typedef struct nerf_mesh nerf_mesh;
 
@@ -1922,6 +1923,10 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
  * large, a box of zero volume or not finite, a threshold that is not
  * finite, unknown colour); NERF_EVERSION; NERF_ECANCELLED (the progress
  * callback); NERF_ENOMEM.
+ *
+ * Reads the model only (as nerf_model_query()): several calls may run on
+ * one model at once while nothing trains it.  Memory beyond the mesh is
+ * two planes of samples and one layer of edge indices, not the grid.
  */
 NERF_API int nerf_mesh_extract(nerf_mesh **out, const nerf_model *model,
                                const nerf_mesh_options *opts);
