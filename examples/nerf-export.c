@@ -59,8 +59,13 @@ int main(int argc, char **argv)
         cli_usage_error("nerf-export", "unknown subcommand '%s' (did you mean "
                         "%s?)", argv[1], near);
     } else {
-        cli_usage_error("nerf-export", "unknown subcommand '%s' (one of mesh, "
-                        "grid)", argv[1]);
+        char list[256] = "";
+        for (size_t i = 0; i < N_SUBCOMMANDS; i++) {
+            strncat(list, i ? ", " : "", sizeof list - strlen(list) - 1);
+            strncat(list, subcommands[i].name, sizeof list - strlen(list) - 1);
+        }
+        cli_usage_error("nerf-export", "unknown subcommand '%s' (one of %s)",
+                        argv[1], list);
     }
     return 2;
 }
