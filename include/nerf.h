@@ -1885,7 +1885,10 @@ typedef struct nerf_mesh_options {
     uint32_t min_component_faces; /**< Drop components of fewer faces;
                                  default 0 (keep all). */
     uint32_t threads;       /**< At most this many threads sample the
-                                 density; 0 (the default): every core. */
+                                 density; 0 (the default): the cores
+                                 divided by OpenBLAS's own thread count,
+                                 as the renderer's threads.  Results do
+                                 not depend on it. */
     uint32_t reserved0;     /**< Must be 0. */
     nerf_progress_cb progress; /**< NULL, or called after each plane of
                                  samples (kind NERF_PROGRESS_GEOMETRY);

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "gemm.h"
 #include "parallel.h"
 #include "space.h"
 
@@ -16,7 +17,13 @@ int nerf__model_field_init(nerf__model_field *f, const nerf_model *model,
     f->model = model;
     f->net = model->n_nets > 1 ? 1 : 0;
     const unsigned pool = nerf__parallel_threads();
-    f->blocks = threads == 0 || threads > pool ? pool : threads;
+    /* Each block's products run on the BLAS's threads: over a threaded
+     * OpenBLAS, as many blocks as cores would oversubscribe them (the
+     * renderer's rule, render/renderer.c). */
+    const int blas = nerf__blas_threads();
+    unsigned fit = blas > 1 ? pool / (unsigned)blas : pool;
+    fit = fit ? fit : 1;
+    f->blocks = threads == 0 ? fit : threads > pool ? pool : threads;
     const nerf__env *env = nerf__model_env(model);
     f->ws = nerf__calloc(env, f->blocks, sizeof *f->ws);
     f->mapped = nerf__alloc(env, (size_t)f->blocks * CHUNK * 3 * sizeof(float));
