@@ -25,12 +25,14 @@ static void usage(FILE *out)
           "Write what a trained model holds in forms other tools read.\n"
           "Subcommands:\n", out);
     for (size_t i = 0; i < N_SUBCOMMANDS; i++) {
-        fprintf(out, "  %-8s %s\n", subcommands[i].name, subcommands[i].summary);
+        fprintf(out, "  %-8s %s\n", subcommands[i].name,
+                subcommands[i].summary);
     }
     fputs("  nerf-export SUBCOMMAND --help   the subcommand's options\n"
           "Examples:\n"
           "  nerf-export mesh --model lego.nerf --out lego.ply\n"
-          "  nerf-export grid --model lego.nerf --out lego.npy --resolution 128\n",
+          "  nerf-export grid --model lego.nerf --out lego.npy \\\n"
+          "      --resolution 128\n",
           out);
 }
 

@@ -62,7 +62,8 @@ static void fill_none(uint32_t *a, size_t n)
 static int sample_plane(const nerf__grid_box *g, const nerf__field *field,
                         layer *l, uint32_t k, float *out)
 {
-    const float z = k == g->cells[2] ? g->hi[2] : g->lo[2] + (float)k * g->step[2];
+    const float z = k == g->cells[2] ? g->hi[2]
+                                     : g->lo[2] + (float)k * g->step[2];
     float *p = l->points;
     for (size_t j = 0; j < l->ny; j++) {
         const float y = j == g->cells[1] ? g->hi[1]
@@ -123,8 +124,9 @@ static int edge_vertex(const nerf__grid_box *g, layer *l, const float v[8],
     const int axis = e / 4;
     float p[3];
     for (int c = 0; c < 3; c++) {
-        p[c] = corner[c] == g->cells[c] ? g->hi[c]
-                                        : g->lo[c] + (float)corner[c] * g->step[c];
+        p[c] = corner[c] == g->cells[c]
+                   ? g->hi[c]
+                   : g->lo[c] + (float)corner[c] * g->step[c];
         if (c == axis) {
             p[c] += t * g->step[c];
         }

@@ -77,7 +77,8 @@ int nerf__mesh_add_face(nerf_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 int nerf__mesh_compute_normals(nerf_mesh *m)
 {
     if (m->normals == NULL) {
-        m->normals = nerf__alloc(&m->env, 3 * m->n_vertices * sizeof(float) + 1);
+        m->normals = nerf__alloc(&m->env,
+                                 3 * m->n_vertices * sizeof(float) + 1);
         if (m->normals == NULL) {
             return NERF_ENOMEM;
         }

@@ -27,8 +27,8 @@ int nerf__mesh_colour(nerf_mesh *mesh, nerf__model_field *field,
                                       points ? points : mesh->vertices, dirs,
                                       rgb);
     for (size_t i = 0; rc == 0 && i < 3 * n; i++) {
-        const float c = rgb[i];
-        mesh->colours[i] = (uint8_t)lrintf(255.0f * (c > 0.0f ? (c < 1.0f ? c : 1.0f) : 0.0f));
+        const float c = rgb[i] > 0.0f ? (rgb[i] < 1.0f ? rgb[i] : 1.0f) : 0.0f;
+        mesh->colours[i] = (uint8_t)lrintf(255.0f * c);
     }
     nerf__free(env, dirs);
     nerf__free(env, rgb);
