@@ -1106,8 +1106,11 @@ NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
 /** What a nerf_progress report is about. */
 typedef enum nerf_progress_kind {
     NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
-    NERF_PROGRESS_TRAIN = 2   /**< done and total count steps; loss and
+    NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
                                    psnr are those of the last step. */
+    NERF_PROGRESS_GEOMETRY = 3 /**< Since 0.5.  nerf_mesh_extract() and
+                                   nerf_density_grid_write(): done and
+                                   total count planes of grid samples. */
 } nerf_progress_kind;
 
 /**
@@ -2084,6 +2087,162 @@ NERF_API int nerf_points_write(const nerf_points *points, const char *path,
 
 /** Since 0.5: release a point cloud.  NULL is a no-op. */
 NERF_API void nerf_points_destroy(nerf_points *points);
+
+/* ======================================================================
+ * Geometry (since 0.5): meshes and density grids
+ * ====================================================================== */
+
+/**
+ * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
+ * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
+ * number of threads may read one mesh and write it at the same time.
+ */
+typedef struct nerf_mesh nerf_mesh;
+
+/** Since 0.5: how nerf_mesh_extract() colours the vertices. */
+typedef enum nerf_mesh_colour {
+    NERF_MESH_COLOUR_NONE = 0,  /**< No colours (nerf_mesh_colours() gives
+                                     NULL; the files have none). */
+    NERF_MESH_COLOUR_NORMAL = 1 /**< The radiance seen at the vertex looking
+                                     at the surface head on: the model's
+                                     colour at the vertex for the view
+                                     direction minus the vertex normal. */
+} nerf_mesh_colour;
+
+/** Since 0.5: file formats of nerf_mesh_write(). */
+typedef enum nerf_mesh_format {
+    NERF_MESH_FORMAT_AUTO = 0,       /**< By the path's extension: .ply
+                                          (binary), .obj; others refused. */
+    NERF_MESH_FORMAT_PLY = 1,        /**< Binary little-endian PLY. */
+    NERF_MESH_FORMAT_PLY_ASCII = 2,  /**< ASCII PLY. */
+    NERF_MESH_FORMAT_OBJ = 3         /**< Wavefront OBJ; colours as the
+                                          common "v x y z r g b" extension
+                                          (r g b in [0, 1]). */
+} nerf_mesh_format;
+
+/**
+ * Since 0.5: settings of nerf_mesh_extract() and nerf_density_grid_write().
+ * The density is sampled on a grid over a box and, for a mesh, cut at the
+ * threshold by marching cubes, one layer of cells at a time (memory holds
+ * two planes of samples, not the whole grid).
+ */
+typedef struct nerf_mesh_options {
+    uint32_t struct_size;   /**< Set by nerf_mesh_options_init(). */
+    uint32_t resolution;    /**< Cells along the box's longest side,
+                                 1..16384; the other sides get as many as
+                                 keep the cells nearest to cubes.  Default
+                                 256. */
+    float threshold;        /**< Density at the surface (finite); default
+                                 25, the level instant-ngp and nerfstudio
+                                 use for sigma (docs/export.md). */
+    float box[6];           /**< x0 y0 z0 x1 y1 z1: the region sampled, in
+                                 the model's space (world, or NDC for an
+                                 NDC model).  All zero (the default): the
+                                 model's bounds, [-bound, bound]^3 (the
+                                 central cube of an unbounded model; for
+                                 NDC, x and y in [-bound, bound] and z in
+                                 [-1, 1]). */
+    uint32_t colour;        /**< nerf_mesh_colour; default NORMAL. */
+    uint32_t keep_largest;  /**< 1: keep only the connected component with
+                                 the most faces; default 0. */
+    uint32_t min_component_faces; /**< Drop components of fewer faces;
+                                 default 0 (keep all). */
+    uint32_t threads;       /**< At most this many threads sample the
+                                 density; 0 (the default): the cores
+                                 divided by OpenBLAS's own thread count,
+                                 as the renderer's threads.  Results do
+                                 not depend on it. */
+    uint32_t reserved0;     /**< Must be 0. */
+    nerf_progress_cb progress; /**< NULL, or called after each plane of
+                                 samples (kind NERF_PROGRESS_GEOMETRY);
+                                 nonzero cancels with NERF_ECANCELLED. */
+    void *progress_user;    /**< Passed to progress. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_mesh_options;
+
+/**
+ * Since 0.5: fill @p opts with the defaults and record @p struct_size (or
+ * use NERF_MESH_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
+                                    size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_MESH_OPTIONS_INIT(o) nerf_mesh_options_init((o), sizeof *(o))
+
+/**
+ * Since 0.5: extract the surface where @p model's density crosses
+ * opts->threshold, with marching cubes over the grid the options lay over
+ * their box.  The density is that of the model's fine network when it has
+ * one.  Where the surface stays inside the box the mesh is closed (every
+ * edge in exactly two faces), triangles wound counter-clockwise seen from
+ * outside (normals towards lower density); it is open where the box cuts
+ * it.  Vertices are in the model's space, except for an NDC model with
+ * recorded render settings (nerf_model_render_settings() with its NDC
+ * frustum): its vertices are mapped back to world space (docs/export.md).
+ * Normals (area-weighted face normals) always come with the mesh.
+ * @param out  receives the mesh (NULL on failure); free it with
+ *             nerf_mesh_destroy().  An empty mesh (no surface at that
+ *             threshold) is a success.
+ * @param opts NULL means the defaults.
+ * @return NERF_OK; NERF_EINVAL (NULL model or out, resolution 0 or too
+ * large, a box of zero volume or not finite, a threshold that is not
+ * finite, unknown colour); NERF_EVERSION; NERF_ECANCELLED (the progress
+ * callback); NERF_ENOMEM.
+ *
+ * Reads the model only (as nerf_model_query()): several calls may run on
+ * one model at once while nothing trains it.  Memory beyond the mesh is
+ * two planes of samples and one layer of edge indices, not the grid.
+ */
+NERF_API int nerf_mesh_extract(nerf_mesh **out, const nerf_model *model,
+                               const nerf_mesh_options *opts);
+
+/** Since 0.5: release a mesh.  NULL is a no-op. */
+NERF_API void nerf_mesh_destroy(nerf_mesh *mesh);
+
+/** Since 0.5: vertices of @p mesh (0 for NULL). */
+NERF_API size_t nerf_mesh_vertex_count(const nerf_mesh *mesh);
+/** Since 0.5: triangles of @p mesh (0 for NULL). */
+NERF_API size_t nerf_mesh_face_count(const nerf_mesh *mesh);
+/** Since 0.5: vertex_count x 3 floats, x y z; NULL for an empty mesh. */
+NERF_API const float *nerf_mesh_vertices(const nerf_mesh *mesh);
+/** Since 0.5: face_count x 3 vertex indices; NULL for an empty mesh. */
+NERF_API const uint32_t *nerf_mesh_faces(const nerf_mesh *mesh);
+/** Since 0.5: vertex_count x 3 unit normals, or NULL. */
+NERF_API const float *nerf_mesh_normals(const nerf_mesh *mesh);
+/** Since 0.5: vertex_count x 3 bytes r g b, or NULL (colour NONE). */
+NERF_API const uint8_t *nerf_mesh_colours(const nerf_mesh *mesh);
+
+/**
+ * Since 0.5: write @p mesh to @p path in nerf_mesh_format @p format,
+ * through a temporary file renamed over @p path.  PLY files carry
+ * vertices (float x y z, float nx ny nz, uchar red green blue when the
+ * mesh has them) and faces (uchar count, uint indices).
+ * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format, AUTO with
+ * an extension other than .ply or .obj); NERF_EIO naming @p path;
+ * NERF_ENOMEM.
+ */
+NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
+                             int format);
+
+/**
+ * Since 0.5: sample @p model's density on the grid of @p opts over its box
+ * and write it to @p path as a float32 .npy of shape (nz, ny, nx): C order,
+ * element [k][j][i] the density at x = x0 + (i + 0.5) (x1 - x0) / nx (and
+ * so on): samples at the cell centres.  Beside it goes a JSON sidecar,
+ * @p path with ".npy" replaced by ".json" (or ".json" appended), holding
+ * the box, the shape, the axis order and the model's space
+ * (docs/formats.md).  With opts->colour NORMAL, a (nz, ny, nx, 3) float32
+ * .npy of colours in [0, 1] too, named as the sidecar with "_rgb.npy":
+ * the colour seen looking down the density gradient.  The whole grid is
+ * held in memory: 4 bytes a sample (16 with colour).  Uses resolution,
+ * box, colour, threads, progress and hooks of @p opts (NULL: defaults).
+ * @return NERF_OK; NERF_EINVAL as nerf_mesh_extract() and for a NULL
+ * path; NERF_EIO naming the file; NERF_ECANCELLED; NERF_ENOMEM.
+ */
+NERF_API int nerf_density_grid_write(const nerf_model *model,
+                                     const char *path,
+                                     const nerf_mesh_options *opts);
 
 #ifdef __cplusplus
 }

@@ -14,11 +14,12 @@
 # abi suite compare the ABI with tests/abi/libnerf.abi; without it that test
 # is skipped.  clang builds the library a second time (a C library must
 # build with both compilers) and, with libclang-rt-dev's libFuzzer, the fuzz
-# targets.
+# targets.  python3-meshio is the independent reader the mesh export's
+# tests load PLY and OBJ files with (skipped with a message without it).
 NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev libjpeg-dev zlib1g-dev
                    libcjson-dev meson ninja-build pkg-config python3-numpy
                    libsdl2-dev xvfb xauth libdnnl-dev abigail-tools
-                   clang libclang-rt-dev)
+                   clang libclang-rt-dev python3-meshio)
 
 # Optional packages: the test command installs them when it can (as root,
 # from the configured apt sources) and carries on without them otherwise;

@@ -22,3 +22,5 @@ nerf_split nerf_abi_split;
 nerf_dataset_format nerf_abi_dataset_format;
 nerf_points_format nerf_abi_points_format;
 nerf_schedule_state nerf_abi_schedule_state;
+nerf_mesh_colour nerf_abi_mesh_colour;
+nerf_mesh_format nerf_abi_mesh_format;

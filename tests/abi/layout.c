@@ -152,6 +152,20 @@ FROZEN(nerf_points_options, progress, 32);
 FROZEN(nerf_points_options, progress_user, 40);
 SIZE(nerf_points_options, 48);
 
+FROZEN(nerf_mesh_options, struct_size, 0);
+FROZEN(nerf_mesh_options, resolution, 4);
+FROZEN(nerf_mesh_options, threshold, 8);
+FROZEN(nerf_mesh_options, box, 12);
+FROZEN(nerf_mesh_options, colour, 36);
+FROZEN(nerf_mesh_options, keep_largest, 40);
+FROZEN(nerf_mesh_options, min_component_faces, 44);
+FROZEN(nerf_mesh_options, threads, 48);
+FROZEN(nerf_mesh_options, reserved0, 52);
+FROZEN(nerf_mesh_options, progress, 56);
+FROZEN(nerf_mesh_options, progress_user, 64);
+FROZEN(nerf_mesh_options, hooks, 72);
+SIZE(nerf_mesh_options, 80);
+
 FROZEN(nerf_dataset_options, struct_size, 0);
 FROZEN(nerf_dataset_options, split, 4);
 FROZEN(nerf_dataset_options, downscale, 8);
@@ -231,6 +245,9 @@ _Static_assert(NERF_DATASET_BLENDER == 1 && NERF_DATASET_LLFF == 2,
 _Static_assert(NERF_IMAGE_MAX_SIDE == 16384, "image size limit changed");
 _Static_assert(NERF_POINTS_PLY_BINARY == 0 && NERF_POINTS_PLY_ASCII == 1,
                "point cloud formats renumbered");
+_Static_assert(NERF_PROGRESS_GEOMETRY == 3 && NERF_MESH_COLOUR_NORMAL == 1 &&
+               NERF_MESH_FORMAT_PLY == 1 && NERF_MESH_FORMAT_PLY_ASCII == 2 &&
+               NERF_MESH_FORMAT_OBJ == 3, "geometry enums renumbered");
 
 int main(void)
 {

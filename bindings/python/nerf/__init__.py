@@ -71,6 +71,8 @@ from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
 from .train import Trainer
+from .mesh import (MESH_COLOUR_NONE, MESH_COLOUR_NORMAL, Mesh)
+from .structs import MeshOptions, PROGRESS_GEOMETRY
 
 #: The version of the loaded library, "major.minor.patch".
 __version__ = version_string()
@@ -79,6 +81,7 @@ __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats", "DepthResult", "PointCloud",
+    "Mesh", "MeshOptions",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "write_npy",
     "load_camera_path",
@@ -117,5 +120,6 @@ __all__ = [
     "SCENE_LAYOUT_TRANSFORMS", "SCENE_LAYOUT_LLFF",
     "SCENE_LAYOUT_COLMAP_TEXT", "SCENE_LAYOUT_COLMAP_BINARY",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
+    "MESH_COLOUR_NONE", "MESH_COLOUR_NORMAL", "PROGRESS_GEOMETRY",
 ]
 

@@ -18,9 +18,10 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
 
 from . import _loader, errors
 from .structs import (LOG_CB, Camera, CameraPathOptions, DatasetOptions,
-                      Hooks, ModelOptions, PointsOptions, ProgressStruct,
-                      RendererOptions, SamplerOptions, SceneOptions,
-                      ScheduleStruct, TrainerOptions, TrainStatsStruct)
+                      Hooks, MeshOptions, ModelOptions, PointsOptions,
+                      ProgressStruct, RendererOptions, SamplerOptions,
+                      SceneOptions, ScheduleStruct, TrainerOptions,
+                      TrainStatsStruct)
 
 
 class _Opaque(ctypes.Structure):
@@ -56,6 +57,10 @@ class nerf_points(_Opaque):
     pass
 
 
+class nerf_mesh(_Opaque):
+    pass
+
+
 ModelP = POINTER(nerf_model)
 SamplerP = POINTER(nerf_sampler)
 RendererP = POINTER(nerf_renderer)
@@ -63,6 +68,7 @@ DatasetP = POINTER(nerf_dataset)
 TrainerP = POINTER(nerf_trainer)
 CameraPathP = POINTER(nerf_camera_path)
 PointsP = POINTER(nerf_points)
+MeshP = POINTER(nerf_mesh)
 
 PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
 
@@ -116,6 +122,20 @@ _PROTOTYPES = {
                                            POINTER(RendererOptions)], True),
     # Since 0.5: schedules fitted to a time budget.
     "nerf_model_schedule": (c_int, [ModelP, POINTER(ScheduleStruct)], True),
+    # Since 0.5: meshes and density grids.
+    "nerf_mesh_options_init": (c_int, [POINTER(MeshOptions), c_size_t], True),
+    "nerf_mesh_extract": (c_int, [POINTER(MeshP), ModelP,
+                                  POINTER(MeshOptions)], True),
+    "nerf_mesh_destroy": (None, [MeshP], False),
+    "nerf_mesh_vertex_count": (c_size_t, [MeshP], False),
+    "nerf_mesh_face_count": (c_size_t, [MeshP], False),
+    "nerf_mesh_vertices": (_F, [MeshP], False),
+    "nerf_mesh_faces": (_U32, [MeshP], False),
+    "nerf_mesh_normals": (_F, [MeshP], False),
+    "nerf_mesh_colours": (POINTER(c_uint8), [MeshP], False),
+    "nerf_mesh_write": (c_int, [MeshP, c_char_p, c_int], True),
+    "nerf_density_grid_write": (c_int, [ModelP, c_char_p,
+                                        POINTER(MeshOptions)], True),
     # Built-in scene.
     "nerf_scene_options_init": (c_int, [POINTER(SceneOptions), c_size_t],
                                 True),

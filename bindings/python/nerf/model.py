@@ -372,3 +372,48 @@ class Model(_handle.Handle):
                                  dirs.ptr if dirs else None, rgb.ptr,
                                  sigma.ptr)
         return rgb.release(), sigma.release()
+
+    def mesh(self, resolution: int = 256, threshold: float = 25.0,
+             box: Optional[Any] = None, colour: bool = True,
+             keep_largest: bool = False, min_component_faces: int = 0,
+             threads: int = 0, progress: Any = None) -> Any:
+        """The surface where the density crosses ``threshold``, by
+        marching cubes over a grid of ``resolution`` cells along the
+        longest side of ``box`` (x0, y0, z0, x1, y1, z1; None: the model's
+        bounds) (``nerf_mesh_extract``, since libnerf 0.5).
+
+        ``colour``: vertex colours as seen looking at the surface head on.
+        ``keep_largest``: only the connected piece with the most faces;
+        ``min_component_faces``: drop smaller pieces.  ``progress(p)`` is
+        called after each plane of samples; a true return cancels
+        (NerfCancelled).
+
+        Returns:
+            a :class:`nerf.Mesh` with ``vertices``, ``faces``, ``normals``
+            and ``colours`` arrays and ``write(path)``.
+        """
+        from . import mesh as _mesh
+        opts = _mesh.mesh_options(
+            resolution=resolution, threshold=threshold, box=box,
+            colour=colour, keep_largest=keep_largest,
+            min_component_faces=min_component_faces, threads=threads)
+        with self._using() as ptr:
+            return _mesh.extract(self._res, ptr, opts, progress)
+
+    def write_density_grid(self, path: Any, resolution: int = 256,
+                           box: Optional[Any] = None, colour: bool = False,
+                           threads: int = 0, progress: Any = None) -> Any:
+        """Write the density at the cell centres of a grid over ``box`` as
+        a float32 .npy of shape (nz, ny, nx), with a JSON sidecar (``path``
+        with .json for .npy) recording the box; with ``colour``, colours
+        in ``*_rgb.npy`` too (``nerf_density_grid_write``, since 0.5).
+
+        Returns:
+            the sidecar, as a dict ("shape", "box_min", "box_max",
+            "spacing", "order", ...).
+        """
+        from . import mesh as _mesh
+        opts = _mesh.mesh_options(resolution=resolution, box=box,
+                                  colour=colour, threads=threads)
+        with self._using() as ptr:
+            return _mesh.write_grid(ptr, path, opts, progress)

@@ -377,6 +377,43 @@ class PointsOptions(_Versioned):
         ("progress_user", c_void_p),
     ]
 
+class MeshOptions(_Versioned):
+    """``nerf_mesh_options`` (since libnerf 0.5): the grid, threshold and
+    filters of :meth:`nerf.Model.mesh` and
+    :meth:`nerf.Model.write_density_grid`."""
+
+    _c_name_ = "nerf_mesh_options"
+    _c_init_ = "nerf_mesh_options_init"
+    _private_ = ("struct_size", "hooks", "progress", "progress_user")
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("resolution", c_uint32),
+        ("threshold", c_float),
+        ("box", c_float * 6),
+        ("colour", c_uint32),
+        ("keep_largest", c_uint32),
+        ("min_component_faces", c_uint32),
+        ("threads", c_uint32),
+        ("reserved0", c_uint32),
+        ("progress", c_void_p),
+        ("progress_user", c_void_p),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+    def _set(self, name: str, value: Any) -> None:
+        if name == "box":
+            value = [float(v) for v in value]
+            if len(value) != 6:
+                raise ValueError("box: expected 6 numbers x0 y0 z0 x1 y1 z1")
+            self.box = (c_float * 6)(*value)
+            return
+        setattr(self, name, value)
+
+    def _get(self, name: str) -> Any:
+        if name == "box":
+            return tuple(self.box)
+        return getattr(self, name)
+
 
 class CameraPathOptions(_Versioned):
     """``nerf_camera_path_options``: how a camera path file becomes
@@ -515,7 +552,9 @@ def read_covered(struct: ctypes.Structure, size: int) -> Dict[str, Any]:
 # nerf_progress_kind
 PROGRESS_RENDER = 1
 PROGRESS_TRAIN = 2
-PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train"}
+PROGRESS_GEOMETRY = 3
+PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train",
+                  PROGRESS_GEOMETRY: "geometry"}
 
 # nerf_points_format (libnerf 0.5)
 POINTS_PLY_BINARY = 0
@@ -693,4 +732,4 @@ class Camera(_Versioned):
 ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
                TrainerOptions, TrainStatsStruct, CameraPathOptions,
-               ScheduleStruct, PointsOptions)
+               ScheduleStruct, PointsOptions, MeshOptions)

@@ -179,6 +179,21 @@ static void structs(void)
     FIELD(nerf_points_options, progress_user);
     end_struct();
 
+    BEGIN(nerf_mesh_options);
+    FIELD(nerf_mesh_options, struct_size);
+    FIELD(nerf_mesh_options, resolution);
+    FIELD(nerf_mesh_options, threshold);
+    FIELD(nerf_mesh_options, box);
+    FIELD(nerf_mesh_options, colour);
+    FIELD(nerf_mesh_options, keep_largest);
+    FIELD(nerf_mesh_options, min_component_faces);
+    FIELD(nerf_mesh_options, threads);
+    FIELD(nerf_mesh_options, reserved0);
+    FIELD(nerf_mesh_options, progress);
+    FIELD(nerf_mesh_options, progress_user);
+    FIELD(nerf_mesh_options, hooks);
+    end_struct();
+
     BEGIN(nerf_dataset_options);
     FIELD(nerf_dataset_options, struct_size);
     FIELD(nerf_dataset_options, split);

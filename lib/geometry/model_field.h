@@ -1,0 +1,37 @@
+/*
+ * A model's density and colour as fields the geometry code samples: the
+ * fine network when the model has one, spread over the cores in blocks
+ * that each keep their own workspace between calls.
+ */
+#ifndef NERF_GEOMETRY_MODEL_FIELD_H
+#define NERF_GEOMETRY_MODEL_FIELD_H
+
+#include <stddef.h>
+
+#include "model.h"
+
+typedef struct nerf__model_field {
+    const nerf_model *model;
+    int net;               /* network index */
+    unsigned blocks;       /* threads, one workspace each */
+    nerf__workspace *ws;   /* [blocks] */
+    float *mapped;         /* [blocks][CHUNK x 3]: contracted points */
+} nerf__model_field;
+
+/* threads 0: every core of the library's pool. */
+int nerf__model_field_init(nerf__model_field *f, const nerf_model *model,
+                           unsigned threads);
+void nerf__model_field_release(nerf__model_field *f);
+
+/* Density (after the model's activation, so >= 0) at n points of the
+ * model's space; ctx is the nerf__model_field (a nerf__field sampler). */
+int nerf__model_field_density(void *ctx, size_t n, const float *points,
+                              float *out);
+
+/* Colours in [0, 1] at n points seen along the unit directions dirs (n x
+ * 3).  A model without view directions ignores them. */
+int nerf__model_field_colour(nerf__model_field *f, size_t n,
+                             const float *points, const float *dirs,
+                             float *rgb);
+
+#endif
