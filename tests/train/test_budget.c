@@ -73,6 +73,25 @@ static int on_progress(const nerf_progress *p, void *user)
     return w->stop_at_first;
 }
 
+/*
+ * run_for(budget) to the fitted length.  On a busy machine the steps after
+ * the fit can run slower than those measured: the run then stops a tenth
+ * past the budget, saying so, and a second call trains on to the length.
+ */
+static int run_to_the_end(nerf_trainer *t, nerf_model *m, double budget)
+{
+    int rc = nerf_trainer_run_for(t, budget, NULL);
+    if (rc == NERF_ECANCELLED &&
+        strstr(nerf_last_error(), "out of time") != NULL) {
+        CHECK(nerf_model_step(m) < schedule_of(m).total_steps);
+        printf("  out of time at step %llu: going on\n",
+               (unsigned long long)nerf_model_step(m));
+        nerf_trainer_set_progress(t, NULL, NULL);
+        rc = nerf_trainer_run_for(t, 30.0, NULL);
+    }
+    return rc;
+}
+
 TEST(fits_the_length_and_ends_there)
 {
     nerf_sampler *s = tiny_sampler(1);
@@ -81,35 +100,33 @@ TEST(fits_the_length_and_ends_there)
     CHECK(schedule_of(m).state == NERF_SCHEDULE_STEPS);
     watch w = {.m = m};
     nerf_trainer_set_progress(t, on_progress, &w);
-    const double budget = 0.5, t0 = now();
+    const double budget = 1.5, t0 = now();
     int rc = nerf_trainer_run_for(t, budget, NULL);
     const double took = now() - t0;
-    nerf_schedule sc = schedule_of(m);
-    /* On a busy machine the steps after the fit can run slower than those
-     * measured: the run then stops a tenth past the budget, and a second
-     * call trains on to the fitted length. */
     if (rc == NERF_ECANCELLED) {
         CHECK(strstr(nerf_last_error(), "out of time") != NULL);
-        CHECK(nerf_model_step(m) < sc.total_steps);
-        printf("  out of time at step %llu: going on\n",
-               (unsigned long long)nerf_model_step(m));
         nerf_trainer_set_progress(t, NULL, NULL);
-        rc = nerf_trainer_run_for(t, 30.0, NULL);
+        rc = run_to_the_end(t, m, 30.0);
     }
     CHECK_OK(rc);
+    nerf_schedule sc = schedule_of(m);
     CHECK(sc.state == NERF_SCHEDULE_FITTED);
     CHECK(sc.budget_seconds == budget);
     CHECK(sc.steps_per_second > 0.0);
-    CHECK(sc.fit_step > 0 && sc.fit_step < sc.total_steps);
+    CHECK(sc.fit_step > 0 && sc.fit_step <= sc.total_steps);
     CHECK(nerf_model_step(m) == sc.total_steps);
     CHECK(param(m, NERF_PARAM_DECAY_START) == (double)sc.fit_step);
     CHECK(param(m, NERF_PARAM_DECAY_STEPS) == (double)sc.total_steps);
     /* The rate held through the measuring, and decayed to the final one
      * by the end. */
     CHECK(w.measuring_steps > 0 && w.measuring_at_lr0 == w.measuring_steps);
-    CHECK(w.fitted_seen);
-    CHECK(fabs(nerf_model_learning_rate(m) /
-                   param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
+    /* (A machine so slow that the budget had no step left after the fit
+     * trains none at the decayed rates.) */
+    if (sc.total_steps > sc.fit_step) {
+        CHECK(w.fitted_seen);
+        CHECK(fabs(nerf_model_learning_rate(m) /
+                       param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
+    }
     /* Never past the budget and its tenth by more than a step and the
      * bookkeeping around it. */
     CHECK(took < 1.1 * budget + 1.0);
@@ -131,9 +148,9 @@ TEST(resume_after_the_fit_is_bit_identical)
     nerf_sampler *s = tiny_sampler(3);
     nerf_model *whole = tiny_model(4);
     nerf_trainer *t = make_trainer(whole, s);
-    watch w = {.m = whole, .stop_after_fit = 3};
+    watch w = {.m = whole, .stop_after_fit = 1};
     nerf_trainer_set_progress(t, on_progress, &w);
-    CHECK(nerf_trainer_run_for(t, 0.5, NULL) == NERF_ECANCELLED);
+    CHECK(nerf_trainer_run_for(t, 1.5, NULL) == NERF_ECANCELLED);
     nerf_schedule cut = schedule_of(whole);
     CHECK(cut.state == NERF_SCHEDULE_FITTED);
     CHECK(nerf_model_step(whole) < cut.total_steps);
@@ -189,7 +206,7 @@ TEST(measuring_resumes_by_measuring)
         CHECK(nerf_model_learning_rate(resumed) ==
               param(resumed, NERF_PARAM_LEARNING_RATE));
         t = make_trainer(resumed, s);
-        CHECK_OK(nerf_trainer_run_for(t, 0.3, NULL));
+        CHECK_OK(run_to_the_end(t, resumed, 0.3));
         nerf_trainer_destroy(t);
         sc = schedule_of(resumed);
         CHECK(sc.state == NERF_SCHEDULE_FITTED && sc.budget_seconds == 0.3);
