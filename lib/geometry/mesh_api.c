@@ -189,7 +189,8 @@ NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
     }
     const nerf__mesh_arrays a = {mesh->n_vertices, mesh->n_faces,
                                  mesh->vertices, mesh->normals,
-                                 mesh->colours, mesh->faces};
+                                 mesh->colours, mesh->faces,
+                                 "libnerf mesh"};
     switch (format) {
     case NERF_MESH_FORMAT_PLY:
         return nerf__mesh_write_ply(&mesh->env, path, &a, 0);

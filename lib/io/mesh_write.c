@@ -73,8 +73,8 @@ int nerf__mesh_write_ply(const nerf__env *env, const char *path,
                          const nerf__mesh_arrays *m, int ascii)
 {
     buf b = {env, NULL, 0, 0, 0};
-    put(&b, "ply\nformat %s 1.0\ncomment libnerf mesh\n",
-        ascii ? "ascii" : "binary_little_endian");
+    put(&b, "ply\nformat %s 1.0\ncomment %s\n",
+        ascii ? "ascii" : "binary_little_endian", m->comment);
     put(&b, "element vertex %zu\n", m->n_vertices);
     put(&b, "property float x\nproperty float y\nproperty float z\n");
     if (m->normals) {
@@ -84,8 +84,11 @@ int nerf__mesh_write_ply(const nerf__env *env, const char *path,
         put(&b, "property uchar red\nproperty uchar green\n"
             "property uchar blue\n");
     }
-    put(&b, "element face %zu\nproperty list uchar uint vertex_indices\n"
-        "end_header\n", m->n_faces);
+    if (m->faces) {
+        put(&b, "element face %zu\nproperty list uchar uint "
+            "vertex_indices\n", m->n_faces);
+    }
+    put(&b, "end_header\n");
     for (size_t i = 0; i < m->n_vertices; i++) {
         const float *v = m->vertices + 3 * i;
         const float *n = m->normals ? m->normals + 3 * i : NULL;
@@ -93,7 +96,7 @@ int nerf__mesh_write_ply(const nerf__env *env, const char *path,
         if (ascii) {
             put(&b, "%.9g %.9g %.9g", (double)v[0], (double)v[1], (double)v[2]);
             if (n) {
-                put(&b, " %.6g %.6g %.6g", (double)n[0], (double)n[1],
+                put(&b, " %.9g %.9g %.9g", (double)n[0], (double)n[1],
                     (double)n[2]);
             }
             if (c) {
@@ -122,7 +125,7 @@ int nerf__mesh_write_ply(const nerf__env *env, const char *path,
         }
         b.size += size;
     }
-    for (size_t f = 0; f < m->n_faces; f++) {
+    for (size_t f = 0; m->faces && f < m->n_faces; f++) {
         const uint32_t *t = m->faces + 3 * f;
         if (ascii) {
             put(&b, "3 %u %u %u\n", (unsigned)t[0], (unsigned)t[1],
