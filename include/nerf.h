@@ -1739,8 +1739,10 @@ typedef struct nerf_exchange {
  * the same bits on every worker (an all-reduce), so that every worker
  * applies the same update.  Each worker's gradient is already weighed by
  * the whole step's ray count, so the sum is the gradient one worker
- * would compute on the whole batch.  Return 0, or nonzero to fail the
- * step (NERF_ERROR, the weights left as before it).
+ * would compute on the whole batch.  It runs on the thread that takes
+ * the step, never on a worker thread, and must not call back into the
+ * trainer.  Return 0, or nonzero to fail the step (NERF_ERROR, the
+ * weights left as before it).
  */
 typedef int (*nerf_grad_hook)(void *user, float *grads, size_t n,
                               nerf_exchange *x);
@@ -1931,7 +1933,9 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *trainer);
  * @return NERF_OK; NERF_EINVAL; NERF_ENOMEM (first step only: later steps
  * reuse their buffers, except that with ray marching they grow when a
  * step has more samples than any before); NERF_ERROR if the loss is not
- * finite (the weights are then left as they were before the step).
+ * finite (the weights are then left as they were before the step), if
+ * the grad_hook or checksum_hook failed (the message quotes the hook's),
+ * or if the workers' weights differ (see checksum_every).
  */
 NERF_API int nerf_trainer_step(nerf_trainer *trainer,
                                nerf_train_stats *stats_out);
@@ -1980,7 +1984,9 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * nerf_trainer_run().
  *
  * @param seconds the budget, > 0 and finite, counted from this call.
- * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds.
+ * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds, or
+ * for a trainer that is one of several workers (worker_count > 1), each
+ * of which would fit the run to its own clock.
  */
 NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
                                   nerf_train_stats *stats_out);
