@@ -9,11 +9,17 @@
 #include <unistd.h>
 
 #include "common/cli.h"
+#include "common/dist.h"
 #include "common/out_folder.h"
 #include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 #include "common/video.h"
+
+/* nerf-render-mpi is this program built with common/dist_mpi.c. */
+#ifndef PROG
+#define PROG "nerf-render"
+#endif
 
 static const char usage[] =
     "usage: nerf-render --model MODEL --out DIR\n"
@@ -89,7 +95,9 @@ static const char usage[] =
     "  nerf-render --model fern.nerf --data fern --downscale 8 \\\n"
     "      --path spiral --frames 60 --depth --out fern-spiral\n"
     "  nerf-render --model lego.nerf --data lego --split test --width 200 \\\n"
-    "      --out lego-test\n";
+    "      --out lego-test\n"
+    "nerf-render-mpi (built with Open MPI) takes the same flags under\n"
+    "mpirun -np N: rank r renders views r, r + N, r + 2N ... (not --video).\n";
 
 typedef struct args {
     const char *model, *out, *data, *path, *poses;
@@ -141,8 +149,8 @@ static int parse(int argc, char **argv, args *a)
         int bad = v == NULL;
         if (bad) {
             /* A flag parse() does not know reaches here too. */
-            if (cli_check_option("nerf-render", k, options) == 0) {
-                cli_bad_value("nerf-render", k, NULL, NULL);
+            if (cli_check_option(PROG, k, options) == 0) {
+                cli_bad_value(PROG, k, NULL, NULL);
             }
         } else if (strcmp(k, "--model") == 0) {
             a->model = v;
@@ -188,82 +196,82 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_double(v, &a->far);
             a->bounds_given |= 2;
         } else {
-            cli_unknown("nerf-render", k, options);
+            cli_unknown(PROG, k, options);
             return -1;
         }
         if (bad) {
             if (v) {
-                cli_bad_value("nerf-render", k, v, NULL);
+                cli_bad_value(PROG, k, v, NULL);
             }
             return -1;
         }
     }
     if (a->model == NULL || a->out == NULL ||
         (a->data == NULL && a->path == NULL && a->poses == NULL)) {
-        cli_usage_error("nerf-render", "--model, --out and --data, --path or "
+        cli_usage_error(PROG, "--model, --out and --data, --path or "
                         "--poses are required");
         return -1;
     }
     if (a->path && a->poses) {
-        cli_usage_error("nerf-render", "--path and --poses exclude each "
+        cli_usage_error(PROG, "--path and --poses exclude each "
                         "other");
         return -1;
     }
     if ((a->focal > 0.0 || a->fov > 0.0) && a->poses == NULL) {
-        cli_usage_error("nerf-render", "--focal and --fov go with --poses");
+        cli_usage_error(PROG, "--focal and --fov go with --poses");
         return -1;
     }
     if (a->focal > 0.0 && a->fov > 0.0) {
-        cli_usage_error("nerf-render", "give --focal or --fov, not both");
+        cli_usage_error(PROG, "give --focal or --fov, not both");
         return -1;
     }
     /* A file's w and h keep their aspect ratio only as a pair. */
     if (a->poses && a->size_given && a->size_given != 3) {
-        cli_usage_error("nerf-render", "with --poses, give --width and "
+        cli_usage_error(PROG, "with --poses, give --width and "
                         "--height together");
         return -1;
     }
     /* One bound alone would leave the other to a default that may not fit
      * it; a wrong pair would be sampled backwards. */
     if (a->bounds_given && a->bounds_given != 3) {
-        cli_usage_error("nerf-render", "give --near and --far together");
+        cli_usage_error(PROG, "give --near and --far together");
         return -1;
     }
     if (a->bounds_given && !(a->near >= 0.0)) {
-        cli_usage_error("nerf-render", "--near must be at least 0 (got %g)",
+        cli_usage_error(PROG, "--near must be at least 0 (got %g)",
                 a->near);
         return -1;
     }
     if (a->bounds_given && !(a->near < a->far)) {
-        cli_usage_error("nerf-render", "--near must be less than --far (got "
+        cli_usage_error(PROG, "--near must be less than --far (got "
                         "--near %g --far %g)", a->near, a->far);
         return -1;
     }
     if (a->fps_given && a->video == NULL) {
-        cli_usage_error("nerf-render", "--fps goes with --video");
+        cli_usage_error(PROG, "--fps goes with --video");
         return -1;
     }
     if (a->video != NULL && a->skip_existing) {
         /* The video is encoded from the views this run renders. */
-        cli_usage_error("nerf-render", "--video needs every view rendered: "
+        cli_usage_error(PROG, "--video needs every view rendered: "
                         "drop --skip-existing");
         return -1;
     }
     if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
-        cli_usage_error("nerf-render", "--path spiral needs --data");
+        cli_usage_error(PROG, "--path spiral needs --data");
         return -1;
     }
     /* Options that would change nothing are refused rather than ignored:
      * the user meant something by them. */
     if (a->frames_given && a->path == NULL) {
-        cli_usage_error("nerf-render", "--frames goes with --path (--data "
+        cli_usage_error(PROG, "--frames goes with --path (--data "
                         "renders each view of its split, --poses each "
                         "camera of the file)");
         return -1;
     }
     int views_of_data = a->path == NULL && a->poses == NULL;
     if (a->split_given && !views_of_data) {
-        cli_usage_error("nerf-render", "--split chooses the views of --data "
+        cli_usage_error(PROG, "--split chooses the views of --data "
                         "to render; with --%s it would change nothing",
                         a->path ? "path" : "poses");
         return -1;
@@ -271,13 +279,13 @@ static int parse(int argc, char **argv, args *a)
     int data_size = views_of_data ||
                     (a->path && strcmp(a->path, "spiral") == 0);
     if (a->downscale_given && !data_size) {
-        cli_usage_error("nerf-render", "--downscale shrinks the views of "
+        cli_usage_error(PROG, "--downscale shrinks the views of "
                         "--data and --path spiral; with --%s give --width "
                         "and --height", a->path ? "path orbit" : "poses");
         return -1;
     }
     if (a->downscale_given && a->size_given) {
-        cli_usage_error("nerf-render", "give --downscale or --width/--height, "
+        cli_usage_error(PROG, "give --downscale or --width/--height, "
                         "not both");
         return -1;
     }
@@ -372,6 +380,15 @@ static void depth_to_grey(float *depth, const float *opacity, size_t n,
     }
 }
 
+/* The processes of the render: this one alone, or MPI's ranks, each of
+ * which renders every size-th view from its rank on. */
+static dist D;
+
+static int mine(uint32_t i)
+{
+    return (int)(i % (uint32_t)D.size) == D.rank;
+}
+
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED 1
 /* Stopped by a signal, and said so. */
@@ -394,7 +411,9 @@ typedef struct render_progress {
 static int on_render_progress(const nerf_progress *p, void *user)
 {
     render_progress *rp = user;
-    progress_update(&rp->bar, rp->before + p->done, "pixels");
+    if (D.rank == 0) {
+        progress_update(&rp->bar, rp->before + p->done, "pixels");
+    }
     return interrupted ? 1 : 0;
 }
 
@@ -414,7 +433,7 @@ static int alloc_outputs(outputs *o, size_t pixels, uint32_t w, uint32_t h,
     memset(o, 0, sizeof *o);
     size_t floats = depth ? 5 : 3; /* rgb, and depth and opacity */
     if (pixels > SIZE_MAX / floats / sizeof(float)) {
-        fprintf(stderr, "nerf-render: a %ux%u image is more than this "
+        fprintf(stderr, PROG ": a %ux%u image is more than this "
                         "machine can address\n", (unsigned)w, (unsigned)h);
         return -1;
     }
@@ -426,7 +445,7 @@ static int alloc_outputs(outputs *o, size_t pixels, uint32_t w, uint32_t h,
     }
     if (o->rgb == NULL || (depth && (o->depth == NULL || o->opacity == NULL))) {
         size_t bytes = pixels * floats * sizeof(float);
-        fprintf(stderr, "nerf-render: cannot allocate %zu bytes (%.1f GiB) "
+        fprintf(stderr, PROG ": cannot allocate %zu bytes (%.1f GiB) "
                         "for the output of a %ux%u image\n", bytes,
                 (double)bytes / (1u << 30), (unsigned)w, (unsigned)h);
         return -1;
@@ -474,14 +493,14 @@ static int video_mismatch(const args *a, const nerf_camera *cam, uint32_t i,
         return 0;
     }
     if (i > 0 && (cam->width != lw || cam->height != lh)) {
-        fprintf(stderr, "nerf-render: --video needs views of one size, but "
+        fprintf(stderr, PROG ": --video needs views of one size, but "
                         "view %u is %ux%u and the ones before %ux%u\n",
                 (unsigned)i, (unsigned)cam->width, (unsigned)cam->height,
                 (unsigned)lw, (unsigned)lh);
         return 1;
     }
     if (cam->width % 2 != 0 || cam->height % 2 != 0) {
-        fprintf(stderr, "nerf-render: --video needs an even width and "
+        fprintf(stderr, PROG ": --video needs an even width and "
                         "height (the codecs keep colour at half "
                         "resolution), but the views are %ux%u\n",
                 (unsigned)cam->width, (unsigned)cam->height);
@@ -528,7 +547,7 @@ static void say_interrupted(const args *a, const written *w, uint32_t n,
         snprintf(now, sizeof now, "%u, r_%03u.png to r_%03u.png", w->now,
                  w->first, w->last);
     }
-    fprintf(stderr, "nerf-render: interrupted: %s holds %u of the %u views "
+    fprintf(stderr, PROG ": interrupted: %s holds %u of the %u views "
             "(this run wrote %s); the same command with --skip-existing "
             "renders the other %u\n", a->out, have, n, now, n - have);
 }
@@ -560,6 +579,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             w.before++;
             continue;
         }
+        if (!mine(i)) {
+            continue;
+        }
         total += pixels;
         if (pixels > largest) {
             largest = pixels;
@@ -568,12 +590,15 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         }
     }
     if (w.before == n) {
-        fprintf(stderr, "nerf-render: all %u views are in %s already: "
+        if (D.rank != 0) {
+            return NERF_OK;
+        }
+        fprintf(stderr, PROG ": all %u views are in %s already: "
                 "nothing to render\n", n, a->out);
         return NERF_OK;
     }
-    if (w.before > 0) {
-        fprintf(stderr, "nerf-render: %u of the %u views are in %s already; "
+    if (w.before > 0 && D.rank == 0) {
+        fprintf(stderr, PROG ": %u of the %u views are in %s already; "
                 "rendering the other %u\n", w.before, n, a->out,
                 n - w.before);
     }
@@ -586,7 +611,7 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
      * costs no rendering. */
     video *vid = NULL;
     if (a->video != NULL) {
-        vid = video_open("nerf-render", a->video, lw, lh, (unsigned)a->fps);
+        vid = video_open(PROG, a->video, lw, lh, (unsigned)a->fps);
         if (vid == NULL) {
             free_outputs(&o);
             return REPORTED;
@@ -594,11 +619,11 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     }
     render_progress rp;
     rp.before = 0;
-    progress_begin(&rp.bar, "nerf-render", total);
+    progress_begin(&rp.bar, PROG, total);
     nerf_renderer_set_progress(r, on_render_progress, &rp);
     int rc = NERF_OK;
     for (uint32_t i = 0; i < n && rc == NERF_OK; i++) {
-        if (a->skip_existing && view_written(a, i)) {
+        if (!mine(i) || (a->skip_existing && view_written(a, i))) {
             continue;
         }
         nerf_camera cam;
@@ -630,17 +655,28 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             rc = REPORTED;
         }
     }
+    if (rc == NERF_OK || rc == NERF_ECANCELLED) {
+        /* Rank 0 reports once every process has written its views; a
+         * process that failed ends the job instead (main). */
+        dist_barrier(&D);
+    }
     if (rc == NERF_ECANCELLED && interrupted) {
-        say_interrupted(a, &w, n, rp.bar.tty);
+        if (D.size == 1) {
+            say_interrupted(a, &w, n, rp.bar.tty);
+        } else if (D.rank == 0) {
+            fprintf(stderr, PROG ": interrupted: the same command with "
+                    "--skip-existing renders the views missing from %s\n",
+                    a->out);
+        }
         return INTERRUPTED;
     }
-    if (rc == NERF_OK) {
+    if (rc == NERF_OK && D.rank == 0) {
         char note[4200];
         snprintf(note, sizeof note, "%u view%s in %s", (unsigned)n,
                  n == 1 ? "" : "s", a->out);
         progress_end(&rp.bar, note);
         if (a->video != NULL) {
-            fprintf(stderr, "nerf-render: wrote %s: %u frames of %ux%u at "
+            fprintf(stderr, PROG ": wrote %s: %u frames of %ux%u at "
                             "%u fps, %s\n", a->video, (unsigned)n,
                     (unsigned)lw, (unsigned)lh, (unsigned)a->fps, codec);
         }
@@ -648,19 +684,26 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
     return rc;
 }
 
-int main(int argc, char **argv)
+static int run(int argc, char **argv)
 {
     cli_blas_single_thread();
     args a;
     if (parse(argc, argv, &a) != 0) {
         return 2;
     }
+    if (a.video != NULL && D.size > 1) {
+        cli_usage_error(PROG, "--video needs the views in order in one "
+                        "process: render the frames with several, then "
+                        "encode them with one (nerf-render --skip-existing "
+                        "--video)");
+        return 2;
+    }
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
-    hooks.log_user = "nerf-render";
+    hooks.log_user = PROG;
     if (a.video != NULL && !video_supported()) {
-        fprintf(stderr, "nerf-render: this build has no video output "
+        fprintf(stderr, PROG ": this build has no video output "
                         "(FFmpeg's libraries were not found at build time); "
                         "the frames are written as PNG in %s\n", a.out);
         a.video = NULL;
@@ -710,17 +753,23 @@ int main(int argc, char **argv)
         ro.hooks = &hooks;
         rc = nerf_renderer_create(&r, m, s, &ro);
     }
-    if (rc == NERF_OK) {
-        rc = out_ready_folder(a.out, "nerf-render") == 0 ? NERF_OK
-                                                          : REPORTED;
+    if (rc == NERF_OK && D.rank == 0) {
+        rc = out_ready_folder(a.out, PROG) == 0 ? NERF_OK : REPORTED;
     }
+    /* The others write into the folder rank 0 has made (or, if it could
+     * not, are ended by it). */
+    dist_barrier(&D);
     if (rc == NERF_OK) {
         signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
+        /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
+         * caught, it would leave the rank waiting for the dead one. */
+        if (D.size == 1) {
+            signal(SIGTERM, on_signal);
+        }
         rc = render_all(&a, r, ds, cp, near, far);
     }
     if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED) {
-        cli_report("nerf-render", rc);
+        cli_report(PROG, rc);
     }
     nerf_renderer_destroy(r);
     nerf_sampler_destroy(s);
@@ -730,4 +779,17 @@ int main(int argc, char **argv)
     /* As a shell reports a program killed by the signal: 130 for
      * SIGINT. */
     return rc == INTERRUPTED ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (dist_init(&D, &argc, &argv, PROG) != 0) {
+        return 1;
+    }
+    int status = run(argc, argv);
+    if (status != 0 && status < 128) {
+        dist_fail(&D, status); /* the others may wait at a barrier */
+    }
+    dist_finish(&D);
+    return status;
 }

@@ -9,10 +9,16 @@
 #include <unistd.h>
 
 #include "common/cli.h"
+#include "common/dist.h"
 #include "common/out_folder.h"
 #include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+
+/* nerf-train-mpi is this program built with common/dist_mpi.c. */
+#ifndef PROG
+#define PROG "nerf-train"
+#endif
 
 static const char usage[] =
     "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
@@ -74,6 +80,10 @@ static const char usage[] =
     "  --help        print this help and exit\n"
     "Ctrl-C (SIGINT) stops after the current step, saves MODEL and exits\n"
     "with status 130 (SIGTERM: 143).\n"
+    "nerf-train-mpi (built with Open MPI) takes the same flags under\n"
+    "mpirun -np N: each process trains its share of every step's rays and\n"
+    "the gradients are summed over MPI; rank 0 prints and saves MODEL;\n"
+    "--seconds needs --steps there (docs/distributed.md).\n"
     "MODEL's folder is created if missing; MODEL is tried before training\n"
     "(a file is created beside it and removed); a save that fails leaves\n"
     "the last good MODEL in place, says so and makes the status 1.\n"
@@ -86,6 +96,9 @@ static const char usage[] =
     "      --steps 4400 --seconds 600\n";
 
 static volatile sig_atomic_t interrupted;
+
+/* The processes of the run: this one alone, or MPI's ranks. */
+static dist D;
 
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED (-1001)
@@ -106,17 +119,27 @@ typedef struct run_state {
 static int on_progress(const nerf_progress *p, void *user)
 {
     run_state *st = user;
+    if (st->seconds > 0.0 && p->elapsed >= st->seconds) {
+        st->out_of_time = 1;
+    }
+    /* Several processes stop together, at the same step, or those that
+     * went on would wait for the others forever. */
+    double loss = p->loss, psnr = p->psnr;
+    int sig = interrupted;
+    dist_step_agree(&D, &sig, &st->out_of_time, &loss, &psnr);
+    if (sig && !interrupted) {
+        interrupted = sig;
+    }
     char note[96];
     snprintf(note, sizeof note, "step %llu loss %.5f psnr %.2f",
-             (unsigned long long)(st->first_step + p->done), p->loss, p->psnr);
+             (unsigned long long)(st->first_step + p->done), loss, psnr);
     /* Under a budget the total is a projection until the schedule is
      * fitted, then the fitted length. */
     if (p->total > 0) {
         st->bar.total = p->total > p->done ? p->total : p->done;
     }
-    progress_update(&st->bar, p->done, note);
-    if (st->seconds > 0.0 && p->elapsed >= st->seconds) {
-        st->out_of_time = 1;
+    if (D.rank == 0) {
+        progress_update(&st->bar, p->done, note);
     }
     return interrupted || st->out_of_time ? 1 : 0;
 }
@@ -172,8 +195,8 @@ static int parse(int argc, char **argv, args *a)
         int bad = v == NULL;
         if (bad) {
             /* A flag parse() does not know reaches here too. */
-            if (cli_check_option("nerf-train", k, options) == 0) {
-                cli_bad_value("nerf-train", k, NULL, NULL);
+            if (cli_check_option(PROG, k, options) == 0) {
+                cli_bad_value(PROG, k, NULL, NULL);
             }
         } else if (strcmp(k, "--data") == 0) {
             a->data = v;
@@ -221,22 +244,22 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 0, 1, &on);
             a->random_bg = (int)on;
         } else {
-            cli_unknown("nerf-train", k, options);
+            cli_unknown(PROG, k, options);
             return -1;
         }
         if (bad) {
             if (v) {
-                cli_bad_value("nerf-train", k, v, NULL);
+                cli_bad_value(PROG, k, v, NULL);
             }
             return -1;
         }
     }
     if (a->data == NULL || a->out == NULL) {
-        cli_usage_error("nerf-train", "--data and --out are required");
+        cli_usage_error(PROG, "--data and --out are required");
         return -1;
     }
     if (a->resume && a->overwrite) {
-        cli_usage_error("nerf-train", "--resume continues MODEL, "
+        cli_usage_error(PROG, "--resume continues MODEL, "
                         "--overwrite replaces it: give one");
         return -1;
     }
@@ -270,7 +293,7 @@ static int check_preset(const args *a, const nerf_model *m)
         return NERF_OK;
     }
     const char *name = preset_name(have);
-    fprintf(stderr, "nerf-train: %s holds a model of %s%s%s, not of "
+    fprintf(stderr, PROG ": %s holds a model of %s%s%s, not of "
             "--preset %s: resume it without --preset, or train a new one "
             "with --overwrite\n", a->out, name ? "the " : "",
             name ? name : "no preset's network",
@@ -289,7 +312,7 @@ static int check_existing(const args *a)
         S_ISDIR(st.st_mode)) {
         return 0;
     }
-    fprintf(stderr, "nerf-train: %s exists: --resume continues it, "
+    fprintf(stderr, PROG ": %s exists: --resume continues it, "
             "--overwrite replaces it\n", a->out);
     return -1;
 }
@@ -302,23 +325,23 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
         if (rc == NERF_OK) {
             rc = check_preset(a, *m);
         }
-        if (rc == NERF_OK) {
-            fprintf(stderr, "nerf-train: resuming %s at step %llu\n", a->out,
+        if (rc == NERF_OK && D.rank == 0) {
+            fprintf(stderr, PROG ": resuming %s at step %llu\n", a->out,
                     (unsigned long long)nerf_model_step(*m));
             nerf_model_options mo;
             NERF_MODEL_OPTIONS_INIT(&mo);
             nerf_model_get_options(*m, &mo);
             if (a->matmul >= 0 && (uint32_t)a->matmul != mo.matmul) {
-                fprintf(stderr, "nerf-train: --matmul ignored: the model "
+                fprintf(stderr, PROG ": --matmul ignored: the model "
                         "keeps the %s products it was saved with\n",
                         mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
             }
             if (a->lr_given) {
-                fprintf(stderr, "nerf-train: --lr ignored: the model keeps "
+                fprintf(stderr, PROG ": --lr ignored: the model keeps "
                         "the learning-rate schedule it was saved with\n");
             }
             if (a->space >= 0 && (uint32_t)a->space != mo.space) {
-                fprintf(stderr, "nerf-train: --space ignored: the model "
+                fprintf(stderr, PROG ": --space ignored: the model "
                         "keeps the space it was created with\n");
             }
         }
@@ -337,12 +360,12 @@ static int create_model(const args *a, const nerf_hooks *hooks,
     mo.hooks = hooks;
     mo.matmul = a->matmul < 0 ? NERF_MATMUL_FP32 : (uint32_t)a->matmul;
     if (mo.encoding == NERF_ENCODING_HASHGRID) {
-        int rc = setup_model_space(&mo, ds, a->space, "nerf-train");
+        int rc = setup_model_space(&mo, ds, a->space, PROG);
         if (rc != NERF_OK) {
             return rc;
         }
     } else if (a->space > 0 && a->space != NERF_SPACE_NDC) {
-        fprintf(stderr, "nerf-train: --space applies to the fast preset's "
+        fprintf(stderr, PROG ": --space applies to the fast preset's "
                 "grids; this preset reads coordinates anywhere\n");
     }
     int rc = nerf_model_create(m, &mo);
@@ -380,7 +403,7 @@ static int plan_run(const args *a, const nerf_model *m, plan *p)
                (step == 0 || sc.state != NERF_SCHEDULE_STEPS)) {
         p->budget = 1;
     } else if (sc.state == NERF_SCHEDULE_MEASURING) {
-        fprintf(stderr, "nerf-train: %s was saved while its schedule was "
+        fprintf(stderr, PROG ": %s was saved while its schedule was "
                 "being fitted to a time budget: give --seconds (the time "
                 "left) or --steps\n", a->out);
         return SETUP_USAGE;
@@ -390,18 +413,28 @@ static int plan_run(const args *a, const nerf_model *m, plan *p)
     } else {
         p->target = a->steps;
     }
+    if (p->budget && D.size > 1) {
+        /* Each process would fit the schedule to its own clock. */
+        fprintf(stderr, PROG ": --seconds without --steps fits the run to "
+                "one process's step rate; with %d processes give --steps "
+                "(and --seconds to stop early, if wanted)\n", D.size);
+        return SETUP_USAGE;
+    }
+    if (D.rank != 0) {
+        return NERF_OK;
+    }
     if (p->budget) {
         if (sc.state == NERF_SCHEDULE_FITTED) {
-            fprintf(stderr, "nerf-train: training on to the %llu steps "
+            fprintf(stderr, PROG ": training on to the %llu steps "
                     "fitted to its budget, for at most %g s\n",
                     (unsigned long long)sc.total_steps, a->seconds);
         } else {
-            fprintf(stderr, "nerf-train: training for %g s: the learning "
+            fprintf(stderr, PROG ": training for %g s: the learning "
                     "rate holds for the first quarter, then decays over "
                     "the steps the measured rate allows\n", a->seconds);
         }
     } else if (a->seconds > 0.0 && p->target > step) {
-        fprintf(stderr, "nerf-train: stopping at step %llu or after %g s, "
+        fprintf(stderr, PROG ": stopping at step %llu or after %g s, "
                 "whichever comes first\n", (unsigned long long)p->target,
                 a->seconds);
     }
@@ -420,7 +453,7 @@ static void report_budget(const nerf_model *m, int rc)
     }
     /* The fit itself is logged by the trainer when it happens. */
     if (rc == NERF_ECANCELLED && nerf_model_step(m) < sc.total_steps) {
-        fprintf(stderr, "nerf-train: out of time at step %llu of %llu (the "
+        fprintf(stderr, PROG ": out of time at step %llu of %llu (the "
                 "steps ran slower than measured); --resume trains on to "
                 "%llu\n", (unsigned long long)nerf_model_step(m),
                 (unsigned long long)sc.total_steps,
@@ -428,7 +461,7 @@ static void report_budget(const nerf_model *m, int rc)
     }
 }
 
-int main(int argc, char **argv)
+static int run(int argc, char **argv)
 {
     cli_blas_single_thread();
     args a;
@@ -441,7 +474,10 @@ int main(int argc, char **argv)
     nerf_hooks hooks;
     NERF_HOOKS_INIT(&hooks);
     hooks.log_cb = cli_log;
-    hooks.log_user = "nerf-train";
+    hooks.log_user = PROG;
+    if (D.rank != 0) {
+        hooks.log_level = NERF_LOG_WARN; /* rank 0 tells the story */
+    }
 
     nerf_dataset *ds = NULL;
     nerf_model *m = NULL;
@@ -487,16 +523,17 @@ int main(int argc, char **argv)
         }
         to.checkpoint_path = a.out;
         to.hooks = &hooks;
+        dist_trainer_options(&D, &to);
         /* Made only now, when nothing but the trainer can fail, and
          * before its check of MODEL, which needs the folder. */
-        rc = out_make_parent(a.out, "nerf-train") == 0 ? NERF_OK : REPORTED;
+        rc = out_make_parent(a.out, PROG) == 0 ? NERF_OK : REPORTED;
         if (rc == NERF_OK) {
             rc = nerf_trainer_create(&t, m, ds, s, &to);
         }
     }
     if (rc != NERF_OK) {
         if (rc != SETUP_USAGE && rc != REPORTED) {
-            cli_report("nerf-train", rc);
+            cli_report(PROG, rc);
         }
         nerf_dataset_destroy(ds);
         nerf_model_destroy(m);
@@ -504,7 +541,11 @@ int main(int argc, char **argv)
         return rc == SETUP_USAGE ? 2 : 1;
     }
     signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
+    /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
+     * caught, it would leave the rank waiting for the dead one. */
+    if (D.size == 1) {
+        signal(SIGTERM, on_signal);
+    }
     plan pl;
     rc = plan_run(&a, m, &pl);
     if (rc != NERF_OK) {
@@ -520,7 +561,7 @@ int main(int argc, char **argv)
     st.seconds = pl.budget ? 0.0 : a.seconds;
     st.out_of_time = 0;
     uint64_t todo = pl.target > st.first_step ? pl.target - st.first_step : 0;
-    progress_begin(&st.bar, "nerf-train", pl.budget ? 1 : todo);
+    progress_begin(&st.bar, PROG, pl.budget ? 1 : todo);
     nerf_trainer_set_progress(t, on_progress, &st);
     nerf_train_stats stats;
     memset(&stats, 0, sizeof stats);
@@ -538,11 +579,13 @@ int main(int argc, char **argv)
     /* Interrupted, the run is not done: one line says where it stopped
      * (the bar's line, on a terminal, is ended first). */
     int stopped = rc == NERF_ECANCELLED && interrupted;
-    if (interrupted && (stopped || rc == NERF_EIO)) {
+    if (D.rank != 0) {
+        /* Rank 0 says how the run ended. */
+    } else if (interrupted && (stopped || rc == NERF_EIO)) {
         if (st.bar.tty) {
             fputc('\n', stderr);
         }
-        fprintf(stderr, "nerf-train: interrupted at step %llu; %s %s%s\n",
+        fprintf(stderr, PROG ": interrupted at step %llu; %s %s%s\n",
                 (unsigned long long)nerf_model_step(m),
                 saved ? "saved" : "NOT saved to", a.out,
                 saved ? " (resume with --resume)" : "");
@@ -558,6 +601,7 @@ int main(int argc, char **argv)
         }
         progress_end(&st.bar, note);
     }
+    dist_report(&D);
     if (pl.budget && !interrupted) {
         report_budget(m, rc);
         if (rc == NERF_ECANCELLED) {
@@ -565,21 +609,25 @@ int main(int argc, char **argv)
         }
     }
     if (rc == NERF_EIO) {
-        cli_report("nerf-train", rc);
-        fprintf(stderr, "nerf-train: the save failed: %s keeps the last "
+        cli_report(PROG, rc);
+        fprintf(stderr, PROG ": the save failed: %s keeps the last "
                 "checkpoint written whole, if any; steps since are lost\n",
                 a.out);
     } else if (rc == NERF_ECANCELLED && st.out_of_time && !interrupted) {
-        fprintf(stderr, "nerf-train: stopped after %g s as asked, at step "
-                "%llu before step %llu; resume with --resume\n", a.seconds,
-                (unsigned long long)nerf_model_step(m),
-                (unsigned long long)pl.target);
+        if (D.rank == 0) {
+            fprintf(stderr, PROG ": stopped after %g s as asked, at step "
+                    "%llu before step %llu; resume with --resume\n",
+                    a.seconds, (unsigned long long)nerf_model_step(m),
+                    (unsigned long long)pl.target);
+        }
         rc = NERF_OK;
     } else if (rc == NERF_OK && st.seconds > 0.0 && todo > 0) {
-        fprintf(stderr, "nerf-train: reached step %llu before the %g s "
-                "limit\n", (unsigned long long)pl.target, a.seconds);
+        if (D.rank == 0) {
+            fprintf(stderr, PROG ": reached step %llu before the %g s "
+                    "limit\n", (unsigned long long)pl.target, a.seconds);
+        }
     } else if (rc != NERF_OK && !stopped) {
-        cli_report("nerf-train", rc);
+        cli_report(PROG, rc);
     }
     nerf_trainer_destroy(t);
     nerf_sampler_destroy(s);
@@ -588,4 +636,19 @@ int main(int argc, char **argv)
     /* As a shell reports a program killed by the signal: 130 for
      * SIGINT. */
     return stopped ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (dist_init(&D, &argc, &argv, PROG) != 0) {
+        return 1;
+    }
+    int status = run(argc, argv);
+    if (status != 0 && status < 128) {
+        /* With other processes, a failure here must end them too: they
+         * would wait for this one at the next exchange. */
+        dist_fail(&D, status);
+    }
+    dist_finish(&D);
+    return status;
 }

@@ -1703,6 +1703,63 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
 /* Training                                                                 */
 /* ------------------------------------------------------------------------ */
 
+/** Since 0.5.  Sparse ranges a nerf_exchange can describe. */
+#define NERF_EXCHANGE_MAX_SPARSE 4
+
+/**
+ * Since 0.5.  What a trainer tells its gradient and checksum hooks (see
+ * nerf_trainer_options.worker_count) besides the numbers they exchange.
+ * Versioned: the library sets struct_size; read a field only if
+ * struct_size covers it (fields are only appended).
+ */
+typedef struct nerf_exchange {
+    uint32_t struct_size;  /**< sizeof the library's struct. */
+    uint32_t worker_rank;  /**< This worker, 0..worker_count - 1. */
+    uint32_t worker_count; /**< Workers of the run; 1 for a trainer alone. */
+    uint32_t n_sparse;     /**< Ranges of the gradient vector that are
+                                mostly zeros: the hash tables, whose entries
+                                a step mostly does not touch (0 for a
+                                model without one).  Elements outside them
+                                are dense: nearly all nonzero. */
+    uint64_t step;         /**< The step being taken: the model's step
+                                count before it. */
+    uint64_t sparse_begin[NERF_EXCHANGE_MAX_SPARSE]; /**< First element of
+                                each sparse range (index into grads). */
+    uint64_t sparse_end[NERF_EXCHANGE_MAX_SPARSE];   /**< One past its
+                                last. */
+    uint64_t rays;         /**< Rays this worker trained on in the step. */
+    uint64_t batch_rays;   /**< Rays of the whole step, all workers. */
+    char message[256];     /**< Empty on entry: a hook that fails may write
+                                a NUL-terminated reason here, which the
+                                trainer's error message quotes. */
+} nerf_exchange;
+
+/**
+ * Since 0.5.  Gradient hook: called by every worker after the step's
+ * backward pass and before the optimiser, with the model's flat gradient
+ * vector @p grads of @p n floats (n = nerf_model_param_count()).  It must
+ * leave in @p grads the sum of all workers' vectors, element by element,
+ * the same bits on every worker (an all-reduce), so that every worker
+ * applies the same update.  Each worker's gradient is already weighed by
+ * the whole step's ray count, so the sum is the gradient one worker
+ * would compute on the whole batch.  It runs on the thread that takes
+ * the step, never on a worker thread, and must not call back into the
+ * trainer.  Return 0, or nonzero to fail the step (NERF_ERROR, the
+ * weights left as before it).
+ */
+typedef int (*nerf_grad_hook)(void *user, float *grads, size_t n,
+                              nerf_exchange *x);
+
+/**
+ * Since 0.5.  Checksum hook (nerf_trainer_options.checksum_every): on
+ * entry both @p range[0] and @p range[1] hold this worker's checksum of
+ * its weights (CRC-32 of the parameters' bytes); the hook must leave in
+ * range[0] the smallest and in range[1] the largest over all workers,
+ * the same on every worker.  Return 0, or nonzero to fail the step.
+ */
+typedef int (*nerf_checksum_hook)(void *user, uint32_t range[2],
+                                  nerf_exchange *x);
+
 /** How a trainer draws and weighs its rays, fixed at creation. */
 typedef struct nerf_trainer_options {
     uint32_t struct_size;     /**< Set by nerf_trainer_options_init(). */
@@ -1752,6 +1809,46 @@ typedef struct nerf_trainer_options {
                                     (Mueller et al.).  0 (default): the
                                     background is white_background's.
                                     Images without alpha ignore it. */
+    /* Since 0.5: data-parallel training (docs/distributed.md).  Zero
+     * (an older caller's zero fill) is a trainer alone. */
+    uint32_t worker_rank;     /**< This worker, 0..worker_count - 1. */
+    uint32_t worker_count;    /**< 0 or 1 (default): alone.  W > 1: this
+                                   trainer is one of W, each with a copy
+                                   of the same model (same seed, or the
+                                   same checkpoint), dataset, sampler
+                                   and options but its rank.  Every
+                                   worker draws the step's batch as one
+                                   trainer alone would (batch_rays rays,
+                                   keyed by the step), and worker r
+                                   trains on its contiguous share, rays
+                                   [n r / W, n (r + 1) / W) of the n
+                                   the step takes: with batch_samples,
+                                   n is where the whole batch's samples
+                                   reach the budget, which every worker
+                                   finds by counting the samples of all
+                                   rays (a marching sampler: a march of
+                                   the batch without the network).  The
+                                   loss is weighed by n, and grad_hook
+                                   sums the workers' gradients, so the
+                                   workers take the step one trainer
+                                   would take on the whole batch, up to
+                                   the order of the sums.  Needs
+                                   grad_hook; nerf_trainer_run_for() is
+                                   refused (its clock differs between
+                                   workers). */
+    nerf_grad_hook grad_hook; /**< Called every step before the optimiser
+                                   (also for a worker alone); NULL
+                                   (default): none. */
+    nerf_checksum_hook checksum_hook; /**< See checksum_every. */
+    void *hook_user;          /**< Passed to both hooks. */
+    uint32_t checksum_every;  /**< N > 0: after every step whose count is
+                                   a multiple of N, and before a
+                                   trainer's first step, compare the
+                                   workers' weights through
+                                   checksum_hook (needed then), failing
+                                   with NERF_ERROR if they differ.  0
+                                   (default): never. */
+    uint32_t reserved1;       /**< Must be 0. */
 } nerf_trainer_options;
 
 /**
@@ -1839,7 +1936,9 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *trainer);
  * @return NERF_OK; NERF_EINVAL; NERF_ENOMEM (first step only: later steps
  * reuse their buffers, except that with ray marching they grow when a
  * step has more samples than any before); NERF_ERROR if the loss is not
- * finite (the weights are then left as they were before the step).
+ * finite (the weights are then left as they were before the step), if
+ * the grad_hook or checksum_hook failed (the message quotes the hook's),
+ * or if the workers' weights differ (see checksum_every).
  */
 NERF_API int nerf_trainer_step(nerf_trainer *trainer,
                                nerf_train_stats *stats_out);
@@ -1888,7 +1987,9 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * nerf_trainer_run().
  *
  * @param seconds the budget, > 0 and finite, counted from this call.
- * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds.
+ * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds, or
+ * for a trainer that is one of several workers (worker_count > 1), each
+ * of which would fit the run to its own clock.
  */
 NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
                                   nerf_train_stats *stats_out);

@@ -27,10 +27,13 @@ NERF_DEB_PACKAGES=(gcc g++ libopenblas-dev libpng-dev libjpeg-dev zlib1g-dev
 # scripts/colmap-train.sh; its test is skipped without it.  FFmpeg's
 # libraries (meson option video) let nerf-render --video write MP4 files,
 # and the ffmpeg package's ffprobe and ffmpeg let the test check them;
-# without the libraries that test is skipped.
+# without the libraries that test is skipped.  Open MPI (meson option mpi)
+# builds nerf-train-mpi and nerf-render-mpi and runs their two-rank test;
+# without it that test is skipped.
 NERF_DEB_OPTIONAL=(colmap
                    libavcodec-dev libavformat-dev libavutil-dev
-                   libswscale-dev ffmpeg)
+                   libswscale-dev ffmpeg
+                   libopenmpi-dev openmpi-bin)
 
 # Options of build/release, shared by both scripts so that running one after
 # the other reuses the build instead of reconfiguring it back and forth.

@@ -94,6 +94,14 @@ NERF_API int nerf_trainer_run_for(nerf_trainer *t, double seconds,
         return nerf__error(NERF_EINVAL, "nerf_trainer_run_for: a budget of "
                            "%g s is not a positive finite time", seconds);
     }
+    if (t->workers > 1) {
+        /* Each worker would fit the length to its own clock, and stop at
+         * its own step: the workers would part, or wait on each other. */
+        return nerf__error(NERF_EINVAL, "nerf_trainer_run_for: a time budget "
+                           "is not supported for a trainer that is one of "
+                           "%u workers; give a step count (nerf_trainer_run())",
+                           (unsigned)t->workers);
+    }
     nerf_model *m = t->model;
     const nerf__schedule *sc = &m->schedule;
     nerf__run r;

@@ -8,21 +8,23 @@
 #include "trainer.h"
 
 /*
- * Mean squared error of one pass over the batch, and its gradient with
- * respect to the pass's colours.  The loss is the sum of the passes' MSEs,
- * as the reference (img_loss + img_loss0).
+ * Squared error of one pass over n colour values, and its gradient with
+ * respect to them, of the mean over `all` values: the whole batch's, of
+ * which a worker may hold a share.  The loss is the sum of the passes'
+ * MSEs, as the reference (img_loss + img_loss0).  Returns the mean over
+ * the n values.
  */
-static double pass_loss(size_t n, const float *rgb, const float *target,
-                        float *grad)
+static double pass_loss(size_t n, size_t all, const float *rgb,
+                        const float *target, float *grad)
 {
     double sum = 0.0;
-    const float scale = 2.0f / (float)n;
+    const float scale = 2.0f / (float)all;
     for (size_t i = 0; i < n; i++) {
         float e = rgb[i] - target[i];
         sum += (double)e * e;
         grad[i] = scale * e;
     }
-    return sum / (double)n;
+    return n > 0 ? sum / (double)n : 0.0;
 }
 
 static double psnr_of(double mse)
@@ -75,11 +77,51 @@ int nerf__trainer_update_grid(nerf_trainer *t)
     return NERF_OK;
 }
 
+/* This worker's rays of step k, rendered into t->rgb (the setup's ray
+ * numbering and background moved to the share's first ray). */
+static int render_share(nerf_trainer *t, uint64_t k, nerf__share *sh)
+{
+    const size_t B = t->opts.batch_rays;
+    if (t->workers > 1) {
+        nerf__trainer_share(t, k, sh);
+    } else {
+        *sh = (nerf__share){.all = B, .lo = 0, .hi = B};
+    }
+    const size_t lo = sh->lo;
+    t->setup.first_ray = k * B + lo;
+    t->setup.background = t->backgrounds ? t->backgrounds + 3 * lo : NULL;
+    t->batch.n_rays = 0;
+    t->batch.n_evaluated = 0;
+    if (sh->hi == lo) {
+        return NERF_OK;
+    }
+    nerf__pass_out out[NERF__PASSES];
+    memset(out, 0, sizeof out);
+    out[0].rgb = t->rgb[0];
+    out[1].rgb = t->rgb[1];
+    int rc = nerf__render_batch(&t->batch, &t->setup, sh->hi - lo,
+                                t->origins + 3 * lo, t->directions + 3 * lo,
+                                out);
+    if (rc == NERF_OK && t->workers <= 1) {
+        /* With batch_samples the batch took the first n of the B rays. */
+        sh->all = sh->hi = t->batch.n_rays;
+    }
+    return rc;
+}
+
 static int step(nerf_trainer *t, nerf_train_stats *stats)
 {
     nerf_model *m = t->model;
     const uint64_t k = m->step;
-    const size_t B = t->opts.batch_rays;
+    if (!t->checked) {
+        /* Workers that start from different weights would train apart
+         * from the first step on. */
+        int rc = nerf__trainer_check_workers(t, true);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        t->checked = true;
+    }
     if (t->march) {
         int rc = nerf__trainer_update_grid(t);
         if (rc != NERF_OK) {
@@ -87,22 +129,18 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
         }
     }
     nerf__trainer_pick_rays(t, k);
-    t->setup.first_ray = k * B;
-    nerf__pass_out out[NERF__PASSES];
-    memset(out, 0, sizeof out);
-    out[0].rgb = t->rgb[0];
-    out[1].rgb = t->rgb[1];
-    int rc = nerf__render_batch(&t->batch, &t->setup, B, t->origins,
-                                t->directions, out);
+    nerf__share sh;
+    int rc = render_share(t, k, &sh);
     if (rc != NERF_OK) {
         return rc;
     }
-    const uint32_t passes = t->batch.n_pass;
-    /* With batch_samples the batch took the first n of the B rays. */
-    const size_t n = t->batch.n_rays;
+    const nerf_sampler_options *so = &t->sampler->opts;
+    const uint32_t passes = t->march || so->n_fine == 0 ? 1 : 2;
+    const size_t n = sh.hi - sh.lo;
+    const float *targets = t->targets + 3 * sh.lo;
     double mse[NERF__PASSES] = {0.0, 0.0};
     for (uint32_t p = 0; p < passes; p++) {
-        mse[p] = pass_loss(3 * n, t->rgb[p], t->targets, t->d_rgb[p]);
+        mse[p] = pass_loss(3 * n, 3 * sh.all, t->rgb[p], targets, t->d_rgb[p]);
     }
     double loss = mse[0] + mse[1];
     if (!isfinite(loss)) {
@@ -111,9 +149,16 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
                            (unsigned long long)k);
     }
     nerf__model_clear_grad(m);
-    const float *d_rgb[NERF__PASSES] = {t->d_rgb[0], passes > 1 ? t->d_rgb[1] : NULL};
-    const float *none[NERF__PASSES] = {NULL, NULL};
-    rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none, none);
+    if (n > 0) {
+        const float *d_rgb[NERF__PASSES] = {t->d_rgb[0],
+                                            passes > 1 ? t->d_rgb[1] : NULL};
+        const float *none[NERF__PASSES] = {NULL, NULL};
+        rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none, none);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
+    rc = nerf__trainer_exchange(t, k, n, sh.all);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -125,9 +170,10 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
     stats->psnr = psnr_of(mse[passes - 1]);
     stats->psnr_coarse = psnr_of(mse[0]);
     stats->learning_rate = lr;
-    stats->samples_per_ray = (double)t->batch.n_evaluated / (double)n;
+    stats->samples_per_ray =
+        n > 0 ? (double)t->batch.n_evaluated / (double)n : 0.0;
     stats->rays = n;
-    return NERF_OK;
+    return nerf__trainer_check_workers(t, false);
 }
 
 NERF_API int nerf_trainer_step(nerf_trainer *t, nerf_train_stats *stats_out)

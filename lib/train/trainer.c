@@ -50,6 +50,19 @@ static int check_options(const void *opts)
         what = "batch_samples must be 0..67108864";
     } else if (o->random_background != 0 && o->random_background != 1) {
         what = "random_background must be 0 or 1";
+    } else if (o->worker_count > (1u << 20)) {
+        what = "worker_count must be 0..1048576";
+    } else if (o->worker_rank >= (o->worker_count ? o->worker_count : 1u)) {
+        what = o->worker_count > 1
+                   ? "worker_rank must be less than worker_count"
+                   : "worker_rank must be 0 without worker_count";
+    } else if (o->worker_count > 1 && o->grad_hook == NULL) {
+        what = "worker_count > 1 needs a grad_hook to sum the workers' "
+               "gradients";
+    } else if (o->checksum_every > 0 && o->checksum_hook == NULL) {
+        what = "checksum_every needs a checksum_hook";
+    } else if (o->reserved1 != 0) {
+        what = "reserved1 must be 0";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);
@@ -94,6 +107,13 @@ static int alloc_buffers(nerf_trainer *t)
             return NERF_ENOMEM;
         }
     }
+    if (t->workers > 1 && t->march && t->opts.batch_samples > 0) {
+        t->march_offsets = nerf__calloc(&t->env, (size_t)t->opts.batch_rays + 1,
+                                        sizeof *t->march_offsets);
+        if (t->march_offsets == NULL) {
+            return NERF_ENOMEM;
+        }
+    }
     return NERF_OK;
 }
 
@@ -117,7 +137,9 @@ static void setup_render(nerf_trainer *t)
     s->keep = true;
     s->white_background = t->white;
     s->noise_std = t->noise_std;
-    s->sample_budget = t->opts.batch_samples;
+    /* Workers find the whole batch's cut themselves and render only
+     * their share of it (workers.c). */
+    s->sample_budget = t->workers > 1 ? 0 : t->opts.batch_samples;
     s->background = t->backgrounds;
     if (t->sampler->opts.ndc) {
         /* The NDC frustum of a forward-facing scene is that of its
@@ -199,6 +221,7 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     t->dataset = dataset;
     t->sampler = sampler;
     t->march = nerf__sampler_marches(sampler);
+    t->workers = o.worker_count > 1 ? o.worker_count : 1;
     t->n_images = dataset->count;
     t->width = dataset->width;
     t->height = dataset->height;
@@ -232,12 +255,18 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     }
     setup_render(t);
     record_render_settings(t);
+    nerf__trainer_exchange_init(t);
     char per_step[64];
     if (o.batch_samples > 0) {
         snprintf(per_step, sizeof per_step, "up to %u rays of %u samples",
                  o.batch_rays, o.batch_samples);
     } else {
         snprintf(per_step, sizeof per_step, "%u rays", o.batch_rays);
+    }
+    if (t->workers > 1) {
+        nerf__log(&env, NERF_LOG_INFO, "trainer: worker %u of %u, training on "
+                  "its share of each step's rays", (unsigned)o.worker_rank,
+                  (unsigned)t->workers);
     }
     nerf__log(&env, NERF_LOG_INFO, "trainer: %u images of %ux%u, %s per "
               "step, %s background, density noise %g, precrop %u steps%s",
@@ -264,6 +293,7 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *t)
         nerf__free(&env, bufs[i]);
     }
     nerf__free(&env, t->backgrounds);
+    nerf__free(&env, t->march_offsets);
     nerf__free(&env, t->cameras);
     nerf__free(&env, t->checkpoint_path);
     nerf__free(&env, t);

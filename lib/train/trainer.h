@@ -41,6 +41,14 @@ struct nerf_trainer {
      * (from the model's allocator). */
     bool march;
     nerf__workspace density_ws;
+    /* Data-parallel training (workers.c): the worker count (1 alone),
+     * what the hooks are told, whether the weights were compared before
+     * the first step, and with batch_samples and a marching sampler the
+     * sample counts of the whole batch [batch_rays + 1]. */
+    uint32_t workers;
+    nerf_exchange exchange;
+    bool checked;
+    size_t *march_offsets;
 };
 
 /*
@@ -98,6 +106,23 @@ double nerf__run_elapsed(const nerf__run *r);
 int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out);
 /* The final save, folded into the run's status rc. */
 int nerf__run_end(nerf_trainer *t, const nerf__run *r, int rc);
+
+/* The rays of a step this worker trains on: [lo, hi) of the `all` the
+ * whole step takes (alone: all of them). */
+typedef struct nerf__share {
+    size_t all, lo, hi;
+} nerf__share;
+
+/* What the hooks are told of the model (its sparse ranges); at creation. */
+void nerf__trainer_exchange_init(nerf_trainer *t);
+/* This worker's share of step `step`, whose rays have been picked; sets
+ * the setup's first_ray to the batch's first. */
+void nerf__trainer_share(nerf_trainer *t, uint64_t step, nerf__share *s);
+/* The gradient hook on the model's gradients, if there is one. */
+int nerf__trainer_exchange(nerf_trainer *t, uint64_t step, size_t rays,
+                           size_t all);
+/* The checksum comparison, when checksum_every says (or `first`). */
+int nerf__trainer_check_workers(nerf_trainer *t, bool first);
 
 /*
  * Record the trainer's dataset in its model (model->data), first warning

@@ -190,7 +190,28 @@ FROZEN(nerf_trainer_options, hooks, 40);
 /* Appended in 0.2. */
 FROZEN(nerf_trainer_options, batch_samples, 48);
 FROZEN(nerf_trainer_options, random_background, 52);
-SIZE(nerf_trainer_options, 56);
+/* Appended in 0.5. */
+FROZEN(nerf_trainer_options, worker_rank, 56);
+FROZEN(nerf_trainer_options, worker_count, 60);
+FROZEN(nerf_trainer_options, grad_hook, 64);
+FROZEN(nerf_trainer_options, checksum_hook, 72);
+FROZEN(nerf_trainer_options, hook_user, 80);
+FROZEN(nerf_trainer_options, checksum_every, 88);
+FROZEN(nerf_trainer_options, reserved1, 92);
+SIZE(nerf_trainer_options, 96);
+
+/* New in 0.5. */
+FROZEN(nerf_exchange, struct_size, 0);
+FROZEN(nerf_exchange, worker_rank, 4);
+FROZEN(nerf_exchange, worker_count, 8);
+FROZEN(nerf_exchange, n_sparse, 12);
+FROZEN(nerf_exchange, step, 16);
+FROZEN(nerf_exchange, sparse_begin, 24);
+FROZEN(nerf_exchange, sparse_end, 56);
+FROZEN(nerf_exchange, rays, 88);
+FROZEN(nerf_exchange, batch_rays, 96);
+FROZEN(nerf_exchange, message, 104);
+SIZE(nerf_exchange, 360);
 
 FROZEN(nerf_train_stats, struct_size, 0);
 FROZEN(nerf_train_stats, reserved0, 4);

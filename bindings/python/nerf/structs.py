@@ -476,7 +476,19 @@ class TrainerOptions(_Versioned):
         ("hooks", POINTER(Hooks)),
         ("batch_samples", c_uint32),
         ("random_background", c_int32),
+        # Appended in libnerf 0.5: data-parallel training.  The hooks are
+        # C function pointers for a transport written in C (nerf-train-mpi);
+        # the binding leaves them NULL.
+        ("worker_rank", c_uint32),
+        ("worker_count", c_uint32),
+        ("grad_hook", c_void_p),
+        ("checksum_hook", c_void_p),
+        ("hook_user", c_void_p),
+        ("checksum_every", c_uint32),
+        ("reserved1", c_uint32),
     ]
+    _private_ = ("struct_size", "hooks", "grad_hook", "checksum_hook",
+                 "hook_user", "reserved1")
 
     def _set(self, name: str, value: Any) -> None:
         if name == "checkpoint_path" and value is not None:
@@ -535,6 +547,25 @@ class ScheduleStruct(_Versioned):
         ("steps_per_second", c_double),
         ("fit_step", c_uint64),
         ("total_steps", c_uint64),
+    ]
+
+
+class ExchangeStruct(_Versioned):
+    """``nerf_exchange``, as a trainer passes it to its gradient and
+    checksum hooks (since libnerf 0.5)."""
+
+    _c_name_ = "nerf_exchange"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("worker_rank", c_uint32),
+        ("worker_count", c_uint32),
+        ("n_sparse", c_uint32),
+        ("step", c_uint64),
+        ("sparse_begin", c_uint64 * 4),
+        ("sparse_end", c_uint64 * 4),
+        ("rays", c_uint64),
+        ("batch_rays", c_uint64),
+        ("message", ctypes.c_char * 256),
     ]
 
 
@@ -732,4 +763,5 @@ class Camera(_Versioned):
 ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
                TrainerOptions, TrainStatsStruct, CameraPathOptions,
-               ScheduleStruct, PointsOptions, MeshOptions)
+               ScheduleStruct, PointsOptions, MeshOptions,
+               ExchangeStruct)

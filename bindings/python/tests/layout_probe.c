@@ -219,6 +219,26 @@ static void structs(void)
     FIELD(nerf_trainer_options, hooks);
     FIELD(nerf_trainer_options, batch_samples);
     FIELD(nerf_trainer_options, random_background);
+    FIELD(nerf_trainer_options, worker_rank);
+    FIELD(nerf_trainer_options, worker_count);
+    FIELD(nerf_trainer_options, grad_hook);
+    FIELD(nerf_trainer_options, checksum_hook);
+    FIELD(nerf_trainer_options, hook_user);
+    FIELD(nerf_trainer_options, checksum_every);
+    FIELD(nerf_trainer_options, reserved1);
+    end_struct();
+
+    BEGIN(nerf_exchange);
+    FIELD(nerf_exchange, struct_size);
+    FIELD(nerf_exchange, worker_rank);
+    FIELD(nerf_exchange, worker_count);
+    FIELD(nerf_exchange, n_sparse);
+    FIELD(nerf_exchange, step);
+    FIELD(nerf_exchange, sparse_begin);
+    FIELD(nerf_exchange, sparse_end);
+    FIELD(nerf_exchange, rays);
+    FIELD(nerf_exchange, batch_rays);
+    FIELD(nerf_exchange, message);
     end_struct();
 
     BEGIN(nerf_train_stats);
