@@ -2,6 +2,7 @@
 
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <string.h>
 
 typedef struct job {
     const nerf__smm_seg *seg;
@@ -21,63 +22,153 @@ typedef struct job {
 #endif
 
 /* ---- portable ------------------------------------------------------------
- * A tile of PR rows by PN columns in plain C, which the compiler vectorises
- * for whatever the build targets. */
+ * Tiles of 4 rows by 2 vectors of 4 floats through the compilers' generic
+ * vectors (SSE2 on x86-64, NEON on aarch64, scalar code elsewhere); plain
+ * C loops where the compiler has no vector extension. */
+
+#if defined(__GNUC__)
+typedef float v4 __attribute__((vector_size(16)));
+typedef int32_t v4i __attribute__((vector_size(16)));
 
 #define PR 4
-#define PN 16
+#define PV 2
 
-static ALWAYS_INLINE void tile_portable(const job *j, size_t i0, size_t rows,
-                                        uint32_t n0, uint32_t cols)
+static ALWAYS_INLINE v4 load4(const float *p, int n)
 {
-    float acc[PR][PN];
-    for (size_t r = 0; r < rows; r++) {
-        const float *init = j->flags & NERF__SMM_ADD
-                                ? j->c + (i0 + r) * j->ldc + n0
-                                : j->bias ? j->bias + n0 : NULL;
-        for (uint32_t c = 0; c < cols; c++) {
-            acc[r][c] = init ? init[c] : 0.0f;
+    v4 x = {0.0f, 0.0f, 0.0f, 0.0f};
+    if (n >= 4) {
+        memcpy(&x, p, sizeof x);
+    } else {
+        for (int i = 0; i < n; i++) {
+            x[i] = p[i];
         }
     }
+    return x;
+}
+
+static ALWAYS_INLINE void store4(float *p, v4 x, int n)
+{
+    if (n >= 4) {
+        memcpy(p, &x, sizeof x);
+    } else {
+        for (int i = 0; i < n; i++) {
+            p[i] = x[i];
+        }
+    }
+}
+
+#define GRID4x2(OP)                                                         \
+    OP(0, 0) OP(0, 1) OP(1, 0) OP(1, 1) OP(2, 0) OP(2, 1) OP(3, 0) OP(3, 1)
+
+/* R rows, V vectors, the last holding `tail` columns (1 to 4). */
+static ALWAYS_INLINE void tile_portable(const job *j, size_t i0, const int R,
+                                        uint32_t n0, const int V,
+                                        const int tail)
+{
+    const bool add = j->flags & NERF__SMM_ADD;
+    float *const c = j->c + i0 * j->ldc + n0;
+    const size_t ldc = j->ldc;
+    const v4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
+#define W4(v) ((v) == V - 1 ? tail : 4)
+#define DECL(r, v) v4 c##r##v = zero;
+    GRID4x2(DECL)
+#undef DECL
+#define INIT(r, v)                                                          \
+    if ((r) < R && (v) < V) {                                               \
+        if (add) {                                                          \
+            c##r##v = load4(c + (r) * ldc + 4 * (v), W4(v));                \
+        } else if (j->bias) {                                               \
+            c##r##v = load4(j->bias + n0 + 4 * (v), W4(v));                 \
+        }                                                                   \
+    }
+    GRID4x2(INIT)
+#undef INIT
     const float *brow = j->b + n0;
     for (int s = 0; s < j->n_seg; s++) {
         const nerf__smm_seg *sg = &j->seg[s];
         const float *a = sg->a + i0 * sg->sm;
-        for (uint32_t k = 0; k < sg->k; k++, brow += j->ldb, a += sg->sk) {
-            for (size_t r = 0; r < rows; r++) {
-                const float x = a[r * sg->sm];
-                for (uint32_t c = 0; c < cols; c++) {
-                    acc[r][c] += x * brow[c];
-                }
-            }
+        const size_t sm = sg->sm, sk = sg->sk;
+        for (uint32_t k = 0; k < sg->k; k++, brow += j->ldb, a += sk) {
+            const v4 b0 = load4(brow, W4(0));
+            const v4 b1 = V > 1 ? load4(brow + 4, W4(1)) : b0;
+#define FMA(r, v)                                                           \
+    if ((r) < R && (v) < V) {                                               \
+        c##r##v += a[(r) * sm] * b##v;                                      \
+    }
+            GRID4x2(FMA)
+#undef FMA
         }
     }
-    for (size_t r = 0; r < rows; r++) {
-        float *out = j->c + (i0 + r) * j->ldc + n0;
-        for (uint32_t c = 0; c < cols; c++) {
-            float v = acc[r][c];
-            if (j->flags & NERF__SMM_RELU) {
-                v = v > 0.0f ? v : 0.0f;
-            }
-            out[c] = v;
-        }
+    const bool relu = j->flags & NERF__SMM_RELU;
+#define STORE(r, v)                                                         \
+    if ((r) < R && (v) < V) {                                               \
+        v4 y = c##r##v;                                                     \
+        if (relu) { /* NaN and -0 give +0, as x > 0 ? x : 0 */              \
+            y = (v4)((v4i)y & (y > zero));                                  \
+        }                                                                   \
+        store4(c + (r) * ldc + 4 * (v), y, W4(v));                          \
     }
+    GRID4x2(STORE)
+#undef STORE
+#undef W4
 }
+
+#define CASEP(R, V)                                                         \
+    case ((R) - 1) * PV + (V) - 1:                                          \
+        if (tail == 4) {                                                    \
+            tile_portable(j, i0, R, n0, V, 4);                              \
+        } else {                                                            \
+            tile_portable(j, i0, R, n0, V, tail);                           \
+        }                                                                   \
+        break
 
 static void run_portable(const job *j, size_t m, uint32_t n)
 {
     for (size_t i0 = 0; i0 < m; i0 += PR) {
-        for (uint32_t n0 = 0; n0 < n; n0 += PN) {
-            /* Constant bounds for the whole tiles, so that they unroll. */
-            if (m - i0 >= PR && n - n0 >= PN) {
-                tile_portable(j, i0, PR, n0, PN);
-            } else {
-                tile_portable(j, i0, m - i0 < PR ? m - i0 : PR, n0,
-                              n - n0 < PN ? n - n0 : PN);
+        const int R = m - i0 < PR ? (int)(m - i0) : PR;
+        for (uint32_t n0 = 0; n0 < n; n0 += 4 * PV) {
+            const uint32_t cols = n - n0 < 4 * PV ? n - n0 : 4 * PV;
+            const int V = (int)((cols + 3) / 4);
+            const int tail = (int)(cols - 4 * (uint32_t)(V - 1));
+            switch ((R - 1) * PV + V - 1) {
+            CASEP(1, 1); CASEP(1, 2);
+            CASEP(2, 1); CASEP(2, 2);
+            CASEP(3, 1); CASEP(3, 2);
+            CASEP(4, 1); CASEP(4, 2);
+            default:
+                break;
             }
         }
     }
 }
+#undef GRID4x2
+
+#else /* no vector extension: one element at a time */
+
+static void run_portable(const job *j, size_t m, uint32_t n)
+{
+    for (size_t i = 0; i < m; i++) {
+        for (uint32_t col = 0; col < n; col++) {
+            float acc = j->flags & NERF__SMM_ADD ? j->c[i * j->ldc + col]
+                        : j->bias                ? j->bias[col]
+                                                 : 0.0f;
+            size_t kb = 0;
+            for (int s = 0; s < j->n_seg; s++) {
+                const nerf__smm_seg *sg = &j->seg[s];
+                for (uint32_t k = 0; k < sg->k; k++) {
+                    acc += sg->a[i * sg->sm + k * sg->sk] *
+                           j->b[(kb + k) * j->ldb + col];
+                }
+                kb += sg->k;
+            }
+            if (j->flags & NERF__SMM_RELU) {
+                acc = acc > 0.0f ? acc : 0.0f;
+            }
+            j->c[i * j->ldc + col] = acc;
+        }
+    }
+}
+#endif
 
 /* ---- x86: AVX-512 and AVX2 -----------------------------------------------
  * Compiled whatever the build's baseline (target attributes), and run only
@@ -93,61 +184,73 @@ static void run_portable(const job *j, size_t m, uint32_t n)
 #define T256 __attribute__((target("avx2,fma")))
 
 /* AVX-512: up to 6 rows by 4 vectors of 16 (64 columns); the tail is
- * masked, which costs nothing on loads and stores. */
+ * masked, which costs nothing on loads and stores.  The accumulators are
+ * named variables, not an array: compilers keep an array that lives across
+ * the segment loop in memory. */
 #define R512 6
 #define V512 4
+
+/* OP(r, v) for every accumulator of the tile; OP tests r < R, v < V. */
+#define GRID6x4(OP)                                                         \
+    OP(0, 0) OP(0, 1) OP(0, 2) OP(0, 3) OP(1, 0) OP(1, 1) OP(1, 2) OP(1, 3) \
+    OP(2, 0) OP(2, 1) OP(2, 2) OP(2, 3) OP(3, 0) OP(3, 1) OP(3, 2) OP(3, 3) \
+    OP(4, 0) OP(4, 1) OP(4, 2) OP(4, 3) OP(5, 0) OP(5, 1) OP(5, 2) OP(5, 3)
 
 static ALWAYS_INLINE T512 void tile512(const job *j, size_t i0, const int R,
                                        uint32_t n0, const int V,
                                        __mmask16 last)
 {
-    __m512 acc[R512][V512];
-    __mmask16 mk[V512];
-    for (int v = 0; v < V; v++) {
-        mk[v] = v == V - 1 ? last : (__mmask16)0xffff;
+    const __mmask16 m0 = V == 1 ? last : 0xffff, m1 = V == 2 ? last : 0xffff;
+    const __mmask16 m2 = V == 3 ? last : 0xffff, m3 = last;
+    const bool add = j->flags & NERF__SMM_ADD;
+    float *const c = j->c + i0 * j->ldc + n0;
+    const size_t ldc = j->ldc;
+#define DECL(r, v) __m512 c##r##v = _mm512_setzero_ps();
+    GRID6x4(DECL)
+#undef DECL
+#define INIT(r, v)                                                          \
+    if ((r) < R && (v) < V) {                                               \
+        if (add) {                                                          \
+            c##r##v = _mm512_maskz_loadu_ps(m##v, c + (r) * ldc + 16 * (v)); \
+        } else if (j->bias) {                                               \
+            c##r##v = _mm512_maskz_loadu_ps(m##v, j->bias + n0 + 16 * (v)); \
+        }                                                                   \
     }
-    for (int r = 0; r < R; r++) {
-        for (int v = 0; v < V; v++) {
-            if (j->flags & NERF__SMM_ADD) {
-                acc[r][v] = _mm512_maskz_loadu_ps(
-                    mk[v], j->c + (i0 + r) * j->ldc + n0 + 16 * v);
-            } else if (j->bias) {
-                acc[r][v] = _mm512_maskz_loadu_ps(mk[v], j->bias + n0 + 16 * v);
-            } else {
-                acc[r][v] = _mm512_setzero_ps();
-            }
-        }
-    }
+    GRID6x4(INIT)
+#undef INIT
     const float *brow = j->b + n0;
     for (int s = 0; s < j->n_seg; s++) {
         const nerf__smm_seg *sg = &j->seg[s];
         const float *a = sg->a + i0 * sg->sm;
         const size_t sm = sg->sm, sk = sg->sk;
         for (uint32_t k = 0; k < sg->k; k++, brow += j->ldb, a += sk) {
-            __m512 bv[V512];
-            for (int v = 0; v < V; v++) {
-                bv[v] = _mm512_maskz_loadu_ps(mk[v], brow + 16 * v);
-            }
-            for (int r = 0; r < R; r++) {
-                const __m512 x = _mm512_set1_ps(a[r * sm]);
-                for (int v = 0; v < V; v++) {
-                    acc[r][v] = _mm512_fmadd_ps(x, bv[v], acc[r][v]);
-                }
-            }
+            const __m512 b0 = _mm512_maskz_loadu_ps(m0, brow);
+            const __m512 b1 = V > 1 ? _mm512_maskz_loadu_ps(m1, brow + 16)
+                                    : b0;
+            const __m512 b2 = V > 2 ? _mm512_maskz_loadu_ps(m2, brow + 32)
+                                    : b0;
+            const __m512 b3 = V > 3 ? _mm512_maskz_loadu_ps(m3, brow + 48)
+                                    : b0;
+#define FMA(r, v)                                                           \
+    if ((r) < R && (v) < V) {                                               \
+        c##r##v = _mm512_fmadd_ps(_mm512_set1_ps(a[(r) * sm]), b##v, c##r##v); \
+    }
+            GRID6x4(FMA)
+#undef FMA
         }
     }
-    for (int r = 0; r < R; r++) {
-        for (int v = 0; v < V; v++) {
-            __m512 y = acc[r][v];
-            if (j->flags & NERF__SMM_RELU) {
-                /* The second operand when either is NaN or both are zero:
-                 * NaN and -0 give +0, as the C path's v > 0 ? v : 0. */
-                y = _mm512_max_ps(y, _mm512_setzero_ps());
-            }
-            _mm512_mask_storeu_ps(j->c + (i0 + r) * j->ldc + n0 + 16 * v,
-                                  mk[v], y);
-        }
+    /* max(x, 0) gives its second operand when x is NaN or -0: +0, as the
+     * C path's x > 0 ? x : 0. */
+    const bool relu = j->flags & NERF__SMM_RELU;
+#define STORE(r, v)                                                         \
+    if ((r) < R && (v) < V) {                                               \
+        _mm512_mask_storeu_ps(c + (r) * ldc + 16 * (v), m##v,               \
+                              relu ? _mm512_max_ps(c##r##v,                 \
+                                                   _mm512_setzero_ps())     \
+                                   : c##r##v);                              \
     }
+    GRID6x4(STORE)
+#undef STORE
 }
 
 #define CASE512(R, V)                                                       \
@@ -184,6 +287,9 @@ static T512 void run512(const job *j, size_t m, uint32_t n)
 #define R256 4
 #define V256 2
 
+#define GRID4x2(OP)                                                         \
+    OP(0, 0) OP(0, 1) OP(1, 0) OP(1, 1) OP(2, 0) OP(2, 1) OP(3, 0) OP(3, 1)
+
 static ALWAYS_INLINE T256 void tile256(const job *j, size_t i0, const int R,
                                        uint32_t n0, const int V,
                                        const int masked, __m256i last)
@@ -191,50 +297,52 @@ static ALWAYS_INLINE T256 void tile256(const job *j, size_t i0, const int R,
 #define LOAD256(v, p)                                                       \
     (masked && (v) == V - 1 ? _mm256_maskload_ps((p), last)                 \
                             : _mm256_loadu_ps(p))
-    __m256 acc[R256][V256];
-    for (int r = 0; r < R; r++) {
-        for (int v = 0; v < V; v++) {
-            if (j->flags & NERF__SMM_ADD) {
-                acc[r][v] = LOAD256(v, j->c + (i0 + r) * j->ldc + n0 + 8 * v);
-            } else if (j->bias) {
-                acc[r][v] = LOAD256(v, j->bias + n0 + 8 * v);
-            } else {
-                acc[r][v] = _mm256_setzero_ps();
-            }
-        }
+    const bool add = j->flags & NERF__SMM_ADD;
+    float *const c = j->c + i0 * j->ldc + n0;
+    const size_t ldc = j->ldc;
+#define DECL(r, v) __m256 c##r##v = _mm256_setzero_ps();
+    GRID4x2(DECL)
+#undef DECL
+#define INIT(r, v)                                                          \
+    if ((r) < R && (v) < V) {                                               \
+        if (add) {                                                          \
+            c##r##v = LOAD256(v, c + (r) * ldc + 8 * (v));                  \
+        } else if (j->bias) {                                               \
+            c##r##v = LOAD256(v, j->bias + n0 + 8 * (v));                   \
+        }                                                                   \
     }
+    GRID4x2(INIT)
+#undef INIT
     const float *brow = j->b + n0;
     for (int s = 0; s < j->n_seg; s++) {
         const nerf__smm_seg *sg = &j->seg[s];
         const float *a = sg->a + i0 * sg->sm;
         const size_t sm = sg->sm, sk = sg->sk;
         for (uint32_t k = 0; k < sg->k; k++, brow += j->ldb, a += sk) {
-            __m256 bv[V256];
-            for (int v = 0; v < V; v++) {
-                bv[v] = LOAD256(v, brow + 8 * v);
-            }
-            for (int r = 0; r < R; r++) {
-                const __m256 x = _mm256_broadcast_ss(a + r * sm);
-                for (int v = 0; v < V; v++) {
-                    acc[r][v] = _mm256_fmadd_ps(x, bv[v], acc[r][v]);
-                }
-            }
+            const __m256 b0 = LOAD256(0, brow);
+            const __m256 b1 = V > 1 ? LOAD256(1, brow + 8) : b0;
+#define FMA(r, v)                                                           \
+    if ((r) < R && (v) < V) {                                               \
+        c##r##v = _mm256_fmadd_ps(_mm256_broadcast_ss(a + (r) * sm), b##v,  \
+                                  c##r##v);                                 \
+    }
+            GRID4x2(FMA)
+#undef FMA
         }
     }
-    for (int r = 0; r < R; r++) {
-        for (int v = 0; v < V; v++) {
-            __m256 y = acc[r][v];
-            if (j->flags & NERF__SMM_RELU) {
-                y = _mm256_max_ps(y, _mm256_setzero_ps());
-            }
-            float *p = j->c + (i0 + r) * j->ldc + n0 + 8 * v;
-            if (masked && v == V - 1) {
-                _mm256_maskstore_ps(p, last, y);
-            } else {
-                _mm256_storeu_ps(p, y);
-            }
-        }
+    const bool relu = j->flags & NERF__SMM_RELU;
+#define STORE(r, v)                                                         \
+    if ((r) < R && (v) < V) {                                               \
+        const __m256 y = relu ? _mm256_max_ps(c##r##v, _mm256_setzero_ps()) \
+                              : c##r##v;                                    \
+        if (masked && (v) == V - 1) {                                       \
+            _mm256_maskstore_ps(c + (r) * ldc + 8 * (v), last, y);          \
+        } else {                                                            \
+            _mm256_storeu_ps(c + (r) * ldc + 8 * (v), y);                   \
+        }                                                                   \
     }
+    GRID4x2(STORE)
+#undef STORE
 #undef LOAD256
 }
 
@@ -306,10 +414,21 @@ int nerf__smm_best(void)
     return NERF__SMM_PORTABLE;
 }
 
+/*
+ * The portable kernels are no faster than the BLAS's own (about equal to
+ * OpenBLAS's SSE kernels on x86, docs/performance.md), so without AVX2
+ * the layers keep going through the BLAS.
+ */
+int nerf__smm_default(void)
+{
+    const int v = nerf__smm_best();
+    return v >= NERF__SMM_AVX2 ? v : NERF__SMM_OFF;
+}
+
 /* Chosen once when the library is loaded; nerf__smm_use() overrides. */
 __attribute__((constructor)) static void choose_variant(void)
 {
-    atomic_store(&in_use, nerf__smm_best());
+    atomic_store(&in_use, nerf__smm_default());
 }
 
 int nerf__smm_variant(void)

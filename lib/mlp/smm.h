@@ -14,12 +14,13 @@
  * X W^T (B = W^T packed), dY W (B = W) and dY^T X (A = dY read down its
  * columns, B = X).  init_i is C's own row (SMM_ADD), the bias, or zero.
  *
- * Variants: AVX-512, AVX2 with FMA, and portable C, the best the
- * processor has chosen when the library is loaded.  Every element is one
- * chain of multiply-adds in k order from its initial value, whatever the
- * tiling, so the AVX-512 and AVX2 variants give identical bits (both use
- * fused multiply-adds); the portable one rounds each product (no FMA) and
- * differs from them by rounding only.
+ * Variants: AVX-512, AVX2 with FMA, and portable C (generic vectors);
+ * which one runs is chosen when the library is loaded (nerf__smm_default).
+ * Every element is one chain of multiply-adds in k order from its initial
+ * value, whatever the tiling, so the AVX-512 and AVX2 variants give
+ * identical bits (both fuse each multiply-add); the portable one leaves
+ * fusing to the compiler (gcc in ISO C mode does not) and differs from
+ * them by rounding only.
  */
 #ifndef NERF_MLP_SMM_H
 #define NERF_MLP_SMM_H
@@ -50,8 +51,11 @@ enum {
     NERF__SMM_AVX512 = 3,
 };
 
-/* The best variant this processor runs (chosen at load time). */
+/* The fastest kernels this processor runs (never NERF__SMM_OFF). */
 int nerf__smm_best(void);
+/* What the library uses unless told otherwise, chosen when it is loaded:
+ * nerf__smm_best() where that has AVX2, else NERF__SMM_OFF. */
+int nerf__smm_default(void);
 /* Whether `variant` runs here (NERF__SMM_OFF always does). */
 int nerf__smm_supported(int variant);
 /* The variant in use (NERF__SMM_OFF: the fused path is off). */

@@ -205,7 +205,7 @@ TEST(products_against_double_every_variant)
             free(res[v][i]);
         }
     }
-    nerf__smm_use(nerf__smm_best());
+    nerf__smm_use(nerf__smm_default());
 }
 
 /* ---- whole networks ------------------------------------------------------- */
@@ -348,7 +348,7 @@ static void check_model(const nerf_model_options *opts, size_t n,
         free_outputs(&got);
         free_outputs(&again);
     }
-    nerf__smm_use(nerf__smm_best());
+    nerf__smm_use(nerf__smm_default());
     free_outputs(&ref);
     free(pos);
     free(dir);
