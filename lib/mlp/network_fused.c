@@ -308,7 +308,8 @@ static int backward_block(const fjob *j, size_t r0, size_t rows, float *part)
     const size_t G = j->G;
     float *buf[2] = {ws->grad_a + r0 * G, ws->grad_b + r0 * G};
     int cur = 0;
-    float *const P = part - j->base; /* indexed as params */
+    /* The partial of parameter index i (as in params) is PARTIAL(i). */
+#define PARTIAL(i) (part + ((i) - j->base))
     const uint32_t W = net->width, Ep = net->pos_width;
     const uint32_t HW = nerf__network_head_width(net);
 
@@ -319,31 +320,31 @@ static int backward_block(const fjob *j, size_t r0, size_t rows, float *part)
         const nerf__linear *rgb = &net->rgb;
         float *dz = buf[0];
         sigmoid_grad(j, r0, rows, dz);
-        col_sum(rows, 3, dz, G, P + rgb->b);
+        col_sum(rows, 3, dz, G, PARTIAL(rgb->b));
         weight_grad(rows, dz, G, 3,
                     nerf__view_buffer(net, ws, vd - 1) + r0 * V, V, V,
-                    P + rgb->w, V);
+                    PARTIAL(rgb->w), V);
         input_grad(rows, dz, G, 3, params + rgb->w, V, V, buf[1]);
         cur = 1;
         for (uint32_t k = vd; k-- > 1;) {
             const nerf__linear *v = &net->view[k];
             float *d = buf[cur];
             relu_mask_sum(rows, V, nerf__view_buffer(net, ws, k) + r0 * V, V,
-                          d, G, P + v->b);
+                          d, G, PARTIAL(v->b));
             weight_grad(rows, d, G, V,
                         nerf__view_buffer(net, ws, k - 1) + r0 * V, V, V,
-                        P + v->w, V);
+                        PARTIAL(v->w), V);
             input_grad(rows, d, G, V, params + v->w, V, V, buf[1 - cur]);
             cur = 1 - cur;
         }
         const nerf__linear *v0 = &net->view[0];
         float *d = buf[cur];
         relu_mask_sum(rows, V, nerf__view_buffer(net, ws, 0) + r0 * V, V, d,
-                      G, P + v0->b);
-        weight_grad(rows, d, G, V, ws->head + r0 * HW, HW, F, P + v0->w,
+                      G, PARTIAL(v0->b));
+        weight_grad(rows, d, G, V, ws->head + r0 * HW, HW, F, PARTIAL(v0->w),
                     v0->in);
         weight_grad(rows, d, G, V, ws->enc_dir + r0 * Ed, Ed, Ed,
-                    P + v0->w + F, v0->in);
+                    PARTIAL(v0->w + F), v0->in);
         /* The gradient goes on only through the head's part. */
         input_grad(rows, d, G, V, params + v0->w, v0->in, F, buf[1 - cur]);
         cur = 1 - cur;
@@ -354,10 +355,10 @@ static int backward_block(const fjob *j, size_t r0, size_t rows, float *part)
     sigma_grad(j, r0, rows, d_head);
 
     const nerf__linear *head = &net->head;
-    col_sum(rows, HW, d_head, G, P + head->b);
+    col_sum(rows, HW, d_head, G, PARTIAL(head->b));
     weight_grad(rows, d_head, G, HW,
                 nerf__trunk_buffer(net, ws, net->depth - 1) + r0 * W, W, W,
-                P + head->w, W);
+                PARTIAL(head->w), W);
     input_grad(rows, d_head, G, HW, params + head->w, W, W, buf[1 - cur]);
     cur = 1 - cur;
 
@@ -365,10 +366,10 @@ static int backward_block(const fjob *j, size_t r0, size_t rows, float *part)
         const nerf__linear *l = &net->trunk[i];
         float *d = buf[cur];
         relu_mask_sum(rows, W, nerf__trunk_buffer(net, ws, i) + r0 * W, W, d,
-                      G, P + l->b);
+                      G, PARTIAL(l->b));
         if (i == 0) {
             weight_grad(rows, d, G, W, ws->enc_pos + r0 * Ep, Ep, Ep,
-                        P + l->w, l->in);
+                        PARTIAL(l->w), l->in);
             if (nerf__encoding_params(&net->pos_enc)) {
                 input_grad(rows, d, G, W, params + l->w, l->in, Ep,
                            buf[1 - cur]);
@@ -381,16 +382,17 @@ static int backward_block(const fjob *j, size_t r0, size_t rows, float *part)
         const size_t col = i == net->skip ? Ep : 0;
         if (col) {
             weight_grad(rows, d, G, W, ws->enc_pos + r0 * Ep, Ep, Ep,
-                        P + l->w, l->in);
+                        PARTIAL(l->w), l->in);
         }
         weight_grad(rows, d, G, W,
                     nerf__trunk_buffer(net, ws, i - 1) + r0 * W, W, W,
-                    P + l->w + col, l->in);
+                    PARTIAL(l->w + col), l->in);
         input_grad(rows, d, G, W, params + l->w + col, l->in, W,
                    buf[1 - cur]);
         cur = 1 - cur;
     }
     return cur;
+#undef PARTIAL
 }
 
 /* Which buffer backward_block() leaves the last dX in: one swap per

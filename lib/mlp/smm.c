@@ -233,7 +233,8 @@ static ALWAYS_INLINE T512 void tile512(const job *j, size_t i0, const int R,
                                     : b0;
 #define FMA(r, v)                                                           \
     if ((r) < R && (v) < V) {                                               \
-        c##r##v = _mm512_fmadd_ps(_mm512_set1_ps(a[(r) * sm]), b##v, c##r##v); \
+        c##r##v =                                                           \
+            _mm512_fmadd_ps(_mm512_set1_ps(a[(r) * sm]), b##v, c##r##v);    \
     }
             GRID6x4(FMA)
 #undef FMA
