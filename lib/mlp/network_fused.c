@@ -133,7 +133,28 @@ static nerf__smm_seg cols_of(const float *dy, size_t ld, size_t rows)
     return (nerf__smm_seg){dy, 1, ld, (uint32_t)rows};
 }
 
-static void forward_block(const fjob *j, size_t r0, size_t rows)
+/*
+ * Where a block's hidden activations go: the workspace's rows when it
+ * keeps them for the backward, else two block-sized slots on the stack
+ * (local), which never leave the cache.
+ */
+#define SLOT (NERF__FUSED_ROWS * NERF__FUSED_MAX_WIDTH)
+
+static float *trunk_out(const fjob *j, float *local, uint32_t i, size_t r0)
+{
+    return local ? local + (i % 2) * SLOT
+                 : nerf__trunk_buffer(j->net, j->ws, i) + r0 * j->net->width;
+}
+
+static float *view_out(const fjob *j, float *local, uint32_t k, size_t r0)
+{
+    return local ? local + (k % 2) * SLOT
+                 : nerf__view_buffer(j->net, j->ws, k) +
+                       r0 * j->net->view_width;
+}
+
+static void forward_block(const fjob *j, size_t r0, size_t rows,
+                          float *local)
 {
     const nerf__network *net = j->net;
     const float *params = j->params;
@@ -143,7 +164,7 @@ static void forward_block(const fjob *j, size_t r0, size_t rows)
     size_t ldx = Ep;
     for (uint32_t i = 0; i < net->depth; i++) {
         const nerf__linear *l = &net->trunk[i];
-        float *y = nerf__trunk_buffer(net, ws, i) + r0 * W;
+        float *y = trunk_out(j, local, i, r0);
         /* At the skip the input is [gamma(x), h]. */
         const bool skip = i > 0 && i == net->skip;
         nerf__smm_seg seg[2];
@@ -176,11 +197,11 @@ static void forward_block(const fjob *j, size_t r0, size_t rows)
     const uint32_t first = net->depth + 1;
     const nerf__smm_seg in0[2] = {rows_of(ws->head + r0 * HW, HW, F),
                                   rows_of(ws->enc_dir + r0 * Ed, Ed, Ed)};
-    float *h = nerf__view_buffer(net, ws, 0) + r0 * V;
+    float *h = view_out(j, local, 0, r0);
     nerf__smm(rows, V, in0, 2, j->wt[first], padded(V),
               params + net->view[0].b, NERF__SMM_RELU, h, V);
     for (uint32_t k = 1; k < net->view_depth; k++) {
-        float *hk = nerf__view_buffer(net, ws, k) + r0 * V;
+        float *hk = view_out(j, local, k, r0);
         const nerf__smm_seg in = rows_of(h, V, V);
         nerf__smm(rows, V, &in, 1, j->wt[first + k], padded(V),
                   params + net->view[k].b, NERF__SMM_RELU, hk, V);
@@ -195,10 +216,12 @@ static void forward_block(const fjob *j, size_t r0, size_t rows)
 static void forward_range(void *ctx, size_t begin, size_t end)
 {
     const fjob *j = ctx;
+    float slots[2 * SLOT]; /* 64 KB */
+    float *local = j->ws->keep ? NULL : slots;
     for (size_t r0 = begin; r0 < end; r0 += NERF__FUSED_ROWS) {
         const size_t rows =
             end - r0 < NERF__FUSED_ROWS ? end - r0 : NERF__FUSED_ROWS;
-        forward_block(j, r0, rows);
+        forward_block(j, r0, rows, local);
     }
 }
 
