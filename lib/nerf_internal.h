@@ -62,6 +62,8 @@
 #include "gemm_bf16.h"
 #include "layer.h"
 #include "network.h"
+#include "network_fused.h"
+#include "smm.h"
 
 /* occupancy and model: the grid, and the struct behind nerf_model. */
 #include "model.h"

@@ -5,6 +5,7 @@
 
 #include "fused.h"
 #include "layer.h"
+#include "network_fused.h"
 #include "parallel.h"
 #include "rng.h"
 
@@ -93,7 +94,7 @@ void nerf__network_init(const nerf__network *net, float *params,
 
 /* ---- workspace ---------------------------------------------------------- */
 
-static size_t grad_width(const nerf__network *net)
+size_t nerf__network_grad_width(const nerf__network *net)
 {
     size_t g = net->width + 1;
     if (net->view_width > g) {
@@ -163,9 +164,10 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     /* bf16 storage, in floats (two values each). */
     const bool bf16 = keep && net->bf16 != NULL;
     size_t kept = bf16 ? (n * input_columns(net, layer_count(net)) + 1) / 2 : 0;
-    size_t grad16 = bf16 ? (n * grad_width(net) + 1) / 2 : 0;
-    size_t partials = keep ? NERF__RELU_PARTIALS(n, grad_width(net)) : 0;
-    enum { SLOTS = 12 };
+    size_t grad16 = bf16 ? (n * nerf__network_grad_width(net) + 1) / 2 : 0;
+    size_t partials =
+        keep ? NERF__RELU_PARTIALS(n, nerf__network_grad_width(net)) : 0;
+    enum { SLOTS = 13 };
     size_t bytes[SLOTS] = { /* in floats, made bytes below */
         n * net->pos_width,
         density_only ? 0 : n * net->dir_width,
@@ -174,11 +176,12 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         n * nerf__network_head_width(net),
         view_layers * n * net->view_width,
         density_only ? 0 : n * 3,
-        keep ? n * grad_width(net) : 0,
-        keep ? n * grad_width(net) : 0,
+        keep ? n * nerf__network_grad_width(net) : 0,
+        keep ? n * nerf__network_grad_width(net) : 0,
         kept,
         grad16,
         partials,
+        net->bf16 ? 0 : nerf__fused_scratch(net, n, keep),
     };
     for (int i = 0; i < SLOTS; i++) {
         bytes[i] *= sizeof(float);
@@ -192,7 +195,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     float **slots[SLOTS] = {&ws->enc_pos, &ws->enc_dir, &ws->pos, &ws->trunk,
                             &ws->head, &ws->view, &ws->rgb, &ws->grad_a,
                             &ws->grad_b, &kept_at, &grad16_at,
-                            &ws->partials};
+                            &ws->partials, &ws->fused};
     unsigned char *at = block;
     for (int i = 0; i < SLOTS; i++) {
         *slots[i] = nerf__carve(&at, bytes[i]);
@@ -278,20 +281,18 @@ static void encode_directions(const nerf__network *net, nerf__workspace *ws,
 static float *trunk_buffer(const nerf__network *net, nerf__workspace *ws,
                            uint32_t layer)
 {
-    size_t slot = ws->keep ? layer : layer % 2;
-    return ws->trunk + slot * ws->n * net->width;
+    return nerf__trunk_buffer(net, ws, layer);
 }
 
 static float *view_buffer(const nerf__network *net, nerf__workspace *ws,
                           uint32_t layer)
 {
-    size_t slot = ws->keep ? layer : layer % 2;
-    return ws->view + slot * ws->n * net->view_width;
+    return nerf__view_buffer(net, ws, layer);
 }
 
 static float exp_density(float x)
 {
-    return expf(x < NERF__EXP_DENSITY_MAX ? x : NERF__EXP_DENSITY_MAX);
+    return nerf__exp_density(x);
 }
 
 /* Outside the space's domain there is nothing (space.h): density 0, and
@@ -334,6 +335,13 @@ static void output_rows(void *ctx, size_t begin, size_t end)
             j->sigma_out[i] = outside(net, j->pos, i) ? 0.0f : sigma;
         }
     }
+}
+
+/* The fused small-MLP path (network_fused.h) where the network fits it and
+ * the workspace was reserved for it. */
+static bool use_fused(const nerf__network *net, const nerf__workspace *ws)
+{
+    return ws->fused != NULL && nerf__fused_active(net);
 }
 
 static nerf__layer_ctx layer_ctx(const nerf__network *net, nerf__workspace *ws)
@@ -381,6 +389,17 @@ int nerf__network_forward(const nerf__network *net, const float *params,
     const uint32_t W = net->width;
     ws->n = n;
     encode_positions(net, params, ws, n, positions);
+    if (use_fused(net, ws)) {
+        if (net->use_viewdirs) {
+            encode_directions(net, ws, n, directions);
+        }
+        nerf__fused_forward(net, params, ws, n, false);
+        rows_job j = {.net = net, .params = params, .ws = ws,
+                      .rgb_out = rgb_out, .sigma_out = sigma_out,
+                      .pos = positions};
+        nerf__parallel_for(n, 60, output_rows, &j);
+        return NERF_OK;
+    }
     const float *x;
     int rc = trunk_forward(net, params, ws, n, &x);
 
@@ -450,6 +469,13 @@ int nerf__network_density(const nerf__network *net, const float *params,
     const uint32_t W = net->width;
     ws->n = n;
     encode_positions(net, params, ws, n, positions);
+    rows_job j = {.net = net, .params = params, .ws = ws,
+                  .sigma_out = sigma_out, .pos = positions};
+    if (use_fused(net, ws)) {
+        nerf__fused_forward(net, params, ws, n, true);
+        nerf__parallel_for(n, 30, density_rows, &j);
+        return NERF_OK;
+    }
     const float *x;
     int rc = trunk_forward(net, params, ws, n, &x);
     /* Only the density row of the head's weights; its bias is added by
@@ -463,8 +489,6 @@ int nerf__network_density(const nerf__network *net, const float *params,
     if (rc != NERF_OK) {
         return rc;
     }
-    rows_job j = {.net = net, .params = params, .ws = ws,
-                  .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 30, density_rows, &j);
     return NERF_OK;
 }
@@ -559,6 +583,16 @@ int nerf__network_backward(const nerf__network *net, const float *params,
     const uint32_t HW = nerf__network_head_width(net);
     float *d_head = ws->grad_a;
     int rc = NERF_OK;
+    if (use_fused(net, ws) && ws->keep) {
+        size_t ld = 0;
+        const float *d_enc = nerf__fused_backward(net, params, grads, ws,
+                                                  d_rgb, d_sigma, &ld);
+        if (d_enc) {
+            nerf__encoding_backward(&net->pos_enc, n, ws->pos, d_enc, ld,
+                                    grads + net->pos_params);
+        }
+        return NERF_OK;
+    }
 
     if (net->use_viewdirs) {
         const nerf__linear *r = &net->rgb;

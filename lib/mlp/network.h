@@ -18,6 +18,7 @@
 #ifndef NERF_MLP_NETWORK_H
 #define NERF_MLP_NETWORK_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -143,7 +144,36 @@ typedef struct nerf__workspace {
     /* The rounded operands of a bf16 network's products, created by its
      * first product (layer.h). */
     struct nerf__bf16_scratch *bf16;
+    /* The fused path's packed weights and gradient partials
+     * (network_fused.h), or NULL where the network does not fit it. */
+    float *fused;
 } nerf__workspace;
+
+/* Floats per sample in each of grad_a and grad_b. */
+size_t nerf__network_grad_width(const nerf__network *net);
+
+/* Where trunk layer `layer`'s activations are ([n, width]): its own slot
+ * when the workspace keeps them, else one of two alternating slots. */
+static inline float *nerf__trunk_buffer(const nerf__network *net,
+                                        nerf__workspace *ws, uint32_t layer)
+{
+    size_t slot = ws->keep ? layer : layer % 2;
+    return ws->trunk + slot * ws->n * net->width;
+}
+
+/* The same for the colour branch ([n, view_width]). */
+static inline float *nerf__view_buffer(const nerf__network *net,
+                                       nerf__workspace *ws, uint32_t layer)
+{
+    size_t slot = ws->keep ? layer : layer % 2;
+    return ws->view + slot * ws->n * net->view_width;
+}
+
+/* The exponential density activation, truncated. */
+static inline float nerf__exp_density(float x)
+{
+    return expf(x < NERF__EXP_DENSITY_MAX ? x : NERF__EXP_DENSITY_MAX);
+}
 
 int nerf__workspace_reserve(const nerf__env *env, nerf__workspace *ws,
                             const nerf__network *net, size_t n, bool keep);

@@ -1,0 +1,427 @@
+/*
+ * The fused small-MLP path (lib/mlp/network_fused.h, smm.h): its products
+ * against a double-precision reference for every kernel variant this
+ * processor runs, on sizes that are not multiples of the tiles; the
+ * AVX-512 and AVX2 variants bit for bit against each other; and whole
+ * networks (the fast preset's shape, a skip trunk, a reference head, no
+ * view directions) against the per-layer sgemm path, forward, density
+ * and backward, on sample counts that leave partial blocks and chunks,
+ * with two runs giving the same bits.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "../harness.h"
+#include "model.h"
+#include "network_fused.h"
+#include "rng.h"
+#include "smm.h"
+
+static const char *variant_name(int v)
+{
+    static const char *names[] = {"off (sgemm)", "portable", "avx2",
+                                  "avx512"};
+    return names[v];
+}
+
+static float uniform(nerf__rng *r)
+{
+    return 2.0f * nerf__rng_uniform(r) - 1.0f;
+}
+
+/* C[i, j] as smm defines it, in double, with the sum of |terms| as the
+ * scale of its rounding error. */
+static void ref_entry(size_t i, uint32_t j, const nerf__smm_seg *seg, int ns,
+                      const float *b, size_t ldb, const float *bias,
+                      unsigned flags, const float *c0, size_t ldc,
+                      double *value, double *scale)
+{
+    double s = 0.0, mag = 0.0;
+    if (flags & NERF__SMM_ADD) {
+        s = c0[i * ldc + j];
+    } else if (bias) {
+        s = bias[j];
+    }
+    mag = fabs(s);
+    size_t kb = 0;
+    for (int q = 0; q < ns; q++) {
+        for (uint32_t k = 0; k < seg[q].k; k++) {
+            double t = (double)seg[q].a[i * seg[q].sm + k * seg[q].sk] *
+                       b[(kb + k) * ldb + j];
+            s += t;
+            mag += fabs(t);
+        }
+        kb += seg[q].k;
+    }
+    if ((flags & NERF__SMM_RELU) && !(s > 0.0)) {
+        s = 0.0;
+    }
+    *value = s;
+    *scale = mag;
+}
+
+/* One product of m x n from k1 + k2 rows of B, with A read by rows
+ * (transposed = 0) or down its columns (1), for the current variant;
+ * the result goes to out (ldc = n + 3, so rows are not line-aligned). */
+static void run_case(size_t m, uint32_t n, uint32_t k1, uint32_t k2,
+                     int transposed, unsigned flags, bool with_bias,
+                     uint64_t seed, float *out, int *bad)
+{
+    nerf__rng r = nerf__rng_make(seed, 5);
+    const uint32_t K = k1 + k2;
+    const size_t lda = K + 5, ldb = n + 7, ldc = n + 3;
+    const size_t a_rows = transposed ? K : m, a_cols = transposed ? m : K;
+    float *a = malloc((a_rows * lda + a_cols + 1) * sizeof(float));
+    float *b = malloc((K * ldb + 1) * sizeof(float));
+    float *bias = malloc((n + 1) * sizeof(float));
+    float *c0 = malloc((m * ldc + 1) * sizeof(float));
+    for (size_t i = 0; i < a_rows * lda + a_cols + 1; i++) {
+        a[i] = uniform(&r);
+    }
+    for (size_t i = 0; i < K * ldb + 1; i++) {
+        b[i] = uniform(&r);
+    }
+    for (size_t i = 0; i <= n; i++) {
+        bias[i] = uniform(&r);
+    }
+    for (size_t i = 0; i < m * ldc + 1; i++) {
+        c0[i] = uniform(&r);
+    }
+    nerf__smm_seg seg[2];
+    int ns = 0;
+    /* The second segment starts at column (or row) k1 of the same A. */
+    if (transposed) {
+        seg[ns++] = (nerf__smm_seg){a, 1, lda, k1};
+        if (k2) {
+            seg[ns++] = (nerf__smm_seg){a + k1 * lda, 1, lda, k2};
+        }
+    } else {
+        seg[ns++] = (nerf__smm_seg){a, lda, 1, k1};
+        if (k2) {
+            seg[ns++] = (nerf__smm_seg){a + k1, lda, 1, k2};
+        }
+    }
+    memcpy(out, c0, (m * ldc + 1) * sizeof(float));
+    nerf__smm(m, n, seg, ns, b, ldb, with_bias ? bias : NULL, flags, out,
+              ldc);
+    for (size_t i = 0; i < m; i++) {
+        for (uint32_t j = 0; j < ldc; j++) {
+            float got = out[i * ldc + j];
+            if (j >= n) { /* between rows: untouched */
+                if (got != c0[i * ldc + j] && (*bad)++ < 5) {
+                    FAILF("%s m=%zu n=%u: wrote column %u beyond n",
+                          variant_name(nerf__smm_variant()), m, n, j);
+                }
+                continue;
+            }
+            double want, scale;
+            ref_entry(i, j, seg, ns, b, ldb, with_bias ? bias : NULL, flags,
+                      c0, ldc, &want, &scale);
+            /* A sum of K products rounds by at most about K units of
+             * its terms' magnitude. */
+            const double tol = (K + 2) * 1.2e-7 * scale;
+            if (!(fabs(got - want) <= tol) && (*bad)++ < 5) {
+                FAILF("%s m=%zu n=%u k=%u+%u t=%d flags=%u: C[%zu,%u] = %.9g, "
+                      "reference %.9g", variant_name(nerf__smm_variant()), m,
+                      n, k1, k2, transposed, flags, i, j, (double)got, want);
+            }
+        }
+    }
+    if (out[m * ldc] != c0[m * ldc] && (*bad)++ < 5) {
+        FAILF("wrote past the last row");
+    }
+    free(a);
+    free(b);
+    free(bias);
+    free(c0);
+}
+
+static const size_t ms[] = {1, 5, 7, 13, 37, 128, 131};
+static const uint32_t ns_[] = {1, 3, 8, 15, 16, 17, 31, 33, 64, 65, 100};
+static const uint32_t ks[][2] = {{1, 0}, {7, 0}, {32, 0}, {16, 15}, {63, 1},
+                                 {130, 0}};
+
+static void products_for(int variant, float **results)
+{
+    int bad = 0;
+    size_t at = 0;
+    for (size_t a = 0; a < sizeof ms / sizeof *ms; a++) {
+        for (size_t b = 0; b < sizeof ns_ / sizeof *ns_; b++) {
+            for (size_t c = 0; c < sizeof ks / sizeof *ks; c++) {
+                const size_t m = ms[a];
+                const uint32_t n = ns_[b];
+                const unsigned flags = (unsigned)((a + b + c) % 4);
+                float *out = results[at++];
+                run_case(m, n, ks[c][0], ks[c][1], (int)((a + c) % 2), flags,
+                         (b % 2) == 0, 1000 + 17 * a + 5 * b + c, out, &bad);
+            }
+        }
+    }
+    (void)variant;
+}
+
+#define N_CASES (7 * 11 * 6)
+
+TEST(products_against_double_every_variant)
+{
+    float *res[4][N_CASES];
+    for (int v = NERF__SMM_PORTABLE; v <= NERF__SMM_AVX512; v++) {
+        for (size_t i = 0; i < N_CASES; i++) {
+            res[v][i] = malloc((131 * 103 + 1) * sizeof(float));
+        }
+    }
+    int ran = 0;
+    for (int v = NERF__SMM_PORTABLE; v <= NERF__SMM_AVX512; v++) {
+        if (nerf__smm_use(v) != 0) {
+            printf("  %s: not on this processor\n", variant_name(v));
+            continue;
+        }
+        ran++;
+        products_for(v, res[v]);
+    }
+    CHECK(ran >= 1);
+    /* Both FMA variants run one multiply-add chain per element in the
+     * same order: they must agree bit for bit. */
+    if (nerf__smm_supported(NERF__SMM_AVX2) &&
+        nerf__smm_supported(NERF__SMM_AVX512)) {
+        size_t at = 0;
+        int differ = 0;
+        for (size_t a = 0; a < sizeof ms / sizeof *ms; a++) {
+            for (size_t b = 0; b < sizeof ns_ / sizeof *ns_; b++) {
+                for (size_t c = 0; c < sizeof ks / sizeof *ks; c++, at++) {
+                    size_t size = ms[a] * (ns_[b] + 3) + 1;
+                    if (memcmp(res[NERF__SMM_AVX2][at],
+                               res[NERF__SMM_AVX512][at],
+                               size * sizeof(float)) != 0) {
+                        differ++;
+                    }
+                }
+            }
+        }
+        CHECK_EQ_INT(differ, 0);
+    }
+    for (int v = NERF__SMM_PORTABLE; v <= NERF__SMM_AVX512; v++) {
+        for (size_t i = 0; i < N_CASES; i++) {
+            free(res[v][i]);
+        }
+    }
+    nerf__smm_use(nerf__smm_default());
+}
+
+/* ---- whole networks ------------------------------------------------------ */
+
+typedef struct outputs {
+    float *rgb, *sigma, *density, *grads;
+} outputs;
+
+static void run_network(nerf_model *m, int k, size_t n, const float *pos,
+                        const float *dir, const float *a_rgb,
+                        const float *a_sigma, outputs *o)
+{
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    o->rgb = malloc(3 * n * sizeof(float));
+    o->sigma = malloc(n * sizeof(float));
+    o->density = malloc(n * sizeof(float));
+    o->grads = malloc(m->n_params * sizeof(float));
+    CHECK_OK(nerf__model_forward(m, k, &ws, n, pos, dir, o->rgb, o->sigma));
+    nerf__model_zero_grad(m);
+    CHECK_OK(nerf__model_backward(m, k, &ws, a_rgb, a_sigma));
+    memcpy(o->grads, m->grads, m->n_params * sizeof(float));
+    nerf__workspace_release(&m->env, &ws);
+    memset(&ws, 0, sizeof ws);
+    /* Without kept activations (rendering) the same values, bit for bit:
+     * every sample's sums are the same whatever buffers hold them. */
+    float *rgb = malloc(3 * n * sizeof(float));
+    float *sigma = malloc(n * sizeof(float));
+    CHECK_OK(nerf__model_evaluate(m, k, &ws, n, pos, dir, rgb, sigma));
+    CHECK(memcmp(rgb, o->rgb, 3 * n * sizeof(float)) == 0);
+    CHECK(memcmp(sigma, o->sigma, n * sizeof(float)) == 0);
+    free(rgb);
+    free(sigma);
+    nerf__workspace_release(&m->env, &ws);
+    memset(&ws, 0, sizeof ws);
+    CHECK_OK(nerf__model_density(m, k, &ws, n, pos, o->density));
+    nerf__workspace_release(&m->env, &ws);
+}
+
+static void free_outputs(outputs *o)
+{
+    free(o->rgb);
+    free(o->sigma);
+    free(o->density);
+    free(o->grads);
+}
+
+static bool same_bits(const outputs *a, const outputs *b, size_t n,
+                      size_t params)
+{
+    return memcmp(a->rgb, b->rgb, 3 * n * sizeof(float)) == 0 &&
+           memcmp(a->sigma, b->sigma, n * sizeof(float)) == 0 &&
+           memcmp(a->density, b->density, n * sizeof(float)) == 0 &&
+           memcmp(a->grads, b->grads, params * sizeof(float)) == 0;
+}
+
+/*
+ * Values that differ only by the order of their sums, whose rounding
+ * scales with the magnitude of their terms rather than of their result:
+ * within rel of |want| + floor + frac times the largest |want|.
+ */
+static void compare(const char *what, const float *got, const float *want,
+                    size_t count, double rel, double floor, double frac,
+                    const char *variant)
+{
+    double scale = 0.0;
+    for (size_t i = 0; i < count; i++) {
+        scale = fabs(want[i]) > scale ? fabs(want[i]) : scale;
+    }
+    int bad = 0;
+    for (size_t i = 0; i < count; i++) {
+        double err = fabs((double)got[i] - want[i]);
+        double tol = rel * (fabs(want[i]) + floor + frac * scale);
+        if (!(err <= tol) && bad++ < 5) {
+            FAILF("%s, %s [%zu]: %.9g, sgemm path %.9g", variant, what, i,
+                  (double)got[i], (double)want[i]);
+        }
+    }
+}
+
+static void check_model(const nerf_model_options *opts, size_t n,
+                        bool expect_fused)
+{
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, opts));
+    if (m == NULL) {
+        return;
+    }
+    const int k = nerf__model_network(m, NERF_NETWORK_COARSE);
+    const nerf__network *net = &m->nets[k];
+    CHECK(nerf__fused_fits(net) == expect_fused);
+    /* Trained weights are no longer PyTorch's uniform draw: perturb them
+     * so that some ReLUs are off and the head is not near zero. */
+    nerf__rng r = nerf__rng_make(99, 3);
+    for (size_t i = net->offset; i < net->offset + net->count; i++) {
+        m->params[i] += 0.05f * uniform(&r);
+    }
+    float *pos = malloc(3 * n * sizeof(float));
+    float *dir = malloc(3 * n * sizeof(float));
+    float *a_rgb = malloc(3 * n * sizeof(float));
+    float *a_sigma = malloc(n * sizeof(float));
+    for (size_t i = 0; i < n; i++) {
+        double n2 = 0.0;
+        for (int c = 0; c < 3; c++) {
+            pos[3 * i + c] = 1.1f * uniform(&r);
+            dir[3 * i + c] = uniform(&r);
+            n2 += dir[3 * i + c] * dir[3 * i + c];
+            a_rgb[3 * i + c] = uniform(&r);
+        }
+        for (int c = 0; c < 3; c++) {
+            dir[3 * i + c] /= (float)sqrt(n2);
+        }
+        a_sigma[i] = 0.01f * uniform(&r);
+    }
+    CHECK_EQ_INT(nerf__smm_use(NERF__SMM_OFF), 0);
+    outputs ref;
+    run_network(m, k, n, pos, dir, a_rgb, a_sigma, &ref);
+    for (int v = NERF__SMM_PORTABLE; v <= NERF__SMM_AVX512; v++) {
+        if (nerf__smm_use(v) != 0) {
+            continue;
+        }
+        outputs got, again;
+        run_network(m, k, n, pos, dir, a_rgb, a_sigma, &got);
+        run_network(m, k, n, pos, dir, a_rgb, a_sigma, &again);
+        CHECK(same_bits(&got, &again, n, m->n_params));
+        if (expect_fused && nerf__smm_default() != NERF__SMM_OFF) {
+            /* It did take another path: sums in another order (on a few
+             * samples, another BLAS could happen to sum in this order). */
+            CHECK(!same_bits(&got, &ref, n, m->n_params));
+        }
+        const char *name = variant_name(v);
+        compare("rgb", got.rgb, ref.rgb, 3 * n, 1e-5, 0.01, 0.0, name);
+        compare("sigma", got.sigma, ref.sigma, n, 1e-5, 0.01, 0.0, name);
+        compare("density", got.density, ref.density, n, 1e-5, 0.01, 0.0,
+                name);
+        compare("density vs forward", got.density, got.sigma, n, 1e-5, 0.01,
+                0.0, name);
+        /* Parameter gradients sum n samples' products: per layer, against
+         * that layer's largest. */
+        const size_t first = net->trunk[0].w;
+        compare("encoding gradient", got.grads + net->offset,
+                ref.grads + net->offset, first - net->offset, 1e-4, 0.0, 0.05,
+                name);
+        for (uint32_t l = 0; l < net->depth; l++) {
+            const nerf__linear *L = &net->trunk[l];
+            compare("trunk gradient", got.grads + L->w, ref.grads + L->w,
+                    (size_t)L->in * L->out + L->out, 1e-4, 0.0, 0.05,
+                    name);
+        }
+        const size_t rest = net->offset + net->count - net->head.w;
+        compare("head and colour gradient", got.grads + net->head.w,
+                ref.grads + net->head.w, rest, 1e-4, 0.0, 0.05, name);
+        free_outputs(&got);
+        free_outputs(&again);
+    }
+    nerf__smm_use(nerf__smm_default());
+    free_outputs(&ref);
+    free(pos);
+    free(dir);
+    free(a_rgb);
+    free(a_sigma);
+    nerf_model_destroy(m);
+}
+
+/*
+ * Sample counts: where the fused kernels are the default (x86 with AVX2),
+ * counts that leave partial blocks and chunks; elsewhere (the portable
+ * kernels are then only for tests, and the aarch64 CI stage runs this
+ * under qemu, where a call that wakes the thread pool costs seconds) only
+ * counts small enough to run on the calling thread: the products test
+ * above covers the portable kernels at every size.
+ */
+static size_t count(size_t full, size_t emulated)
+{
+    return nerf__smm_default() != NERF__SMM_OFF ? full : emulated;
+}
+
+/* The fast preset's network with a small table: 2,500 samples are a whole
+ * chunk, then a partial one ending in a partial block. */
+TEST(fast_preset_network)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    o.seed = 5;
+    CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_FAST));
+    o.hash_log2_size = 12;
+    check_model(&o, count(2500, 3), true);
+    check_model(&o, 1, true);
+    check_model(&o, count(131, 2), true);
+}
+
+/* Reference-style heads (width + 1 columns, sigma last), a skip layer with
+ * a two-part input, and no view directions. */
+TEST(reference_forms)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    o.seed = 9;
+    o.depth = 4;
+    o.width = 40;
+    o.skip_layer = 2;
+    o.view_width = 24;
+    o.pos_frequencies = 4;
+    o.dir_frequencies = 2;
+    check_model(&o, count(777, 3), true);
+    o.use_viewdirs = 0;
+    check_model(&o, count(300, 2), true);
+    /* Too wide for the fused path: both runs are the sgemm path. */
+    o.width = 96;
+    check_model(&o, count(50, 1), false);
+}
+
+int main(void)
+{
+    RUN(products_against_double_every_variant);
+    RUN(fast_preset_network);
+    RUN(reference_forms);
+    HARNESS_EXIT();
+}
