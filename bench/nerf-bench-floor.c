@@ -79,8 +79,10 @@ static void access_block(void *ctx, size_t block)
 
 /*
  * Seconds per access, all threads together, on `entries` entries of
- * `table`: the best of three runs.  Block b draws entries congruent to b
- * modulo the block count, so that concurrent writes never meet.
+ * `table`: the best of three runs.  Block b draws its entries from the
+ * b-th contiguous part of the table, so that concurrent writes never meet,
+ * not even in one cache line (the library's backward gives each level to
+ * one thread).
  */
 static double time_accesses(float *table, uint32_t entries, uint32_t features,
                             bool write, uint32_t *idx, size_t blocks,
@@ -93,7 +95,7 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
     for (size_t b = 0; b < blocks; b++) {
         for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
             uint32_t e = (uint32_t)(next_random(seed) % per);
-            idx[b * ACCESSES_PER_BLOCK + i] = e * (uint32_t)blocks + (uint32_t)b;
+            idx[b * ACCESSES_PER_BLOCK + i] = (uint32_t)b * per + e;
         }
     }
     access_job j;
@@ -238,7 +240,9 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         write_per_sample += 8.0 * w;
     }
     free(idx);
-    nerf__model_clear_grad(m);
+    /* The adds above went behind the model's back: it believes its
+     * gradients zero since the breakdown's last Adam step. */
+    memset(m->grads + net->pos_params, 0, hg->count * sizeof(float));
     fl->encoding = n * (read_per_sample + write_per_sample);
 
     const double peak = 1e9 * fl->peak_gflops;
