@@ -1995,7 +1995,8 @@ NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
                                   nerf_train_stats *stats_out);
 
 /**
- * Set (or with NULL clear) the progress callback of nerf_trainer_run().
+ * Set (or with NULL clear) the progress callback of nerf_trainer_run()
+ * and nerf_trainer_run_for().
  * @return NERF_OK, or NERF_EINVAL for a NULL trainer.
  */
 NERF_API int nerf_trainer_set_progress(nerf_trainer *trainer,
