@@ -4,17 +4,17 @@
  * so that the COLMAP loader is tested on every machine.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "byte_buf.h"
 #include "byteorder.h"
 #include "camera.h"
 #include "colmap.h"
 #include "colmap_poses.h"
-#include "file_io.h"
 #include "field.h"
+#include "file_io.h"
 #include "scene_image.h"
 #include "scene_internal.h"
 
@@ -27,85 +27,27 @@
  * of it (world units; the solids' edges are some 0.02 wide). */
 #define SEE_TOLERANCE 0.05
 
-/* A growing byte buffer; a failed allocation sets oom and drops writes. */
-typedef struct buf {
-    const nerf__env *env;
-    unsigned char *p;
-    size_t n, cap;
-    bool oom;
-} buf;
-
-static unsigned char *reserve(buf *b, size_t more)
+static void put_u32(nerf__buf *b, uint32_t v)
 {
-    if (b->oom) {
-        return NULL;
-    }
-    if (b->n + more > b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 4096;
-        while (cap < b->n + more) {
-            cap *= 2;
-        }
-        unsigned char *p = nerf__alloc(b->env, cap);
-        if (p == NULL) {
-            b->oom = true;
-            return NULL;
-        }
-        if (b->p) {
-            memcpy(p, b->p, b->n);
-        }
-        nerf__free(b->env, b->p);
-        b->p = p;
-        b->cap = cap;
-    }
-    unsigned char *at = b->p + b->n;
-    b->n += more;
-    return at;
-}
-
-static void put_u32(buf *b, uint32_t v)
-{
-    unsigned char *p = reserve(b, 4);
+    unsigned char *p = nerf__buf_grow(b, 4);
     if (p) {
         nerf__store_le32(p, v);
     }
 }
 
-static void put_u64(buf *b, uint64_t v)
+static void put_u64(nerf__buf *b, uint64_t v)
 {
-    unsigned char *p = reserve(b, 8);
+    unsigned char *p = nerf__buf_grow(b, 8);
     if (p) {
         nerf__store_le64(p, v);
     }
 }
 
-static void put_f64(buf *b, double v)
+static void put_f64(nerf__buf *b, double v)
 {
     uint64_t bits;
     memcpy(&bits, &v, sizeof bits);
     put_u64(b, bits);
-}
-
-static void put_bytes(buf *b, const void *data, size_t n)
-{
-    unsigned char *p = reserve(b, n);
-    if (p) {
-        memcpy(p, data, n);
-    }
-}
-
-static void put_text(buf *b, const char *fmt, ...) NERF__PRINTF(2, 3);
-
-static void put_text(buf *b, const char *fmt, ...)
-{
-    char line[512];
-    va_list ap;
-    va_start(ap, fmt);
-    int n = vsnprintf(line, sizeof line, fmt, ap);
-    va_end(ap);
-    if (n > 0) {
-        put_bytes(b, line, (size_t)n < sizeof line ? (size_t)n
-                                                   : sizeof line - 1);
-    }
 }
 
 typedef struct point {
@@ -124,12 +66,12 @@ typedef struct colmap_writer {
     nerf__scene_look look; /* the capture's */
     const nerf__env *env;
     const char *dir;
-    uint32_t n;          /* views */
-    nerf_camera *cams;   /* n */
+    uint32_t n;        /* views */
+    nerf_camera *cams; /* n */
     point *points;
     uint32_t n_points;
-    sighting *seen;      /* n_points x n */
-    uint32_t *n_seen;    /* 2D points per view */
+    sighting *seen;   /* n_points x n */
+    uint32_t *n_seen; /* 2D points per view */
 } colmap_writer;
 
 static uint8_t to8(double v)
@@ -161,8 +103,7 @@ static int write_views(colmap_writer *w, uint8_t *rgba)
                         to8(rgba[4 * j + c] / 255.0 * a + (1.0 - a));
                 }
             }
-            snprintf(path, sizeof path, "%s/images/%05u", w->dir,
-                     (unsigned)k);
+            snprintf(path, sizeof path, "%s/images/%05u", w->dir, (unsigned)k);
             rc = nerf__scene_image_write(w->env, path, o, 3, rgba);
         }
     }
@@ -206,8 +147,8 @@ static bool sees(const colmap_writer *w, const nerf_camera *cam,
         len2 += (double)d[a] * d[a];
     }
     /* t = 1 at x: anything beyond t = 2 is behind it. */
-    float alpha = nerf__scene_render_ray_in(w->look.world, o, d, 0.0f, 2.0f,
-                                            rgb, &depth);
+    float alpha =
+        nerf__scene_render_ray_in(w->look.world, o, d, 0.0f, 2.0f, rgb, &depth);
     if (!(alpha > 0.5f)) {
         return false;
     }
@@ -237,9 +178,9 @@ static int make_points(colmap_writer *w)
                 size_t row = (size_t)((gy + 0.5) * o->height / SEED_GRID);
                 float ro[3], rd[3], rgb[3], depth;
                 nerf__camera_rays(cam, row * o->width + col, 1, ro, rd);
-                float a = nerf__scene_render_ray_in(
-                    w->look.world, ro, rd, w->look.near, w->look.far, rgb,
-                    &depth);
+                float a = nerf__scene_render_ray_in(w->look.world, ro, rd,
+                                                    w->look.near, w->look.far,
+                                                    rgb, &depth);
                 if (!(a > SEED_OPACITY)) {
                     continue;
                 }
@@ -275,11 +216,11 @@ static int make_points(colmap_writer *w)
 
 /* One camera: PINHOLE, or OPENCV when the views have a lens (k3 is
  * refused beforehand: OPENCV has none). */
-static void camera_record(const colmap_writer *w, bool bin, buf *b)
+static void camera_record(const colmap_writer *w, bool bin, nerf__buf *b)
 {
     const nerf_camera *c = &w->cams[0];
-    const bool lens = c->k1 != 0.0f || c->k2 != 0.0f || c->p1 != 0.0f ||
-                      c->p2 != 0.0f;
+    const bool lens =
+        c->k1 != 0.0f || c->k2 != 0.0f || c->p1 != 0.0f || c->p2 != 0.0f;
     const double p[8] = {c->fx, c->fy, c->cx, c->cy,
                          c->k1, c->k2, c->p1, c->p2};
     const int n = lens ? 8 : 4;
@@ -294,27 +235,29 @@ static void camera_record(const colmap_writer *w, bool bin, buf *b)
         }
         return;
     }
-    put_text(b, "# Camera list with one line of data per camera:\n"
-                "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-                "# Number of cameras: 1\n");
-    put_text(b, "1 %s %u %u", lens ? "OPENCV" : "PINHOLE",
-             (unsigned)c->width, (unsigned)c->height);
+    nerf__buf_printf(b, "# Camera list with one line of data per camera:\n"
+                        "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+                        "# Number of cameras: 1\n");
+    nerf__buf_printf(b, "1 %s %u %u", lens ? "OPENCV" : "PINHOLE",
+                     (unsigned)c->width, (unsigned)c->height);
     for (int i = 0; i < n; i++) {
-        put_text(b, " %.17g", p[i]);
+        nerf__buf_printf(b, " %.17g", p[i]);
     }
-    put_text(b, "\n");
+    nerf__buf_printf(b, "\n");
 }
 
-static void image_records(const colmap_writer *w, bool bin, buf *b)
+static void image_records(const colmap_writer *w, bool bin, nerf__buf *b)
 {
     if (bin) {
         put_u64(b, w->n);
     } else {
-        put_text(b, "# Image list with two lines of data per image:\n"
-                    "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, "
-                    "NAME\n"
-                    "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
-                    "# Number of images: %u\n", (unsigned)w->n);
+        nerf__buf_printf(b,
+                         "# Image list with two lines of data per image:\n"
+                         "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, "
+                         "NAME\n"
+                         "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
+                         "# Number of images: %u\n",
+                         (unsigned)w->n);
     }
     for (uint32_t k = 0; k < w->n; k++) {
         double c2w[12], q[4], t[3];
@@ -334,12 +277,13 @@ static void image_records(const colmap_writer *w, bool bin, buf *b)
                 put_f64(b, t[i]);
             }
             put_u32(b, 1);
-            put_bytes(b, name, strlen(name) + 1);
+            nerf__buf_put(b, name, strlen(name) + 1);
             put_u64(b, w->n_seen[k]);
         } else {
-            put_text(b, "%u %.17g %.17g %.17g %.17g %.17g %.17g %.17g 1 %s\n",
-                     (unsigned)(k + 1), q[0], q[1], q[2], q[3], t[0], t[1],
-                     t[2], name);
+            nerf__buf_printf(
+                b, "%u %.17g %.17g %.17g %.17g %.17g %.17g %.17g 1 %s\n",
+                (unsigned)(k + 1), q[0], q[1], q[2], q[3], t[0], t[1], t[2],
+                name);
         }
         /* The point ids in the order the sightings were numbered. */
         const char *sep = "";
@@ -353,26 +297,28 @@ static void image_records(const colmap_writer *w, bool bin, buf *b)
                 put_f64(b, s->v);
                 put_u64(b, (uint64_t)p + 1);
             } else {
-                put_text(b, "%s%.6f %.6f %u", sep, (double)s->u,
-                         (double)s->v, (unsigned)(p + 1));
+                nerf__buf_printf(b, "%s%.6f %.6f %u", sep, (double)s->u,
+                                 (double)s->v, (unsigned)(p + 1));
                 sep = " ";
             }
         }
         if (!bin) {
-            put_text(b, "\n");
+            nerf__buf_printf(b, "\n");
         }
     }
 }
 
-static void point_records(const colmap_writer *w, bool bin, buf *b)
+static void point_records(const colmap_writer *w, bool bin, nerf__buf *b)
 {
     if (bin) {
         put_u64(b, w->n_points);
     } else {
-        put_text(b, "# 3D point list with one line of data per point:\n"
-                    "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, "
-                    "TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
-                    "# Number of points: %u\n", (unsigned)w->n_points);
+        nerf__buf_printf(b,
+                         "# 3D point list with one line of data per point:\n"
+                         "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, "
+                         "TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
+                         "# Number of points: %u\n",
+                         (unsigned)w->n_points);
     }
     for (uint32_t p = 0; p < w->n_points; p++) {
         const point *pt = &w->points[p];
@@ -386,13 +332,13 @@ static void point_records(const colmap_writer *w, bool bin, buf *b)
             for (int c = 0; c < 3; c++) {
                 put_f64(b, pt->xyz[c]);
             }
-            put_bytes(b, pt->rgb, 3);
+            nerf__buf_put(b, pt->rgb, 3);
             put_f64(b, 0.0);
             put_u64(b, len);
         } else {
-            put_text(b, "%u %.17g %.17g %.17g %u %u %u 0", (unsigned)(p + 1),
-                     pt->xyz[0], pt->xyz[1], pt->xyz[2], pt->rgb[0],
-                     pt->rgb[1], pt->rgb[2]);
+            nerf__buf_printf(b, "%u %.17g %.17g %.17g %u %u %u 0",
+                             (unsigned)(p + 1), pt->xyz[0], pt->xyz[1],
+                             pt->xyz[2], pt->rgb[0], pt->rgb[1], pt->rgb[2]);
         }
         for (uint32_t k = 0; k < w->n; k++) {
             if (row[k].idx < 0) {
@@ -402,18 +348,19 @@ static void point_records(const colmap_writer *w, bool bin, buf *b)
                 put_u32(b, k + 1);
                 put_u32(b, (uint32_t)row[k].idx);
             } else {
-                put_text(b, " %u %d", (unsigned)(k + 1), (int)row[k].idx);
+                nerf__buf_printf(b, " %u %d", (unsigned)(k + 1),
+                                 (int)row[k].idx);
             }
         }
         if (!bin) {
-            put_text(b, "\n");
+            nerf__buf_printf(b, "\n");
         }
     }
 }
 
 static int write_model(const colmap_writer *w, bool bin)
 {
-    typedef void (*record_fn)(const colmap_writer *, bool, buf *);
+    typedef void (*record_fn)(const colmap_writer *, bool, nerf__buf *);
     static const record_fn records[3] = {camera_record, image_records,
                                          point_records};
     static const char *const names[3] = {"cameras", "images", "points3D"};
@@ -421,17 +368,11 @@ static int write_model(const colmap_writer *w, bool bin)
     snprintf(path, sizeof path, "%s/sparse/0", w->dir);
     int rc = nerf__scene_make_dir(path);
     for (int f = 0; f < 3 && rc == NERF_OK; f++) {
-        buf b = {w->env, NULL, 0, 0, false};
+        nerf__buf b = {w->env, NULL, 0, 0, false};
         records[f](w, bin, &b);
         snprintf(path, sizeof path, "%s/sparse/0/%s.%s", w->dir, names[f],
                  bin ? "bin" : "txt");
-        if (b.oom) {
-            rc = nerf__error(NERF_ENOMEM, "%s: out of memory", path);
-        } else {
-            nerf__span part = {b.p, b.n};
-            rc = nerf__file_write_atomic(w->env, path, &part, 1);
-        }
-        nerf__free(w->env, b.p);
+        rc = nerf__buf_save(&b, path);
     }
     return rc;
 }
@@ -455,7 +396,8 @@ int nerf__scene_write_colmap(const char *dir, const nerf_scene_options *o,
         rc = write_model(&w, o->layout == NERF_SCENE_LAYOUT_COLMAP_BINARY);
     }
     if (rc == NERF_OK) {
-        nerf__log(env, NERF_LOG_INFO, "scene: wrote %u views of %ux%u and "
+        nerf__log(env, NERF_LOG_INFO,
+                  "scene: wrote %u views of %ux%u and "
                   "%u sparse points as a COLMAP %s model to %s",
                   (unsigned)w.n, (unsigned)o->width, (unsigned)o->height,
                   (unsigned)w.n_points,

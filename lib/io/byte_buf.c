@@ -1,0 +1,71 @@
+/* The growing byte buffer of the writers that build a file in memory. */
+#include "byte_buf.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "file_io.h"
+
+unsigned char *nerf__buf_grow(nerf__buf *b, size_t n)
+{
+    if (b->failed) {
+        return NULL;
+    }
+    if (b->size + n > b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 4096;
+        while (cap < b->size + n) {
+            cap *= 2;
+        }
+        unsigned char *p = nerf__alloc(b->env, cap);
+        if (p == NULL) {
+            b->failed = true;
+            return NULL;
+        }
+        if (b->data) {
+            memcpy(p, b->data, b->size);
+        }
+        nerf__free(b->env, b->data);
+        b->data = p;
+        b->cap = cap;
+    }
+    unsigned char *at = b->data + b->size;
+    b->size += n;
+    return at;
+}
+
+void nerf__buf_put(nerf__buf *b, const void *data, size_t n)
+{
+    unsigned char *p = nerf__buf_grow(b, n);
+    if (p) {
+        memcpy(p, data, n);
+    }
+}
+
+void nerf__buf_printf(nerf__buf *b, const char *fmt, ...)
+{
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    if (n > 0) {
+        nerf__buf_put(b, line,
+                      (size_t)n < sizeof line ? (size_t)n : sizeof line - 1);
+    }
+}
+
+int nerf__buf_save(nerf__buf *b, const char *path)
+{
+    int rc;
+    if (b->failed) {
+        rc = nerf__error(NERF_ENOMEM, "%s: out of memory", path);
+    } else {
+        nerf__span part = {b->data, b->size};
+        rc = nerf__file_write_atomic(b->env, path, &part, 1);
+    }
+    nerf__free(b->env, b->data);
+    b->data = NULL;
+    b->size = b->cap = 0;
+    return rc;
+}
