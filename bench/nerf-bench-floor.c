@@ -113,33 +113,6 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
     return best / ((double)ACCESSES_PER_BLOCK * (double)blocks);
 }
 
-typedef struct adam_job {
-    size_t begin, n, per_block;
-    float *p, *g, *m, *v;
-    float b1, b2, step, eps;
-} adam_job;
-
-/* Adam on a contiguous part of the parameters, gradients zeroed. */
-static void adam_block(void *ctx, size_t block)
-{
-    adam_job *j = ctx;
-    const size_t begin = j->begin + block * j->per_block;
-    const size_t end = j->begin + (block + 1) * j->per_block < j->begin + j->n
-                           ? j->begin + (block + 1) * j->per_block
-                           : j->begin + j->n;
-    float *restrict p = j->p, *restrict g = j->g;
-    float *restrict m = j->m, *restrict v = j->v;
-    for (size_t k = begin; k < end; k++) {
-        const float gk = g[k];
-        const float mk = j->b1 * m[k] + (1.0f - j->b1) * gk;
-        const float vk = j->b2 * v[k] + (1.0f - j->b2) * gk * gk;
-        m[k] = mk;
-        v[k] = vk;
-        p[k] -= j->step * mk / (sqrtf(vk) + j->eps);
-        g[k] = 0.0f;
-    }
-}
-
 /* Parameters of network 0 the step's backward touched: every layer
  * parameter, and each hash-table float whose entry got a gradient. */
 static size_t touched_params(const nerf_model *m, const nerf__network *net,
@@ -165,26 +138,17 @@ static size_t touched_params(const nerf_model *m, const nerf__network *net,
  * touched parameters alone is its share of this pass: the same bytes per
  * parameter, at the rate of a pass that streams them.
  */
-static double time_dense_adam(nerf_model *m, const nerf__network *net,
-                              size_t blocks)
+static double time_dense_adam(nerf_model *m, const nerf__network *net)
 {
-    adam_job j;
-    memset(&j, 0, sizeof j);
-    j.begin = net->offset;
-    j.n = net->count;
-    j.per_block = (net->count + blocks - 1) / blocks;
-    j.p = m->params;
-    j.g = m->grads;
-    j.m = m->adam_m;
-    j.v = m->adam_v;
-    j.b1 = (float)m->adam.beta1;
-    j.b2 = (float)m->adam.beta2;
-    j.eps = (float)m->adam.eps;
-    j.step = (float)nerf__adam_rate(&m->adam, m->step);
+    const double lr = nerf__adam_rate(&m->adam, m->step);
+    const size_t at = net->offset;
     double best = INFINITY;
     for (int run = 0; run < 4; run++) {
         double t0 = now();
-        nerf__parallel_blocks(blocks, (size_t)1 << 30, adam_block, &j);
+        /* The library's own dense update (flags 0), on its thread pool. */
+        nerf__adam_update(&m->adam, m->step + 1, lr, net->count,
+                          m->params + at, m->grads + at, m->adam_m + at,
+                          m->adam_v + at, 0);
         if (run > 0) {
             best = fmin(best, now() - t0);
         }
@@ -260,7 +224,7 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         return -1;
     }
     fl->touched = touched_params(m, net, hg);
-    fl->optimiser = time_dense_adam(m, net, blocks) * (double)fl->touched /
+    fl->optimiser = time_dense_adam(m, net) * (double)fl->touched /
                     (double)net->count;
 
     const double cells = (double)bd->grid_cells_evaluated / NERF__GRID_EVERY;
