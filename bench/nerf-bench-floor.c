@@ -15,10 +15,15 @@
  *    bytes, 4 MiB each) its accesses are as random as these.
  *  - MLP: the network's products, forward and the two backward ones (dX,
  *    dW), at the machine's peak multiply-add rate (nerf-bench-peak.c).
- *  - Optimiser: an Adam update of the parameters the step touched (hash
- *    entries with a gradient, and the layers) at the rate of a dense pass
- *    that streams every parameter in memory order: 16 bytes read and 16
- *    written per parameter, no more.
+ *  - Optimiser: an Adam update of what the step touched.  The layers are
+ *    dense, at the rate of a pass that streams them.  The hash entries
+ *    with a gradient lie scattered over four arrays of the table's size
+ *    (parameters, gradients, two moments) that no cache holds, so the
+ *    unit of their cost is the 64-byte line, not the parameter: the
+ *    floor is four random read-modify-writes of each line that holds a
+ *    touched entry, timed like the encoding's on the table's gradient.
+ *    (Streaming the whole table instead costs about as much: finding the
+ *    touched lines without reading the others saves nothing.)
  *  - Grid refresh: the density of the cells a refresh evaluates (per
  *    step: a sixteenth of them), as encoding reads plus the density
  *    layers' products.
@@ -113,20 +118,31 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
     return best / ((double)ACCESSES_PER_BLOCK * (double)blocks);
 }
 
-/* Parameters of network 0 the step's backward touched: every layer
- * parameter, and each hash-table float whose entry got a gradient. */
+/* Floats of a cache line: the unit of a scattered update's traffic. */
+#define LINE_FLOATS 16u
+
+/* Parameters of network 0 the step's backward touched (every layer
+ * parameter, and each hash-table float whose entry got a gradient), and
+ * the 64-byte lines of the table that hold them. */
 static size_t touched_params(const nerf_model *m, const nerf__network *net,
-                             const nerf__hashgrid *hg)
+                             const nerf__hashgrid *hg, size_t *lines)
 {
     const float *g = m->grads;
     const size_t table = net->pos_params, table_end = table + hg->count;
-    size_t k = net->count - hg->count;
+    size_t k = net->count - hg->count, last_line = SIZE_MAX;
+    *lines = 0;
     for (size_t i = table; i < table_end; i += hg->features) {
         bool take = false;
         for (size_t f = 0; f < hg->features; f++) {
             take = take || g[i + f] != 0.0f;
         }
         k += take ? hg->features : 0;
+        /* An entry does not straddle lines: features are a power of 2. */
+        const size_t line = i / LINE_FLOATS;
+        if (take && line != last_line) {
+            ++*lines;
+            last_line = line;
+        }
     }
     return k;
 }
@@ -223,9 +239,22 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         nerf__model_clear_grad(m);
         return -1;
     }
-    fl->touched = touched_params(m, net, hg);
-    fl->optimiser = time_dense_adam(m, net) * (double)fl->touched /
-                    (double)net->count;
+    fl->touched = touched_params(m, net, hg, &fl->touched_lines);
+    const double layers = (double)(net->count - hg->count);
+    fl->optimiser = time_dense_adam(m, net) * layers / (double)net->count;
+    /* A line's random read-modify-write on an array of the table's size,
+     * the step's gradients gone into Adam above (zeros are left). */
+    const uint32_t lines = (uint32_t)(hg->count / LINE_FLOATS);
+    float *g = m->grads + net->pos_params;
+    idx = malloc(blocks * ACCESSES_PER_BLOCK * sizeof *idx);
+    if (idx == NULL) {
+        return -1;
+    }
+    fl->line_rmw_ns = 1e9 * time_accesses(g, lines, LINE_FLOATS, true, idx,
+                                          blocks, &seed);
+    free(idx);
+    memset(g, 0, hg->count * sizeof(float));
+    fl->optimiser += 4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
 
     const double cells = (double)bd->grid_cells_evaluated / NERF__GRID_EVERY;
     fl->grid = cells * (read_per_sample + density_flops(net) / peak);

@@ -364,6 +364,16 @@ static void c_fl_touched(char *b, size_t s, const preset_setup *p,
     }
     snprintf(b, s, "%zu", f->floor.touched);
 }
+static void c_fl_lines(char *b, size_t s, const preset_setup *p,
+                       const figures *f)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    snprintf(b, s, "%zu, %.2f ns each", f->floor.touched_lines,
+             f->floor.line_rmw_ns);
+}
 static void c_prims(char *b, size_t s, const preset_setup *p,
                     const figures *f)
 {
@@ -502,8 +512,9 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, "  hash read/add, level 0 .. last", c_access, ps, fs, n);
         row(out, "  encoding (hash fwd + bwd)", c_fl_enc, ps, fs, n);
         row(out, "  MLP at peak", c_fl_mlp, ps, fs, n);
-        row(out, "  optimiser (touched params)", c_fl_opt, ps, fs, n);
+        row(out, "  optimiser (touched lines x 4)", c_fl_opt, ps, fs, n);
         row(out, "  parameters touched", c_fl_touched, ps, fs, n);
+        row(out, "  table lines touched, update", c_fl_lines, ps, fs, n);
         row(out, "  grid refresh", c_fl_grid, ps, fs, n);
         row(out, "  floor / fast_floor_share", c_fl_sum, ps, fs, n);
     }
@@ -564,8 +575,10 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "level at the random-access cost measured on the model's "
                 "own tables with every thread issuing independent "
                 "accesses; the network's forward, dX and dW products at "
-                "the measured fp32 FMA peak; Adam over the parameters the "
-                "step touched; a refresh's density queries / %u.  In "
+                "the measured fp32 FMA peak; Adam: the layers at a streaming "
+                "pass's rate, and 4 random 64-byte line updates (parameters, "
+                "gradients, moments) for each line of the table holding a "
+                "touched entry; a refresh's density queries / %u.  In "
                 "brackets: floor / measured part (100%%: at the floor); "
                 "fast_floor_share = floor sum / mean step.\n",
                 NERF__GRID_EVERY);

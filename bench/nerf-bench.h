@@ -157,6 +157,8 @@ typedef struct fast_floor {
     double level_read_ns[NERF__HASHGRID_MAX_LEVELS];  /* per access, */
     double level_write_ns[NERF__HASHGRID_MAX_LEVELS]; /* all threads */
     size_t touched; /* parameters the step's backward gave a gradient */
+    size_t touched_lines; /* 64-byte lines of the table holding them */
+    double line_rmw_ns;   /* a random line update, all threads */
     double encoding, mlp, optimiser, grid, sum;
 } fast_floor;
 
