@@ -111,8 +111,9 @@ static void on_signal(int sig)
 }
 
 /* Without --checkpoint-every, MODEL is saved every this many seconds of
- * training: a save of the fast preset (140 MB) takes about 4 s here, so
- * one every 500 steps (20 s) cost a fifth of a run's time. */
+ * training (the trainer's checkpoint_seconds): a save of the fast preset
+ * (140 MB) takes about 4 s here, so one every 500 steps (20 s) cost a
+ * fifth of a run's time. */
 #define SAVE_SECONDS 120.0
 
 typedef struct run_state {
@@ -120,23 +121,7 @@ typedef struct run_state {
     uint64_t first_step;
     double seconds;  /* time limit beside --steps, 0 = none */
     int out_of_time;
-    nerf_model *model;
-    const char *save_path; /* timed saves to it; NULL: none */
-    double last_save;      /* elapsed seconds at the last timed save */
 } run_state;
-
-/* The timed save; a failure is said, and the run goes on to its final
- * save, whose failure ends it. */
-static void timed_save(run_state *st, double elapsed)
-{
-    if (st->save_path == NULL || elapsed - st->last_save < SAVE_SECONDS) {
-        return;
-    }
-    st->last_save = elapsed;
-    if (nerf_model_save(st->model, st->save_path) != NERF_OK) {
-        fprintf(stderr, "\n%s: warning: %s\n", PROG, nerf_last_error());
-    }
-}
 
 static int on_progress(const nerf_progress *p, void *user)
 {
@@ -164,7 +149,6 @@ static int on_progress(const nerf_progress *p, void *user)
     if (D.rank == 0 && p->total > 0) {
         progress_update(&st->bar, p->done, note);
     }
-    timed_save(st, p->elapsed);
     return interrupted || st->out_of_time ? 1 : 0;
 }
 
@@ -528,6 +512,7 @@ static int run(int argc, char **argv)
         to.batch_rays = (uint32_t)a.batch;
         to.batch_samples = (uint32_t)a.batch_samples;
         to.checkpoint_every = a.every == UINT64_MAX ? 0 : (uint32_t)a.every;
+        to.checkpoint_seconds = a.every == UINT64_MAX ? SAVE_SECONDS : 0.0;
         nerf_model_options mo;
         NERF_MODEL_OPTIONS_INIT(&mo);
         nerf_model_get_options(m, &mo);
@@ -584,9 +569,6 @@ static int run(int argc, char **argv)
     /* nerf_trainer_run_for() keeps its own time. */
     st.seconds = pl.budget ? 0.0 : a.seconds;
     st.out_of_time = 0;
-    st.model = m;
-    st.save_path = a.every == UINT64_MAX && D.rank == 0 ? a.out : NULL;
-    st.last_save = 0.0;
     uint64_t todo = pl.target > st.first_step ? pl.target - st.first_step : 0;
     progress_begin(&st.bar, PROG, pl.budget ? 1 : todo);
     nerf_trainer_set_progress(t, on_progress, &st);

@@ -1849,6 +1849,20 @@ typedef struct nerf_trainer_options {
                                    with NERF_ERROR if they differ.  0
                                    (default): never. */
     uint32_t reserved1;       /**< Must be 0. */
+    /* Since 0.6.  Zero (an older caller's zero fill): saves by steps
+     * alone, as before. */
+    double checkpoint_seconds; /**< S > 0: nerf_trainer_run() and
+                                    nerf_trainer_run_for() also save to
+                                    checkpoint_path once S seconds have
+                                    passed since the call began or since
+                                    its last save, so that a run whose
+                                    step count is not known beforehand (a
+                                    time budget) loses at most about S
+                                    seconds of training when it is killed.
+                                    The clock decides when a save happens,
+                                    never what is trained.  Needs
+                                    checkpoint_path; 0 (default): no
+                                    timed saves. */
 } nerf_trainer_options;
 
 /**
@@ -1966,9 +1980,11 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * by measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for
  * a quarter of @p seconds, takes the step rate over the last third of that
  * time (steps get faster as a marching sampler's occupancy grid learns
- * where the scene is, so the latest rate is the best guess of the rest),
- * and fixes the run's length: the steps taken plus that rate times the
- * time left.  It sets NERF_PARAM_DECAY_START to the current step and
+ * where the scene is, so the latest rate is the best guess of the rest;
+ * time spent saving checkpoints is left out), and fixes the run's length:
+ * the steps taken plus that rate times the time left, less the share of
+ * it that timed saves (checkpoint_seconds) will take at the last save's
+ * duration.  It sets NERF_PARAM_DECAY_START to the current step and
  * NERF_PARAM_DECAY_STEPS to that length, records the fit in the model
  * (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
  * trains to the length.  From the fit on, the run is a plain schedule:

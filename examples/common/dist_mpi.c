@@ -296,6 +296,7 @@ void dist_trainer_options(dist *d, nerf_trainer_options *o)
         /* One writer: rank 0 saves what every rank holds. */
         o->checkpoint_path = NULL;
         o->checkpoint_every = 0;
+        o->checkpoint_seconds = 0.0;
     }
 }
 

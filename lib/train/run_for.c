@@ -32,6 +32,21 @@ static uint64_t steps_for(double rate, double seconds_left)
     return n < 1e12 ? (uint64_t)n : (uint64_t)1e12;
 }
 
+/*
+ * The share of the time left that timed saves will take, from the last
+ * one's duration (0 before any).  A save of the fast preset takes seconds:
+ * with saves every 2 minutes, 3% of a run, which a length fitted to the
+ * whole time left would overrun.
+ */
+static double saving_share(const nerf_trainer *t, const nerf__run *r)
+{
+    const double every = t->opts.checkpoint_seconds;
+    if (!(every > 0.0) || !r->saved) {
+        return 0.0;
+    }
+    return r->save_seconds / (every + r->save_seconds);
+}
+
 /* Measure until a share of the budget has passed, then fix the length. */
 static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
                            nerf_train_stats *stats_out)
@@ -43,7 +58,7 @@ static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
     sc->budget = budget;
     m->adam.decay_start = NO_DECAY;
     m->adam.decay_steps = NO_DECAY;
-    double mark_time = 0.0;
+    double mark_time = 0.0, mark_saving = 0.0;
     uint64_t mark_done = 0;
     bool marked = false;
     double elapsed = 0.0;
@@ -58,21 +73,27 @@ static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
         if (!marked && elapsed >= WINDOW_START * budget) {
             marked = true;
             mark_time = elapsed;
+            mark_saving = r->saving;
             mark_done = r->done;
         }
     }
     if (rc != NERF_OK) {
         return rc;
     }
-    /* One step may outlast the whole window: then the rate since the
-     * start is all there is. */
-    const double rate = r->done > mark_done && elapsed > mark_time
-                            ? (double)(r->done - mark_done) / (elapsed - mark_time)
-                            : (double)r->done / elapsed;
+    /* The rate of training alone: a save inside the window (the first
+     * timed one falls there in a 10-minute budget) would lower it by a
+     * tenth.  One step may outlast the whole window: then the rate since
+     * the start is all there is. */
+    const double window = elapsed - mark_time - (r->saving - mark_saving);
+    const double rate = r->done > mark_done && window > 0.0
+                            ? (double)(r->done - mark_done) / window
+                            : (double)r->done / fmax(elapsed - r->saving,
+                                                     1e-9);
+    const double left = (budget - elapsed) * (1.0 - saving_share(t, r));
     sc->state = NERF_SCHEDULE_FITTED;
     sc->rate = rate;
     sc->fit_step = m->step;
-    sc->total = m->step + steps_for(rate, budget - elapsed);
+    sc->total = m->step + steps_for(rate, left);
     m->adam.decay_start = (double)sc->fit_step;
     m->adam.decay_steps = fmax((double)sc->total, 1.0);
     nerf__log(&t->env, NERF_LOG_INFO, "trainer: %.1f steps/s after %.0f s: "

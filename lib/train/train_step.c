@@ -202,14 +202,33 @@ static double seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int save_checkpoint(nerf_trainer *t)
+static int save_checkpoint(nerf_trainer *t, nerf__run *r)
 {
+    const double begin = nerf__run_elapsed(r);
     int rc = nerf_model_save(t->model, t->checkpoint_path);
     if (rc == NERF_OK) {
         nerf__log(&t->env, NERF_LOG_INFO, "trainer: saved %s at step %llu",
                   t->checkpoint_path, (unsigned long long)t->model->step);
     }
+    /* Timed saves count from the end of this one, failed or not: a save
+     * of a large model takes seconds, which are not training. */
+    r->last_save = nerf__run_elapsed(r);
+    r->save_seconds = r->last_save - begin;
+    r->saving += r->save_seconds;
+    r->saved_step = t->model->step;
+    r->saved = true;
     return rc;
+}
+
+/* Whether the step just taken is one to save after. */
+static bool save_due(const nerf_trainer *t, const nerf__run *r)
+{
+    const uint32_t every = t->opts.checkpoint_every;
+    if (every > 0 && r->last.step % every == 0) {
+        return true;
+    }
+    const double s = t->opts.checkpoint_seconds;
+    return s > 0.0 && nerf__run_elapsed(r) - r->last_save >= s;
 }
 
 void nerf__run_begin(nerf_trainer *t, nerf__run *r, uint64_t total)
@@ -233,9 +252,8 @@ int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out)
     }
     r->done++;
     fill_stats(stats_out, &r->last);
-    uint32_t every = t->opts.checkpoint_every;
-    if (every > 0 && r->last.step % every == 0) {
-        rc = save_checkpoint(t);
+    if (t->checkpoint_path && save_due(t, r)) {
+        rc = save_checkpoint(t, r);
     }
     if (rc == NERF_OK && t->progress) {
         nerf_progress p;
@@ -258,14 +276,13 @@ int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out)
     return rc;
 }
 
-int nerf__run_end(nerf_trainer *t, const nerf__run *r, int rc)
+int nerf__run_end(nerf_trainer *t, nerf__run *r, int rc)
 {
     /* A checkpoint at the end too, cancelled or not, so that no finished
      * step is lost. */
-    const uint64_t at = r->last.step;
     if (t->checkpoint_path && r->done > 0 &&
-        (t->opts.checkpoint_every == 0 || at % t->opts.checkpoint_every)) {
-        int save_rc = save_checkpoint(t);
+        !(r->saved && r->saved_step == t->model->step)) {
+        int save_rc = save_checkpoint(t, r);
         /* A failed save outranks a cancellation: the caller asked for the
          * stop, but must learn that the steps since the last checkpoint
          * are not on disk. */

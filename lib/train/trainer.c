@@ -63,6 +63,11 @@ static int check_options(const void *opts)
         what = "checksum_every needs a checksum_hook";
     } else if (o->reserved1 != 0) {
         what = "reserved1 must be 0";
+    } else if (!(o->checkpoint_seconds >= 0.0 &&
+                 o->checkpoint_seconds <= 1e12)) { /* also NaN */
+        what = "checkpoint_seconds must be a finite time >= 0";
+    } else if (o->checkpoint_seconds > 0.0 && o->checkpoint_path == NULL) {
+        what = "checkpoint_seconds needs a checkpoint_path";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);

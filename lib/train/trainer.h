@@ -98,6 +98,11 @@ typedef struct nerf__run {
     double start;            /* monotonic seconds */
     uint64_t done, total;    /* steps taken by this run; total reported */
     nerf_train_stats last;   /* of the last step */
+    double last_save;        /* run seconds when the last save ended */
+    double saving;           /* run seconds spent saving, in all */
+    double save_seconds;     /* how long the last save took */
+    uint64_t saved_step;     /* the model's step at the last save */
+    bool saved;              /* whether this run has saved yet */
 } nerf__run;
 
 void nerf__run_begin(nerf_trainer *t, nerf__run *r, uint64_t total);
@@ -105,7 +110,7 @@ double nerf__run_elapsed(const nerf__run *r);
 /* One step and what follows it; NERF_ECANCELLED when asked to stop. */
 int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out);
 /* The final save, folded into the run's status rc. */
-int nerf__run_end(nerf_trainer *t, const nerf__run *r, int rc);
+int nerf__run_end(nerf_trainer *t, nerf__run *r, int rc);
 
 /* The rays of a step this worker trains on: [lo, hi) of the `all` the
  * whole step takes (alone: all of them). */

@@ -198,7 +198,9 @@ FROZEN(nerf_trainer_options, checksum_hook, 72);
 FROZEN(nerf_trainer_options, hook_user, 80);
 FROZEN(nerf_trainer_options, checksum_every, 88);
 FROZEN(nerf_trainer_options, reserved1, 92);
-SIZE(nerf_trainer_options, 96);
+/* Appended in 0.6. */
+FROZEN(nerf_trainer_options, checkpoint_seconds, 96);
+SIZE(nerf_trainer_options, 104);
 
 /* New in 0.5. */
 FROZEN(nerf_exchange, struct_size, 0);

@@ -248,6 +248,43 @@ TEST(plain_schedule_and_bad_arguments)
     nerf_sampler_destroy(s);
 }
 
+/*
+ * Time spent saving is not training time: the fit leaves it out of the
+ * measured rate, and leaves the share of the time left that timed saves
+ * will take out of the length.  Saving after every step, the saves take
+ * all the time there is, so the length is the fit's own step.
+ */
+TEST(saves_are_not_training_time)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/budget.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(1);
+    nerf_model *m = tiny_model(2);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 32;
+    o.checkpoint_path = path;
+    o.checkpoint_seconds = 1e-9;
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    if (t) {
+        CHECK_OK(nerf_trainer_run_for(t, 0.5, NULL));
+        nerf_schedule sc = schedule_of(m);
+        CHECK(sc.state == NERF_SCHEDULE_FITTED);
+        CHECK(sc.fit_step > 0);
+        CHECK_EQ_INT(sc.total_steps, sc.fit_step);
+        CHECK_EQ_INT(nerf_model_step(m), sc.fit_step);
+        nerf_model *saved = NULL;
+        CHECK_OK(nerf_model_load(&saved, path, NULL));
+        CHECK_EQ_INT(nerf_model_step(saved), sc.fit_step);
+        nerf_model_destroy(saved);
+    }
+    remove(path);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
 int main(void)
 {
     if (fixture_open(&fx, 16, 4, 0) != NERF_OK) {
@@ -258,6 +295,7 @@ int main(void)
     RUN(resume_after_the_fit_is_bit_identical);
     RUN(measuring_resumes_by_measuring);
     RUN(plain_schedule_and_bad_arguments);
+    RUN(saves_are_not_training_time);
     fixture_close(&fx);
     HARNESS_EXIT();
 }

@@ -1,6 +1,8 @@
 /* The trainer: determinism, exact resume, checkpoints, cancellation and
  * allocation failures. */
 #include <dirent.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -222,6 +224,92 @@ TEST(run_progress_cancel_and_checkpoints)
     CHECK_EQ_INT(nerf_model_step(saved), 2);
     nerf_model_destroy(saved);
     nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
+/* What the checkpoint at a path holds after a step: its step, or -1 when
+ * there is none yet. */
+typedef struct saves_seen {
+    const char *path;
+    int64_t at[4];
+    int calls;
+} saves_seen;
+
+static int note_saved_step(const nerf_progress *p, void *user)
+{
+    (void)p;
+    saves_seen *w = user;
+    nerf_model *saved = NULL;
+    int64_t step = -1;
+    if (nerf_model_load(&saved, w->path, NULL) == NERF_OK) {
+        step = (int64_t)nerf_model_step(saved);
+    }
+    nerf_model_destroy(saved);
+    if (w->calls < 4) {
+        w->at[w->calls] = step;
+    }
+    w->calls++;
+    return 0;
+}
+
+/*
+ * checkpoint_seconds saves once that much time has passed since the last
+ * save: a tiny interval saves after every step (and the run's end adds no
+ * second save of the last step), a long one only at the end.  Refused
+ * without a path, or negative, infinite or NaN.
+ */
+TEST(timed_checkpoints)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/timed.nerf", fx.dir);
+    nerf_sampler *s = tiny_sampler(1);
+    const double every[2] = {1e-9, 1e6};
+    for (int k = 0; k < 2; k++) {
+        unlink(path);
+        nerf_model *m = tiny_model(4);
+        nerf_trainer_options o;
+        NERF_TRAINER_OPTIONS_INIT(&o);
+        CHECK(o.checkpoint_seconds == 0.0);
+        o.batch_rays = 32;
+        o.checkpoint_path = path;
+        o.checkpoint_seconds = every[k];
+        nerf_trainer *t = NULL;
+        CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+        saves_seen w = {.path = path};
+        CHECK_OK(nerf_trainer_set_progress(t, note_saved_step, &w));
+        CHECK_OK(nerf_trainer_run(t, 3, NULL));
+        CHECK_EQ_INT(w.calls, 3);
+        for (int i = 0; i < 3; i++) {
+            CHECK_EQ_INT(w.at[i], k == 0 ? i + 1 : -1);
+        }
+        nerf_model *saved = NULL;
+        CHECK_OK(nerf_model_load(&saved, path, NULL));
+        CHECK_EQ_INT(nerf_model_step(saved), 3);
+        nerf_model_destroy(saved);
+        nerf_trainer_destroy(t);
+        nerf_model_destroy(m);
+    }
+    unlink(path);
+    nerf_model *m = tiny_model(1);
+    const double bad[] = {-1.0, INFINITY, NAN};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        nerf_trainer_options o;
+        NERF_TRAINER_OPTIONS_INIT(&o);
+        o.checkpoint_path = path;
+        o.checkpoint_seconds = bad[i];
+        nerf_trainer *t = NULL;
+        CHECK_EQ_INT(nerf_trainer_create(&t, m, fx.train, s, &o),
+                     NERF_EINVAL);
+        CHECK(strstr(nerf_last_error(), "checkpoint_seconds") != NULL);
+        CHECK(t == NULL);
+    }
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.checkpoint_seconds = 60.0;
+    nerf_trainer *t = NULL;
+    CHECK_EQ_INT(nerf_trainer_create(&t, m, fx.train, s, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "checkpoint_path") != NULL);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
 }
@@ -537,6 +625,7 @@ int main(void)
     RUN(fast_resume_is_bit_identical);
     RUN(marching_needs_a_grid);
     RUN(run_progress_cancel_and_checkpoints);
+    RUN(timed_checkpoints);
     RUN(unwritable_checkpoint_path);
     RUN(failed_final_save_is_reported);
     RUN(bad_arguments);

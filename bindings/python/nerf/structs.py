@@ -486,6 +486,8 @@ class TrainerOptions(_Versioned):
         ("hook_user", c_void_p),
         ("checksum_every", c_uint32),
         ("reserved1", c_uint32),
+        # Appended in libnerf 0.6.
+        ("checkpoint_seconds", c_double),
     ]
     _private_ = ("struct_size", "hooks", "grad_hook", "checksum_hook",
                  "hook_user", "reserved1")

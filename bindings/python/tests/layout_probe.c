@@ -226,6 +226,7 @@ static void structs(void)
     FIELD(nerf_trainer_options, hook_user);
     FIELD(nerf_trainer_options, checksum_every);
     FIELD(nerf_trainer_options, reserved1);
+    FIELD(nerf_trainer_options, checkpoint_seconds);
     end_struct();
 
     BEGIN(nerf_exchange);

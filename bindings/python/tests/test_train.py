@@ -96,6 +96,28 @@ class Training(TestCase):
         with self.assertNerfError(nerf.NerfIOError, nerf.EIO, "missing-dir"):
             trainer(model, ds, sampler, checkpoint_path=bad)
 
+    def test_timed_checkpoints(self):
+        # A save once checkpoint_seconds have passed since the last: a
+        # tiny interval saves after every step, which a progress callback
+        # sees on disk.
+        path = os.path.join(_support.tmpdir(), "timed.nerf")
+        ds, model, sampler = _support.tiny_setup()
+        self.assertEqual(nerf.TrainerOptions().checkpoint_seconds, 0.0)
+        seen = []
+
+        def on_progress(p):
+            with nerf.Model.load(path) as back:
+                seen.append(back.step)
+
+        with trainer(model, ds, sampler, checkpoint_path=path,
+                     checkpoint_seconds=1e-9) as t:
+            t.run(2, progress=on_progress)
+        self.assertEqual(seen, [1, 2])
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "checkpoint_seconds"):
+            trainer(model, ds, sampler, checkpoint_path=path,
+                    checkpoint_seconds=-1.0)
+
     def test_run_for_fits_and_records_the_schedule(self):
         ds, model, sampler = _support.tiny_setup(seed=2)
         self.assertEqual(model.schedule["state"], "steps")
