@@ -1159,7 +1159,8 @@ typedef struct nerf_renderer_options {
                                     use nor results depend on it. */
     uint32_t threads;          /**< Worker threads for image and ray
                                     rendering, 0..1024.  0 (the default):
-                                    the online cores divided by OpenBLAS's
+                                    the cores the process may run on (its
+                                    CPU affinity) divided by OpenBLAS's
                                     own thread count (each worker's matrix
                                     products already use that many; more
                                     workers would oversubscribe the cores),

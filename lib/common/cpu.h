@@ -3,7 +3,8 @@
 
 #include <stdint.h>
 
-/* Processors online when first asked, at least 1: the default worker
+/* Processors the process may run on (its affinity; those online where
+ * that cannot be read) when first asked, at least 1: the default worker
  * count. */
 uint32_t nerf__cpu_count(void);
 
