@@ -219,17 +219,14 @@ TEST(run_progress_cancel_and_checkpoints)
     CHECK_EQ_INT(nerf_trainer_run(t, 10, &st), NERF_ECANCELLED);
     CHECK_EQ_INT(calls, 2);
     CHECK_EQ_INT(st.step, 2);
-    nerf_model *saved = NULL;
-    CHECK_OK(nerf_model_load(&saved, path, NULL));
-    CHECK_EQ_INT(nerf_model_step(saved), 2);
-    nerf_model_destroy(saved);
+    CHECK_EQ_INT(fixture_saved_step(path), 2);
     nerf_trainer_destroy(t);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
 }
 
-/* What the checkpoint at a path holds after a step: its step, or -1 when
- * there is none yet. */
+/* What the checkpoint at a path held after each step: its step, or -1
+ * when there was none yet. */
 typedef struct saves_seen {
     const char *path;
     int64_t at[4];
@@ -240,14 +237,8 @@ static int note_saved_step(const nerf_progress *p, void *user)
 {
     (void)p;
     saves_seen *w = user;
-    nerf_model *saved = NULL;
-    int64_t step = -1;
-    if (nerf_model_load(&saved, w->path, NULL) == NERF_OK) {
-        step = (int64_t)nerf_model_step(saved);
-    }
-    nerf_model_destroy(saved);
     if (w->calls < 4) {
-        w->at[w->calls] = step;
+        w->at[w->calls] = fixture_saved_step(w->path);
     }
     w->calls++;
     return 0;
@@ -283,10 +274,7 @@ TEST(timed_checkpoints)
         for (int i = 0; i < 3; i++) {
             CHECK_EQ_INT(w.at[i], k == 0 ? i + 1 : -1);
         }
-        nerf_model *saved = NULL;
-        CHECK_OK(nerf_model_load(&saved, path, NULL));
-        CHECK_EQ_INT(nerf_model_step(saved), 3);
-        nerf_model_destroy(saved);
+        CHECK_EQ_INT(fixture_saved_step(path), 3);
         nerf_trainer_destroy(t);
         nerf_model_destroy(m);
     }
@@ -429,10 +417,7 @@ TEST(failed_final_save_is_reported)
     CHECK_EQ_INT(nerf_trainer_run(t, 10, NULL), NERF_EIO);
     CHECK(strstr(nerf_last_error(), path) != NULL);
     CHECK_EQ_INT(nerf_model_step(m), 4);
-    nerf_model *saved = NULL;
-    CHECK_OK(nerf_model_load(&saved, kept, NULL));
-    CHECK_EQ_INT(nerf_model_step(saved), 3);
-    nerf_model_destroy(saved);
+    CHECK_EQ_INT(fixture_saved_step(kept), 3);
     nerf_trainer_destroy(t);
     unlink(dir);
     unlink(kept);

@@ -93,6 +93,18 @@ static inline void fixture_close(fixture *f)
     fx_remove_tree(f->dir);
 }
 
+/* The step of the checkpoint at path; -1 when none can be loaded. */
+static inline int64_t fixture_saved_step(const char *path)
+{
+    nerf_model *saved = NULL;
+    if (nerf_model_load(&saved, path, NULL) != NERF_OK) {
+        return -1;
+    }
+    int64_t step = (int64_t)nerf_model_step(saved);
+    nerf_model_destroy(saved);
+    return step;
+}
+
 static inline nerf_model *tiny_model(uint64_t seed)
 {
     nerf_model_options o;
