@@ -44,15 +44,19 @@ void nerf__buf_put(nerf__buf *b, const void *data, size_t n)
 
 void nerf__buf_printf(nerf__buf *b, const char *fmt, ...)
 {
-    char line[512];
-    va_list ap;
+    va_list ap, again;
     va_start(ap, fmt);
-    int n = vsnprintf(line, sizeof line, fmt, ap);
+    va_copy(again, ap);
+    const int n = vsnprintf(NULL, 0, fmt, ap);
     va_end(ap);
-    if (n > 0) {
-        nerf__buf_put(b, line,
-                      (size_t)n < sizeof line ? (size_t)n : sizeof line - 1);
+    /* vsnprintf writes a NUL after the text: room for it, then the size
+     * taken back, so that the next write overwrites it. */
+    unsigned char *p = n > 0 ? nerf__buf_grow(b, (size_t)n + 1) : NULL;
+    if (p) {
+        vsnprintf((char *)p, (size_t)n + 1, fmt, again);
+        b->size--;
     }
+    va_end(again);
 }
 
 int nerf__buf_save(nerf__buf *b, const char *path)

@@ -24,7 +24,7 @@ unsigned char *nerf__buf_grow(nerf__buf *b, size_t n);
 
 void nerf__buf_put(nerf__buf *b, const void *data, size_t n);
 
-/* Text of at most 511 bytes, without its terminating NUL. */
+/* Formatted text, without its terminating NUL. */
 void nerf__buf_printf(nerf__buf *b, const char *fmt, ...) NERF__PRINTF(2, 3);
 
 /* Write the buffer to path atomically and free it.  NERF_OK; NERF_ENOMEM

@@ -14,7 +14,6 @@
 #include "colmap.h"
 #include "colmap_poses.h"
 #include "field.h"
-#include "file_io.h"
 #include "scene_image.h"
 #include "scene_internal.h"
 
