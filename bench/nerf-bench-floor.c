@@ -121,12 +121,10 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
 /* Floats of a cache line: the unit of a scattered update's traffic. */
 #define LINE_FLOATS 16u
 
-/* Parameters of network 0 the step's backward touched (every layer
- * parameter, and each hash-table float whose entry got a gradient), and
- * the 64-byte lines of the table that hold them. */
-static size_t touched_params(const nerf_model *m, const nerf__network *net,
-                             const nerf__hashgrid *hg, size_t *lines)
+size_t touched_params(const nerf_model *m, size_t *lines)
 {
+    const nerf__network *net = &m->nets[0];
+    const nerf__hashgrid *hg = &net->pos_enc.u.hash;
     const float *g = m->grads;
     const size_t table = net->pos_params, table_end = table + hg->count;
     size_t k = net->count - hg->count, last_line = SIZE_MAX;
@@ -137,22 +135,26 @@ static size_t touched_params(const nerf_model *m, const nerf__network *net,
             take = take || g[i + f] != 0.0f;
         }
         k += take ? hg->features : 0;
-        /* An entry does not straddle lines: features are a power of 2. */
-        const size_t line = i / LINE_FLOATS;
-        if (take && line != last_line) {
-            ++*lines;
-            last_line = line;
+        if (!take) {
+            continue;
         }
+        /* Entries come in memory order, so a line already counted is the
+         * last one; an entry may straddle two (features need not divide
+         * a line). */
+        const size_t first = i / LINE_FLOATS;
+        const size_t last = (i + hg->features - 1) / LINE_FLOATS;
+        *lines += (first != last_line) + (last != first);
+        last_line = last;
     }
     return k;
 }
 
 /*
  * Seconds of a dense Adam pass over all of network 0's parameters, in
- * memory order on every thread: the best of three, after an untimed pass
- * that applies the step's real gradients.  The floor of an update of the
- * touched parameters alone is its share of this pass: the same bytes per
- * parameter, at the rate of a pass that streams them.
+ * memory order on every thread: the best of three, after an untimed pass.
+ * The layers' share of it is their floor: the same bytes per parameter,
+ * at the rate of a pass that streams them.  (A dense pass costs the same
+ * whatever the gradients hold.)
  */
 static double time_dense_adam(nerf_model *m, const nerf__network *net)
 {
@@ -186,7 +188,6 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
 {
     memset(fl, 0, sizeof *fl);
     nerf_model *m = t->model;
-    nerf__batch *b = &t->batch;
     const nerf__network *net = &m->nets[0];
     if (!bd->ok || net->pos_enc.kind != NERF_ENCODING_HASHGRID) {
         return -1;
@@ -219,42 +220,26 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         read_per_sample += 8.0 * r;
         write_per_sample += 8.0 * w;
     }
+    /* The optimiser's unit: a random read-modify-write of a whole line,
+     * on an array of the table's size. */
+    float *g = m->grads + net->pos_params;
+    const uint32_t lines = (uint32_t)(hg->count / LINE_FLOATS);
+    fl->line_rmw_ns = 1e9 * time_accesses(g, lines, LINE_FLOATS, true, idx,
+                                          blocks, &seed);
     free(idx);
     /* The adds above went behind the model's back: it believes its
      * gradients zero since the breakdown's last Adam step. */
-    memset(m->grads + net->pos_params, 0, hg->count * sizeof(float));
+    memset(g, 0, hg->count * sizeof(float));
     fl->encoding = n * (read_per_sample + write_per_sample);
 
     const double peak = 1e9 * fl->peak_gflops;
     fl->mlp = n * 3.0 * nerf__network_flops_per_sample(net) / peak;
 
-    /* The step's own gradients, from the last step's samples as the
-     * breakdown ran them, to see which parameters a step touches. */
-    int rc = nerf__model_forward(m, 0, &b->ws[0], bd->samples, b->march_points,
-                                 b->m_dirs, b->m_rgb, b->m_sigma);
-    if (rc == NERF_OK) {
-        rc = nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
-    }
-    if (rc != NERF_OK) {
-        nerf__model_clear_grad(m);
-        return -1;
-    }
-    fl->touched = touched_params(m, net, hg, &fl->touched_lines);
+    fl->touched = bd->touched;
+    fl->touched_lines = bd->touched_lines;
     const double layers = (double)(net->count - hg->count);
-    fl->optimiser = time_dense_adam(m, net) * layers / (double)net->count;
-    /* A line's random read-modify-write on an array of the table's size,
-     * the step's gradients gone into Adam above (zeros are left). */
-    const uint32_t lines = (uint32_t)(hg->count / LINE_FLOATS);
-    float *g = m->grads + net->pos_params;
-    idx = malloc(blocks * ACCESSES_PER_BLOCK * sizeof *idx);
-    if (idx == NULL) {
-        return -1;
-    }
-    fl->line_rmw_ns = 1e9 * time_accesses(g, lines, LINE_FLOATS, true, idx,
-                                          blocks, &seed);
-    free(idx);
-    memset(g, 0, hg->count * sizeof(float));
-    fl->optimiser += 4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
+    fl->optimiser = time_dense_adam(m, net) * layers / (double)net->count +
+                    4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
 
     const double cells = (double)bd->grid_cells_evaluated / NERF__GRID_EVERY;
     fl->grid = cells * (read_per_sample + density_flops(net) / peak);

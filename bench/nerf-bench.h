@@ -135,6 +135,11 @@ typedef struct step_breakdown {
     double grid_update;  /* one refresh, one per NERF__GRID_EVERY steps */
     int grid_updates;
     size_t grid_cells_evaluated;
+    /* What the step's backward touched (touched_params()), counted in the
+     * untimed first round on the trained model: the timed rounds repeat
+     * one step's update, which drives the model far from any real state
+     * (after ten seconds of them, the backward gave no gradient at all). */
+    size_t touched, touched_lines;
 } step_breakdown;
 
 /* The categories the figures are reported in, seconds per step. */
@@ -166,6 +171,10 @@ typedef struct fast_floor {
 double peak_gflops(const char **isa_out);
 /* After time_breakdown() on the same trainer; writes the model. */
 int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
+/* Parameters of network 0 (a hash-grid one) with a gradient in m->grads:
+ * every layer parameter, and each table float whose entry got one; and
+ * in *lines the 64-byte lines of the table that hold them. */
+size_t touched_params(const nerf_model *m, size_t *lines);
 
 /* ---- the figures of one preset ------------------------------------------ */
 
