@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Draw a mesh that nerf-export wrote as a PNG, for the docs.
+"""Draw a model's mesh, as nerf-export mesh extracts it, as a PNG.
 
     /usr/bin/python3 scripts/mesh_preview.py MODEL OUT.png [--resolution N]
         [--size PIXELS] [--azimuth DEG] [--elevation DEG]
