@@ -398,6 +398,60 @@ void nerf__march_samples_release(nerf__march_samples *s)
     nerf__march_samples_init(s, &env);
 }
 
+/* t and dt room for at least `total` samples; s's samples are lost. */
+static int reserve_samples(nerf__march_samples *s, size_t total)
+{
+    if (s->t != NULL && total <= s->cap_samples) {
+        return NERF_OK;
+    }
+    /* Some headroom: the next batch's count is rarely the same. */
+    size_t cap = total + total / 8 + 64, bytes;
+    size_t half = (cap + 15) & ~(size_t)15; /* dt stays 64-byte aligned */
+    if (nerf__mul_size(2 * half, sizeof(float), &bytes) != 0) {
+        return nerf__error(NERF_ENOMEM, "march: %zu samples overflow", total);
+    }
+    float *t = nerf__alloc(&s->env, bytes);
+    if (t == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__free(&s->env, s->t);
+    s->t = t;
+    s->dt = t + half;
+    s->cap_samples = half;
+    return NERF_OK;
+}
+
+static void slot_range(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    const size_t room = j->o->max_samples;
+    for (size_t k = begin; k < end; k++) {
+        j->counts[k + 1] = march_one(j, k, j->t_out + k * room,
+                                     j->dt_out + k * room, j->next_step + k);
+    }
+}
+
+/* The one-pass march: every ray into its slot, then the slots packed in
+ * ray order, which moves samples only towards the front. */
+static void march_slots(const nerf__occupancy *g, const nerf__march_options *o,
+                        const nerf__march_rays *rays, nerf__march_samples *s)
+{
+    const size_t room = o->max_samples;
+    march_job j = {.g = g, .o = o, .r = rays, .counts = s->offsets,
+                   .t_out = s->t, .dt_out = s->dt,
+                   .next_step = s->next_step};
+    s->offsets[0] = 0;
+    nerf__parallel_for(rays->n, COST_PER_RAY, slot_range, &j);
+    for (size_t k = 0; k < rays->n; k++) {
+        const size_t n = s->offsets[k + 1], at = s->offsets[k];
+        if (at != k * room) {
+            memmove(s->t + at, s->t + k * room, n * sizeof(float));
+            memmove(s->dt + at, s->dt + k * room, n * sizeof(float));
+        }
+        s->offsets[k + 1] = at + n;
+    }
+}
+
 int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
                     const nerf__march_rays *rays, nerf__march_samples *s)
 {
@@ -422,26 +476,22 @@ int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
         s->next_step = next_step;
         s->cap_rays = rays->n;
     }
-    size_t total = nerf__march_count(g, o, rays, s->offsets);
-    if (s->t == NULL || total > s->cap_samples) {
-        /* Some headroom: the next batch's count is rarely the same. */
-        size_t cap = total + total / 8 + 64, bytes;
-        size_t half = (cap + 15) & ~(size_t)15; /* dt stays 64-byte aligned */
-        if (nerf__mul_size(2 * half, sizeof(float), &bytes) != 0) {
-            return nerf__error(NERF_ENOMEM, "march: %zu samples overflow",
-                               total);
+    int rc;
+    if (o->max_samples > 0 && rays->n <= NERF__MARCH_ONE_PASS_ROOM / o->max_samples) {
+        rc = reserve_samples(s, rays->n * o->max_samples);
+        if (rc != NERF_OK) {
+            return rc;
         }
-        float *t = nerf__alloc(&s->env, bytes);
-        if (t == NULL) {
-            return NERF_ENOMEM;
+        march_slots(g, o, rays, s);
+    } else {
+        const size_t total = nerf__march_count(g, o, rays, s->offsets);
+        rc = reserve_samples(s, total);
+        if (rc != NERF_OK) {
+            return rc;
         }
-        nerf__free(&s->env, s->t);
-        s->t = t;
-        s->dt = t + half;
-        s->cap_samples = half;
+        nerf__march_fill(g, o, rays, s->offsets, s->t, s->dt, s->next_step);
     }
-    nerf__march_fill(g, o, rays, s->offsets, s->t, s->dt, s->next_step);
     s->n_rays = rays->n;
-    s->total = total;
+    s->total = s->offsets[rays->n];
     return NERF_OK;
 }

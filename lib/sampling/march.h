@@ -31,8 +31,10 @@
  * compositing takes as delta).  Marching is two passes over the same
  * per-ray loop, count then fill, so the layout is fixed before any sample
  * is written and does not depend on threads; both passes run over the
- * thread pool by rays.  No memory is allocated except by
- * nerf__march_run(), which grows a reusable buffer.
+ * thread pool by rays.  (nerf__march_run() marches small capped batches
+ * in one pass into per-ray slots instead, with the same result.)  No
+ * memory is allocated except by nerf__march_run(), which grows a reusable
+ * buffer.
  *
  * Contracted spaces (options.contract = inner > 0; space.h's CONTRACT):
  * the grid lies over contracted space, [-2 inner, 2 inner]^3, and a
@@ -144,7 +146,14 @@ typedef struct nerf__march_samples {
 void nerf__march_samples_init(nerf__march_samples *s, const nerf__env *env);
 void nerf__march_samples_release(nerf__march_samples *s);
 
-/* Count, size s, fill.  NERF_OK or NERF_ENOMEM (s then holds no batch). */
+/*
+ * Count, size s, fill.  Or, when rays times max_samples is at most
+ * NERF__MARCH_ONE_PASS_ROOM, march each ray once into a slot of
+ * max_samples and pack the slots: the same samples in half the marching,
+ * for a renderer's rounds of a few samples a ray, whose slots take a few
+ * kilobytes.  NERF_OK or NERF_ENOMEM (s then holds no batch).
+ */
+#define NERF__MARCH_ONE_PASS_ROOM 65536u
 int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
                     const nerf__march_rays *rays, nerf__march_samples *s);
 

@@ -516,6 +516,12 @@ TEST(resumed_marches_continue_exactly)
     size_t pieces = 0;
     CHECK_EQ_INT(march_in_pieces(g, o, s.rays, &all, 5, &pieces), 0);
     printf("  %zu pieces of at most 5 samples\n", pieces);
+    /* Pieces of 5 fit the one-pass slots; pieces of 40 for every ray do
+     * not, and take the count and fill passes. */
+    CHECK(N_RAYS * 5 <= NERF__MARCH_ONE_PASS_ROOM &&
+          N_RAYS * 40 > NERF__MARCH_ONE_PASS_ROOM);
+    CHECK_EQ_INT(march_in_pieces(g, o, s.rays, &all, 40, &pieces), 0);
+    printf("  %zu pieces of at most 40 samples\n", pieces);
     unmarch(&all);
     nerf__occupancy_destroy(g);
 }
