@@ -147,6 +147,12 @@ typedef struct nerf__workspace {
     /* The fused path's packed weights and gradient partials
      * (network_fused.h), or NULL where the network does not fit it. */
     float *fused;
+    /* Set by a caller whose parameters have not changed since this
+     * workspace's last forward (a renderer between the rounds of one
+     * block): the fused path then keeps the weights it packed for that
+     * forward instead of packing them again. */
+    bool params_unchanged;
+    uint32_t packed_layers; /* layers ws->fused holds, 0 after a reserve */
 } nerf__workspace;
 
 /* Floats per sample in each of grad_a and grad_b. */

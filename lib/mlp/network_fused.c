@@ -103,15 +103,18 @@ typedef struct fjob {
     float *grads;
 } fjob;
 
-/* W^T of every layer the pass needs, rows padded, into ws->fused. */
+/* W^T of every layer the pass needs, rows padded, into ws->fused, unless
+ * the caller vouches that the weights packed there last are current. */
 static void pack(fjob *j, uint32_t layers)
 {
-    float *at = j->ws->fused;
+    nerf__workspace *ws = j->ws;
+    const bool current = ws->params_unchanged && ws->packed_layers >= layers;
+    float *at = ws->fused;
     for (uint32_t i = 0; i < layers; i++) {
         const nerf__linear *l = layer_at(j->net, i);
         const float *w = j->params + l->w;
         const uint32_t P = padded(l->out);
-        for (uint32_t k = 0; k < l->in; k++) {
+        for (uint32_t k = 0; k < l->in && !current; k++) {
             for (uint32_t o = 0; o < P; o++) {
                 at[(size_t)k * P + o] = o < l->out ? w[(size_t)o * l->in + k]
                                                    : 0.0f;
@@ -119,6 +122,9 @@ static void pack(fjob *j, uint32_t layers)
         }
         j->wt[i] = at;
         at += (size_t)l->in * P;
+    }
+    if (!current) {
+        ws->packed_layers = layers;
     }
 }
 

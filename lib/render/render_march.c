@@ -186,9 +186,11 @@ static void zero_empty(void *ctx, size_t begin, size_t end)
     }
 }
 
-/* Points, directions and the network over the batch's packed samples. */
+/* Points, directions and the network over the batch's packed samples.
+ * same_params: the model is unchanged since the last call on b, so the
+ * network may reuse what it prepared from the weights then. */
 static int evaluate(nerf__batch *b, const nerf__render_setup *s,
-                    const march_job *j, bool keep)
+                    const march_job *j, bool keep, bool same_params)
 {
     const nerf_model *m = s->model;
     const size_t total = b->march.total, n = j->rays->n;
@@ -212,6 +214,7 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
             return rc;
         }
     }
+    ws->params_unchanged = same_params;
     if (keep) {
         rc = nerf__model_forward(m, 0, ws, total, b->march_points, dirs,
                                  b->m_rgb, b->m_sigma);
@@ -219,6 +222,7 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
         rc = nerf__model_evaluate(m, 0, ws, total, b->march_points, dirs,
                                   b->m_rgb, b->m_sigma);
     }
+    ws->params_unchanged = false;
     if (rc == NERF_OK && s->march_zero_empty) {
         march_job z = *j;
         z.g = nerf__model_grid(m);
@@ -266,7 +270,7 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
     }
     march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir, .mo = &mo};
     if (rc == NERF_OK) {
-        rc = evaluate(b, s, &j, true);
+        rc = evaluate(b, s, &j, true, false);
     }
     if (rc != NERF_OK) {
         return rc;
@@ -343,6 +347,8 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
     march_job j = {.b = b, .viewdir = b->m_view,
                    .max_samples = mo.max_samples, .mo = &mo};
     size_t n_active = n;
+    /* The model does not change between the rounds of a block. */
+    bool first_round = true;
     for (size_t k = 0; k < n; k++) {
         nerf__composite_state_init(&b->m_state[k]);
         b->m_count[k] = 0;
@@ -370,7 +376,8 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         j.rays = &rays;
         rc = nerf__march_run(g, &mo, &rays, &b->march);
         if (rc == NERF_OK) {
-            rc = evaluate(b, s, &j, false);
+            rc = evaluate(b, s, &j, false, !first_round);
+            first_round = false;
         }
         if (rc != NERF_OK) {
             return rc;

@@ -418,10 +418,87 @@ TEST(reference_forms)
     check_model(&o, count(50, 1), false);
 }
 
+/* One evaluation through ws, into rgb [n, 3]. */
+static void evaluate(nerf_model *m, int k, nerf__workspace *ws, size_t n,
+                     const float *pos, const float *dir, float *rgb,
+                     bool vouch)
+{
+    /* After the reserve inside, which may drop the packing. */
+    ws->params_unchanged = vouch;
+    CHECK_OK(nerf__model_evaluate(m, k, ws, n, pos, dir, rgb, NULL));
+    ws->params_unchanged = false;
+}
+
+/*
+ * A renderer vouches that the weights did not change between the rounds
+ * of a block (nerf__workspace.params_unchanged), and the fused path then
+ * keeps the weights it packed: the same results while that holds, a
+ * fresh packing after a reserve or where fewer layers were packed.
+ */
+TEST(packed_weights_kept_when_vouched)
+{
+    if (nerf__smm_default() == NERF__SMM_OFF) {
+        printf("  skipped: the fused path is not this processor's default\n");
+        return;
+    }
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    o.seed = 7;
+    CHECK_OK(nerf_model_options_preset(&o, NERF_PRESET_FAST));
+    o.hash_log2_size = 12;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m == NULL) {
+        return;
+    }
+    const int k = nerf__model_network(m, NERF_NETWORK_COARSE);
+    const nerf__network *net = &m->nets[k];
+    enum { N = 300 };
+    static float pos[3 * N], dir[3 * N], sigma[N];
+    static float first[3 * N], got[3 * N], fresh[3 * N];
+    nerf__rng r = nerf__rng_make(7, 1);
+    for (size_t i = 0; i < 3 * N; i++) {
+        pos[i] = uniform(&r);
+        dir[i] = i % 3 == 2 ? 1.0f : 0.0f;
+    }
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    CHECK_OK(nerf__model_reserve(m, k, &ws, N, false));
+    evaluate(m, k, &ws, N, pos, dir, first, false);
+    evaluate(m, k, &ws, N, pos, dir, got, true);
+    CHECK(memcmp(got, first, sizeof got) == 0);
+    /* A density pass packs the trunk alone: a vouched forward after it
+     * packs the colour branch too. */
+    CHECK_OK(nerf__model_density(m, k, &ws, N, pos, sigma));
+    evaluate(m, k, &ws, N, pos, dir, got, true);
+    CHECK(memcmp(got, first, sizeof got) == 0);
+    /* Vouching is taken at its word: changed colour weights are not seen
+     * until a forward that does not vouch. */
+    for (uint32_t i = 0; i < net->view[0].in * net->view[0].out; i++) {
+        m->params[net->view[0].w + i] += 0.1f * uniform(&r);
+    }
+    evaluate(m, k, &ws, N, pos, dir, got, true);
+    CHECK(memcmp(got, first, sizeof got) == 0);
+    evaluate(m, k, &ws, N, pos, dir, fresh, false);
+    CHECK(memcmp(fresh, first, sizeof fresh) != 0);
+    /* A workspace that grows has packed nothing. */
+    for (uint32_t i = 0; i < net->view[0].in * net->view[0].out; i++) {
+        m->params[net->view[0].w + i] += 0.1f * uniform(&r);
+    }
+    CHECK_OK(nerf__model_reserve(m, k, &ws, 2 * N, false));
+    evaluate(m, k, &ws, N, pos, dir, got, true);
+    CHECK(memcmp(got, fresh, sizeof got) != 0);
+    evaluate(m, k, &ws, N, pos, dir, fresh, false);
+    CHECK(memcmp(got, fresh, sizeof got) == 0);
+    nerf__workspace_release(nerf__model_env(m), &ws);
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     RUN(products_against_double_every_variant);
     RUN(fast_preset_network);
     RUN(reference_forms);
+    RUN(packed_weights_kept_when_vouched);
     HARNESS_EXIT();
 }
