@@ -1165,7 +1165,10 @@ typedef struct nerf_renderer_options {
                                     products already use that many; more
                                     workers would oversubscribe the cores),
                                     at least 1; all cores with another
-                                    BLAS.  Results do not depend on it. */
+                                    BLAS, and (since 0.6.1) for a model
+                                    whose products need no BLAS (the fast
+                                    preset's fp32 network on x86-64).
+                                    Results do not depend on it. */
     uint32_t reserved0;        /**< Must be 0. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
                                     defaults. */

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "gemm_bf16.h"
+#include "network_fused.h"
 #include "occupancy.h"
 #include "options.h"
 
@@ -598,6 +599,16 @@ const nerf__env *nerf__model_env(const nerf_model *m)
 bool nerf__model_uses_viewdirs(const nerf_model *m)
 {
     return m->nets[0].use_viewdirs;
+}
+
+bool nerf__model_uses_blas(const nerf_model *m)
+{
+    for (uint32_t i = 0; i < m->n_nets; i++) {
+        if (!nerf__fused_active(&m->nets[i])) {
+            return true;
+        }
+    }
+    return false;
 }
 
 const nerf__space *nerf__model_space(const nerf_model *m)

@@ -132,6 +132,10 @@ const nerf__env *nerf__model_env(const nerf_model *m);
 
 /* Whether the networks take view directions (both or neither do). */
 bool nerf__model_uses_viewdirs(const nerf_model *m);
+/* Whether evaluating the model goes through the BLAS (or oneDNN), whose
+ * own threads then share the cores, rather than through the fused path's
+ * kernels alone (mlp/network_fused.h). */
+bool nerf__model_uses_blas(const nerf_model *m);
 
 /* The space the model's networks and grid work in (space.h): a world
  * point reaches them through nerf__space_to_domain(). */

@@ -17,12 +17,15 @@
  * 2 cores, 100x100: with OpenBLAS on 2 threads, 1 worker gave 6930 rays/s
  * (tiny) and 296 (reference), 2 workers 5815 and 278; with
  * OPENBLAS_NUM_THREADS=1, 1 worker 4914 and 188, 2 workers 9353 and 367.
- * So: cores divided by the BLAS's threads, at least 1.
+ * So: cores divided by the BLAS's threads, at least 1.  A model on the
+ * fused path calls no BLAS: one worker per core, or a lone worker would
+ * hand every small loop of its blocks to the thread pool (a trained fast
+ * lego model, 800x800 on 2 cores: 4.8 s a frame against 1.0).
  */
-static uint32_t auto_threads(void)
+static uint32_t auto_threads(const nerf_model *m)
 {
     uint32_t cores = nerf__cpu_count();
-    int blas = nerf__blas_threads();
+    int blas = nerf__model_uses_blas(m) ? nerf__blas_threads() : 1;
     uint32_t t = blas > 1 ? cores / (uint32_t)blas : cores;
     return t ? t : 1;
 }
@@ -126,7 +129,7 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
     } else {
         r->noise_std = o.raw_noise_std;
     }
-    r->threads = o.threads ? o.threads : auto_threads();
+    r->threads = o.threads ? o.threads : auto_threads(model);
     r->chunk = ((size_t)o.chunk_rays + NERF__RENDER_BLOCK - 1) /
                NERF__RENDER_BLOCK * NERF__RENDER_BLOCK;
     atomic_init(&r->cancel, 0);

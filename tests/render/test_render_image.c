@@ -14,10 +14,14 @@
 #include "../harness.h"
 #include "composite.h"
 #include "composite_packed.h"
+#include "cpu.h"
+#include "gemm.h"
 #include "march.h"
 #include "model.h"
 #include "nerf.h"
 #include "occupancy.h"
+#include "renderer.h"
+#include "smm.h"
 
 #define W 24
 #define H 16
@@ -593,6 +597,43 @@ TEST(argument_checks)
     nerf_model_destroy(m);
 }
 
+/*
+ * Left to the library, the workers of a renderer whose model goes
+ * through the BLAS share the cores with the BLAS's threads; a model on
+ * the fused path calls no BLAS and gets a worker per core, whatever the
+ * BLAS's thread count.
+ */
+TEST(default_workers)
+{
+    nerf_model *fast = fast_model(), *tiny = tiny_model();
+    nerf_sampler *s = fast_sampler(1024);
+    nerf_renderer *rf = NULL, *rt = NULL;
+    if (fast && tiny && s) {
+        CHECK_OK(nerf_renderer_create(&rf, fast, s, NULL));
+        CHECK_OK(nerf_renderer_create(&rt, tiny, NULL, NULL));
+    }
+    if (rf && rt) {
+        const uint32_t cores = nerf__cpu_count();
+        const int blas = nerf__blas_threads();
+        uint32_t shared = blas > 1 ? cores / (uint32_t)blas : cores;
+        shared = shared ? shared : 1;
+        printf("  %u cores, BLAS on %d threads: %u workers for the fast "
+               "model, %u for the tiny one\n", cores, blas, rf->threads,
+               rt->threads);
+        CHECK(nerf__model_uses_blas(tiny));
+        CHECK_EQ_INT(rt->threads, shared);
+        CHECK(nerf__model_uses_blas(fast) ==
+              (nerf__smm_default() == NERF__SMM_OFF));
+        CHECK_EQ_INT(rf->threads,
+                     nerf__model_uses_blas(fast) ? shared : cores);
+    }
+    nerf_renderer_destroy(rf);
+    nerf_renderer_destroy(rt);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(fast);
+    nerf_model_destroy(tiny);
+}
+
 int main(void)
 {
     RUN(chunks_and_threads_bitwise);
@@ -603,5 +644,6 @@ int main(void)
     RUN(progress_and_cancel);
     RUN(cancel_from_another_thread);
     RUN(argument_checks);
+    RUN(default_workers);
     HARNESS_EXIT();
 }
