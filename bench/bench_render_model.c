@@ -1,0 +1,121 @@
+/*
+ * bench_render_model: seconds per frame of a saved model's renders, the
+ * figure of "an 800x800 frame of a trained fast model".  Prints figures;
+ * asserts nothing.
+ *
+ *   bench_render_model MODEL [--side N] [--frames N] [--threads N]
+ *
+ * Renders --frames views (default 8) of --side pixels square (default
+ * 800) along nerf-render's --path orbit (radius 4, 30 degrees up, the
+ * lego scene's field of view) with the renderer the model's own render
+ * settings give, after one untimed frame in which the workers allocate
+ * their scratch.  A marching model's cost depends on its weights (rays
+ * stop where it is opaque), so the figure is only meaningful for a model
+ * trained on a real scene.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "nerf.h"
+
+/* As nerf-render's --path orbit. */
+#define ORBIT_FOV 0.6911112070083618
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int orbit(unsigned i, unsigned n, uint32_t side, nerf_camera *cam)
+{
+    const double pi = 3.14159265358979323846;
+    const double az = 2.0 * pi * i / n, elev = pi / 6.0;
+    const float eye[3] = {(float)(4.0 * cos(elev) * cos(az)),
+                          (float)(4.0 * cos(elev) * sin(az)),
+                          (float)(4.0 * sin(elev))};
+    const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    NERF_CAMERA_INIT(cam);
+    cam->width = cam->height = side;
+    cam->fx = cam->fy = (float)(0.5 * side / tan(0.5 * ORBIT_FOV));
+    cam->cx = cam->cy = 0.5f * (float)side;
+    return nerf_camera_look_at(cam, eye, target, up);
+}
+
+static int compare(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int main(int argc, char **argv)
+{
+    const char *path = NULL;
+    unsigned side = 800, frames = 8, threads = 0;
+    for (int i = 1; i < argc; i++) {
+        unsigned *v = strcmp(argv[i], "--side") == 0      ? &side
+                      : strcmp(argv[i], "--frames") == 0  ? &frames
+                      : strcmp(argv[i], "--threads") == 0 ? &threads
+                                                          : NULL;
+        if (v && i + 1 < argc) {
+            *v = (unsigned)strtoul(argv[++i], NULL, 10);
+        } else if (!v && argv[i][0] != '-' && path == NULL) {
+            path = argv[i];
+        } else {
+            path = NULL;
+            break;
+        }
+    }
+    if (path == NULL || side == 0 || frames == 0 || frames > 1000) {
+        fprintf(stderr, "usage: bench_render_model MODEL [--side N] "
+                        "[--frames N (1-1000)] [--threads N]\n");
+        return 2;
+    }
+    nerf_model *m = NULL;
+    nerf_renderer *r = NULL;
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    ro.threads = threads;
+    const size_t pixels = (size_t)side * side;
+    float *rgb = malloc(3 * pixels * sizeof(float));
+    double *t = malloc(frames * sizeof(double));
+    int rc = rgb && t ? nerf_model_load(&m, path, NULL) : NERF_ENOMEM;
+    if (rc == NERF_OK) {
+        rc = nerf_renderer_create(&r, m, NULL, &ro);
+    }
+    nerf_camera cam;
+    for (unsigned i = 0; i <= frames && rc == NERF_OK; i++) {
+        /* Frame 0 again first, untimed: the workers' scratch. */
+        rc = orbit(i == 0 ? 0 : i - 1, frames, side, &cam);
+        const double t0 = now();
+        if (rc == NERF_OK) {
+            rc = nerf_renderer_render_image(r, &cam, rgb, NULL, NULL, pixels);
+        }
+        if (i > 0) {
+            t[i - 1] = now() - t0;
+        }
+    }
+    if (rc != NERF_OK) {
+        fprintf(stderr, "bench_render_model: %s\n", nerf_last_error());
+    } else {
+        double sum = 0.0;
+        for (unsigned i = 0; i < frames; i++) {
+            sum += t[i];
+        }
+        qsort(t, frames, sizeof *t, compare);
+        printf("%s\n%s: %u orbit frames of %ux%u: %.3f s a frame on "
+               "average (median %.3f, fastest %.3f, slowest %.3f), "
+               "%.0f rays/s\n", nerf_build_info(), path, frames, side, side,
+               sum / frames, t[frames / 2], t[0], t[frames - 1],
+               (double)pixels * frames / sum);
+    }
+    nerf_renderer_destroy(r);
+    nerf_model_destroy(m);
+    free(rgb);
+    free(t);
+    return rc == NERF_OK ? 0 : 1;
+}
