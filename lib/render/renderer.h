@@ -30,6 +30,7 @@ typedef struct nerf__worker {
     float origins[3 * NERF__RENDER_BLOCK];
     float directions[3 * NERF__RENDER_BLOCK];
     float rgb[3 * NERF__RENDER_BLOCK];
+    float depth[NERF__RENDER_BLOCK], opacity[NERF__RENDER_BLOCK];
 } nerf__worker;
 
 struct nerf_renderer {

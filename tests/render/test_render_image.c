@@ -249,6 +249,70 @@ TEST(marching_chunks_and_threads_bitwise)
 }
 
 /*
+ * Marching renders visit the image in 8x8 tiles: every pixel once, the
+ * partial tiles of sizes 8 does not divide included, each the render of
+ * its own ray, for every output and the 8-bit form, whatever the threads.
+ */
+TEST(marching_image_in_tiles)
+{
+    nerf_model *m = fast_model();
+    nerf_sampler *s = fast_sampler(1024);
+    if (!m || !s) {
+        return;
+    }
+    static const uint32_t sizes[][2] = {{13, 11}, {8, 8}, {1, 1}, {9, 17}};
+    enum { MAXPIX = 13 * 17 };
+    static float o[3 * MAXPIX], d[3 * MAXPIX];
+    static float rgb[3 * MAXPIX], depth[MAXPIX], opac[MAXPIX];
+    static float ref_rgb[3 * MAXPIX], ref_depth[MAXPIX], ref_opac[MAXPIX];
+    static uint8_t rgb8[3 * MAXPIX];
+    for (size_t c = 0; c < sizeof sizes / sizeof sizes[0]; c++) {
+        nerf_camera cam;
+        test_camera(&cam);
+        cam.width = sizes[c][0];
+        cam.height = sizes[c][1];
+        cam.cx = 0.5f * (float)cam.width;
+        cam.cy = 0.5f * (float)cam.height;
+        const size_t n = (size_t)cam.width * cam.height;
+        CHECK_OK(nerf_camera_rays(&cam, 0, n, o, d));
+        nerf_renderer *r = renderer(m, s, 64, 1, 1);
+        CHECK_OK(nerf_renderer_render_rays(r, n, o, d, ref_rgb, ref_depth,
+                                           ref_opac));
+        nerf_renderer_destroy(r);
+        for (uint32_t threads = 1; threads <= 3; threads += 2) {
+            r = renderer(m, s, 128, threads, 1);
+            memset(rgb, 0xff, sizeof rgb);
+            memset(depth, 0xff, sizeof depth);
+            memset(opac, 0xff, sizeof opac);
+            CHECK_OK(nerf_renderer_render_image(r, &cam, rgb, depth, opac,
+                                                n));
+            if (memcmp(rgb, ref_rgb, 3 * n * sizeof(float)) != 0 ||
+                memcmp(depth, ref_depth, n * sizeof(float)) != 0 ||
+                memcmp(opac, ref_opac, n * sizeof(float)) != 0) {
+                FAILF("%ux%u, %u threads: the image is not its rays' render",
+                      cam.width, cam.height, threads);
+            }
+            CHECK_OK(nerf_renderer_render_image(r, &cam, NULL, NULL, opac,
+                                                n));
+            CHECK(memcmp(opac, ref_opac, n * sizeof(float)) == 0);
+            memset(rgb8, 0, sizeof rgb8);
+            CHECK_OK(nerf_renderer_render_image_u8(r, &cam, rgb8, depth,
+                                                   NULL, n));
+            int bad = 0;
+            for (size_t i = 0; i < 3 * n; i++) {
+                float v = fminf(fmaxf(ref_rgb[i], 0.0f), 1.0f);
+                bad += rgb8[i] != (uint8_t)(v * 255.0f + 0.5f);
+            }
+            CHECK_EQ_INT(bad, 0);
+            CHECK(memcmp(depth, ref_depth, n * sizeof(float)) == 0);
+            nerf_renderer_destroy(r);
+        }
+    }
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
+/*
  * The render in pieces is the render of the whole march: a few rays
  * rebuilt from the marcher, a model query and compositing with early
  * termination.  max_samples cuts rays as documented.
@@ -640,6 +704,7 @@ int main(void)
     RUN(matches_building_blocks);
     RUN(marching_chunks_and_threads_bitwise);
     RUN(marching_matches_building_blocks);
+    RUN(marching_image_in_tiles);
     RUN(ndc_render);
     RUN(progress_and_cancel);
     RUN(cancel_from_another_thread);
