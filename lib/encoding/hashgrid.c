@@ -19,8 +19,8 @@
  * core overlaps some of them; prefetching the corners of the sample
  * AHEAD places on overlaps more.  bench_hashgrid, 2^18 samples along
  * rays, 2 threads, on the 2-core Xeon: forward 7.9-8.3 Msamples/s without,
- * 10.4-11.1 with 16 ahead (9.5-10.7 with 8); backward 6.8-7.4 without,
- * 8.4-8.8 with 16 (8.2 with 8, 7.0 with 64).  (An earlier trial, a few
+ * 10.5-11.0 with 16 ahead (9.5-10.7 with 8); backward 6.8-7.4 without,
+ * 8.6-9.1 with 16 (8.2 with 8, 7.0 with 64).  (An earlier trial, a few
  * samples ahead, measured no gain.)  Huge pages measured no faster.
  *
  * Levels are the outer loop over a block of BLOCK samples, so a level's

@@ -477,8 +477,9 @@ int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
         s->cap_rays = rays->n;
     }
     int rc;
-    if (o->max_samples > 0 && rays->n <= NERF__MARCH_ONE_PASS_ROOM / o->max_samples) {
-        rc = reserve_samples(s, rays->n * o->max_samples);
+    const uint32_t room = o->max_samples;
+    if (room > 0 && rays->n <= NERF__MARCH_ONE_PASS_ROOM / room) {
+        rc = reserve_samples(s, rays->n * room);
         if (rc != NERF_OK) {
             return rc;
         }
