@@ -23,11 +23,17 @@
 /* Work on items [begin, end). */
 typedef void (*nerf__range_fn)(void *ctx, size_t begin, size_t end);
 
+/* Floating-point operations of a vectorised matrix kernel that take about
+ * as long as one simple operation (8-wide fused multiply-adds). */
+#define NERF__FLOPS_PER_OP 32
+
 /*
  * Call fn over [0, n) in contiguous ranges, on up to every core.  `cost` is
- * the rough work per item in simple operations; small jobs (n * cost below
- * a threshold where waking a worker costs more than it saves) run on the
- * calling thread.  Returns when every range is done.
+ * the rough work per item in simple operations: scalar instructions, about
+ * four to a nanosecond.  Vectorised multiply-adds count NERF__FLOPS_PER_OP
+ * to the operation.  Small jobs (n * cost below a threshold where waking a
+ * worker costs more than it saves) run on the calling thread.  Returns when
+ * every range is done.
  */
 void nerf__parallel_for(size_t n, size_t cost, nerf__range_fn fn, void *ctx);
 

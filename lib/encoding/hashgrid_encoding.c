@@ -45,7 +45,7 @@ static void forward(const nerf__encoding *e, const float *table, size_t n,
 {
     table_job j = {.hg = &e->u.hash, .table = table, .in = in, .out = out,
                    .stride = out_stride};
-    nerf__parallel_for(n, 200 * e->u.hash.levels, forward_rows, &j);
+    nerf__parallel_for(n, 50 * e->u.hash.levels, forward_rows, &j);
 }
 
 /* Coarse levels are dense and cheap, fine ones hashed and slow: blocks

@@ -89,6 +89,6 @@ void nerf__adam_update(const nerf__adam *hp, uint64_t t, double lr, size_t n,
         .decay = (flags & NERF__ADAM_DECAY) ? (float)hp->weight_decay : 0.0f,
         .params = params, .m = m, .v = v, .grads = grads,
     };
-    nerf__parallel_for(n, 12, (flags & NERF__ADAM_SPARSE) ? adam_sparse
+    nerf__parallel_for(n, 4, (flags & NERF__ADAM_SPARSE) ? adam_sparse
                                                           : adam_dense, &j);
 }

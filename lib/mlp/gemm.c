@@ -44,13 +44,19 @@ static void forward_rows(void *ctx, size_t begin, size_t end)
                 (int)p->ldc);
 }
 
+/* The pool's cost of one row of a product whose rows are a x b. */
+static size_t item_cost(size_t a, size_t b)
+{
+    return 2 * a * b / NERF__FLOPS_PER_OP;
+}
+
 void nerf__gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
                         size_t ldx, const float *w, size_t ldw, float beta,
                         float *y, size_t ldy)
 {
     product p = {out, in, n, x, w, ldx, ldw, beta, y, ldy};
     if (split_over_pool()) {
-        nerf__parallel_for(n, 2 * (size_t)out * in, forward_rows, &p);
+        nerf__parallel_for(n, item_cost(out, in), forward_rows, &p);
     } else {
         forward_rows(&p, 0, n);
     }
@@ -71,7 +77,7 @@ void nerf__gemm_input_grad(size_t n, uint32_t out, uint32_t in, const float *dy,
 {
     product p = {out, in, n, dy, w, lddy, ldw, 0.0f, dx, lddx};
     if (split_over_pool()) {
-        nerf__parallel_for(n, 2 * (size_t)out * in, input_grad_rows, &p);
+        nerf__parallel_for(n, item_cost(out, in), input_grad_rows, &p);
     } else {
         input_grad_rows(&p, 0, n);
     }
@@ -104,8 +110,8 @@ void nerf__gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
     if (!split_over_pool()) {
         weight_grad_rows(&p, 0, out);
     } else if (out >= in) {
-        nerf__parallel_for(out, 2 * n * in, weight_grad_rows, &p);
+        nerf__parallel_for(out, item_cost(n, in), weight_grad_rows, &p);
     } else {
-        nerf__parallel_for(in, 2 * n * out, weight_grad_cols, &p);
+        nerf__parallel_for(in, item_cost(n, out), weight_grad_cols, &p);
     }
 }

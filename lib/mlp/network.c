@@ -544,7 +544,7 @@ static void sigma_grad(const nerf__network *net, nerf__workspace *ws,
     const uint32_t HW = nerf__network_head_width(net);
     rows_job j = {.net = net, .ws = ws, .d_sigma = d_sigma,
                   .dz = d_head + nerf__network_sigma_col(net), .ld = HW};
-    nerf__parallel_for(ws->n, 4, sigma_grad_rows, &j);
+    nerf__parallel_for(ws->n, 64, sigma_grad_rows, &j);
 }
 
 /* The buffer of the two gradient scratch buffers that p is not. */

@@ -237,8 +237,8 @@ void nerf__fused_forward(const nerf__network *net, const float *params,
     fjob j = {.net = net, .params = params, .ws = ws,
               .density_only = density_only};
     pack(&j, density_only ? net->depth : n_layers(net));
-    nerf__parallel_for(n, (size_t)nerf__network_flops_per_sample(net),
-                       forward_range, &j);
+    nerf__parallel_for(n, (size_t)nerf__network_flops_per_sample(net) /
+                              NERF__FLOPS_PER_OP, forward_range, &j);
 }
 
 /* ---- backward ------------------------------------------------------------ */
@@ -498,7 +498,8 @@ const float *nerf__fused_backward(const nerf__network *net,
     j.stride = padded((uint32_t)j.count);
     if (n > 0) {
         const size_t flops = (size_t)nerf__network_flops_per_sample(net);
-        nerf__parallel_blocks(n_chunks(n), 2 * flops * NERF__FUSED_CHUNK,
+        nerf__parallel_blocks(n_chunks(n), 2 * flops * NERF__FUSED_CHUNK /
+                                               NERF__FLOPS_PER_OP,
                               backward_chunk, &j);
         nerf__parallel_for((j.count + SPAN - 1) / SPAN, SPAN * n_chunks(n),
                            reduce_range, &j);

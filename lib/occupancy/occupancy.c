@@ -391,7 +391,7 @@ int nerf__occupancy_update(nerf__occupancy *g, nerf__density_fn density,
 {
     update_job j = {.g = g};
     j.p = n_random >= g->cells ? 1.0 : (double)n_random / (double)g->cells;
-    nerf__parallel_blocks(g->blocks, 8 * BLOCK_CELLS, select_block, &j);
+    nerf__parallel_blocks(g->blocks, BLOCK_CELLS / 8, select_block, &j);
     /* Walk the selection in cell order, a chunk at a time. */
     const size_t chunk = g->opts.chunk;
     size_t evaluated = 0;

@@ -371,7 +371,7 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
         j.pass = (int)pass;
         j.out = out ? &out[pass] : NULL;
         if (pass == 1) {
-            nerf__parallel_for(n_rays, 16 * (n_c + n_f), sample_fine, &j);
+            nerf__parallel_for(n_rays, 128 * (n_c + n_f), sample_fine, &j);
         }
         nerf__parallel_for(n_rays, 6 * samples, fill_points, &j);
         rc = run_network(b, s, (int)pass, n_rays * samples);

@@ -441,7 +441,9 @@ static void march_slots(const nerf__occupancy *g, const nerf__march_options *o,
                    .t_out = s->t, .dt_out = s->dt,
                    .next_step = s->next_step};
     s->offsets[0] = 0;
-    nerf__parallel_for(rays->n, COST_PER_RAY, slot_range, &j);
+    size_t cost = 200 + 64 * room;
+    nerf__parallel_for(rays->n, cost < COST_PER_RAY ? cost : COST_PER_RAY,
+                       slot_range, &j);
     for (size_t k = 0; k < rays->n; k++) {
         const size_t n = s->offsets[k + 1], at = s->offsets[k];
         if (at != k * room) {

@@ -1,6 +1,7 @@
 /*
  * The thread pool behind the element-wise passes: every item is visited
- * exactly once, concurrent and nested callers fall back to their own
+ * exactly once, loops too small to pay for a wake-up stay on the caller,
+ * concurrent and nested callers fall back to their own
  * thread, a forked child still works, and the fused gradient passes give
  * bit-identical results to a plain serial loop.
  */
@@ -76,6 +77,43 @@ TEST(every_item_once)
     nerf__parallel_for(N, 0, visit, &small);
     CHECK(count_ok(counts[0], N, 1));
     CHECK_EQ_INT(atomic_load(&small.ranges), 1);
+}
+
+typedef struct where_job {
+    pthread_t caller;
+    atomic_int ranges, elsewhere;
+} where_job;
+
+static void note_thread(void *ctx, size_t begin, size_t end)
+{
+    where_job *j = ctx;
+    atomic_fetch_add(&j->ranges, 1);
+    if (!pthread_equal(pthread_self(), j->caller)) {
+        atomic_fetch_add(&j->elsewhere, 1);
+    }
+}
+
+/*
+ * A renderer's 64-ray block costs tens of microseconds a pass, less than
+ * waking a worker and waiting for it: it stays on the calling thread.
+ * Handing such loops over made one render worker several times slower
+ * than running them itself (docs/performance.md).
+ */
+TEST(small_loops_stay_on_the_caller)
+{
+    where_job j = {.caller = pthread_self()};
+    atomic_init(&j.ranges, 0);
+    atomic_init(&j.elsewhere, 0);
+    /* A round of 64 rays by 4 samples through a hash grid's 16 levels,
+     * at 50 operations a level. */
+    nerf__parallel_for(256, 16 * 50, note_thread, &j);
+    /* 64 rays' march of up to 8 samples each. */
+    nerf__parallel_for(64, 200 + 64 * 8, note_thread, &j);
+    /* A whole millisecond of work: worth splitting. */
+    nerf__parallel_for(64, 64000, note_thread, &j);
+    int big = nerf__parallel_threads() > 1 ? 2 : 1;
+    CHECK_EQ_INT(atomic_load(&j.ranges), 2 + big);
+    CHECK_EQ_INT(atomic_load(&j.elsewhere), big - 1);
 }
 
 TEST(nested_calls_run_inline)
@@ -200,6 +238,7 @@ TEST(gradient_passes_match_serial)
 int main(void)
 {
     RUN(every_item_once);
+    RUN(small_loops_stay_on_the_caller);
     RUN(nested_calls_run_inline);
     RUN(concurrent_callers);
     RUN(forked_child);
