@@ -13,37 +13,19 @@
  * stop where it is opaque), so the figure is only meaningful for a model
  * trained on a real scene.
  */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "nerf.h"
-
-/* As nerf-render's --path orbit. */
-#define ORBIT_FOV 0.6911112070083618
+#include "orbit.h"
 
 static double now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int orbit(unsigned i, unsigned n, uint32_t side, nerf_camera *cam)
-{
-    const double pi = 3.14159265358979323846;
-    const double az = 2.0 * pi * i / n, elev = pi / 6.0;
-    const float eye[3] = {(float)(4.0 * cos(elev) * cos(az)),
-                          (float)(4.0 * cos(elev) * sin(az)),
-                          (float)(4.0 * sin(elev))};
-    const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    NERF_CAMERA_INIT(cam);
-    cam->width = cam->height = side;
-    cam->fx = cam->fy = (float)(0.5 * side / tan(0.5 * ORBIT_FOV));
-    cam->cx = cam->cy = 0.5f * (float)side;
-    return nerf_camera_look_at(cam, eye, target, up);
 }
 
 static int compare(const void *a, const void *b)
@@ -90,7 +72,7 @@ int main(int argc, char **argv)
     nerf_camera cam;
     for (unsigned i = 0; i <= frames && rc == NERF_OK; i++) {
         /* Frame 0 again first, untimed: the workers' scratch. */
-        rc = orbit(i == 0 ? 0 : i - 1, frames, side, &cam);
+        rc = orbit_camera(i == 0 ? 0 : i - 1, frames, side, side, &cam);
         const double t0 = now();
         if (rc == NERF_OK) {
             rc = nerf_renderer_render_image(r, &cam, rgb, NULL, NULL, pixels);

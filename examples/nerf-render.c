@@ -12,6 +12,7 @@
 #include "common/dist.h"
 #include "common/out_folder.h"
 #include "common/options.h"
+#include "common/orbit.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 #include "common/video.h"
@@ -110,10 +111,6 @@ typedef struct args {
     uint64_t fps;
     int fps_given;
 } args;
-
-/* The lego scene's horizontal field of view, in radians: --path orbit's,
- * and the default of --poses files that carry no intrinsics. */
-#define ORBIT_FOV 0.6911112070083618
 
 /* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
@@ -356,18 +353,7 @@ static int view_camera(const args *a, const nerf_dataset *ds,
         }
         return rc;
     }
-    /* The lego scene's field of view, circling at 30 degrees. */
-    const double fov = ORBIT_FOV, elev = 30.0 * 3.14159265358979 / 180;
-    double az = 2.0 * 3.14159265358979 * i / n;
-    float eye[3] = {(float)(4.0 * cos(elev) * cos(az)),
-                    (float)(4.0 * cos(elev) * sin(az)), (float)(4.0 * sin(elev))};
-    const float target[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    cam->width = (uint32_t)a->width;
-    cam->height = (uint32_t)a->height;
-    cam->fx = cam->fy = (float)(0.5 * a->width / tan(0.5 * fov));
-    cam->cx = 0.5f * cam->width;
-    cam->cy = 0.5f * cam->height;
-    return nerf_camera_look_at(cam, eye, target, up);
+    return orbit_camera(i, n, (uint32_t)a->width, (uint32_t)a->height, cam);
 }
 
 /* Depth as a grey image: near white, far black, scaled to [near, far]. */
