@@ -512,10 +512,10 @@ typedef struct nerf_schedule {
     uint32_t state;          /**< A nerf_schedule_state. */
     double budget_seconds;   /**< The time budget the schedule was (or is
                                   being) fitted to; 0 for STEPS. */
-    double steps_per_second; /**< FITTED: the step rate measured before
-                                  the fit; else 0. */
+    double steps_per_second; /**< FITTED: the step rate the length was
+                                  last fitted to; else 0. */
     uint64_t fit_step;       /**< FITTED: the step at which the length was
-                                  fixed (DECAY_START); else 0. */
+                                  first fixed (DECAY_START); else 0. */
     uint64_t total_steps;    /**< FITTED: the run's length (DECAY_STEPS):
                                   where nerf_trainer_run_for() stops;
                                   STEPS: DECAY_STEPS; MEASURING: 0. */
@@ -1991,11 +1991,19 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * duration.  It sets NERF_PARAM_DECAY_START to the current step and
  * NERF_PARAM_DECAY_STEPS to that length, records the fit in the model
  * (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
- * trains to the length.  From the fit on, the run is a plain schedule:
- * a model saved after it, loaded and given to nerf_trainer_run_for() or
- * nerf_trainer_run() continues bit for bit to the same end, and two runs
- * that fixed the same length train the same weights.  A FITTED model
- * trains on to its recorded length without measuring again.
+ * trains to the length.  Since 0.6.2, when half of @p seconds has passed
+ * the same call fits the length once more, to the rate over the quarter
+ * of the budget before (steps are often still getting faster at the
+ * first fit): NERF_PARAM_DECAY_STEPS and the recorded length move, the
+ * decay's start stays, so the learning rate moves by a few percent at
+ * that step.  From each fit on, the run is a plain schedule: a model saved
+ * after it, loaded and given to nerf_trainer_run_for() or
+ * nerf_trainer_run() continues bit for bit to its recorded length, and
+ * two runs that fixed the same lengths at the same steps train the same
+ * weights.  A FITTED model trains on to its recorded length without
+ * measuring or fitting again; so a model saved between the two fits and
+ * resumed ends at the first fit's length, where the unbroken run would
+ * have moved it (the second fit depends on the clock as the first does).
  *
  * The run ends at the fitted length (NERF_OK).  Should steps turn slower
  * than measured, it ends when @p seconds and a tenth have passed

@@ -1,5 +1,6 @@
 /* Training to a time budget: the measured fit, the held rate, the recorded
- * length, and resuming bit for bit after the fit. */
+ * length, the second fit at half the budget, and resuming bit for bit
+ * after the fit. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -184,6 +185,72 @@ TEST(resume_after_the_fit_is_bit_identical)
     nerf_sampler_destroy(s);
 }
 
+/* Steps that turn slower after the fit, as on a machine that got busy. */
+typedef struct slowing {
+    nerf_model *m;
+    uint64_t first_total; /* the first fit's length */
+    struct timespec pause;
+} slowing;
+
+static int slow_after_the_fit(const nerf_progress *p, void *user)
+{
+    (void)p;
+    slowing *w = user;
+    nerf_schedule sc = schedule_of(w->m);
+    if (sc.state != NERF_SCHEDULE_FITTED) {
+        return 0;
+    }
+    if (w->first_total == 0) {
+        w->first_total = sc.total_steps;
+        /* Four steps' time asleep after each: five times slower. */
+        const double pause = 4.0 / sc.steps_per_second;
+        w->pause.tv_sec = (time_t)pause;
+        w->pause.tv_nsec = (long)((pause - (double)w->pause.tv_sec) * 1e9);
+    }
+    nanosleep(&w->pause, NULL);
+    return 0;
+}
+
+/*
+ * The second fit, at half the budget: with steps five times slower than
+ * the first fit measured, a run fitted once would stop a tenth past its
+ * budget, short of its length (NERF_ECANCELLED); fitted again, it ends at
+ * its new, shorter length within the budget.
+ */
+TEST(fits_again_at_half_the_budget)
+{
+    nerf_sampler *s = tiny_sampler(9);
+    nerf_model *m = tiny_model(10);
+    nerf_trainer *t = make_trainer(m, s);
+    slowing w = {.m = m};
+    nerf_trainer_set_progress(t, slow_after_the_fit, &w);
+    const double budget = 2.0, t0 = now();
+    int rc = nerf_trainer_run_for(t, budget, NULL);
+    const double took = now() - t0;
+    if (rc != NERF_OK) {
+        printf("  %s\n", nerf_last_error());
+    }
+    CHECK_OK(rc);
+    nerf_schedule sc = schedule_of(m);
+    CHECK(sc.state == NERF_SCHEDULE_FITTED);
+    CHECK(w.first_total > 0 && sc.total_steps < w.first_total);
+    CHECK(nerf_model_step(m) == sc.total_steps);
+    CHECK(param(m, NERF_PARAM_DECAY_START) == (double)sc.fit_step);
+    CHECK(param(m, NERF_PARAM_DECAY_STEPS) == (double)sc.total_steps);
+    if (sc.total_steps > sc.fit_step) {
+        CHECK(fabs(nerf_model_learning_rate(m) /
+                       param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
+    }
+    CHECK(took < 1.1 * budget + 0.5);
+    printf("  fitted at step %llu to %llu steps, then to %llu; %.2f s of "
+           "%.2f\n", (unsigned long long)sc.fit_step,
+           (unsigned long long)w.first_total,
+           (unsigned long long)sc.total_steps, took, budget);
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
 /* Saved before its fit, a model measures again when resumed. */
 TEST(measuring_resumes_by_measuring)
 {
@@ -289,6 +356,7 @@ int main(void)
         return 1;
     }
     RUN(fits_the_length_and_ends_there);
+    RUN(fits_again_at_half_the_budget);
     RUN(resume_after_the_fit_is_bit_identical);
     RUN(measuring_resumes_by_measuring);
     RUN(plain_schedule_and_bad_arguments);
