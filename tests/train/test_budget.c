@@ -151,7 +151,10 @@ TEST(resume_after_the_fit_is_bit_identical)
     nerf_trainer *t = make_trainer(whole, s);
     watch w = {.m = whole, .stop_after_fit = 1};
     nerf_trainer_set_progress(t, on_progress, &w);
-    CHECK(nerf_trainer_run_for(t, 1.5, NULL) == NERF_ECANCELLED);
+    /* Long enough that the step after the fit does not reach half of it,
+     * where the length would be fitted again (on a sanitized build on a
+     * busy machine, steps have taken half a second). */
+    CHECK(nerf_trainer_run_for(t, 4.0, NULL) == NERF_ECANCELLED);
     nerf_schedule cut = schedule_of(whole);
     CHECK(cut.state == NERF_SCHEDULE_FITTED);
     CHECK(nerf_model_step(whole) < cut.total_steps);
@@ -213,9 +216,11 @@ static int slow_after_the_fit(const nerf_progress *p, void *user)
 
 /*
  * The second fit, at half the budget: with steps five times slower than
- * the first fit measured, a run fitted once would stop a tenth past its
- * budget, short of its length (NERF_ECANCELLED); fitted again, it ends at
- * its new, shorter length within the budget.
+ * the first fit measured, the length shrinks to about a fifth of what was
+ * left (a run fitted once would stop a tenth past its budget, short of its
+ * length), and the run ends there.  On a machine so busy that even the
+ * slowed steps vary by a fifth, it may still run out of time: that is
+ * said, and a second call trains on.
  */
 TEST(fits_again_at_half_the_budget)
 {
@@ -227,25 +232,33 @@ TEST(fits_again_at_half_the_budget)
     const double budget = 2.0, t0 = now();
     int rc = nerf_trainer_run_for(t, budget, NULL);
     const double took = now() - t0;
-    if (rc != NERF_OK) {
-        printf("  %s\n", nerf_last_error());
-    }
-    CHECK_OK(rc);
     nerf_schedule sc = schedule_of(m);
     CHECK(sc.state == NERF_SCHEDULE_FITTED);
-    CHECK(w.first_total > 0 && sc.total_steps < w.first_total);
-    CHECK(nerf_model_step(m) == sc.total_steps);
+    CHECK(w.first_total > sc.fit_step);
+    /* Fitted again to the slower rate: well under what was left. */
+    CHECK((double)(sc.total_steps - sc.fit_step) <
+          0.6 * (double)(w.first_total - sc.fit_step));
     CHECK(param(m, NERF_PARAM_DECAY_START) == (double)sc.fit_step);
     CHECK(param(m, NERF_PARAM_DECAY_STEPS) == (double)sc.total_steps);
-    if (sc.total_steps > sc.fit_step) {
-        CHECK(fabs(nerf_model_learning_rate(m) /
-                       param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
-    }
-    CHECK(took < 1.1 * budget + 0.5);
     printf("  fitted at step %llu to %llu steps, then to %llu; %.2f s of "
            "%.2f\n", (unsigned long long)sc.fit_step,
            (unsigned long long)w.first_total,
            (unsigned long long)sc.total_steps, took, budget);
+    if (rc == NERF_OK) {
+        CHECK(took < 1.1 * budget + 0.5);
+    } else {
+        CHECK(rc == NERF_ECANCELLED &&
+              strstr(nerf_last_error(), "out of time") != NULL);
+        printf("  %s\n", nerf_last_error());
+        nerf_trainer_set_progress(t, NULL, NULL);
+        rc = run_to_the_end(t, m, budget);
+    }
+    CHECK_OK(rc);
+    CHECK(nerf_model_step(m) == sc.total_steps);
+    if (sc.total_steps > sc.fit_step) {
+        CHECK(fabs(nerf_model_learning_rate(m) /
+                       param(m, NERF_PARAM_LEARNING_RATE_FINAL) - 1.0) < 1e-9);
+    }
     nerf_trainer_destroy(t);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
