@@ -135,9 +135,9 @@ static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
 }
 
 /*
- * The length again, from the rate over the window: the decay keeps its
- * start and ends at the new length, so the rate moves by a few percent at
- * this step.  Never before the current step.
+ * The length again, from the step rate over the window: the decay keeps
+ * its start and ends at the new length, so the learning rate moves by a
+ * few percent at this step.  Never before the current step.
  */
 static void refit(nerf_trainer *t, nerf__run *r, const rate_window *w,
                   double budget, double elapsed)
