@@ -109,11 +109,17 @@ TEST(small_loops_stay_on_the_caller)
     nerf__parallel_for(256, 16 * 50, note_thread, &j);
     /* 64 rays' march of up to 8 samples each. */
     nerf__parallel_for(64, 200 + 64 * 8, note_thread, &j);
-    /* A whole millisecond of work: worth splitting. */
+    CHECK_EQ_INT(atomic_load(&j.ranges), 2);
+    CHECK_EQ_INT(atomic_load(&j.elsewhere), 0);
+    /* A whole millisecond of work: worth splitting where there are cores
+     * to split it over. */
     nerf__parallel_for(64, 64000, note_thread, &j);
-    int big = nerf__parallel_threads() > 1 ? 2 : 1;
-    CHECK_EQ_INT(atomic_load(&j.ranges), 2 + big);
-    CHECK_EQ_INT(atomic_load(&j.elsewhere), big - 1);
+    if (nerf__parallel_threads() > 1) {
+        CHECK(atomic_load(&j.ranges) >= 4);
+        CHECK(atomic_load(&j.elsewhere) >= 1);
+    } else {
+        CHECK_EQ_INT(atomic_load(&j.ranges), 3);
+    }
 }
 
 TEST(nested_calls_run_inline)
