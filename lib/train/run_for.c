@@ -85,12 +85,21 @@ static double saving_share(const nerf_trainer *t, const nerf__run *r)
     return r->save_seconds / (every + r->save_seconds);
 }
 
-/* The length the rest of the budget allows from this step at `rate`. */
-static uint64_t fitted_total(const nerf_trainer *t, const nerf__run *r,
-                             double rate, double budget, double elapsed)
+/*
+ * Fix the run's length at the step rate over the window: the steps the
+ * rest of the budget allows, less the share timed saves will take.  The
+ * decay ends there, and the progress reports count to it.
+ */
+static void fit_length(nerf_trainer *t, nerf__run *r, const rate_window *w,
+                       double budget, double elapsed)
 {
+    nerf_model *m = t->model;
+    nerf__schedule *sc = &m->schedule;
+    sc->rate = window_rate(w, r, elapsed);
     const double left = (budget - elapsed) * (1.0 - saving_share(t, r));
-    return t->model->step + steps_for(rate, left);
+    sc->total = m->step + steps_for(sc->rate, left);
+    m->adam.decay_steps = fmax((double)sc->total, 1.0);
+    r->total = r->done + (sc->total - m->step);
 }
 
 /* Measure until a share of the budget has passed, then fix the length. */
@@ -119,16 +128,13 @@ static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
     if (rc != NERF_OK) {
         return rc;
     }
-    const double rate = window_rate(&w, r, elapsed);
     sc->state = NERF_SCHEDULE_FITTED;
-    sc->rate = rate;
     sc->fit_step = m->step;
-    sc->total = fitted_total(t, r, rate, budget, elapsed);
     m->adam.decay_start = (double)sc->fit_step;
-    m->adam.decay_steps = fmax((double)sc->total, 1.0);
+    fit_length(t, r, &w, budget, elapsed);
     nerf__log(&t->env, NERF_LOG_INFO, "trainer: %.1f steps/s after %.0f s: "
               "the learning rate decays from step %llu to %llu, fitted to "
-              "a budget of %g s", rate, elapsed,
+              "a budget of %g s", sc->rate, elapsed,
               (unsigned long long)sc->fit_step, (unsigned long long)sc->total,
               budget);
     return NERF_OK;
@@ -142,17 +148,12 @@ static int measure_and_fit(nerf_trainer *t, nerf__run *r, double budget,
 static void refit(nerf_trainer *t, nerf__run *r, const rate_window *w,
                   double budget, double elapsed)
 {
-    nerf_model *m = t->model;
-    nerf__schedule *sc = &m->schedule;
-    const double rate = window_rate(w, r, elapsed);
+    const nerf__schedule *sc = &t->model->schedule;
     const uint64_t before = sc->total;
-    sc->rate = rate;
-    sc->total = fitted_total(t, r, rate, budget, elapsed);
-    m->adam.decay_steps = fmax((double)sc->total, 1.0);
-    r->total = r->done + (sc->total - m->step);
+    fit_length(t, r, w, budget, elapsed);
     nerf__log(&t->env, NERF_LOG_INFO, "trainer: %.1f steps/s after %.0f s: "
               "the length fitted again, %llu steps instead of %llu",
-              rate, elapsed, (unsigned long long)sc->total,
+              sc->rate, elapsed, (unsigned long long)sc->total,
               (unsigned long long)before);
 }
 
@@ -189,7 +190,6 @@ NERF_API int nerf_trainer_run_for(nerf_trainer *t, double seconds,
     rate_window w = {0};
     if (sc->state != NERF_SCHEDULE_FITTED) {
         rc = measure_and_fit(t, &r, seconds, stats_out);
-        r.total = r.done + (sc->total - m->step);
         refit_due = true;
     }
     while (rc == NERF_OK && m->step < sc->total) {
