@@ -91,7 +91,7 @@ static const nerf__linear *the_layer(const nerf_model *m)
 static void forward(layer_run *r)
 {
     const nerf__linear *l = the_layer(r->m);
-    nerf__layer_ctx c = {r->m->nets[0].bf16, &r->ws.bf16, &r->m->env};
+    nerf__layer_ctx c = {r->m->nets[0].onednn, &r->ws.onednn, &r->m->env};
     nerf__layer_part p = {r->x, WIDTH, WIDTH};
     r->rc = nerf__layer_forward(&c, r->n, WIDTH, &p, 1, r->m->params + l->w,
                                 WIDTH, r->m->params + l->b, true, r->y, WIDTH,
@@ -101,7 +101,7 @@ static void forward(layer_run *r)
 static void backward(layer_run *r)
 {
     const nerf__linear *l = the_layer(r->m);
-    nerf__layer_ctx c = {r->m->nets[0].bf16, &r->ws.bf16, &r->m->env};
+    nerf__layer_ctx c = {r->m->nets[0].onednn, &r->ws.onednn, &r->m->env};
     nerf__layer_part p = {r->x, WIDTH, WIDTH};
     r->rc = nerf__layer_backward(&c, r->n, WIDTH, r->dy, WIDTH, NULL, &p, 1,
                                  NULL, r->m->params + l->w, WIDTH, r->dw, 0,

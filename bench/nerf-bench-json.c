@@ -264,7 +264,7 @@ void print_json(const run_info *ri, const preset_setup *ps,
     cJSON_AddStringToObject(root, "libnerf_version", nerf_version_string());
     cJSON_AddStringToObject(root, "build_info", nerf_build_info());
     cJSON_AddStringToObject(root, "matmul",
-                            ri->matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
+                            matmul_name((uint32_t)ri->matmul));
     const char *cfg = blas_config(), *core = blas_corename();
     const char *coretype = getenv("OPENBLAS_CORETYPE");
     if (cfg) {

@@ -432,6 +432,10 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "threads); the sgemm rows are fp32 cblas_sgemm, so a share "
                 "is bf16 rays/s over the fp32 bound\n",
                 nerf__parallel_threads());
+    } else if (ri->matmul == NERF_MATMUL_FP32_ONEDNN) {
+        fprintf(out, "matmul: fp32 through oneDNN (cut over libnerf's %u "
+                "threads); the sgemm rows are cblas_sgemm's\n",
+                nerf__parallel_threads());
     } else {
         fprintf(out, "matmul: fp32 (cblas_sgemm)\n");
     }
@@ -491,8 +495,8 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     row(out, "  GFLOP/s", c_render_gf, ps, fs, n);
     row(out, "  sgemm-bound rays/s", c_render_bound, ps, fs, n);
     row(out, "  render_sgemm_share", c_render_share, ps, fs, n);
-    if (ri->matmul == NERF_MATMUL_BF16) {
-        row(out, "oneDNN primitives (bf16)", c_prims, ps, fs, n);
+    if (ri->matmul != NERF_MATMUL_FP32) {
+        row(out, "oneDNN primitives", c_prims, ps, fs, n);
     }
     snprintf(label, sizeof label, "peak RSS, %ux%u render", ri->render_side,
              ri->render_side);

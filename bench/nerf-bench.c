@@ -25,7 +25,7 @@
  *   nerf-bench [--json] [--preset reference|tiny|fast|all] [--seconds S]
  *              [--threads N] [--workers W] [--size S] [--render-size S]
  *              [--rss-rows K] [--full] [--no-800] [--fast-warmup N]
- *              [--matmul fp32|bf16]
+ *              [--matmul fp32|bf16|fp32-onednn]
  *
  * With --json, stdout holds exactly one JSON object and the table goes to
  * stderr.  Run `nerf-bench --help` for what each option does.
@@ -126,7 +126,7 @@ static int measure(preset_setup *p, const nerf_dataset *ds,
         }
     }
     nerf_trainer_destroy(kept);
-    f->bf16_primitives = p->model->bf16 ? nerf__bf16_primitives(p->model->bf16)
+    f->bf16_primitives = p->model->onednn ? nerf__onednn_primitives(p->model->onednn)
                                         : 0;
     if (failed) {
         fprintf(stderr, "nerf-bench: %s: %s: %s\n", p->name, failed,
@@ -152,7 +152,7 @@ static void usage(FILE *out, const char *argv0)
         "       [--seconds S] [--threads N] [--workers W] [--size S]\n"
         "       [--render-size S] [--rss-rows K] [--full] [--no-800]\n"
         "       [--fast-warmup N] [--data DIR [--downscale K]]\n"
-        "       [--matmul fp32|bf16]\n"
+        "       [--matmul " MATMUL_CHOICES "]\n"
         "\n"
         "  --json          print one JSON object on stdout (the table goes\n"
         "                  to stderr)\n"
@@ -250,12 +250,8 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--no-800") == 0) {
             ri.no_rss = true;
         } else if (strcmp(a, "--matmul") == 0 && has_value) {
-            const char *v = argv[++i];
-            if (strcmp(v, "fp32") == 0) {
-                ri.matmul = NERF_MATMUL_FP32;
-            } else if (strcmp(v, "bf16") == 0) {
-                ri.matmul = NERF_MATMUL_BF16;
-            } else {
+            ri.matmul = matmul_parse(argv[++i]);
+            if (ri.matmul < 0) {
                 usage(stderr, argv[0]);
                 return 2;
             }
@@ -303,7 +299,8 @@ int main(int argc, char **argv)
         o.matmul = (uint32_t)ri.matmul;
         nerf_model *m = NULL;
         nerf_model_create(&m, &o); /* fails, and says why */
-        fprintf(stderr, "nerf-bench: --matmul bf16: %s\n", nerf_last_error());
+        fprintf(stderr, "nerf-bench: --matmul %s: %s\n",
+                matmul_name((uint32_t)ri.matmul), nerf_last_error());
         return 2;
     }
     ri.cores = nerf__cpu_count();

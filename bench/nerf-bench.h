@@ -12,6 +12,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "matmul_name.h"
 #include "nerf.h"
 #include "nerf_internal.h"
 

@@ -257,7 +257,7 @@ typedef enum nerf_preset {
  */
 typedef enum nerf_matmul {
     NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
-    NERF_MATMUL_BF16 = 1  /**< Both operands of every layer product rounded
+    NERF_MATMUL_BF16 = 1, /**< Both operands of every layer product rounded
                                to bfloat16 (nearest even), products summed
                                in fp32; bias and ReLU fused into the
                                product.  Through oneDNN, on CPUs with
@@ -266,6 +266,19 @@ typedef enum nerf_matmul {
                                wide layers (docs/performance.md); results
                                differ from fp32 by the rounding (relative
                                errors of order 1e-3). */
+    NERF_MATMUL_FP32_ONEDNN = 2 /**< Since 0.7: fp32 products, bias and
+                               ReLU fused into them, through oneDNN's
+                               matmul instead of cblas_sgemm.  Needs a
+                               libnerf built with oneDNN: ask
+                               nerf_matmul_supported() first.  Faster
+                               than cblas on the reference preset's
+                               256-wide layers on AVX-512 CPUs
+                               (docs/performance.md); results differ
+                               from NERF_MATMUL_FP32 by the order of the
+                               sums only.  Networks that the fused small-
+                               MLP path would run (the fast preset) run
+                               through oneDNN too, which is slower for
+                               them. */
 } nerf_matmul;
 
 /**
@@ -296,9 +309,11 @@ typedef enum nerf_space {
  * NERF_MATMUL_FP32 is always available.  NERF_MATMUL_BF16 needs a libnerf
  * built with oneDNN (meson option bf16) and a CPU on which oneDNN runs
  * bf16 natively (AVX512-BF16; the environment variable DNNL_MAX_CPU_ISA
- * can hide it).  Unknown kinds give 0.
+ * can hide it).  NERF_MATMUL_FP32_ONEDNN needs a libnerf built with
+ * oneDNN and a CPU for which oneDNN has an optimised fp32 matmul.
+ * Unknown kinds give 0.
  *
- * The first call for NERF_MATMUL_BF16 creates a small oneDNN primitive to
+ * The first call for a oneDNN kind creates small oneDNN primitives to
  * find out (a few milliseconds); later calls return the stored answer.
  * Thread-safe.  Since 0.2 (symbol version NERF_0.2).
  */
@@ -366,7 +381,7 @@ typedef struct nerf_model_options {
     /* Formerly reserved1, which had to be 0: old callers get fp32. */
     uint32_t matmul;          /**< nerf_matmul: how the products are
                                    computed; default NERF_MATMUL_FP32.
-                                   NERF_MATMUL_BF16 where
+                                   A kind for which
                                    nerf_matmul_supported() says 0 makes
                                    nerf_model_create() fail with
                                    NERF_EINVAL.  Saved in checkpoints. */
@@ -397,8 +412,8 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts,
  * Create a model with freshly initialised weights (deterministic for a given
  * seed; see docs/architecture.md for the scheme).
  * @return NERF_OK; NERF_EINVAL for out-of-range options, or for
- * NERF_MATMUL_BF16 where nerf_matmul_supported() says 0 (the message says
- * why); NERF_EVERSION for an options struct from a newer header with
+ * a matmul kind for which nerf_matmul_supported() says 0 (the message
+ * says why); NERF_EVERSION for an options struct from a newer header with
  * non-zero unknown fields; NERF_ENOMEM.
  */
 NERF_API int nerf_model_create(nerf_model **out,
@@ -539,10 +554,10 @@ NERF_API int nerf_model_save(const nerf_model *model, const char *path);
 
 /**
  * Load a checkpoint written by nerf_model_save().  The model computes as it
- * was saved, fp32 or bf16 (nerf_model_options.matmul), except that a bf16
- * model loads computing in fp32 where nerf_matmul_supported() says bf16 is
- * not available: its weights are fp32 either way, and a warning goes to
- * the log.
+ * was saved (nerf_model_options.matmul), except that a model saved with
+ * oneDNN products (bf16 or FP32_ONEDNN) loads computing in fp32 through
+ * cblas where nerf_matmul_supported() says its kind is not available:
+ * its weights are fp32 either way, and a warning goes to the log.
  * @param hooks allocation and logging for the new model; NULL = defaults.
  * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
  * checkpoint, or a folder); NERF_EIO (cannot open or read);

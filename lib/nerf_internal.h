@@ -59,7 +59,7 @@
 #include "adam.h"
 #include "fused.h"
 #include "gemm.h"
-#include "gemm_bf16.h"
+#include "gemm_onednn.h"
 #include "layer.h"
 #include "network.h"
 #include "network_fused.h"

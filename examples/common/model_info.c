@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "model_info.h"
+#include "matmul_name.h"
 #include "scene_setup.h"
 
 static const char *preset_name(int preset)
@@ -159,8 +160,7 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
     if (mo.encoding == NERF_ENCODING_HASHGRID) {
         cJSON_AddNumberToObject(o, "bound", mo.bound);
     }
-    cJSON_AddStringToObject(o, "matmul",
-                            mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
+    cJSON_AddStringToObject(o, "matmul", matmul_name(mo.matmul));
     cJSON *holds = cJSON_AddArrayToObject(o, "holds");
     cJSON_AddItemToArray(holds, cJSON_CreateString("weights"));
     if (c & NERF_MODEL_HAS_OPTIMIZER) {

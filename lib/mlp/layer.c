@@ -4,7 +4,7 @@
 
 #include "fused.h"
 #include "gemm.h"
-#include "gemm_bf16.h"
+#include "gemm_onednn.h"
 
 int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                         const nerf__layer_part *parts, int n_parts,
@@ -13,8 +13,8 @@ int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
 {
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(b != NULL || !relu);
-    if (c->bf16) {
-        return nerf__bf16_forward(c, n, out, parts, n_parts, w, ldw, b, relu,
+    if (c->onednn) {
+        return nerf__onednn_forward(c, n, out, parts, n_parts, w, ldw, b, relu,
                                   y, ldy, kept);
     }
     size_t col = 0;
@@ -39,8 +39,8 @@ int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
 {
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(dx == NULL || (dx_part >= 0 && dx_part < n_parts));
-    if (c->bf16) {
-        return nerf__bf16_backward(c, n, out, dy, lddy, dyb, parts, n_parts,
+    if (c->onednn) {
+        return nerf__onednn_backward(c, n, out, dy, lddy, dyb, parts, n_parts,
                                    kept, w, ldw, dw, dx_part, dx, lddx);
     }
     assert(dyb == NULL && kept == NULL);
@@ -60,7 +60,7 @@ int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     return NERF_OK;
 }
 
-void nerf__layer_scratch_free(struct nerf__bf16_scratch *s)
+void nerf__layer_scratch_free(struct nerf__onednn_scratch *s)
 {
-    nerf__bf16_scratch_free(s);
+    nerf__onednn_scratch_free(s);
 }

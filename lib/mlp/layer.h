@@ -5,8 +5,9 @@
  *
  *  - fp32: one cblas_sgemm per input part (gemm.h), then the fused bias
  *    and ReLU pass (fused.h), exactly as the network always ran;
- *  - bf16 (gemm_bf16.h, built with oneDNN): operands rounded to bfloat16,
- *    products accumulated in fp32, bias and ReLU fused into the product.
+ *  - oneDNN (gemm_onednn.h, built with oneDNN): bias and ReLU fused into
+ *    the product, in fp32, or with the operands rounded to bfloat16 and
+ *    the products accumulated in fp32.
  *
  * A layer whose input is a concatenation ([gamma(x), h] at the skip,
  * [feature, gamma(d)] in the view branch) takes it as parts: part p
@@ -22,8 +23,8 @@
 
 #include "env.h"
 
-struct nerf__bf16;
-struct nerf__bf16_scratch;
+struct nerf__onednn;
+struct nerf__onednn_scratch;
 
 /* One input part: rows of x, stride ldx, `in` columns. */
 typedef struct nerf__layer_part {
@@ -35,15 +36,16 @@ typedef struct nerf__layer_part {
 #define NERF__LAYER_MAX_PARTS 2
 
 /*
- * Where a call's products run.  bf16 NULL: fp32 through cblas, and the
- * other fields are unused.  Otherwise the model's bf16 backend, and the
+ * Where a call's products run.  onednn NULL: fp32 through cblas, and the
+ * other fields are unused.  Otherwise the model's oneDNN backend, and the
  * caller's scratch (created on first use with env, freed with
- * nerf__layer_scratch_free()), which holds the rounded operands: one per
- * workspace, since workspaces are never shared between threads.
+ * nerf__layer_scratch_free()), which holds the rounded operands and the
+ * per-thread streams: one per workspace, since workspaces are never
+ * shared between threads.
  */
 typedef struct nerf__layer_ctx {
-    struct nerf__bf16 *bf16;
-    struct nerf__bf16_scratch **scratch;
+    struct nerf__onednn *onednn;
+    struct nerf__onednn_scratch **scratch;
     const nerf__env *env;
 } nerf__layer_ctx;
 
@@ -52,10 +54,10 @@ typedef struct nerf__layer_ctx {
  * parts' column blocks side by side from column 0.  b [out] may be NULL
  * (no bias); relu needs a bias.
  *
- * bf16 only: `kept`, when not NULL, receives the rounded input (the parts
+ * bf16 only (nerf__onednn_rounds()): `kept`, when not NULL, receives the rounded input (the parts
  * side by side, [n, sum of their widths]) for the backward to reuse, which
  * spares rounding it again; the fp32 path ignores it.
- * @return NERF_OK, or (bf16 only) NERF_ENOMEM or NERF_ERROR with a message.
+ * @return NERF_OK, or (oneDNN only) NERF_ENOMEM or NERF_ERROR with a message.
  */
 int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                         const nerf__layer_part *parts, int n_parts,
@@ -78,6 +80,6 @@ int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                          const uint16_t *kept, const float *w, size_t ldw,
                          float *dw, int dx_part, float *dx, size_t lddx);
 
-void nerf__layer_scratch_free(struct nerf__bf16_scratch *s);
+void nerf__layer_scratch_free(struct nerf__onednn_scratch *s);
 
 #endif

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "fused.h"
+#include "gemm_onednn.h"
 #include "layer.h"
 #include "network_fused.h"
 #include "parallel.h"
@@ -145,8 +146,9 @@ static size_t input_columns(const nerf__network *net, uint32_t index)
 static uint16_t *kept_input(const nerf__network *net, nerf__workspace *ws,
                             uint32_t index)
 {
-    return net->bf16 && ws->kept ? ws->kept + ws->n * input_columns(net, index)
-                                 : NULL;
+    return nerf__onednn_rounds(net->onednn) && ws->kept
+               ? ws->kept + ws->n * input_columns(net, index)
+               : NULL;
 }
 
 static int reserve(const nerf__env *env, nerf__workspace *ws,
@@ -162,7 +164,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     size_t layers = keep ? net->depth : 2;
     size_t view_layers = density_only ? 0 : keep ? net->view_depth : 2;
     /* bf16 storage, in floats (two values each). */
-    const bool bf16 = keep && net->bf16 != NULL;
+    const bool bf16 = keep && nerf__onednn_rounds(net->onednn);
     size_t kept = bf16 ? (n * input_columns(net, layer_count(net)) + 1) / 2 : 0;
     size_t grad16 = bf16 ? (n * nerf__network_grad_width(net) + 1) / 2 : 0;
     size_t partials =
@@ -181,7 +183,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
         kept,
         grad16,
         partials,
-        net->bf16 ? 0 : nerf__fused_scratch(net, n, keep),
+        net->onednn ? 0 : nerf__fused_scratch(net, n, keep),
     };
     for (int i = 0; i < SLOTS; i++) {
         bytes[i] *= sizeof(float);
@@ -234,7 +236,7 @@ int nerf__workspace_reserve_density(const nerf__env *env, nerf__workspace *ws,
 void nerf__workspace_release(const nerf__env *env, nerf__workspace *ws)
 {
     nerf__free(env, ws->enc_pos);
-    nerf__layer_scratch_free(ws->bf16);
+    nerf__layer_scratch_free(ws->onednn);
     memset(ws, 0, sizeof *ws);
 }
 
@@ -346,7 +348,7 @@ static bool use_fused(const nerf__network *net, const nerf__workspace *ws)
 
 static nerf__layer_ctx layer_ctx(const nerf__network *net, nerf__workspace *ws)
 {
-    return (nerf__layer_ctx){net->bf16, &ws->bf16, &ws->env};
+    return (nerf__layer_ctx){net->onednn, &ws->onednn, &ws->env};
 }
 
 /* The trunk, from the encoded positions in ws->enc_pos; returns its last
@@ -563,7 +565,7 @@ static const uint16_t *relu_backward(const nerf__network *net,
                                      nerf__workspace *ws, size_t cols,
                                      const float *y, float *dy, float *db)
 {
-    if (net->bf16 && ws->grad_bf16) {
+    if (nerf__onednn_rounds(net->onednn) && ws->grad_bf16) {
         nerf__relu_backward_bias_bf16(ws->n, cols, y, cols, dy, cols, db,
                                       ws->grad_bf16, ws->partials);
         return ws->grad_bf16;

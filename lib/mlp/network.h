@@ -70,9 +70,9 @@ typedef struct nerf__network {
     nerf__linear rgb;  /* view_width -> 3, sigmoid */
     size_t offset;     /* first parameter in the model's array */
     size_t count;      /* number of parameters, table included */
-    /* The model's bf16 backend (gemm_bf16.h), or NULL: products in fp32
-     * through cblas.  Set by the model after the layout. */
-    struct nerf__bf16 *bf16;
+    /* The model's oneDNN backend (gemm_onednn.h), or NULL: products in
+     * fp32 through cblas.  Set by the model after the layout. */
+    struct nerf__onednn *onednn;
 } nerf__network;
 
 /*
@@ -140,10 +140,10 @@ typedef struct nerf__workspace {
     uint16_t *kept;
     uint16_t *grad_bf16;
     float *partials;  /* the ReLU backward's bias sums by row block */
-    nerf__env env;  /* what reserved it, for the bf16 scratch */
-    /* The rounded operands of a bf16 network's products, created by its
-     * first product (layer.h). */
-    struct nerf__bf16_scratch *bf16;
+    nerf__env env;  /* what reserved it, for the oneDNN scratch */
+    /* The rounded operands and streams of a oneDNN network's products,
+     * created by its first product (layer.h). */
+    struct nerf__onednn_scratch *onednn;
     /* The fused path's packed weights and gradient partials
      * (network_fused.h), or NULL where the network does not fit it. */
     float *fused;

@@ -37,7 +37,7 @@ static const nerf__linear *layer_at(const nerf__network *net, uint32_t i)
 bool nerf__fused_fits(const nerf__network *net)
 {
     /* Inputs are at most two parts, each one of these widths. */
-    if (net->bf16 != NULL || net->depth == 0 ||
+    if (net->onednn != NULL || net->depth == 0 ||
         net->pos_width > NERF__FUSED_MAX_WIDTH ||
         net->dir_width > NERF__FUSED_MAX_WIDTH) {
         return false;

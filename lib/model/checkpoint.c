@@ -16,7 +16,7 @@
 #include "byteorder.h"
 #include "file_io.h"
 #include "fingerprint.h"
-#include "gemm_bf16.h"
+#include "gemm_onednn.h"
 #include "model.h"
 #include "occupancy.h"
 #include "schedule.h"
@@ -204,7 +204,7 @@ typedef struct word_section {
 
 static const word_section word_sections[2] = {
     {TAG_MATMUL, MATMUL_INDEX, offsetof(nerf_model_options, matmul),
-     NERF_MATMUL_FP32, NERF_MATMUL_BF16, "matmul"},
+     NERF_MATMUL_FP32, NERF_MATMUL_FP32_ONEDNN, "matmul"},
     {TAG_SPACE, SPACE_INDEX, offsetof(nerf_model_options, space),
      NERF_SPACE_BOX, NERF_SPACE_UNBOUNDED, "space"},
 };
@@ -760,18 +760,21 @@ static const char *get_word_sections(const sections *s, nerf_model_options *o,
 }
 
 /*
- * A checkpoint of a bf16 model holds fp32 weights like any other, so where
- * bf16 products are not available it still loads, computing in fp32 (and
- * saying so), rather than leaving its weights unusable on this machine.
+ * A checkpoint of a oneDNN model holds fp32 weights like any other, so
+ * where its products are not available it still loads, computing in fp32
+ * through cblas (and saying so), rather than leaving its weights unusable
+ * on this machine.
  */
 static void matmul_here(const nerf__env *env, const char *path,
                         nerf_model_options *o)
 {
     const char *why;
-    if (o->matmul == NERF_MATMUL_BF16 && !nerf__bf16_supported(&why)) {
-        nerf__log(env, NERF_LOG_WARN, "%s: the model was saved with bf16 "
+    if (o->matmul != NERF_MATMUL_FP32 &&
+        !nerf__onednn_supported(o->matmul, &why)) {
+        nerf__log(env, NERF_LOG_WARN, "%s: the model was saved with %s "
                   "products, which are not available here (%s): it computes "
-                  "in fp32", path, why);
+                  "in fp32 through cblas", path,
+                  o->matmul == NERF_MATMUL_BF16 ? "bf16" : "oneDNN fp32", why);
         o->matmul = NERF_MATMUL_FP32;
     }
 }

@@ -3,7 +3,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "gemm_bf16.h"
+#include "gemm_onednn.h"
 #include "network_fused.h"
 #include "occupancy.h"
 #include "options.h"
@@ -189,7 +189,7 @@ static const char *check_fast_fields(const nerf_model_options *o)
     if (o->density_activation > NERF_DENSITY_EXP) {
         return "density_activation is not a known nerf_density_activation";
     }
-    if (o->matmul > NERF_MATMUL_BF16) {
+    if (o->matmul > NERF_MATMUL_FP32_ONEDNN) {
         return "matmul is not a known nerf_matmul";
     }
     if (o->space > NERF_SPACE_UNBOUNDED) {
@@ -236,10 +236,14 @@ int nerf__model_check_options(const nerf_model_options *o)
         return nerf__error(NERF_EINVAL, "nerf_model_options: %s", what);
     }
     const char *why;
-    if (o->matmul == NERF_MATMUL_BF16 && !nerf__bf16_supported(&why)) {
-        return nerf__error(NERF_EINVAL, "nerf_model_options: matmul = "
-                           "NERF_MATMUL_BF16, but bf16 products are not "
-                           "available: %s", why);
+    if (o->matmul != NERF_MATMUL_FP32 &&
+        !nerf__onednn_supported(o->matmul, &why)) {
+        return nerf__error(NERF_EINVAL, "nerf_model_options: matmul = %s, "
+                           "but those products are not available: %s",
+                           o->matmul == NERF_MATMUL_BF16
+                               ? "NERF_MATMUL_BF16"
+                               : "NERF_MATMUL_FP32_ONEDNN",
+                           why);
     }
     return NERF_OK;
 }
@@ -249,10 +253,7 @@ NERF_API int nerf_matmul_supported(int kind)
     if (kind == NERF_MATMUL_FP32) {
         return 1;
     }
-    if (kind == NERF_MATMUL_BF16) {
-        return nerf__bf16_supported(NULL);
-    }
-    return 0;
+    return kind > 0 && nerf__onednn_supported((uint32_t)kind, NULL);
 }
 
 static void setup_network(nerf__network *net, const nerf_model_options *o,
@@ -296,31 +297,31 @@ size_t nerf__model_options_param_count(const nerf_model_options *o)
     return net.count * (o->use_fine ? 2u : 1u);
 }
 
-/* The bf16 backend over the networks' layers.  Each network's layers
+/* The oneDNN backend over the networks' layers.  Each network's layers
  * follow its hash table (if any), which products never read, so the table
  * is not rounded. */
-static int bf16_setup(nerf_model *m)
+static int onednn_setup(nerf_model *m)
 {
-    nerf__bf16_region regions[NERF__BF16_MAX_REGIONS];
+    nerf__onednn_region regions[NERF__ONEDNN_MAX_REGIONS];
     for (uint32_t i = 0; i < m->n_nets; i++) {
         const nerf__network *net = &m->nets[i];
         regions[i].offset = net->trunk[0].w;
         regions[i].count = net->offset + net->count - net->trunk[0].w;
     }
-    int rc = nerf__bf16_create(&m->env, m->params, regions, (int)m->n_nets,
-                               &m->bf16);
+    int rc = nerf__onednn_create(&m->env, m->opts.matmul, m->params, regions,
+                                 (int)m->n_nets, &m->onednn);
     if (rc != NERF_OK) {
         return rc;
     }
     for (uint32_t i = 0; i < m->n_nets; i++) {
-        m->nets[i].bf16 = m->bf16;
+        m->nets[i].onednn = m->onednn;
     }
     return NERF_OK;
 }
 
 void nerf__model_weights_changed(nerf_model *m)
 {
-    nerf__bf16_weights_changed(m->bf16);
+    nerf__onednn_weights_changed(m->onednn);
 }
 
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
@@ -355,8 +356,8 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
             return NERF_ENOMEM;
         }
     }
-    if (opts->matmul == NERF_MATMUL_BF16) {
-        int rc = bf16_setup(m);
+    if (opts->matmul != NERF_MATMUL_FP32) {
+        int rc = onednn_setup(m);
         if (rc != NERF_OK) {
             nerf_model_destroy(m);
             return rc;
@@ -432,7 +433,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->grads);
     nerf__free(&env, model->adam_m);
     nerf__free(&env, model->adam_v);
-    nerf__bf16_destroy(model->bf16);
+    nerf__onednn_destroy(model->onednn);
     nerf__occupancy_destroy(model->grid);
     nerf__free(&env, model);
 }

@@ -41,9 +41,10 @@ struct nerf_model {
      * marching sampler skips empty space with (NULL otherwise).  Its EMA
      * and update counter are training state, saved in checkpoints. */
     struct nerf__occupancy *grid;
-    /* NERF_MATMUL_BF16: the rounded weights and oneDNN primitives that
-     * both networks' products use (mlp/gemm_bf16.h); NULL for fp32. */
-    struct nerf__bf16 *bf16;
+    /* NERF_MATMUL_BF16 and FP32_ONEDNN: the oneDNN primitives (and for
+     * bf16 the rounded weights) that both networks' products use
+     * (mlp/gemm_onednn.h); NULL for cblas fp32. */
+    struct nerf__onednn *onednn;
     /* The data the model was last trained on, as the trainer recorded it
      * (or a checkpoint carried it): not known for a model never trained
      * by a trainer.  Resuming on other data is warned about. */

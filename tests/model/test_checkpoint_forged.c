@@ -614,8 +614,10 @@ TEST(occupancy_grid_section)
 
 /*
  * nerf_model_options.matmul travels in an optional section of its own
- * (tag 9: u32 matmul, u32 reserved), written for bf16 models only, so that
- * readers that predate it load such a file computing in fp32.  A bf16
+ * (tag 9: u32 matmul, u32 reserved), written for oneDNN models only, so
+ * that readers that predate it load such a file computing in fp32 (readers
+ * of 0.2 to 0.6 know the section but not the value 2, FP32_ONEDNN, and
+ * refuse it as unknown).  A bf16
  * checkpoint loads as bf16 where bf16 products are available, and as fp32,
  * with a warning, where they are not (test_checkpoint_forged_no_bf16 runs
  * this file with oneDNN's ISA capped below AVX512-BF16).  The options2
@@ -645,6 +647,52 @@ static void keep_warning(int level, const char *msg, void *user)
     if (level == NERF_LOG_WARN) {
         snprintf(warning, sizeof warning, "%s", msg);
     }
+}
+
+/* A file of the good model with a matmul section of `kind` loads with
+ * that kind where it is available, else as fp32 with a warning. */
+static void load_matmul_section(uint32_t kind)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    matmul_value = kind;
+    matmul_reserved = 0;
+    matmul_len = 8;
+    edit_add_matmul(&p);
+    char path[128];
+    path_in(path, sizeof path, kind == NERF_MATMUL_BF16 ? "bf16.ckpt"
+                                                        : "onednn.ckpt");
+    write_payload(path, &p, NULL, 0);
+    nerf_hooks h;
+    NERF_HOOKS_INIT(&h);
+    h.log_cb = keep_warning;
+    h.log_level = NERF_LOG_WARN;
+    warning[0] = '\0';
+    nerf_model *m = NULL, *ref = trained_model(true);
+    CHECK_OK(nerf_model_load(&m, path, &h));
+    if (m && ref) {
+        nerf_model_options o;
+        NERF_MODEL_OPTIONS_INIT(&o);
+        CHECK_OK(nerf_model_get_options(m, &o));
+        CHECK(memcmp(m->params, ref->params, m->n_params * sizeof(float)) == 0);
+        if (nerf_matmul_supported((int)kind)) {
+            CHECK_EQ_INT(o.matmul, kind);
+            CHECK(m->onednn != NULL);
+            CHECK(warning[0] == '\0');
+        } else {
+            CHECK_EQ_INT(o.matmul, NERF_MATMUL_FP32);
+            CHECK(m->onednn == NULL);
+            CHECK(strstr(warning, path) != NULL);
+            CHECK(strstr(warning, "fp32") != NULL);
+            printf("  loaded as fp32: %s\n", warning);
+        }
+    }
+    nerf_model_destroy(m);
+    nerf_model_destroy(ref);
+    free_payload(&p);
+    free(file);
 }
 
 TEST(matmul_section)
@@ -678,50 +726,15 @@ TEST(matmul_section)
         free(file);
     }
 
-    size_t size = 0;
-    unsigned char *file = good_file(&size);
-    payload p;
-    split_payload(file, size, &p);
-    matmul_value = NERF_MATMUL_BF16;
-    matmul_reserved = 0;
-    matmul_len = 8;
-    edit_add_matmul(&p);
-    char path[128];
-    path_in(path, sizeof path, "bf16.ckpt");
-    write_payload(path, &p, NULL, 0);
-    nerf_hooks h;
-    NERF_HOOKS_INIT(&h);
-    h.log_cb = keep_warning;
-    h.log_level = NERF_LOG_WARN;
-    warning[0] = '\0';
-    nerf_model *m = NULL, *ref = trained_model(true);
-    CHECK_OK(nerf_model_load(&m, path, &h));
-    if (m && ref) {
-        nerf_model_options o;
-        NERF_MODEL_OPTIONS_INIT(&o);
-        CHECK_OK(nerf_model_get_options(m, &o));
-        CHECK(memcmp(m->params, ref->params, m->n_params * sizeof(float)) == 0);
-        if (nerf_matmul_supported(NERF_MATMUL_BF16)) {
-            CHECK_EQ_INT(o.matmul, NERF_MATMUL_BF16);
-            CHECK(m->bf16 != NULL);
-            CHECK(warning[0] == '\0');
-        } else {
-            CHECK_EQ_INT(o.matmul, NERF_MATMUL_FP32);
-            CHECK(m->bf16 == NULL);
-            CHECK(strstr(warning, path) != NULL);
-            CHECK(strstr(warning, "fp32") != NULL);
-            printf("  loaded as fp32: %s\n", warning);
-        }
+    const uint32_t kinds[2] = {NERF_MATMUL_BF16, NERF_MATMUL_FP32_ONEDNN};
+    for (int k = 0; k < 2; k++) {
+        load_matmul_section(kinds[k]);
     }
-    nerf_model_destroy(m);
-    nerf_model_destroy(ref);
-    free_payload(&p);
-    free(file);
 
     matmul_value = NERF_MATMUL_FP32; /* allowed, though never written */
     forge("matmul section, fp32", edit_add_matmul, NERF_OK);
-    matmul_value = 2;
-    forge("matmul 2", edit_add_matmul, NERF_EFORMAT);
+    matmul_value = 3;
+    forge("matmul 3", edit_add_matmul, NERF_EFORMAT);
     CHECK(strstr(nerf_last_error(), "matmul") != NULL);
     matmul_value = NERF_MATMUL_BF16;
     matmul_reserved = 1;

@@ -35,7 +35,9 @@ ENCODING_SCALE_PI = 0x2
 # nerf_matmul: how a model computes its matrix products.
 MATMUL_FP32 = 0
 MATMUL_BF16 = 1
-MATMULS = {"fp32": MATMUL_FP32, "bf16": MATMUL_BF16}
+MATMUL_FP32_ONEDNN = 2
+MATMULS = {"fp32": MATMUL_FP32, "bf16": MATMUL_BF16,
+           "fp32-onednn": MATMUL_FP32_ONEDNN}
 
 # nerf_space: where a hash-grid model's grids lie.
 SPACE_BOX = 0
@@ -80,13 +82,14 @@ def network_key(network: Union[str, int]) -> int:
 
 
 def matmul_key(matmul: Union[str, int]) -> int:
-    """A nerf_matmul number from its name (``"fp32"``, ``"bf16"``)."""
+    """A nerf_matmul number from its name (``"fp32"``, ``"bf16"``,
+    ``"fp32-onednn"``)."""
     if isinstance(matmul, str):
         try:
             return MATMULS[matmul]
         except KeyError:
-            raise ValueError("unknown matmul %r (known: fp32, bf16)"
-                             % (matmul,)) from None
+            raise ValueError("unknown matmul %r (known: %s)"
+                             % (matmul, ", ".join(MATMULS))) from None
     return int(matmul)
 
 
@@ -105,7 +108,8 @@ def space_key(space: Union[str, int]) -> int:
 def matmul_supported(matmul: Union[str, int]) -> bool:
     """Whether models with these products can be created here
     (``nerf_matmul_supported``): bf16 needs a libnerf built with oneDNN
-    and a CPU with AVX512-BF16."""
+    and a CPU with AVX512-BF16, fp32-onednn one built with oneDNN and a
+    CPU with AVX-512."""
     return bool(lib.nerf_matmul_supported(matmul_key(matmul)))
 
 

@@ -248,7 +248,7 @@ class DensityActivation(Named):
 
 class Matmul(Named):
     """``nerf_matmul``."""
-    _names = {0: "fp32", 1: "bf16"}
+    _names = {0: "fp32", 1: "bf16", 2: "fp32-onednn"}
 
 
 class Space(Named):

@@ -139,7 +139,8 @@ class Query(TestCase):
 
 
 class Matmul(TestCase):
-    """bf16 products (``matmul``), where this build and CPU have them."""
+    """oneDNN's products (``matmul``), where this build and CPU have
+    them."""
 
     def test_query_and_options(self):
         self.assertTrue(nerf.matmul_supported("fp32"))
@@ -180,6 +181,32 @@ class Matmul(TestCase):
             self.assertEqual(back.options.matmul, nerf.MATMUL_BF16)
             again, _ = back.query(pos, dirs)
             self.assertEqual(flat(again), flat(rgb_b))
+
+    def test_fp32_onednn_model(self):
+        if not nerf.matmul_supported("fp32-onednn"):
+            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                      "NERF_MATMUL_FP32_ONEDNN"):
+                nerf.Model(preset="tiny", matmul="fp32-onednn")
+            self.skipTest("oneDNN fp32 products are not available here: "
+                          + nerf.last_error())
+        pos, dirs = points(50)
+        path = os.path.join(_support.tmpdir(), "onednn.nerf")
+        with nerf.Model(preset="tiny", seed=2) as f, \
+                nerf.Model(preset="tiny", seed=2, matmul="fp32-onednn") as o:
+            self.assertEqual(o.options.matmul, nerf.MATMUL_FP32_ONEDNN)
+            self.assertEqual(str(o.options.matmul), "fp32-onednn")
+            rgb_f, sigma_f = f.query(pos, dirs)
+            rgb_o, sigma_o = o.query(pos, dirs)
+            # fp32 either way: the sums' order is all that differs.
+            got, want = flat(rgb_o) + flat(sigma_o), flat(rgb_f) + flat(sigma_f)
+            scale = max(abs(v) for v in want)
+            self.assertLess(max(abs(x - y) for x, y in zip(got, want)),
+                            1e-5 * scale)
+            o.save(path)
+        with nerf.Model.load(path) as back:
+            self.assertEqual(back.options.matmul, nerf.MATMUL_FP32_ONEDNN)
+            again, _ = back.query(pos, dirs)
+            self.assertEqual(flat(again), flat(rgb_o))
 
 
 class SaveLoad(TestCase):

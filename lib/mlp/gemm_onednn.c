@@ -1,12 +1,13 @@
 /*
- * bf16 layer products through oneDNN's matmul primitive (oneDNN 2.x C API).
- * gemm_bf16.h states what the backend promises; this file is how.
+ * Layer products through oneDNN's matmul primitive (oneDNN 2.x C API), in
+ * bf16 or fp32.  gemm_onednn.h states what the backend promises; this
+ * file is how.
  *
- * Shapes.  oneDNN's fast bf16 matmul (brgemm) needs every dimension fixed
- * when the primitive is created; with a run-time row count it falls back
- * to a slower gemm kernel.  Batches change size all the time (marched
- * samples are packed), so products are cut into pieces of a few fixed
- * sizes, and the primitive of each size is created once and kept:
+ * Shapes.  oneDNN's fast matmul (brgemm) needs every dimension fixed when
+ * the primitive is created; with a run-time row count it falls back to a
+ * slower gemm kernel.  Batches change size all the time (marched samples
+ * are packed), so products are cut into pieces of a few fixed sizes, and
+ * the primitive of each size is created once and kept:
  *  - forward and input-gradient products go by rows, in pieces of
  *    ROW_BLOCK rows and then powers of two down to 2 rows.  A single last
  *    row runs as a 2-row piece over a padded copy, because oneDNN computes
@@ -18,6 +19,12 @@
  * A product of n rows needs at most about log2(ROW_BLOCK) primitives per
  * layer shape, whatever n is.
  *
+ * Operands.  bf16 products read a rounded copy of their inputs, built with
+ * the parts of a concatenated input side by side, so one product serves a
+ * layer.  fp32 products read the inputs where they are, one product per
+ * part: the first part's writes the output, the others add to it (a sum
+ * post-op), and the last applies the bias and the ReLU.
+ *
  * Threads.  Each product is split into one block per libnerf thread
  * (parallel.h), and every block calls oneDNN with OpenMP's thread count
  * set to 1 on its thread, so oneDNN never starts threads of its own.  The
@@ -26,7 +33,7 @@
  * passes (user scratchpad mode), which is what makes one primitive safe
  * to run on several threads at once.
  */
-#include "gemm_bf16.h"
+#include "gemm_onednn.h"
 
 #include <oneapi/dnnl/dnnl.h>
 #include <oneapi/dnnl/dnnl_debug.h>
@@ -46,7 +53,7 @@
 #elif DNNL_CPU_THREADING_RUNTIME == DNNL_RUNTIME_SEQ
 #define USE_OMP 0
 #else
-#error "the bf16 backend needs oneDNN built with the OpenMP or sequential runtime"
+#error "the oneDNN backend needs oneDNN built with the OpenMP or sequential runtime"
 #endif
 
 #define ROW_LOG2 10
@@ -59,10 +66,12 @@
 
 /* ---- process-wide: support check and engine ----------------------------- */
 
+enum { KIND_BF16, KIND_F32, KINDS };
+
 static struct {
     pthread_once_t once;
-    int ok;
-    const char *why;
+    int ok[KINDS];
+    const char *why[KINDS];
     dnnl_engine_t engine; /* lives as long as the process, as oneDNN's own
                            * global state does: primitives of models the
                            * application never destroyed point at it */
@@ -98,14 +107,15 @@ static void threads_leave(int saved)
 enum { F_BIAS = 1, F_RELU = 2, F_SUM = 4 };
 
 /*
- * C[m, n] (+)= A[m, k] B[k, n] (+ bias, ReLU), A and B bf16 with the given
- * element strides, C fp32 rows of ldc.  All int64_t, so the struct has no
- * padding and compares with memcmp.
+ * C[m, n] (+)= A[m, k] B[k, n] (+ bias, ReLU), A and B of type dt with the
+ * given element strides, C fp32 rows of ldc.  All int64_t, so the struct
+ * has no padding and compares with memcmp.
  */
 typedef struct prim_key {
     int64_t m, n, k;
     int64_t sa0, sa1, sb0, sb1, ldc;
     int64_t flags;
+    int64_t dt; /* dnnl_data_type_t */
 } prim_key;
 
 static dnnl_status_t make_pd(const prim_key *key, dnnl_primitive_desc_t *pd,
@@ -115,10 +125,11 @@ static dnnl_status_t make_pd(const prim_key *key, dnnl_primitive_desc_t *pd,
     const dnnl_dims_t db = {key->k, key->n}, sb = {key->sb0, key->sb1};
     const dnnl_dims_t dc = {key->m, key->n}, sc = {key->ldc, 1};
     const dnnl_dims_t dbias = {1, key->n};
-    dnnl_status_t st = dnnl_memory_desc_init_by_strides(&md[0], 2, da,
-                                                        dnnl_bf16, sa);
+    const dnnl_data_type_t dt = (dnnl_data_type_t)key->dt;
+    dnnl_status_t st = dnnl_memory_desc_init_by_strides(&md[0], 2, da, dt,
+                                                        sa);
     if (st == dnnl_success) {
-        st = dnnl_memory_desc_init_by_strides(&md[1], 2, db, dnnl_bf16, sb);
+        st = dnnl_memory_desc_init_by_strides(&md[1], 2, db, dt, sb);
     }
     if (st == dnnl_success) {
         st = dnnl_memory_desc_init_by_strides(&md[2], 2, dc, dnnl_f32, sc);
@@ -194,28 +205,14 @@ static bool cap_isa(void)
     return ((unsigned)dnnl_get_effective_cpu_isa() & amx) != amx;
 }
 
-static void check_support(void)
+/* Whether oneDNN makes an optimised (not reference) matmul of type dt,
+ * and if `brgemm_only`, one of its brgemm kernels; NULL if so, else why
+ * not (`cannot`, `ref_only` or `no_brgemm`). */
+static const char *matmul_made(dnnl_data_type_t dt, const char *cannot,
+                               const char *ref_only, bool brgemm_only,
+                               const char *no_brgemm)
 {
-    if (!cap_isa()) {
-        global.why = "oneDNN runs AMX kernels (ONEDNN_MAX_CPU_ISA allows "
-                     "them, or oneDNN was in use before libnerf), whose "
-                     "rounding depends on the product shape; set "
-                     "ONEDNN_MAX_CPU_ISA=AVX512_CORE_BF16";
-        return;
-    }
-    /* Without native bf16 oneDNN emulates it, slower than fp32: that is
-     * not what anyone asking for bf16 wants. */
-    if (!isa_has_bf16()) {
-        global.why = "oneDNN reports no AVX512-BF16 on this CPU (or "
-                     "DNNL_MAX_CPU_ISA excludes it)";
-        return;
-    }
-    if (dnnl_engine_create(&global.engine, dnnl_cpu, 0) != dnnl_success) {
-        global.engine = NULL;
-        global.why = "oneDNN could not create a CPU engine";
-        return;
-    }
-    const prim_key key = {32, 32, 32, 32, 1, 1, 32, 32, F_BIAS | F_RELU};
+    const prim_key key = {32, 32, 32, 32, 1, 1, 32, 32, F_BIAS | F_RELU, dt};
     dnnl_primitive_desc_t pd = NULL;
     dnnl_memory_desc_t md[4];
     int saved = threads_enter();
@@ -225,23 +222,79 @@ static void check_support(void)
     if (st == dnnl_success) {
         st = dnnl_primitive_desc_query(pd, dnnl_query_impl_info_str, 0, &impl);
     }
+    const char *why = NULL;
     if (st != dnnl_success) {
-        global.why = "oneDNN cannot create a bf16 matmul on this CPU";
+        why = cannot;
     } else if (impl == NULL || strncmp(impl, "ref", 3) == 0) {
-        global.why = "oneDNN has only its reference bf16 matmul on this CPU";
-    } else {
-        global.ok = 1;
+        why = ref_only;
+    } else if (brgemm_only && strncmp(impl, "brg", 3) != 0) {
+        why = no_brgemm;
     }
     dnnl_primitive_desc_destroy(pd);
+    return why;
 }
 
-int nerf__bf16_supported(const char **why)
+static void check_support(void)
 {
+    /* Before anything else: the cap only takes before oneDNN's first use. */
+    const bool capped = cap_isa();
+    if (dnnl_engine_create(&global.engine, dnnl_cpu, 0) != dnnl_success) {
+        global.engine = NULL;
+        global.why[KIND_BF16] = global.why[KIND_F32] =
+            "oneDNN could not create a CPU engine";
+        return;
+    }
+    /* AMX has no fp32 products: the cap does not concern them.  Only the
+     * brgemm kernels (AVX-512 in oneDNN 2.x) compute a row the same way
+     * whatever the row count; the gemm fallback orders its sums by it,
+     * which would make images depend on chunk sizes and thread counts. */
+    global.why[KIND_F32] = matmul_made(
+        dnnl_f32, "oneDNN cannot create an fp32 matmul",
+        "oneDNN has only its reference fp32 matmul on this CPU", true,
+        "oneDNN has no brgemm fp32 matmul on this CPU (it needs AVX-512, "
+        "or DNNL_MAX_CPU_ISA excludes it)");
+    if (!capped) {
+        global.why[KIND_BF16] =
+            "oneDNN runs AMX kernels (ONEDNN_MAX_CPU_ISA allows them, or "
+            "oneDNN was in use before libnerf), whose rounding depends on "
+            "the product shape; set ONEDNN_MAX_CPU_ISA=AVX512_CORE_BF16";
+    } else if (!isa_has_bf16()) {
+        /* Without native bf16 oneDNN emulates it, slower than fp32: that
+         * is not what anyone asking for bf16 wants. */
+        global.why[KIND_BF16] = "oneDNN reports no AVX512-BF16 on this CPU "
+                                "(or DNNL_MAX_CPU_ISA excludes it)";
+    } else {
+        global.why[KIND_BF16] = matmul_made(
+            dnnl_bf16, "oneDNN cannot create a bf16 matmul on this CPU",
+            "oneDNN has only its reference bf16 matmul on this CPU", false,
+            NULL);
+    }
+    for (int k = 0; k < KINDS; k++) {
+        global.ok[k] = global.why[k] == NULL;
+    }
+}
+
+static int kind_of(uint32_t matmul)
+{
+    return matmul == NERF_MATMUL_BF16 ? KIND_BF16
+           : matmul == NERF_MATMUL_FP32_ONEDNN ? KIND_F32
+                                               : -1;
+}
+
+int nerf__onednn_supported(uint32_t matmul, const char **why)
+{
+    const int k = kind_of(matmul);
+    if (k < 0) {
+        if (why) {
+            *why = "not a oneDNN kind of products";
+        }
+        return 0;
+    }
     pthread_once(&global.once, check_support);
     if (why) {
-        *why = global.ok ? NULL : global.why;
+        *why = global.ok[k] ? NULL : global.why[k];
     }
-    return global.ok;
+    return global.ok[k];
 }
 
 /* ---- rounding ----------------------------------------------------------- */
@@ -303,13 +356,17 @@ typedef struct prim_entry {
     struct prim_entry *next;
 } prim_entry;
 
-struct nerf__bf16 {
+struct nerf__onednn {
     nerf__env env;
+    bool bf16;            /* rounds its operands; else fp32 in place */
+    dnnl_data_type_t dt;  /* of the operands */
+    size_t esize;         /* their size in bytes */
+    const char *name;     /* for messages */
     const float *params;
-    nerf__bf16_region regions[NERF__BF16_MAX_REGIONS];
-    size_t base[NERF__BF16_MAX_REGIONS]; /* each region's start in wb */
+    nerf__onednn_region regions[NERF__ONEDNN_MAX_REGIONS];
+    size_t base[NERF__ONEDNN_MAX_REGIONS]; /* each region's start in wb */
     int n_regions;
-    uint16_t *wb;
+    uint16_t *wb; /* bf16: the rounded weights */
     /* gen counts weight changes; synced is the gen wb was rounded at. */
     atomic_uint_fast64_t gen, synced;
     pthread_mutex_t sync_mu;
@@ -318,31 +375,40 @@ struct nerf__bf16 {
     size_t n_prims;
 };
 
-int nerf__bf16_create(const nerf__env *env, const float *params,
-                      const nerf__bf16_region *regions, int n_regions,
-                      nerf__bf16 **out)
+int nerf__onednn_create(const nerf__env *env, uint32_t matmul,
+                        const float *params,
+                        const nerf__onednn_region *regions, int n_regions,
+                        nerf__onednn **out)
 {
     *out = NULL;
     const char *why;
-    if (!nerf__bf16_supported(&why)) {
-        return nerf__error(NERF_EINVAL, "bf16 products are not available: %s",
+    const bool bf16 = matmul == NERF_MATMUL_BF16;
+    const char *name = bf16 ? "bf16 products" : "oneDNN fp32 products";
+    if (!nerf__onednn_supported(matmul, &why)) {
+        return nerf__error(NERF_EINVAL, "%s are not available: %s", name,
                            why);
     }
-    nerf__bf16 *b = nerf__calloc(env, 1, sizeof *b);
+    nerf__onednn *b = nerf__calloc(env, 1, sizeof *b);
     if (b == NULL) {
         return NERF_ENOMEM;
     }
     b->env = *env;
+    b->bf16 = bf16;
+    b->dt = bf16 ? dnnl_bf16 : dnnl_f32;
+    b->esize = bf16 ? sizeof(uint16_t) : sizeof(float);
+    b->name = name;
     b->params = params;
     size_t total = 0;
-    for (int i = 0; i < n_regions && i < NERF__BF16_MAX_REGIONS; i++) {
+    for (int i = 0; i < n_regions && i < NERF__ONEDNN_MAX_REGIONS; i++) {
         b->regions[i] = regions[i];
         b->base[i] = total;
         total += regions[i].count;
         b->n_regions = i + 1;
     }
-    b->wb = nerf__alloc(env, (total ? total : 1) * sizeof(uint16_t));
-    if (b->wb == NULL) {
+    if (bf16) {
+        b->wb = nerf__alloc(env, (total ? total : 1) * sizeof(uint16_t));
+    }
+    if (bf16 && b->wb == NULL) {
         nerf__free(env, b);
         return NERF_ENOMEM;
     }
@@ -354,7 +420,7 @@ int nerf__bf16_create(const nerf__env *env, const float *params,
     return NERF_OK;
 }
 
-void nerf__bf16_destroy(nerf__bf16 *b)
+void nerf__onednn_destroy(nerf__onednn *b)
 {
     if (b == NULL) {
         return;
@@ -375,14 +441,19 @@ void nerf__bf16_destroy(nerf__bf16 *b)
     nerf__free(&env, b);
 }
 
-void nerf__bf16_weights_changed(nerf__bf16 *b)
+int nerf__onednn_rounds(const nerf__onednn *b)
+{
+    return b != NULL && b->bf16;
+}
+
+void nerf__onednn_weights_changed(nerf__onednn *b)
 {
     if (b) {
         atomic_fetch_add_explicit(&b->gen, 1, memory_order_release);
     }
 }
 
-size_t nerf__bf16_primitives(nerf__bf16 *b)
+size_t nerf__onednn_primitives(nerf__onednn *b)
 {
     pthread_mutex_lock(&b->cache_mu);
     size_t n = b->n_prims;
@@ -392,8 +463,11 @@ size_t nerf__bf16_primitives(nerf__bf16 *b)
 
 /* Round the weights again if they changed since the last time.  Threads
  * that find the copy current pay one atomic load. */
-static void sync_weights(nerf__bf16 *b)
+static void sync_weights(nerf__onednn *b)
 {
+    if (!b->bf16) {
+        return;
+    }
     uint64_t want = atomic_load_explicit(&b->gen, memory_order_acquire);
     if (atomic_load_explicit(&b->synced, memory_order_acquire) == want) {
         return;
@@ -410,19 +484,22 @@ static void sync_weights(nerf__bf16 *b)
     pthread_mutex_unlock(&b->sync_mu);
 }
 
-/* The rounded copy of the weights at w (a pointer into params), or NULL
- * if w is not in a region (a caller's bug). */
-static const uint16_t *rounded(const nerf__bf16 *b, const float *w,
-                               size_t count)
+/* The weights at w (a pointer into params) as the products read them:
+ * their rounded copy for bf16, or NULL if w is not in a region (a
+ * caller's bug). */
+static const void *operand_weights(const nerf__onednn *b, const float *w,
+                                   size_t count)
 {
     if (w < b->params) {
         return NULL;
     }
     size_t off = (size_t)(w - b->params);
     for (int i = 0; i < b->n_regions; i++) {
-        const nerf__bf16_region *r = &b->regions[i];
+        const nerf__onednn_region *r = &b->regions[i];
         if (off >= r->offset && off - r->offset + count <= r->count) {
-            return b->wb + b->base[i] + (off - r->offset);
+            return b->bf16 ? (const void *)(b->wb + b->base[i] +
+                                            (off - r->offset))
+                           : (const void *)w;
         }
     }
     return NULL;
@@ -438,16 +515,17 @@ static size_t key_hash(const prim_key *k)
     return (size_t)(h % BUCKETS);
 }
 
-static int dnnl_failed(dnnl_status_t st, const char *what)
+static int dnnl_failed(const nerf__onednn *b, dnnl_status_t st,
+                       const char *what)
 {
     return nerf__error(st == dnnl_out_of_memory ? NERF_ENOMEM : NERF_ERROR,
-                       "bf16 products: oneDNN could not %s (%s)", what,
+                       "%s: oneDNN could not %s (%s)", b->name, what,
                        dnnl_status2str(st));
 }
 
 /* The primitive for key, created on first use.  Entries live as long as
  * the backend, so callers keep the pointer without holding the lock. */
-static int get_prim(nerf__bf16 *b, const prim_key *key, prim_entry **out)
+static int get_prim(nerf__onednn *b, const prim_key *key, prim_entry **out)
 {
     size_t h = key_hash(key);
     pthread_mutex_lock(&b->cache_mu);
@@ -482,17 +560,18 @@ static int get_prim(nerf__bf16 *b, const prim_key *key, prim_entry **out)
         pthread_mutex_unlock(&b->cache_mu);
         nerf__free(&b->env, e);
         char what[160];
-        snprintf(what, sizeof what, "create a bf16 matmul [%lld x %lld] x "
+        snprintf(what, sizeof what, "create a matmul [%lld x %lld] x "
                  "[%lld x %lld]", (long long)key->m, (long long)key->k,
                  (long long)key->k, (long long)key->n);
-        return dnnl_failed(st, what);
+        return dnnl_failed(b, st, what);
     }
     e->next = b->buckets[h];
     b->buckets[h] = e;
     b->n_prims++;
     pthread_mutex_unlock(&b->cache_mu);
-    nerf__log(&b->env, NERF_LOG_DEBUG, "bf16: primitive %zu: [%lld x %lld] x "
-              "[%lld x %lld], flags %lld", b->n_prims, (long long)key->m,
+    nerf__log(&b->env, NERF_LOG_DEBUG, "%s: primitive %zu: [%lld x %lld] x "
+              "[%lld x %lld], flags %lld", b->name, b->n_prims,
+              (long long)key->m,
               (long long)key->k, (long long)key->k, (long long)key->n,
               (long long)key->flags);
     *out = e;
@@ -508,17 +587,19 @@ typedef struct slot {
     size_t block_size;
 } slot;
 
-struct nerf__bf16_scratch {
+struct nerf__onednn_scratch {
     nerf__env env;
     uint16_t *a;   /* the left operand, rounded */
     size_t a_cap;
     uint16_t *x;   /* a weight gradient's inputs, rounded */
     size_t x_cap;
+    float *w;      /* fp32: a block of weights made dense */
+    size_t w_cap;
     unsigned n_slots;
     slot *slots;
 };
 
-void nerf__bf16_scratch_free(nerf__bf16_scratch *s)
+void nerf__onednn_scratch_free(nerf__onednn_scratch *s)
 {
     if (s == NULL) {
         return;
@@ -533,12 +614,13 @@ void nerf__bf16_scratch_free(nerf__bf16_scratch *s)
     nerf__free(&env, s->slots);
     nerf__free(&env, s->a);
     nerf__free(&env, s->x);
+    nerf__free(&env, s->w);
     nerf__free(&env, s);
 }
 
-static int scratch_get(const nerf__layer_ctx *c, nerf__bf16_scratch **out)
+static int scratch_get(const nerf__layer_ctx *c, nerf__onednn_scratch **out)
 {
-    nerf__bf16_scratch *s = *c->scratch;
+    nerf__onednn_scratch *s = *c->scratch;
     if (s == NULL) {
         s = nerf__calloc(c->env, 1, sizeof *s);
         if (s == NULL) {
@@ -580,7 +662,8 @@ static int grow(const nerf__env *env, uint16_t **buf, size_t *cap,
 }
 
 /* Streams and per-block memory of at least `size` bytes for every slot. */
-static int slots_ready(nerf__bf16_scratch *s, unsigned n, size_t size)
+static int slots_ready(const nerf__onednn *b, nerf__onednn_scratch *s,
+                       unsigned n, size_t size)
 {
     for (unsigned i = 0; i < n; i++) {
         slot *sl = &s->slots[i];
@@ -589,7 +672,7 @@ static int slots_ready(nerf__bf16_scratch *s, unsigned n, size_t size)
                                                   dnnl_stream_default_flags);
             if (st != dnnl_success) {
                 sl->stream = NULL;
-                return dnnl_failed(st, "create a stream");
+                return dnnl_failed(b, st, "create a stream");
             }
         }
         if (size > sl->block_size) {
@@ -653,17 +736,21 @@ static dnnl_status_t run_piece(const prim_entry *e, dnnl_stream_t stream,
 
 /* A row-wise product: C[r, :] = f(A[r, :] B) for r in [0, n). */
 typedef struct rows_job {
-    nerf__bf16_scratch *s;
+    nerf__onednn_scratch *s;
     prim_entry *by_log2[ROW_LOG2 + 1]; /* pieces of 2^e rows, e >= 1 */
     size_t n;
     unsigned blocks;
-    const uint16_t *a;
+    const char *a;       /* elements of esize bytes */
     size_t lda;
-    const uint16_t *bm;
+    size_t lda_piece;    /* lda, or k where pieces copy their rows dense */
+    size_t dense_offset; /* of that copy in a slot's block */
+    const void *bm;
     float *c;
     size_t ldc;
     const float *bias;
+    size_t esize;
     size_t k, cols;      /* A's columns, C's columns */
+    bool sum;            /* C is added to, not written */
     size_t pad_offset;   /* of the padded rows in a slot's block */
     atomic_int status;
 } rows_job;
@@ -687,7 +774,16 @@ static void rows_block(void *ctx, size_t t)
     for (int e = ROW_LOG2; e >= 1 && st == dnnl_success; e--) {
         const size_t m = (size_t)1 << e;
         while (hi - r >= m && st == dnnl_success) {
-            st = run_piece(j->by_log2[e], sl->stream, j->a + r * j->lda, j->bm,
+            const char *a = j->a + r * j->lda * j->esize;
+            if (j->lda_piece != j->lda) {
+                char *d = (char *)sl->block + j->dense_offset;
+                for (size_t i = 0; i < m; i++) {
+                    memcpy(d + i * j->k * j->esize,
+                           a + i * j->lda * j->esize, j->k * j->esize);
+                }
+                a = d;
+            }
+            st = run_piece(j->by_log2[e], sl->stream, a, j->bm,
                            j->c + r * j->ldc, j->bias, sl->block);
             r += m;
             if (e < ROW_LOG2) {
@@ -697,11 +793,13 @@ static void rows_block(void *ctx, size_t t)
     }
     if (r < hi && st == dnnl_success) {
         /* The last row, as row 0 of a 2-row piece; row 1 is zeros. */
-        uint16_t *pa = (uint16_t *)((char *)sl->block + j->pad_offset);
-        float *pc = (float *)(pa + round_up64(2 * j->lda * sizeof *pa) /
-                                       sizeof *pa);
-        memcpy(pa, j->a + r * j->lda, j->k * sizeof *pa);
-        memset(pa + j->lda, 0, j->k * sizeof *pa);
+        char *pa = (char *)sl->block + j->pad_offset;
+        float *pc = (float *)(pa + round_up64(2 * j->lda_piece * j->esize));
+        memcpy(pa, j->a + r * j->lda * j->esize, j->k * j->esize);
+        memset(pa + j->lda_piece * j->esize, 0, j->k * j->esize);
+        if (j->sum) {
+            memcpy(pc, j->c + r * j->ldc, j->cols * sizeof *pc);
+        }
         st = run_piece(j->by_log2[1], sl->stream, pa, j->bm, pc, j->bias,
                        sl->block);
         if (st == dnnl_success) {
@@ -718,19 +816,22 @@ static void rows_block(void *ctx, size_t t)
     }
 }
 
-static unsigned blocks_for(const nerf__bf16_scratch *s, size_t units)
+static unsigned blocks_for(const nerf__onednn_scratch *s, size_t units)
 {
     unsigned t = s->n_slots;
     return units < t ? (unsigned)(units ? units : 1) : t;
 }
 
 /*
- * C[n, cols] = A[n, k] B (+ bias, ReLU per flags), A bf16 rows of lda, B
- * a [k, cols] bf16 matrix of strides sb0, sb1, C fp32 rows of ldc.
+ * C[n, cols] = A[n, k] B (+ bias, ReLU, sum into C per flags), A rows of
+ * lda, B a [k, cols] matrix of strides sb0, sb1 (both of the backend's
+ * operand type), C fp32 rows of ldc.  Rows of A wider than k (a part of a
+ * wider matrix) are copied dense piece by piece, for the reason
+ * dense_block() gives.
  */
-static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
-                       size_t k, size_t cols, const uint16_t *a, size_t lda,
-                       const uint16_t *bm, size_t sb0, size_t sb1, float *c,
+static int row_product(nerf__onednn *b, nerf__onednn_scratch *s, size_t n,
+                       size_t k, size_t cols, const void *a, size_t lda,
+                       const void *bm, size_t sb0, size_t sb1, float *c,
                        size_t ldc, const float *bias, int64_t flags)
 {
     rows_job j;
@@ -740,12 +841,15 @@ static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     j.blocks = blocks_for(s, n / 2);
     j.a = a;
     j.lda = lda;
+    j.lda_piece = k;
     j.bm = bm;
     j.c = c;
     j.ldc = ldc;
     j.bias = bias;
+    j.esize = b->esize;
     j.k = k;
     j.cols = cols;
+    j.sum = (flags & F_SUM) != 0;
     atomic_init(&j.status, dnnl_success);
     /* The piece sizes the blocks will use: every block's length in
      * ROW_BLOCKs and powers of two, and 2 for a last odd row. */
@@ -768,8 +872,8 @@ static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
             continue;
         }
         const prim_key key = {(int64_t)1 << e, (int64_t)cols, (int64_t)k,
-                              (int64_t)lda, 1, (int64_t)sb0, (int64_t)sb1,
-                              (int64_t)ldc, flags};
+                              (int64_t)k, 1, (int64_t)sb0, (int64_t)sb1,
+                              (int64_t)ldc, flags, (int64_t)b->dt};
         int rc = get_prim(b, &key, &j.by_log2[e]);
         if (rc != NERF_OK) {
             return rc;
@@ -779,9 +883,11 @@ static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
         }
     }
     j.pad_offset = round_up64(scratch);
-    size_t block = j.pad_offset + round_up64(2 * lda * sizeof(uint16_t)) +
-                   round_up64(2 * ldc * sizeof(float));
-    int rc = slots_ready(s, j.blocks, block);
+    j.dense_offset = j.pad_offset + round_up64(2 * k * b->esize) +
+                     round_up64(2 * ldc * sizeof(float));
+    size_t block = j.dense_offset +
+                   (lda != k ? round_up64(ROW_BLOCK * k * b->esize) : 0);
+    int rc = slots_ready(b, s, j.blocks, block);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -790,23 +896,24 @@ static int row_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     int st = atomic_load(&j.status);
     return st == dnnl_success
                ? NERF_OK
-               : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
+               : dnnl_failed(b, (dnnl_status_t)st, "run a matmul");
 }
 
 /* dW[out, in] += dY^T X, cut along dW's longer side into one range per
  * block, each summing over all samples in K pieces, in sample order. */
 typedef struct wgrad_job {
-    nerf__bf16_scratch *s;
+    nerf__onednn_scratch *s;
     prim_entry *by[WIDTHS][K_LOG2 + 1];
     size_t narrow;     /* the smaller of the two range widths */
     bool by_rows;      /* ranges of dW rows, else of columns */
     size_t span;       /* out or in: the side that is cut */
     unsigned blocks;
     size_t n;
-    const uint16_t *dy; /* [n, out] */
-    size_t out;
-    const uint16_t *x;  /* [n, in] */
-    size_t in;
+    size_t esize;
+    const char *dy;    /* [n, out], rows of lddy */
+    size_t lddy;
+    const char *x;     /* [n, in], rows of ldx */
+    size_t ldx;
     float *dw;
     size_t lddw;
     atomic_int status;
@@ -829,9 +936,10 @@ static void wgrad_block(void *ctx, size_t t)
     for (int e = K_LOG2; e >= 0 && st == dnnl_success; e--) {
         const size_t m = (size_t)1 << e;
         while (j->n - r >= m && st == dnnl_success) {
-            st = run_piece(by[e], sl->stream, j->dy + r * j->out + mo,
-                           j->x + r * j->in + no, j->dw + mo * j->lddw + no,
-                           NULL, sl->block);
+            st = run_piece(by[e], sl->stream,
+                           j->dy + (r * j->lddy + mo) * j->esize,
+                           j->x + (r * j->ldx + no) * j->esize,
+                           j->dw + mo * j->lddw + no, NULL, sl->block);
             r += m;
             if (e < K_LOG2) {
                 break;
@@ -848,9 +956,9 @@ static void wgrad_block(void *ctx, size_t t)
     }
 }
 
-static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
-                          size_t out, size_t in, const uint16_t *dy,
-                          const uint16_t *x, float *dw, size_t lddw)
+static int weight_product(nerf__onednn *b, nerf__onednn_scratch *s, size_t n,
+                          size_t out, size_t in, const void *dy, size_t lddy,
+                          const void *x, size_t ldx, float *dw, size_t lddw)
 {
     wgrad_job j;
     memset(&j, 0, sizeof j);
@@ -860,10 +968,11 @@ static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     j.blocks = blocks_for(s, j.span);
     j.narrow = j.span / j.blocks;
     j.n = n;
+    j.esize = b->esize;
     j.dy = dy;
-    j.out = out;
+    j.lddy = lddy;
     j.x = x;
-    j.in = in;
+    j.ldx = ldx;
     j.dw = dw;
     j.lddw = lddw;
     atomic_init(&j.status, dnnl_success);
@@ -880,8 +989,8 @@ static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
                 continue;
             }
             const prim_key key = {(int64_t)m, (int64_t)cols, (int64_t)k,
-                                  1, (int64_t)out, (int64_t)in, 1,
-                                  (int64_t)lddw, F_SUM};
+                                  1, (int64_t)lddy, (int64_t)ldx, 1,
+                                  (int64_t)lddw, F_SUM, (int64_t)b->dt};
             int rc = get_prim(b, &key, &j.by[w][e]);
             if (rc != NERF_OK) {
                 return rc;
@@ -891,7 +1000,7 @@ static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
             }
         }
     }
-    int rc = slots_ready(s, j.blocks, round_up64(scratch));
+    int rc = slots_ready(b, s, j.blocks, round_up64(scratch));
     if (rc != NERF_OK) {
         return rc;
     }
@@ -900,7 +1009,7 @@ static int weight_product(nerf__bf16 *b, nerf__bf16_scratch *s, size_t n,
     int st = atomic_load(&j.status);
     return st == dnnl_success
                ? NERF_OK
-               : dnnl_failed((dnnl_status_t)st, "run a bf16 matmul");
+               : dnnl_failed(b, (dnnl_status_t)st, "run a matmul");
 }
 
 /* ---- the layer products ------------------------------------------------- */
@@ -914,35 +1023,107 @@ static size_t parts_width(const nerf__layer_part *parts, int n_parts)
     return k;
 }
 
-static int weights_for(nerf__bf16 *b, const float *w, size_t rows,
-                       size_t ldw, size_t cols, const uint16_t **out)
+static int weights_for(nerf__onednn *b, const float *w, size_t rows,
+                       size_t ldw, size_t cols, const void **out)
 {
-    *out = rows ? rounded(b, w, (rows - 1) * ldw + cols) : NULL;
+    sync_weights(b);
+    *out = rows ? operand_weights(b, w, (rows - 1) * ldw + cols) : NULL;
     if (*out == NULL) {
-        return nerf__error(NERF_ERROR, "bf16 products: weights outside the "
-                           "model's parameters");
+        return nerf__error(NERF_ERROR, "%s: weights outside the model's "
+                           "parameters", b->name);
     }
     return NERF_OK;
 }
 
-int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                       const nerf__layer_part *parts, int n_parts,
-                       const float *w, size_t ldw, const float *b, int relu,
-                       float *y, size_t ldy, uint16_t *kept)
+/*
+ * W's column block [out, in] from rows of ldw, copied dense into the
+ * scratch, or w itself when it already is.  oneDNN runs its brgemm kernels
+ * only on dense weights; on a block of a wider matrix it falls back to a
+ * gemm whose sums are ordered by the row count, so a row's result would
+ * depend on the piece it fell in.  A block is at most a layer's weights,
+ * small beside the products that read it.
+ */
+static int dense_block(nerf__onednn_scratch *s, const float *w, size_t out,
+                       size_t in, size_t ldw, const float **dense)
+{
+    if (ldw == in) {
+        *dense = w;
+        return NERF_OK;
+    }
+    size_t need = out * in * sizeof(float);
+    if (need > s->w_cap) {
+        float *p = nerf__alloc(&s->env, need);
+        if (p == NULL) {
+            return NERF_ENOMEM;
+        }
+        nerf__free(&s->env, s->w);
+        s->w = p;
+        s->w_cap = need;
+    }
+    for (size_t r = 0; r < out; r++) {
+        memcpy(s->w + r * in, w + r * ldw, in * sizeof(float));
+    }
+    *dense = s->w;
+    return NERF_OK;
+}
+
+/* fp32: one product per part, read in place, each after the first adding
+ * to Y; the last one applies the bias and the ReLU. */
+static int forward_f32(nerf__onednn *be, nerf__onednn_scratch *s, size_t n,
+                       uint32_t out, const nerf__layer_part *parts,
+                       int n_parts, const float *w, size_t ldw,
+                       const float *b, int relu, float *y, size_t ldy)
+{
+    size_t col = 0;
+    for (int p = 0; p < n_parts; p++) {
+        const bool last = p == n_parts - 1;
+        const void *wp;
+        const float *wd = NULL;
+        int rc = weights_for(be, w + col, out, ldw, parts[p].in, &wp);
+        if (rc == NERF_OK) {
+            rc = dense_block(s, wp, out, parts[p].in, ldw, &wd);
+        }
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        const size_t ld = wd == wp ? ldw : parts[p].in;
+        int64_t flags = (p > 0 ? F_SUM : 0) | (last && b ? F_BIAS : 0) |
+                        (last && relu ? F_RELU : 0);
+        rc = row_product(be, s, n, parts[p].in, out, parts[p].x,
+                         parts[p].ldx, wd, 1, ld, y, ldy, last ? b : NULL,
+                         flags);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        col += parts[p].in;
+    }
+    return NERF_OK;
+}
+
+int nerf__onednn_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
+                         const nerf__layer_part *parts, int n_parts,
+                         const float *w, size_t ldw, const float *b, int relu,
+                         float *y, size_t ldy, uint16_t *kept)
 {
     if (n == 0) {
         return NERF_OK;
     }
-    nerf__bf16 *be = c->bf16;
-    const size_t k = parts_width(parts, n_parts);
-    nerf__bf16_scratch *s;
-    const uint16_t *wb;
+    nerf__onednn *be = c->onednn;
+    nerf__onednn_scratch *s;
     int rc = scratch_get(c, &s);
-    if (rc == NERF_OK && kept == NULL) {
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (!be->bf16) {
+        return forward_f32(be, s, n, out, parts, n_parts, w, ldw, b, relu, y,
+                           ldy);
+    }
+    const size_t k = parts_width(parts, n_parts);
+    const void *wb;
+    if (kept == NULL) {
         rc = grow(&s->env, &s->a, &s->a_cap, n, k);
     }
     if (rc == NERF_OK) {
-        sync_weights(be);
         rc = weights_for(be, w, out, ldw, k, &wb);
     }
     if (rc != NERF_OK) {
@@ -955,20 +1136,64 @@ int nerf__bf16_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     return row_product(be, s, n, k, out, a, k, wb, 1, ldw, y, ldy, b, flags);
 }
 
-int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
-                        const float *dy, size_t lddy, const uint16_t *dyb,
-                        const nerf__layer_part *parts, int n_parts,
-                        const uint16_t *kept, const float *w, size_t ldw,
-                        float *dw, int dx_part, float *dx, size_t lddx)
+/* dX = dY W_q: B is W's column block of part dx_part, [out, in] rows of
+ * ldw. */
+static int input_grad(nerf__onednn *be, nerf__onednn_scratch *s, size_t n,
+                      uint32_t out, const void *dy, size_t lddy,
+                      const nerf__layer_part *parts, int dx_part,
+                      const float *w, size_t ldw, float *dx, size_t lddx)
+{
+    size_t col = 0;
+    for (int p = 0; p < dx_part; p++) {
+        col += parts[p].in;
+    }
+    const uint32_t in = parts[dx_part].in;
+    const void *wb;
+    int rc = weights_for(be, w + col, out, ldw, in, &wb);
+    size_t ld = ldw;
+    if (rc == NERF_OK && !be->bf16) {
+        const float *wd;
+        rc = dense_block(s, wb, out, in, ldw, &wd);
+        ld = wd == wb ? ldw : in;
+        wb = wd;
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    return row_product(be, s, n, out, in, dy, lddy, wb, ld, 1, dx, lddx,
+                       NULL, 0);
+}
+
+int nerf__onednn_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
+                          const float *dy, size_t lddy, const uint16_t *dyb,
+                          const nerf__layer_part *parts, int n_parts,
+                          const uint16_t *kept, const float *w, size_t ldw,
+                          float *dw, int dx_part, float *dx, size_t lddx)
 {
     if (n == 0) {
         return NERF_OK;
     }
-    nerf__bf16 *be = c->bf16;
-    const size_t k = parts_width(parts, n_parts);
-    nerf__bf16_scratch *s;
+    nerf__onednn *be = c->onednn;
+    nerf__onednn_scratch *s;
     int rc = scratch_get(c, &s);
-    if (rc == NERF_OK && dyb == NULL) {
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (!be->bf16) {
+        size_t col = 0;
+        for (int p = 0; p < n_parts && rc == NERF_OK; p++) {
+            rc = weight_product(be, s, n, out, parts[p].in, dy, lddy,
+                                parts[p].x, parts[p].ldx, dw + col, ldw);
+            col += parts[p].in;
+        }
+        if (rc != NERF_OK || dx == NULL) {
+            return rc;
+        }
+        return input_grad(be, s, n, out, dy, lddy, parts, dx_part, w, ldw, dx,
+                          lddx);
+    }
+    const size_t k = parts_width(parts, n_parts);
+    if (dyb == NULL) {
         rc = grow(&s->env, &s->a, &s->a_cap, n, out);
     }
     if (rc == NERF_OK && kept == NULL) {
@@ -987,22 +1212,10 @@ int nerf__bf16_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
         kept = s->x;
     }
     /* One product serves every part: their columns are adjacent in dW. */
-    rc = weight_product(be, s, n, out, k, dyb, kept, dw, ldw);
+    rc = weight_product(be, s, n, out, k, dyb, out, kept, k, dw, ldw);
     if (rc != NERF_OK || dx == NULL) {
         return rc;
     }
-    size_t col = 0;
-    for (int p = 0; p < dx_part; p++) {
-        col += parts[p].in;
-    }
-    const uint32_t in = parts[dx_part].in;
-    const uint16_t *wb;
-    sync_weights(be);
-    rc = weights_for(be, w + col, out, ldw, in, &wb);
-    if (rc != NERF_OK) {
-        return rc;
-    }
-    /* dX = dY W_q: B is W's column block, [out, in] rows of ldw. */
-    return row_product(be, s, n, out, in, dyb, out, wb, ldw, 1, dx, lddx,
-                       NULL, 0);
+    return input_grad(be, s, n, out, dyb, out, parts, dx_part, w, ldw, dx,
+                      lddx);
 }
