@@ -10,6 +10,7 @@
 
 #include "common/cli.h"
 #include "common/dist.h"
+#include "common/matmul_name.h"
 #include "common/out_folder.h"
 #include "common/options.h"
 #include "common/progress.h"
@@ -26,7 +27,8 @@ static const char usage[] =
     "                  [--seed N] [--lr RATE] [--checkpoint-every N]\n"
     "                  [--resume | --overwrite]\n"
     "                  [--batch-samples N] [--random-background 0|1]\n"
-    "                  [--matmul fp32|bf16] [--space auto|box|ndc|unbounded]\n"
+    "                  [--matmul " MATMUL_CHOICES "]\n"
+    "                  [--space auto|box|ndc|unbounded]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, one\n"
     "instant-ngp transforms.json split every 8th frame, LLFF\n"
     "poses_bounds.npy, or a COLMAP model in sparse/0/ beside images/,\n"
@@ -68,10 +70,12 @@ static const char usage[] =
     "                (Blender scenes) against a random background colour, so\n"
     "                that empty space cannot pass for the background (default\n"
     "                1 for fast, 0 for the others)\n"
-    "  --matmul fp32|bf16  the network's matrix products: fp32 (default)\n"
+    "  --matmul M    the network's matrix products: fp32 (cblas),\n"
+    "                fp32-onednn (fp32 through oneDNN, CPUs with AVX-512)\n"
     "                or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
-    "                fp32); saved in MODEL, so --resume, nerf-render and\n"
-    "                nerf-eval keep it\n"
+    "                fp32).  Default: fp32-onednn for the tiny and\n"
+    "                reference presets where it runs, else fp32.  Saved in\n"
+    "                MODEL, so --resume, nerf-render and nerf-eval keep it\n"
     "  --space S     where the fast preset's grids lie: box (a bounded\n"
     "                scene), ndc (forward-facing), unbounded (all-round with\n"
     "                a far background: space beyond a central cube is\n"
@@ -163,7 +167,7 @@ typedef struct args {
     int steps_given;
     int lr_given;
     int random_bg; /* -1: as the preset's model */
-    int matmul;    /* nerf_matmul; -1: not given (fp32) */
+    int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
     int space;     /* nerf_space; -1: the dataset's */
 } args;
 
@@ -237,9 +241,7 @@ static int parse(int argc, char **argv, args *a)
         } else if (strcmp(k, "--batch-samples") == 0) {
             bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
         } else if (strcmp(k, "--matmul") == 0) {
-            a->matmul = strcmp(v, "fp32") == 0   ? NERF_MATMUL_FP32
-                        : strcmp(v, "bf16") == 0 ? NERF_MATMUL_BF16
-                                                 : -1;
+            a->matmul = matmul_parse(v);
             bad = a->matmul < 0;
         } else if (strcmp(k, "--space") == 0) {
             a->space = strcmp(v, "auto") == 0        ? -1
@@ -343,7 +345,7 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
             if (a->matmul >= 0 && (uint32_t)a->matmul != mo.matmul) {
                 fprintf(stderr, PROG ": --matmul ignored: the model "
                         "keeps the %s products it was saved with\n",
-                        mo.matmul == NERF_MATMUL_BF16 ? "bf16" : "fp32");
+                        matmul_name(mo.matmul));
             }
             if (a->lr_given) {
                 fprintf(stderr, PROG ": --lr ignored: the model keeps "
@@ -359,6 +361,24 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
     return NERF_OK;
 }
 
+/*
+ * Without --matmul: the fastest fp32 products for the preset.  oneDNN's
+ * trains the reference preset about 1.3 times and the tiny one about 1.9
+ * times as fast as cblas where it has its AVX-512 kernels
+ * (docs/performance.md); the fast preset's narrow layers run fastest on
+ * the library's own fused kernels, which only the cblas setting uses.
+ */
+static uint32_t default_matmul(int preset)
+{
+    if (preset != NERF_PRESET_FAST &&
+        nerf_matmul_supported(NERF_MATMUL_FP32_ONEDNN)) {
+        fprintf(stderr, PROG ": fp32 products through oneDNN (--matmul "
+                "fp32 for cblas)\n");
+        return NERF_MATMUL_FP32_ONEDNN;
+    }
+    return NERF_MATMUL_FP32;
+}
+
 static int create_model(const args *a, const nerf_hooks *hooks,
                         const nerf_dataset *ds, nerf_model **m)
 {
@@ -367,7 +387,8 @@ static int create_model(const args *a, const nerf_hooks *hooks,
     nerf_model_options_preset(&mo, a->preset);
     mo.seed = a->seed;
     mo.hooks = hooks;
-    mo.matmul = a->matmul < 0 ? NERF_MATMUL_FP32 : (uint32_t)a->matmul;
+    mo.matmul =
+        a->matmul < 0 ? default_matmul(a->preset) : (uint32_t)a->matmul;
     if (mo.encoding == NERF_ENCODING_HASHGRID) {
         int rc = setup_model_space(&mo, ds, a->space, PROG);
         if (rc != NERF_OK) {
