@@ -275,10 +275,13 @@ typedef enum nerf_matmul {
                                256-wide layers on AVX-512 CPUs
                                (docs/performance.md); results differ
                                from NERF_MATMUL_FP32 by the order of the
-                               sums only.  Networks that the fused small-
-                               MLP path would run (the fast preset) run
-                               through oneDNN too, which is slower for
-                               them. */
+                               sums only.  Images do not depend on the
+                               thread count; a training step is
+                               deterministic for a given thread count
+                               (as bf16's), not across thread counts.
+                               Networks that the fused small-MLP path
+                               would run (the fast preset) run through
+                               oneDNN too, which is slower for them. */
 } nerf_matmul;
 
 /**
@@ -310,8 +313,8 @@ typedef enum nerf_space {
  * built with oneDNN (meson option bf16) and a CPU on which oneDNN runs
  * bf16 natively (AVX512-BF16; the environment variable DNNL_MAX_CPU_ISA
  * can hide it).  NERF_MATMUL_FP32_ONEDNN needs a libnerf built with
- * oneDNN and a CPU for which oneDNN has an optimised fp32 matmul.
- * Unknown kinds give 0.
+ * oneDNN and a CPU on which oneDNN runs its brgemm fp32 kernels (AVX-512;
+ * DNNL_MAX_CPU_ISA can hide it).  Unknown kinds give 0.
  *
  * The first call for a oneDNN kind creates small oneDNN primitives to
  * find out (a few milliseconds); later calls return the stored answer.
