@@ -734,6 +734,21 @@ static dnnl_status_t run_piece(const prim_entry *e, dnnl_stream_t stream,
     return st;
 }
 
+/* The end of a block's pieces: wait for them, give back the thread's
+ * OpenMP setting, and keep the first failure of any block in *status. */
+static void block_done(slot *sl, dnnl_status_t st, int saved,
+                       atomic_int *status)
+{
+    if (st == dnnl_success) {
+        st = dnnl_stream_wait(sl->stream);
+    }
+    threads_leave(saved);
+    if (st != dnnl_success) {
+        int none = dnnl_success;
+        atomic_compare_exchange_strong(status, &none, (int)st);
+    }
+}
+
 /* A row-wise product: C[r, :] = f(A[r, :] B) for r in [0, n). */
 typedef struct rows_job {
     nerf__onednn_scratch *s;
@@ -806,14 +821,7 @@ static void rows_block(void *ctx, size_t t)
             memcpy(j->c + r * j->ldc, pc, j->cols * sizeof *pc);
         }
     }
-    if (st == dnnl_success) {
-        st = dnnl_stream_wait(sl->stream);
-    }
-    threads_leave(saved);
-    if (st != dnnl_success) {
-        int none = dnnl_success;
-        atomic_compare_exchange_strong(&j->status, &none, (int)st);
-    }
+    block_done(sl, st, saved, &j->status);
 }
 
 static unsigned blocks_for(const nerf__onednn_scratch *s, size_t units)
@@ -946,14 +954,7 @@ static void wgrad_block(void *ctx, size_t t)
             }
         }
     }
-    if (st == dnnl_success) {
-        st = dnnl_stream_wait(sl->stream);
-    }
-    threads_leave(saved);
-    if (st != dnnl_success) {
-        int none = dnnl_success;
-        atomic_compare_exchange_strong(&j->status, &none, (int)st);
-    }
+    block_done(sl, st, saved, &j->status);
 }
 
 static int weight_product(nerf__onednn *b, nerf__onednn_scratch *s, size_t n,
@@ -1105,13 +1106,10 @@ int nerf__onednn_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                          const float *w, size_t ldw, const float *b, int relu,
                          float *y, size_t ldy, uint16_t *kept)
 {
-    if (n == 0) {
-        return NERF_OK;
-    }
     nerf__onednn *be = c->onednn;
     nerf__onednn_scratch *s;
-    int rc = scratch_get(c, &s);
-    if (rc != NERF_OK) {
+    int rc = n == 0 ? NERF_OK : scratch_get(c, &s);
+    if (rc != NERF_OK || n == 0) {
         return rc;
     }
     if (!be->bf16) {
@@ -1170,13 +1168,10 @@ int nerf__onednn_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                           const uint16_t *kept, const float *w, size_t ldw,
                           float *dw, int dx_part, float *dx, size_t lddx)
 {
-    if (n == 0) {
-        return NERF_OK;
-    }
     nerf__onednn *be = c->onednn;
     nerf__onednn_scratch *s;
-    int rc = scratch_get(c, &s);
-    if (rc != NERF_OK) {
+    int rc = n == 0 ? NERF_OK : scratch_get(c, &s);
+    if (rc != NERF_OK || n == 0) {
         return rc;
     }
     if (!be->bf16) {

@@ -202,29 +202,44 @@ TEST(options)
     nerf_model_destroy(m);
 }
 
-TEST(fp32_checkpoint_loads_as_fp32)
+/* m saved to a temporary file and loaded back (NULL, with a failure
+ * reported, if that fails); the file is gone afterwards. */
+static nerf_model *saved_and_loaded(const nerf_model *m)
 {
-    char dir[] = "/tmp/nerf-bf16-XXXXXX";
-    if (mkdtemp(dir) == NULL) {
-        FAILF("mkdtemp");
-        return;
+    char dir[] = "/tmp/nerf-onednn-XXXXXX";
+    if (m == NULL || mkdtemp(dir) == NULL) {
+        FAILF("no model or no temporary folder");
+        return NULL;
     }
     char path[64];
-    snprintf(path, sizeof path, "%s/fp32.ckpt", dir);
-    nerf_model *m = make_model(NERF_PRESET_TINY, NERF_MATMUL_FP32), *l = NULL;
+    snprintf(path, sizeof path, "%s/model.ckpt", dir);
+    nerf_model *l = NULL;
     CHECK_OK(nerf_model_save(m, path));
     CHECK_OK(nerf_model_load(&l, path, NULL));
+    unlink(path);
+    rmdir(dir);
+    return l;
+}
+
+/* The matmul a model computes with, as its options say. */
+static uint32_t matmul_of(const nerf_model *m)
+{
+    nerf_model_options got;
+    NERF_MODEL_OPTIONS_INIT(&got);
+    CHECK_OK(nerf_model_get_options(m, &got));
+    return got.matmul;
+}
+
+TEST(fp32_checkpoint_loads_as_fp32)
+{
+    nerf_model *m = make_model(NERF_PRESET_TINY, NERF_MATMUL_FP32);
+    nerf_model *l = saved_and_loaded(m);
     if (l) {
-        nerf_model_options got;
-        NERF_MODEL_OPTIONS_INIT(&got);
-        CHECK_OK(nerf_model_get_options(l, &got));
-        CHECK_EQ_INT(got.matmul, NERF_MATMUL_FP32);
+        CHECK_EQ_INT(matmul_of(l), NERF_MATMUL_FP32);
         CHECK(l->onednn == NULL);
     }
     nerf_model_destroy(l);
     nerf_model_destroy(m);
-    unlink(path);
-    rmdir(dir);
 }
 
 /* ---- bf16 against fp32 -------------------------------------------------- */
@@ -621,29 +636,17 @@ TEST(weights_refresh_when_they_change)
 
 TEST(checkpoint_round_trip)
 {
-    char dir[] = "/tmp/nerf-onednn-XXXXXX";
-    if (mkdtemp(dir) == NULL) {
-        FAILF("mkdtemp");
-        return;
-    }
-    char path[64];
-    snprintf(path, sizeof path, "%s/%s.ckpt", dir, kind_name);
-    nerf_model *m = make_model(NERF_PRESET_FAST, kind), *l = NULL;
+    nerf_model *m = make_model(NERF_PRESET_FAST, kind);
     if (m == NULL) {
-        rmdir(dir);
         return;
     }
     for (size_t i = 0; i < m->n_params; i++) {
         m->grads[i] = uniform(-1.0f, 1.0f);
     }
     nerf__model_adam_step(m);
-    CHECK_OK(nerf_model_save(m, path));
-    CHECK_OK(nerf_model_load(&l, path, NULL));
+    nerf_model *l = saved_and_loaded(m);
     if (l) {
-        nerf_model_options got;
-        NERF_MODEL_OPTIONS_INIT(&got);
-        CHECK_OK(nerf_model_get_options(l, &got));
-        CHECK_EQ_INT(got.matmul, kind);
+        CHECK_EQ_INT(matmul_of(l), kind);
         CHECK(l->onednn != NULL);
         CHECK(memcmp(l->params, m->params, m->n_params * sizeof(float)) == 0);
         enum { N = 333 };
@@ -655,8 +658,6 @@ TEST(checkpoint_round_trip)
     }
     nerf_model_destroy(l);
     nerf_model_destroy(m);
-    unlink(path);
-    rmdir(dir);
 }
 
 /* Several threads querying one oneDNN model at once (the threading

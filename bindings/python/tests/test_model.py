@@ -153,14 +153,19 @@ class Matmul(TestCase):
                                   "matmul"):
             nerf.Model(preset="tiny", matmul=5)
 
+    def skip_unless_supported(self, kind, enum_name):
+        """Where `kind` is not available, its refusal is what there is to
+        test: check it, then skip."""
+        if nerf.matmul_supported(kind):
+            return
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  enum_name):
+            nerf.Model(preset="tiny", matmul=kind)
+        self.skipTest("%s products are not available here: %s"
+                      % (kind, nerf.last_error()))
+
     def test_bf16_model(self):
-        if not nerf.matmul_supported("bf16"):
-            # The refusal is what there is to test.
-            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
-                                      "NERF_MATMUL_BF16"):
-                nerf.Model(preset="tiny", matmul="bf16")
-            self.skipTest("bf16 products are not available here: "
-                          + nerf.last_error())
+        self.skip_unless_supported("bf16", "NERF_MATMUL_BF16")
         pos, dirs = points(50)
         path = os.path.join(_support.tmpdir(), "bf16.nerf")
         with nerf.Model(preset="tiny", seed=2) as f, \
@@ -183,12 +188,7 @@ class Matmul(TestCase):
             self.assertEqual(flat(again), flat(rgb_b))
 
     def test_fp32_onednn_model(self):
-        if not nerf.matmul_supported("fp32-onednn"):
-            with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
-                                      "NERF_MATMUL_FP32_ONEDNN"):
-                nerf.Model(preset="tiny", matmul="fp32-onednn")
-            self.skipTest("oneDNN fp32 products are not available here: "
-                          + nerf.last_error())
+        self.skip_unless_supported("fp32-onednn", "NERF_MATMUL_FP32_ONEDNN")
         pos, dirs = points(50)
         path = os.path.join(_support.tmpdir(), "onednn.nerf")
         with nerf.Model(preset="tiny", seed=2) as f, \
