@@ -53,7 +53,7 @@
 #elif DNNL_CPU_THREADING_RUNTIME == DNNL_RUNTIME_SEQ
 #define USE_OMP 0
 #else
-#error "the oneDNN backend needs oneDNN built with the OpenMP or sequential runtime"
+#error "libnerf needs oneDNN built with the OpenMP or sequential runtime"
 #endif
 
 #define ROW_LOG2 10

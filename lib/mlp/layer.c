@@ -14,8 +14,8 @@ int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(b != NULL || !relu);
     if (c->onednn) {
-        return nerf__onednn_forward(c, n, out, parts, n_parts, w, ldw, b, relu,
-                                  y, ldy, kept);
+        return nerf__onednn_forward(c, n, out, parts, n_parts, w, ldw, b,
+                                    relu, y, ldy, kept);
     }
     size_t col = 0;
     for (int p = 0; p < n_parts; p++) {
@@ -40,8 +40,9 @@ int nerf__layer_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     assert(n_parts >= 1 && n_parts <= NERF__LAYER_MAX_PARTS);
     assert(dx == NULL || (dx_part >= 0 && dx_part < n_parts));
     if (c->onednn) {
-        return nerf__onednn_backward(c, n, out, dy, lddy, dyb, parts, n_parts,
-                                   kept, w, ldw, dw, dx_part, dx, lddx);
+        return nerf__onednn_backward(c, n, out, dy, lddy, dyb, parts,
+                                     n_parts, kept, w, ldw, dw, dx_part, dx,
+                                     lddx);
     }
     assert(dyb == NULL && kept == NULL);
     size_t col = 0, dx_col = 0;

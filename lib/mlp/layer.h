@@ -54,10 +54,12 @@ typedef struct nerf__layer_ctx {
  * parts' column blocks side by side from column 0.  b [out] may be NULL
  * (no bias); relu needs a bias.
  *
- * bf16 only (nerf__onednn_rounds()): `kept`, when not NULL, receives the rounded input (the parts
- * side by side, [n, sum of their widths]) for the backward to reuse, which
- * spares rounding it again; the fp32 path ignores it.
- * @return NERF_OK, or (oneDNN only) NERF_ENOMEM or NERF_ERROR with a message.
+ * bf16 only (nerf__onednn_rounds()): `kept`, when not NULL, receives the
+ * rounded input (the parts side by side, [n, sum of their widths]) for
+ * the backward to reuse, which spares rounding it again; the fp32 paths
+ * ignore it.
+ * @return NERF_OK, or (oneDNN only) NERF_ENOMEM or NERF_ERROR with a
+ * message.
  */
 int nerf__layer_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                         const nerf__layer_part *parts, int n_parts,
