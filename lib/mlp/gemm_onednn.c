@@ -589,11 +589,12 @@ typedef struct slot {
 
 struct nerf__onednn_scratch {
     nerf__env env;
-    uint16_t *a;   /* the left operand, rounded */
+    /* Untyped so that one grow() serves them all. */
+    void *a;       /* bf16: the left operand, rounded */
     size_t a_cap;
-    uint16_t *x;   /* a weight gradient's inputs, rounded */
+    void *x;       /* bf16: a weight gradient's inputs, rounded */
     size_t x_cap;
-    float *w;      /* fp32: a block of weights made dense */
+    void *w;       /* fp32: a block of weights made dense */
     size_t w_cap;
     unsigned n_slots;
     slot *slots;
@@ -639,19 +640,20 @@ static int scratch_get(const nerf__layer_ctx *c, nerf__onednn_scratch **out)
     return NERF_OK;
 }
 
-static int grow(const nerf__env *env, uint16_t **buf, size_t *cap,
-                size_t rows, size_t cols)
+/* *buf holds at least rows x cols elements of esize bytes. */
+static int grow(const nerf__env *env, void **buf, size_t *cap, size_t rows,
+                size_t cols, size_t esize)
 {
     size_t need;
     if (nerf__mul_size(rows, cols, &need) != 0 ||
-        nerf__mul_size(need, sizeof(uint16_t), &need) != 0) {
-        return nerf__error(NERF_ENOMEM, "bf16 products: %zu x %zu operand "
+        nerf__mul_size(need, esize, &need) != 0) {
+        return nerf__error(NERF_ENOMEM, "oneDNN products: %zu x %zu operand "
                            "is too large", rows, cols);
     }
     if (need <= *cap) {
         return NERF_OK;
     }
-    uint16_t *p = nerf__alloc(env, need);
+    void *p = nerf__alloc(env, need);
     if (p == NULL) {
         return NERF_ENOMEM;
     }
@@ -756,8 +758,7 @@ typedef struct rows_job {
     size_t n;
     unsigned blocks;
     const char *a;       /* elements of esize bytes */
-    size_t lda;
-    size_t lda_piece;    /* lda, or k where pieces copy their rows dense */
+    size_t lda;          /* above k: pieces copy their rows dense */
     size_t dense_offset; /* of that copy in a slot's block */
     const void *bm;
     float *c;
@@ -790,7 +791,7 @@ static void rows_block(void *ctx, size_t t)
         const size_t m = (size_t)1 << e;
         while (hi - r >= m && st == dnnl_success) {
             const char *a = j->a + r * j->lda * j->esize;
-            if (j->lda_piece != j->lda) {
+            if (j->lda != j->k) {
                 char *d = (char *)sl->block + j->dense_offset;
                 for (size_t i = 0; i < m; i++) {
                     memcpy(d + i * j->k * j->esize,
@@ -809,9 +810,9 @@ static void rows_block(void *ctx, size_t t)
     if (r < hi && st == dnnl_success) {
         /* The last row, as row 0 of a 2-row piece; row 1 is zeros. */
         char *pa = (char *)sl->block + j->pad_offset;
-        float *pc = (float *)(pa + round_up64(2 * j->lda_piece * j->esize));
+        float *pc = (float *)(pa + round_up64(2 * j->k * j->esize));
         memcpy(pa, j->a + r * j->lda * j->esize, j->k * j->esize);
-        memset(pa + j->lda_piece * j->esize, 0, j->k * j->esize);
+        memset(pa + j->k * j->esize, 0, j->k * j->esize);
         if (j->sum) {
             memcpy(pc, j->c + r * j->ldc, j->cols * sizeof *pc);
         }
@@ -849,7 +850,6 @@ static int row_product(nerf__onednn *b, nerf__onednn_scratch *s, size_t n,
     j.blocks = blocks_for(s, n / 2);
     j.a = a;
     j.lda = lda;
-    j.lda_piece = k;
     j.bm = bm;
     j.c = c;
     j.ldc = ldc;
@@ -1051,20 +1051,15 @@ static int dense_block(nerf__onednn_scratch *s, const float *w, size_t out,
         *dense = w;
         return NERF_OK;
     }
-    size_t need = out * in * sizeof(float);
-    if (need > s->w_cap) {
-        float *p = nerf__alloc(&s->env, need);
-        if (p == NULL) {
-            return NERF_ENOMEM;
-        }
-        nerf__free(&s->env, s->w);
-        s->w = p;
-        s->w_cap = need;
+    int rc = grow(&s->env, &s->w, &s->w_cap, out, in, sizeof(float));
+    if (rc != NERF_OK) {
+        return rc;
     }
+    float *d = s->w;
     for (size_t r = 0; r < out; r++) {
-        memcpy(s->w + r * in, w + r * ldw, in * sizeof(float));
+        memcpy(d + r * in, w + r * ldw, in * sizeof(float));
     }
-    *dense = s->w;
+    *dense = d;
     return NERF_OK;
 }
 
@@ -1106,10 +1101,13 @@ int nerf__onednn_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                          const float *w, size_t ldw, const float *b, int relu,
                          float *y, size_t ldy, uint16_t *kept)
 {
+    if (n == 0) {
+        return NERF_OK;
+    }
     nerf__onednn *be = c->onednn;
     nerf__onednn_scratch *s;
-    int rc = n == 0 ? NERF_OK : scratch_get(c, &s);
-    if (rc != NERF_OK || n == 0) {
+    int rc = scratch_get(c, &s);
+    if (rc != NERF_OK) {
         return rc;
     }
     if (!be->bf16) {
@@ -1119,7 +1117,7 @@ int nerf__onednn_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
     const size_t k = parts_width(parts, n_parts);
     const void *wb;
     if (kept == NULL) {
-        rc = grow(&s->env, &s->a, &s->a_cap, n, k);
+        rc = grow(&s->env, &s->a, &s->a_cap, n, k, sizeof(uint16_t));
     }
     if (rc == NERF_OK) {
         rc = weights_for(be, w, out, ldw, k, &wb);
@@ -1162,37 +1160,52 @@ static int input_grad(nerf__onednn *be, nerf__onednn_scratch *s, size_t n,
                        NULL, 0);
 }
 
+/* fp32: a weight gradient per part, each reading its part in place. */
+static int backward_f32(nerf__onednn *be, nerf__onednn_scratch *s, size_t n,
+                        uint32_t out, const float *dy, size_t lddy,
+                        const nerf__layer_part *parts, int n_parts,
+                        const float *w, size_t ldw, float *dw, int dx_part,
+                        float *dx, size_t lddx)
+{
+    int rc = NERF_OK;
+    size_t col = 0;
+    for (int p = 0; p < n_parts && rc == NERF_OK; p++) {
+        rc = weight_product(be, s, n, out, parts[p].in, dy, lddy, parts[p].x,
+                            parts[p].ldx, dw + col, ldw);
+        col += parts[p].in;
+    }
+    if (rc != NERF_OK || dx == NULL) {
+        return rc;
+    }
+    return input_grad(be, s, n, out, dy, lddy, parts, dx_part, w, ldw, dx,
+                      lddx);
+}
+
 int nerf__onednn_backward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                           const float *dy, size_t lddy, const uint16_t *dyb,
                           const nerf__layer_part *parts, int n_parts,
                           const uint16_t *kept, const float *w, size_t ldw,
                           float *dw, int dx_part, float *dx, size_t lddx)
 {
+    if (n == 0) {
+        return NERF_OK;
+    }
     nerf__onednn *be = c->onednn;
     nerf__onednn_scratch *s;
-    int rc = n == 0 ? NERF_OK : scratch_get(c, &s);
-    if (rc != NERF_OK || n == 0) {
+    int rc = scratch_get(c, &s);
+    if (rc != NERF_OK) {
         return rc;
     }
     if (!be->bf16) {
-        size_t col = 0;
-        for (int p = 0; p < n_parts && rc == NERF_OK; p++) {
-            rc = weight_product(be, s, n, out, parts[p].in, dy, lddy,
-                                parts[p].x, parts[p].ldx, dw + col, ldw);
-            col += parts[p].in;
-        }
-        if (rc != NERF_OK || dx == NULL) {
-            return rc;
-        }
-        return input_grad(be, s, n, out, dy, lddy, parts, dx_part, w, ldw, dx,
-                          lddx);
+        return backward_f32(be, s, n, out, dy, lddy, parts, n_parts, w, ldw,
+                            dw, dx_part, dx, lddx);
     }
     const size_t k = parts_width(parts, n_parts);
     if (dyb == NULL) {
-        rc = grow(&s->env, &s->a, &s->a_cap, n, out);
+        rc = grow(&s->env, &s->a, &s->a_cap, n, out, sizeof(uint16_t));
     }
     if (rc == NERF_OK && kept == NULL) {
-        rc = grow(&s->env, &s->x, &s->x_cap, n, k);
+        rc = grow(&s->env, &s->x, &s->x_cap, n, k, sizeof(uint16_t));
     }
     if (rc != NERF_OK) {
         return rc;
