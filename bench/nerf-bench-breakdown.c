@@ -63,6 +63,7 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     }
     nerf__packed_out po = {.rgb = rgb};
     size_t touched = 0, touched_lines = 0;
+    size_t level_entries[NERF__HASHGRID_MAX_LEVELS] = {0};
 
     /* Round 0 is untimed: it faults in the bench's own buffers, which the
      * step has long had. */
@@ -134,7 +135,7 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
         c = now();
         bd->net_bw += c - a;
         if (round == 0) {
-            touched = touched_params(m, &touched_lines);
+            touched = touched_params(m, &touched_lines, level_entries);
         }
         a = now();
         nerf__model_adam_step(m);
@@ -171,6 +172,7 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     bd->grid_cells_evaluated /= (size_t)bd->grid_updates;
     bd->touched = touched;
     bd->touched_lines = touched_lines;
+    memcpy(bd->level_entries, level_entries, sizeof level_entries);
     bd->ok = true;
 done:
     nerf__march_samples_release(&ms);

@@ -5,14 +5,15 @@
  *
  *  - Encoding: every sample reads the 8 corners of its cell at each of
  *    the hash grid's levels and, going backward, adds a gradient to each.
- *    The floor is that many random reads (and read-modify-writes) of one
- *    entry, timed on the model's own tables level by level with every
- *    thread issuing independent accesses, so that the memory system keeps
- *    as many in flight as it can (memory-level parallelism, not
- *    bandwidth, bounds a random gather).  Corners that neighbouring
- *    samples share can come from cache, so a real step may beat this
- *    figure on coarse levels; on the hashed levels (2^19 entries of 8
- *    bytes, 4 MiB each) its accesses are as random as these.
+ *    Neighbouring samples share corners, so the floor counts each
+ *    distinct corner of the step (an entry its gradient reached) once at
+ *    the cost of a random read and read-modify-write of one entry, timed
+ *    on the model's own tables level by level with every thread issuing
+ *    independent accesses, so that the memory system keeps as many in
+ *    flight as it can (memory-level parallelism, not bandwidth, bounds a
+ *    random gather), and the other accesses at the cost of one that hits
+ *    the cache.  Counting all 8 at the random cost, as this file did
+ *    first, came out above the measured encoding on an AMD EPYC.
  *  - MLP: the network's products, forward and the two backward ones (dX,
  *    dW), at the machine's peak multiply-add rate (nerf-bench-peak.c).
  *  - Optimiser: an Adam update of what the step touched.  The layers are
@@ -20,10 +21,12 @@
  *    with a gradient lie scattered over four arrays of the table's size
  *    (parameters, gradients, two moments) that no cache holds, so the
  *    unit of their cost is the 64-byte line, not the parameter: the
- *    floor is four random read-modify-writes of each line that holds a
- *    touched entry, timed like the encoding's on the table's gradient.
- *    (Streaming the whole table instead costs about as much: finding the
- *    touched lines without reading the others saves nothing.)
+ *    cost of updating them alone is four random read-modify-writes of
+ *    each line that holds a touched entry, timed like the encoding's on
+ *    the table's gradient.  Streaming the whole table is the other way,
+ *    and the floor is the cheaper of the two: about the same on an Intel
+ *    Xeon, while on an AMD EPYC the lines alone came to two to three
+ *    times the stream.
  *  - Grid refresh: the density of the cells a refresh evaluates (per
  *    step: a sixteenth of them), as encoding reads plus the density
  *    layers' products.
@@ -37,6 +40,10 @@
 #include "nerf-bench.h"
 
 #define ACCESSES_PER_BLOCK ((size_t)1 << 20)
+/* Entries a thread's cached accesses are drawn from: 8 KiB at 2 floats,
+ * inside any level-1 data cache, and enough that two adds in flight
+ * seldom meet on one entry. */
+#define CACHED_ENTRIES 1024u
 #define MAX_BLOCKS 64
 
 static uint64_t next_random(uint64_t *s)
@@ -53,31 +60,62 @@ typedef struct access_job {
     uint32_t features;
     const uint32_t *idx; /* ACCESSES_PER_BLOCK entry indices per block */
     bool write;
+    bool pairs; /* the loop written for 2 features an entry */
     float sink[MAX_BLOCKS];
 } access_job;
 
-/* Independent reads (or read-modify-writes) of the listed entries. */
+static float entry_sum(const float *e, uint32_t f, bool pairs)
+{
+    if (pairs) {
+        return e[0] + e[1];
+    }
+    float s = 0.0f;
+    for (uint32_t k = 0; k < f; k++) {
+        s += e[k];
+    }
+    return s;
+}
+
+static void entry_add(float *e, uint32_t f, bool pairs)
+{
+    if (pairs) {
+        e[0] += 1e-30f;
+        e[1] += 1e-30f;
+        return;
+    }
+    for (uint32_t k = 0; k < f; k++) {
+        e[k] += 1e-30f;
+    }
+}
+
+/*
+ * Independent reads (or read-modify-writes) of the listed entries.  The
+ * reads go to four sums: with one, each read waits for the add before it.
+ * A loop over a run-time feature count cost 2 ns a read of a cached entry
+ * on an AMD EPYC, the one written for pairs 0.5, so both are timed and
+ * the better kept: the floor is the memory's cost, not a loop's.
+ */
 static void access_block(void *ctx, size_t block)
 {
     access_job *j = ctx;
     const uint32_t *idx = j->idx + block * ACCESSES_PER_BLOCK;
     const uint32_t f = j->features;
+    const bool pairs = j->pairs;
     float *t = j->table;
     float s = 0.0f;
     if (j->write) {
         for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
-            float *e = t + (size_t)idx[i] * f;
-            for (uint32_t k = 0; k < f; k++) {
-                e[k] += 1e-30f;
-            }
+            entry_add(t + (size_t)idx[i] * f, f, pairs);
         }
     } else {
-        for (size_t i = 0; i < ACCESSES_PER_BLOCK; i++) {
-            const float *e = t + (size_t)idx[i] * f;
-            for (uint32_t k = 0; k < f; k++) {
-                s += e[k];
-            }
+        float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+        for (size_t i = 0; i < ACCESSES_PER_BLOCK; i += 4) {
+            s0 += entry_sum(t + (size_t)idx[i] * f, f, pairs);
+            s1 += entry_sum(t + (size_t)idx[i + 1] * f, f, pairs);
+            s2 += entry_sum(t + (size_t)idx[i + 2] * f, f, pairs);
+            s3 += entry_sum(t + (size_t)idx[i + 3] * f, f, pairs);
         }
+        s = s0 + s1 + s2 + s3;
     }
     j->sink[block % MAX_BLOCKS] = s;
 }
@@ -110,7 +148,8 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
     j.idx = idx;
     j.write = write;
     double best = INFINITY;
-    for (int run = 0; run < 3; run++) {
+    for (int run = 0; run < 3 * (1 + (features == 2)); run++) {
+        j.pairs = run >= 3;
         double t0 = now();
         nerf__parallel_blocks(blocks, (size_t)1 << 30, access_block, &j);
         best = fmin(best, now() - t0);
@@ -121,30 +160,41 @@ static double time_accesses(float *table, uint32_t entries, uint32_t features,
 /* Floats of a cache line: the unit of a scattered update's traffic. */
 #define LINE_FLOATS 16u
 
-size_t touched_params(const nerf_model *m, size_t *lines)
+static bool has_gradient(const float *g, uint32_t features)
+{
+    bool any = false;
+    for (uint32_t f = 0; f < features; f++) {
+        any = any || g[f] != 0.0f;
+    }
+    return any;
+}
+
+size_t touched_params(const nerf_model *m, size_t *lines,
+                      size_t level_entries[NERF__HASHGRID_MAX_LEVELS])
 {
     const nerf__network *net = &m->nets[0];
     const nerf__hashgrid *hg = &net->pos_enc.u.hash;
-    const float *g = m->grads;
-    const size_t table = net->pos_params, table_end = table + hg->count;
+    const uint32_t nf = hg->features;
     size_t k = net->count - hg->count, last_line = SIZE_MAX;
     *lines = 0;
-    for (size_t i = table; i < table_end; i += hg->features) {
-        bool take = false;
-        for (size_t f = 0; f < hg->features; f++) {
-            take = take || g[i + f] != 0.0f;
+    for (uint32_t l = 0; l < hg->levels; l++) {
+        const size_t at = net->pos_params + hg->offset[l];
+        level_entries[l] = 0;
+        for (uint32_t e = 0; e < hg->entries[l]; e++) {
+            const size_t i = at + (size_t)e * nf;
+            if (!has_gradient(m->grads + i, nf)) {
+                continue;
+            }
+            level_entries[l]++;
+            k += nf;
+            /* Entries come in memory order, so a line already counted is
+             * the last one; an entry may straddle two (features need not
+             * divide a line). */
+            const size_t first = i / LINE_FLOATS;
+            const size_t last = (i + nf - 1) / LINE_FLOATS;
+            *lines += (first != last_line) + (last != first);
+            last_line = last;
         }
-        k += take ? hg->features : 0;
-        if (!take) {
-            continue;
-        }
-        /* Entries come in memory order, so a line already counted is the
-         * last one; an entry may straddle two (features need not divide
-         * a line). */
-        const size_t first = i / LINE_FLOATS;
-        const size_t last = (i + hg->features - 1) / LINE_FLOATS;
-        *lines += (first != last_line) + (last != first);
-        last_line = last;
     }
     return k;
 }
@@ -207,7 +257,19 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         return -1;
     }
     uint64_t seed = UINT64_C(0x9E3779B97F4A7C15);
-    double read_per_sample = 0.0, write_per_sample = 0.0;
+    /* A repeated corner: the same loop on a few KiB a thread. */
+    const size_t at0 = net->pos_params + hg->offset[0];
+    const uint32_t cached = hg->entries[0] < blocks * CACHED_ENTRIES
+                                ? hg->entries[0]
+                                : (uint32_t)blocks * CACHED_ENTRIES;
+    fl->cached_read_ns = 1e9 * time_accesses(m->params + at0, cached,
+                                             hg->features, false, idx, blocks,
+                                             &seed);
+    fl->cached_write_ns = 1e9 * time_accesses(m->grads + at0, cached,
+                                              hg->features, true, idx, blocks,
+                                              &seed);
+    const double hit = 1e-9 * (fl->cached_read_ns + fl->cached_write_ns);
+    double read_per_sample = 0.0;
     fl->levels = hg->levels;
     for (uint32_t l = 0; l < hg->levels; l++) {
         const size_t at = net->pos_params + hg->offset[l];
@@ -218,7 +280,14 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
         fl->level_read_ns[l] = 1e9 * r;
         fl->level_write_ns[l] = 1e9 * w;
         read_per_sample += 8.0 * r;
-        write_per_sample += 8.0 * w;
+        /* Each distinct corner of the step once at the level's random
+         * cost, its other accesses at a cache hit's (or at the level's,
+         * where that measured lower). */
+        const double corners = 8.0 * n;
+        const double distinct = fmin((double)bd->level_entries[l], corners);
+        fl->level_entries[l] = bd->level_entries[l];
+        fl->encoding += distinct * (r + w) +
+                        (corners - distinct) * fmin(hit, r + w);
     }
     /* The optimiser's unit: a random read-modify-write of a whole line,
      * on an array of the table's size. */
@@ -230,16 +299,18 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
     /* The adds above went behind the model's back: it believes its
      * gradients zero since the breakdown's last Adam step. */
     memset(g, 0, hg->count * sizeof(float));
-    fl->encoding = n * (read_per_sample + write_per_sample);
 
     const double peak = 1e9 * fl->peak_gflops;
     fl->mlp = n * 3.0 * nerf__network_flops_per_sample(net) / peak;
 
     fl->touched = bd->touched;
     fl->touched_lines = bd->touched_lines;
-    const double layers = (double)(net->count - hg->count);
-    fl->optimiser = time_dense_adam(m, net) * layers / (double)net->count +
-                    4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
+    const double dense = time_dense_adam(m, net);
+    const double table = (double)hg->count / (double)net->count;
+    fl->table_lines = 4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
+    fl->table_stream = dense * table;
+    fl->optimiser = dense * (1.0 - table) +
+                    fmin(fl->table_lines, fl->table_stream);
 
     const double cells = (double)bd->grid_cells_evaluated / NERF__GRID_EVERY;
     fl->grid = cells * (read_per_sample + density_flops(net) / peak);

@@ -42,13 +42,16 @@ static cJSON *floor_json(const figures *f)
     }
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "method",
-                            "hash grid: 8 corner reads and 8 gradient adds "
-                            "per sample and level at the random-access cost "
-                            "measured on the model's tables, all threads; "
+                            "hash grid: a read and a gradient add for each "
+                            "distinct corner of the step at the random-access "
+                            "cost measured on the model's tables, all "
+                            "threads, and the rest of the 8 per sample and "
+                            "level at a cached access's cost; "
                             "mlp: forward + dX + dW products at the fp32 FMA "
                             "peak; optimiser: the layers at a streaming "
-                            "pass's rate, and 4 random line updates per "
-                            "touched 64-byte line of the table; grid: a "
+                            "pass's rate, and the table at the lesser of 4 "
+                            "random line updates per touched 64-byte line "
+                            "and a streaming pass over it; grid: a "
                             "refresh's density queries "
                             "per step; share = sum / mean step");
     cJSON_AddNumberToObject(o, "peak_gflops", fl->peak_gflops);
@@ -60,9 +63,18 @@ static cJSON *floor_json(const figures *f)
         cJSON_AddItemToArray(r, cJSON_CreateNumber(fl->level_read_ns[l]));
         cJSON_AddItemToArray(w, cJSON_CreateNumber(fl->level_write_ns[l]));
     }
+    cJSON_AddNumberToObject(o, "cached_read_ns", fl->cached_read_ns);
+    cJSON_AddNumberToObject(o, "cached_add_ns", fl->cached_write_ns);
+    cJSON *e = cJSON_AddArrayToObject(o, "level_corners");
+    for (uint32_t l = 0; l < fl->levels; l++) {
+        const double corners = (double)fl->level_entries[l];
+        cJSON_AddItemToArray(e, cJSON_CreateNumber(corners));
+    }
     cJSON_AddNumberToObject(o, "touched_params", (double)fl->touched);
     cJSON_AddNumberToObject(o, "touched_lines", (double)fl->touched_lines);
     cJSON_AddNumberToObject(o, "line_update_ns", fl->line_rmw_ns);
+    cJSON_AddNumberToObject(o, "table_lines_seconds", fl->table_lines);
+    cJSON_AddNumberToObject(o, "table_stream_seconds", fl->table_stream);
     cJSON *sec = cJSON_AddObjectToObject(o, "seconds");
     cJSON_AddNumberToObject(sec, "encoding", fl->encoding);
     cJSON_AddNumberToObject(sec, "mlp", fl->mlp);

@@ -329,6 +329,22 @@ static void c_access(char *b, size_t s, const preset_setup *p,
              fl->level_write_ns[0], fl->level_read_ns[last],
              fl->level_write_ns[last]);
 }
+static void c_cached(char *b, size_t s, const preset_setup *p,
+                     const figures *f)
+{
+    const fast_floor *fl = &f->floor;
+    if (!fl->ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    size_t corners = 0;
+    for (uint32_t l = 0; l < fl->levels; l++) {
+        corners += fl->level_entries[l];
+    }
+    snprintf(b, s, "%zu of %zu; %.2f/%.2f ns", corners,
+             (size_t)8 * fl->levels * f->bd.samples, fl->cached_read_ns,
+             fl->cached_write_ns);
+}
 static void c_fl_enc(char *b, size_t s, const preset_setup *p,
                      const figures *f)
 {
@@ -373,6 +389,16 @@ static void c_fl_lines(char *b, size_t s, const preset_setup *p,
     }
     snprintf(b, s, "%zu, %.2f ns each", f->floor.touched_lines,
              f->floor.line_rmw_ns);
+}
+static void c_fl_table(char *b, size_t s, const preset_setup *p,
+                       const figures *f)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    snprintf(b, s, "%.2f / %.2f ms", 1e3 * f->floor.table_lines,
+             1e3 * f->floor.table_stream);
 }
 static void c_prims(char *b, size_t s, const preset_setup *p,
                     const figures *f)
@@ -514,11 +540,14 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, "  timed on samples", c_bd_samples, ps, fs, n);
         row(out, "step floor: fp32 FMA peak", c_peak, ps, fs, n);
         row(out, "  hash read/add, level 0 .. last", c_access, ps, fs, n);
+        row(out, "  distinct corners; cached read/add", c_cached, ps, fs,
+            n);
         row(out, "  encoding (hash fwd + bwd)", c_fl_enc, ps, fs, n);
         row(out, "  MLP at peak", c_fl_mlp, ps, fs, n);
-        row(out, "  optimiser (touched lines x 4)", c_fl_opt, ps, fs, n);
+        row(out, "  optimiser", c_fl_opt, ps, fs, n);
         row(out, "  parameters touched", c_fl_touched, ps, fs, n);
         row(out, "  table lines touched, update", c_fl_lines, ps, fs, n);
+        row(out, "  table: its lines x 4 / streamed", c_fl_table, ps, fs, n);
         row(out, "  grid refresh", c_fl_grid, ps, fs, n);
         row(out, "  floor / fast_floor_share", c_fl_sum, ps, fs, n);
     }
@@ -575,14 +604,17 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         fprintf(out,
                 "fast, step floor: what the same step must cost at least "
                 "here (nerf-bench-floor.c, docs/performance.md): the hash "
-                "grid's 8 corner reads and 8 gradient adds per sample and "
-                "level at the random-access cost measured on the model's "
-                "own tables with every thread issuing independent "
-                "accesses; the network's forward, dX and dW products at "
-                "the measured fp32 FMA peak; Adam: the layers at a streaming "
-                "pass's rate, and 4 random 64-byte line updates (parameters, "
-                "gradients, moments) for each line of the table holding a "
-                "touched entry; a refresh's density queries / %u.  In "
+                "grid's distinct corners of the step, each read and given a "
+                "gradient add at the random-access cost measured on the "
+                "model's own tables with every thread issuing independent "
+                "accesses, and the rest of the 8 reads and adds per sample "
+                "and level at a cached access's cost; the network's "
+                "forward, dX and dW products at the measured fp32 FMA peak; "
+                "Adam: the layers at a streaming "
+                "pass's rate, and the table at the lesser of 4 random "
+                "64-byte line updates (parameters, gradients, moments) for "
+                "each line holding a touched entry and a streaming pass "
+                "over all of it; a refresh's density queries / %u.  In "
                 "brackets: floor / measured part (100%%: at the floor); "
                 "fast_floor_share = floor sum / mean step.\n",
                 NERF__GRID_EVERY);

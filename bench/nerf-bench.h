@@ -141,6 +141,7 @@ typedef struct step_breakdown {
      * one step's update, which drives the model far from any real state
      * (after ten seconds of them, the backward gave no gradient at all). */
     size_t touched, touched_lines;
+    size_t level_entries[NERF__HASHGRID_MAX_LEVELS];
 } step_breakdown;
 
 /* The categories the figures are reported in, seconds per step. */
@@ -162,9 +163,14 @@ typedef struct fast_floor {
     uint32_t threads, levels;
     double level_read_ns[NERF__HASHGRID_MAX_LEVELS];  /* per access, */
     double level_write_ns[NERF__HASHGRID_MAX_LEVELS]; /* all threads */
+    double cached_read_ns, cached_write_ns; /* on entries in cache */
+    size_t level_entries[NERF__HASHGRID_MAX_LEVELS]; /* distinct corners */
     size_t touched; /* parameters the step's backward gave a gradient */
     size_t touched_lines; /* 64-byte lines of the table holding them */
     double line_rmw_ns;   /* a random line update, all threads */
+    /* The table's update: its touched lines alone (4 random updates
+     * each), or the whole table streamed; the floor takes the less. */
+    double table_lines, table_stream;
     double encoding, mlp, optimiser, grid, sum;
 } fast_floor;
 
@@ -173,9 +179,11 @@ double peak_gflops(const char **isa_out);
 /* After time_breakdown() on the same trainer; writes the model. */
 int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
 /* Parameters of network 0 (a hash-grid one) with a gradient in m->grads:
- * every layer parameter, and each table float whose entry got one; and
- * in *lines the 64-byte lines of the table that hold them. */
-size_t touched_params(const nerf_model *m, size_t *lines);
+ * every layer parameter, and each table float whose entry got one; in
+ * *lines the 64-byte lines of the table that hold them, and in
+ * level_entries the entries of each level that got one. */
+size_t touched_params(const nerf_model *m, size_t *lines,
+                      size_t level_entries[NERF__HASHGRID_MAX_LEVELS]);
 
 /* ---- the figures of one preset ------------------------------------------ */
 
