@@ -205,7 +205,11 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
     cJSON_AddNumberToObject(o, "render_seconds_timed", f->render_seconds);
     cJSON_AddNumberToObject(o, "render_workers", f->render_workers);
     cJSON_AddNumberToObject(o, "render_blas_threads", f->render_blas_threads);
-    cJSON_AddNumberToObject(o, "bf16_primitives", (double)f->bf16_primitives);
+    /* oneDNN's primitives, bf16 or fp32; the first name is kept for
+     * readers of the output from before fp32 through oneDNN existed. */
+    const double prims = (double)f->onednn_primitives;
+    cJSON_AddNumberToObject(o, "onednn_primitives", prims);
+    cJSON_AddNumberToObject(o, "bf16_primitives", prims);
 
     cJSON_AddNumberToObject(o, "flops_per_sample_forward", f->flops_sample_fw);
     if (p->march) {

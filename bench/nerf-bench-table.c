@@ -403,7 +403,7 @@ static void c_fl_table(char *b, size_t s, const preset_setup *p,
 static void c_prims(char *b, size_t s, const preset_setup *p,
                     const figures *f)
 {
-    snprintf(b, s, "%zu", f->bf16_primitives);
+    snprintf(b, s, "%zu", f->onednn_primitives);
 }
 static void c_workers(char *b, size_t s, const preset_setup *p,
                       const figures *f)

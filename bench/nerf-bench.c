@@ -126,9 +126,8 @@ static int measure(preset_setup *p, const nerf_dataset *ds,
         }
     }
     nerf_trainer_destroy(kept);
-    f->bf16_primitives = p->model->onednn
-                             ? nerf__onednn_primitives(p->model->onednn)
-                             : 0;
+    f->onednn_primitives =
+        p->model->onednn ? nerf__onednn_primitives(p->model->onednn) : 0;
     if (failed) {
         fprintf(stderr, "nerf-bench: %s: %s: %s\n", p->name, failed,
                 nerf_last_error());

@@ -221,7 +221,7 @@ typedef struct figures {
     rss_result rss;
     bool rss_skipped;
     /* bf16: oneDNN primitives the model created for everything above */
-    size_t bf16_primitives;
+    size_t onednn_primitives;
 } figures;
 
 /* nerf-bench-sgemm.c: the FLOPs of the network's shapes (f's flops_*
