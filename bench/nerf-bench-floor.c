@@ -292,7 +292,6 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
          * where that measured lower). */
         const double corners = 8.0 * n;
         const double distinct = fmin((double)bd->level_entries[l], corners);
-        fl->level_entries[l] = bd->level_entries[l];
         fl->encoding += distinct * (r + w) +
                         (corners - distinct) * fmin(hit, r + w);
     }

@@ -67,7 +67,7 @@ static cJSON *floor_json(const figures *f)
     cJSON_AddNumberToObject(o, "cached_add_ns", fl->cached_write_ns);
     cJSON *e = cJSON_AddArrayToObject(o, "level_corners");
     for (uint32_t l = 0; l < fl->levels; l++) {
-        const double corners = (double)fl->level_entries[l];
+        const double corners = (double)f->bd.level_entries[l];
         cJSON_AddItemToArray(e, cJSON_CreateNumber(corners));
     }
     cJSON_AddNumberToObject(o, "touched_params", (double)fl->touched);

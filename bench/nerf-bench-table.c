@@ -339,7 +339,7 @@ static void c_cached(char *b, size_t s, const preset_setup *p,
     }
     size_t corners = 0;
     for (uint32_t l = 0; l < fl->levels; l++) {
-        corners += fl->level_entries[l];
+        corners += f->bd.level_entries[l];
     }
     snprintf(b, s, "%zu of %zu; %.2f/%.2f ns", corners,
              (size_t)8 * fl->levels * f->bd.samples, fl->cached_read_ns,
