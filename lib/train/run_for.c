@@ -1,7 +1,8 @@
 /*
  * Training to a time budget (nerf_trainer_run_for()): measure the step
  * rate with the learning rate held, then fix the run's length and decay
- * over it; at half the budget, fit the length again to the rate then.
+ * over it; at a half, three quarters and nine tenths of the budget, fit
+ * the length again to the rate then.
  * Only the moments of the fits depend on the clock; what they fix is
  * recorded in the model, so everything after them is as deterministic as
  * a run of a given step count.
@@ -22,10 +23,15 @@
 #define WINDOW_START (MEASURE_SHARE * 2.0 / 3.0)
 /* They are still getting faster at the fit: a run fitted there alone
  * ended 4% early in 10 minutes of lego at 1024 rays a step, 11% in 5 at
- * 2048.  The call that fitted fits the length again at half the budget,
- * to the rate over the quarter of the time before. */
-#define REFIT_SHARE 0.5
-#define REFIT_WINDOW_START (REFIT_SHARE * 0.75)
+ * 2048.  Fitted again at half the budget alone, a run on a machine whose
+ * steps then turned slower ended 4% late (626 s of 600).  So the call that
+ * fitted fits the length again at these shares of the budget; the last
+ * leaves an error in the rate a tenth of the time to act on.  Each takes
+ * the rate over the quarter of the time before it, or since the fit before
+ * if that is later. */
+static const double refit_shares[] = {0.5, 0.75, 0.9};
+#define N_REFITS (sizeof refit_shares / sizeof refit_shares[0])
+#define REFIT_WINDOW 0.75
 /* A run whose steps turn slower than measured stops this far past the
  * budget rather than running on without bound. */
 #define OVERRUN 1.1
@@ -71,18 +77,23 @@ static uint64_t steps_for(double rate, double seconds_left)
 }
 
 /*
- * The share of the time left that timed saves will take, from the last
- * one's duration (0 before any).  A save of the fast preset takes seconds:
- * with saves every 2 minutes, 3% of a run, which a length fitted to the
- * whole time left would overrun.
+ * The training time left once saves are taken out, from the last save's
+ * duration (none before the first): the share that timed saves will take
+ * (a save of the fast preset takes seconds: with saves every 2 minutes,
+ * 3% of a run, which a length fitted to the whole time left would
+ * overrun), and the save that ends the run.
  */
-static double saving_share(const nerf_trainer *t, const nerf__run *r)
+static double training_left(const nerf_trainer *t, const nerf__run *r,
+                            double left)
 {
-    const double every = t->opts.checkpoint_seconds;
-    if (!(every > 0.0) || !r->saved) {
-        return 0.0;
+    if (!r->saved) {
+        return left;
     }
-    return r->save_seconds / (every + r->save_seconds);
+    const double every = t->opts.checkpoint_seconds;
+    if (every > 0.0) {
+        left *= every / (every + r->save_seconds);
+    }
+    return left - r->save_seconds;
 }
 
 /*
@@ -96,7 +107,7 @@ static void fit_length(nerf_trainer *t, nerf__run *r, const rate_window *w,
     nerf_model *m = t->model;
     nerf__schedule *sc = &m->schedule;
     sc->rate = window_rate(w, r, elapsed);
-    const double left = (budget - elapsed) * (1.0 - saving_share(t, r));
+    const double left = training_left(t, r, budget - elapsed);
     sc->total = m->step + steps_for(sc->rate, left);
     m->adam.decay_steps = fmax((double)sc->total, 1.0);
     r->total = r->done + (sc->total - m->step);
@@ -186,19 +197,25 @@ NERF_API int nerf_trainer_run_for(nerf_trainer *t, double seconds,
     int rc = NERF_OK;
     /* Only the call that fitted knows how much of the budget is left: a
      * resumed FITTED model trains on to its recorded length. */
-    bool refit_due = false;
+    size_t refits = N_REFITS;
+    double last_fit = 0.0;
     rate_window w = {0};
     if (sc->state != NERF_SCHEDULE_FITTED) {
         rc = measure_and_fit(t, &r, seconds, stats_out);
-        refit_due = true;
+        refits = 0;
+        last_fit = nerf__run_elapsed(&r);
     }
     while (rc == NERF_OK && m->step < sc->total) {
         const double elapsed = nerf__run_elapsed(&r);
-        if (refit_due) {
-            window_mark(&w, &r, elapsed, REFIT_WINDOW_START * seconds);
-            if (elapsed >= REFIT_SHARE * seconds) {
-                refit_due = false;
+        if (refits < N_REFITS) {
+            const double share = refit_shares[refits];
+            window_mark(&w, &r, elapsed,
+                        fmax(REFIT_WINDOW * share * seconds, last_fit));
+            if (elapsed >= share * seconds) {
                 refit(t, &r, &w, seconds, elapsed);
+                refits++;
+                last_fit = elapsed;
+                w.marked = false;
                 continue; /* the new length may end the run here */
             }
         }

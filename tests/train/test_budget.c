@@ -1,6 +1,6 @@
 /* Training to a time budget: the measured fit, the held rate, the recorded
- * length, the second fit at half the budget, and resuming bit for bit
- * after the fit. */
+ * length, the fits again at a half, three quarters and nine tenths of the
+ * budget, and resuming bit for bit after the fit. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -264,6 +264,82 @@ TEST(fits_again_at_half_the_budget)
     nerf_sampler_destroy(s);
 }
 
+/* Steps that turn slower late in the run, after the fit at half the
+ * budget; and the fits the log reports. */
+typedef struct slowing_late {
+    double start, from; /* slow from this many seconds after start */
+    struct timespec pause;
+    int refits; /* "fitted again" lines logged */
+} slowing_late;
+
+static int slow_late(const nerf_progress *p, void *user)
+{
+    slowing_late *w = user;
+    if (now() - w->start >= w->from) {
+        nanosleep(&w->pause, NULL);
+    }
+    (void)p;
+    return 0;
+}
+
+static void count_refits(int level, const char *msg, void *user)
+{
+    (void)level;
+    slowing_late *w = user;
+    w->refits += strstr(msg, "the length fitted again") != NULL;
+}
+
+/*
+ * Steps five times slower from 0.6 of the budget on, which the fit at half
+ * the budget cannot see: fitted no later, the run would go on to a tenth
+ * past its budget.  The fits at three quarters and nine tenths shorten it
+ * to the time left.  (With a step that outlasts the time left at 0.9, the
+ * run ends at the fit at 0.75: two fits again, not three.)
+ */
+TEST(fits_again_late_in_the_budget)
+{
+    nerf_sampler *s = tiny_sampler(11);
+    nerf_model *m = tiny_model(12);
+    nerf_trainer *t = make_trainer(m, s);
+    /* The step time, from a few plain steps of another model. */
+    nerf_model *probe = tiny_model(12);
+    nerf_trainer *pt = make_trainer(probe, s);
+    double t0 = now();
+    CHECK_OK(nerf_trainer_run(pt, 5, NULL));
+    const double step = (now() - t0) / 5.0;
+    nerf_trainer_destroy(pt);
+    nerf_model_destroy(probe);
+    /* Enough steps in the last tenth for the fit at 0.9 to have room. */
+    const double budget = fmax(2.0, 150.0 * step);
+    const double pause = 4.0 * step;
+    slowing_late w = {.from = 0.6 * budget};
+    w.pause.tv_sec = (time_t)pause;
+    w.pause.tv_nsec = (long)((pause - (double)w.pause.tv_sec) * 1e9);
+    nerf_trainer_set_progress(t, slow_late, &w);
+    nerf_log_set_default(count_refits, &w, NERF_LOG_INFO);
+    w.start = t0 = now();
+    int rc = nerf_trainer_run_for(t, budget, NULL);
+    const double took = now() - t0;
+    nerf_log_set_default(NULL, NULL, NERF_LOG_INFO);
+    nerf_schedule sc = schedule_of(m);
+    printf("  %d fits again, %llu steps, %.2f s of %.2f (%s)\n", w.refits,
+           (unsigned long long)sc.total_steps, took, budget,
+           rc == NERF_OK ? "ended" : nerf_last_error());
+    CHECK(sc.state == NERF_SCHEDULE_FITTED);
+    CHECK(w.refits >= 2 && w.refits <= 3);
+    if (rc == NERF_OK) {
+        CHECK(nerf_model_step(m) == sc.total_steps);
+        CHECK(took < 1.05 * budget + 5.0 * step);
+    } else {
+        /* A machine so busy that even the slowed steps vary by a fifth. */
+        CHECK(rc == NERF_ECANCELLED &&
+              strstr(nerf_last_error(), "out of time") != NULL);
+    }
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
 /* Saved before its fit, a model measures again when resumed. */
 TEST(measuring_resumes_by_measuring)
 {
@@ -370,6 +446,7 @@ int main(void)
     }
     RUN(fits_the_length_and_ends_there);
     RUN(fits_again_at_half_the_budget);
+    RUN(fits_again_late_in_the_budget);
     RUN(resume_after_the_fit_is_bit_identical);
     RUN(measuring_resumes_by_measuring);
     RUN(plain_schedule_and_bad_arguments);
