@@ -309,11 +309,9 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
     const double peak = 1e9 * fl->peak_gflops;
     fl->mlp = n * 3.0 * nerf__network_flops_per_sample(net) / peak;
 
-    fl->touched = bd->touched;
-    fl->touched_lines = bd->touched_lines;
     const double dense = time_dense_adam(m, net);
     const double table = (double)hg->count / (double)net->count;
-    fl->table_lines = 4.0 * (double)fl->touched_lines * 1e-9 * fl->line_rmw_ns;
+    fl->table_lines = 4.0 * (double)bd->touched_lines * 1e-9 * fl->line_rmw_ns;
     fl->table_stream = dense * table;
     fl->optimiser = dense * (1.0 - table) +
                     fmin(fl->table_lines, fl->table_stream);

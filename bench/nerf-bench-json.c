@@ -70,8 +70,8 @@ static cJSON *floor_json(const figures *f)
         const double corners = (double)f->bd.level_entries[l];
         cJSON_AddItemToArray(e, cJSON_CreateNumber(corners));
     }
-    cJSON_AddNumberToObject(o, "touched_params", (double)fl->touched);
-    cJSON_AddNumberToObject(o, "touched_lines", (double)fl->touched_lines);
+    cJSON_AddNumberToObject(o, "touched_params", (double)f->bd.touched);
+    cJSON_AddNumberToObject(o, "touched_lines", (double)f->bd.touched_lines);
     cJSON_AddNumberToObject(o, "line_update_ns", fl->line_rmw_ns);
     cJSON_AddNumberToObject(o, "table_lines_seconds", fl->table_lines);
     cJSON_AddNumberToObject(o, "table_stream_seconds", fl->table_stream);

@@ -378,7 +378,7 @@ static void c_fl_touched(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    snprintf(b, s, "%zu", f->floor.touched);
+    snprintf(b, s, "%zu", f->bd.touched);
 }
 static void c_fl_lines(char *b, size_t s, const preset_setup *p,
                        const figures *f)
@@ -387,7 +387,7 @@ static void c_fl_lines(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    snprintf(b, s, "%zu, %.2f ns each", f->floor.touched_lines,
+    snprintf(b, s, "%zu, %.2f ns each", f->bd.touched_lines,
              f->floor.line_rmw_ns);
 }
 static void c_fl_table(char *b, size_t s, const preset_setup *p,

@@ -164,8 +164,6 @@ typedef struct fast_floor {
     double level_read_ns[NERF__HASHGRID_MAX_LEVELS];  /* per access, */
     double level_write_ns[NERF__HASHGRID_MAX_LEVELS]; /* all threads */
     double cached_read_ns, cached_write_ns; /* on entries in cache */
-    size_t touched; /* parameters the step's backward gave a gradient */
-    size_t touched_lines; /* 64-byte lines of the table holding them */
     double line_rmw_ns;   /* a random line update, all threads */
     /* The table's update: its touched lines alone (4 random updates
      * each), or the whole table streamed; the floor takes the less. */
