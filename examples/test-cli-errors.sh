@@ -77,7 +77,7 @@ $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
 $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 3 \
   --batch 64 --resume --lr 0.1 2>"$work/resume.log" ||
   { cat "$work/resume.log"; exit 1; }
-grep -qF "nerf-train: --lr ignored" "$work/resume.log" ||
+grep -qF "nerf-train: --lr and --lr-final ignored" "$work/resume.log" ||
   { cat "$work/resume.log"; fail "--lr on --resume dropped silently"; }
 
 # failed PROGRAM WORDS ARGS...: PROGRAM exits 1 with WORDS in its message,

@@ -51,7 +51,7 @@ help() {
 }
 
 help "$train" --preset --steps --seconds --downscale --batch --seed --lr \
-  --checkpoint-every --resume --batch-samples --random-background \
+  --lr-final --checkpoint-every --resume --batch-samples --random-background \
   --matmul --space
 grep -q "^  --data DIR" "$work/help" || fail "nerf-train: --data unexplained"
 grep -q "^  --out MODEL" "$work/help" || fail "nerf-train: --out unexplained"

@@ -2,7 +2,8 @@
 # nerf-train --seconds without --steps fits the run's length to the time,
 # records it in MODEL (nerf-info shows it) and --resume goes on to it;
 # --steps with --seconds stops at whichever comes first and says which;
-# --resume without --steps continues to the steps MODEL was given.
+# --resume without --steps continues to the steps MODEL was given;
+# --lr-final sets the rate the schedule ends at.
 #
 #   test-train-budget.sh NERF-SCENE NERF-TRAIN NERF-INFO
 set -eu
@@ -73,4 +74,13 @@ grep -q "reached step 3 before the 600 s limit" "$work/both.log" ||
 run both.nerf again.log --resume
 grep -q "already at step 3" "$work/again.log" ||
   { cat "$work/again.log"; fail "resume: went past the given steps"; }
+# --lr and --lr-final set the schedule's ends, which the model records.
+run rates.nerf rates.log --steps 2 --lr 0.02 --lr-final 0.0005
+[ "$status" -eq 0 ] || { cat "$work/rates.log"; fail "rates: status"; }
+[ "$(key rates.nerf lr)" = 0.02 ] &&
+  [ "$(key rates.nerf lr_final)" = 0.0005 ] ||
+  fail "rates: lr $(key rates.nerf lr), lr_final $(key rates.nerf lr_final)"
+run rates.nerf default.log --steps 2 --lr 0.02 --overwrite
+[ "$(key rates.nerf lr_final)" = 0.002 ] ||
+  fail "rates: default lr_final $(key rates.nerf lr_final), not a tenth"
 echo "ok: fitted $start..$total"
