@@ -328,8 +328,10 @@ TEST(fits_again_late_in_the_budget)
     CHECK(sc.state == NERF_SCHEDULE_FITTED);
     CHECK(w.refits >= 2 && w.refits <= 3);
     if (rc == NERF_OK) {
+        /* Not a tighter time: a busy machine's steps vary by more than
+         * the last fit can foresee.  The fits are what is checked. */
         CHECK(nerf_model_step(m) == sc.total_steps);
-        CHECK(took < 1.05 * budget + 5.0 * step);
+        CHECK(took < 1.1 * budget + 5.0 * step);
     } else {
         /* A machine so busy that even the slowed steps vary by a fifth. */
         CHECK(rc == NERF_ECANCELLED &&
