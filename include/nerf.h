@@ -1998,33 +1998,33 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * decaying over the steps that time allows, rather than over a step count
  * guessed beforehand.
  *
- * A model whose schedule is not FITTED (see nerf_model_schedule()) starts
- * by measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for
- * a quarter of @p seconds, takes the step rate over the last third of that
- * time (steps get faster as a marching sampler's occupancy grid learns
- * where the scene is, so the latest rate is the best guess of the rest;
- * time spent saving checkpoints is left out), and fixes the run's length:
- * the steps taken plus that rate times the time left, less the share of
- * it that timed saves (checkpoint_seconds) will take at the last save's
- * duration, less the save that ends the run (since 0.7.1).  It sets NERF_PARAM_DECAY_START to the current step and
- * NERF_PARAM_DECAY_STEPS to that length, records the fit in the model
- * (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
- * trains to the length.  Since 0.6.2, when half of @p seconds has passed
- * the same call fits the length once more, to the rate over the quarter
- * of the budget before (steps are often still getting faster at the
- * first fit); since 0.7.1 again at three quarters and nine tenths of
- * @p seconds, each to the rate since the fit before (so steps that turn
- * slower late in a run shorten it to the time left):
- * NERF_PARAM_DECAY_STEPS and the recorded length move, the decay's start
- * stays, so the learning rate moves by a few percent at each.  From each fit on, the run is a plain schedule: a model saved
- * after it, loaded and given to nerf_trainer_run_for() or
- * nerf_trainer_run() continues bit for bit to its recorded length, and
- * two runs that fixed the same lengths at the same steps train the same
- * weights.  A FITTED model trains on to its recorded length without
- * measuring or fitting again; so a model saved between two fits and
- * resumed ends at the length fitted last before the save, where the
- * unbroken run would have moved it (each fit depends on the clock as the
- * first does).
+ * A model whose schedule is not FITTED (see nerf_model_schedule()) starts by
+ * measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for a quarter
+ * of @p seconds, takes the step rate over the last third of that time (steps
+ * get faster as a marching sampler's occupancy grid learns where the scene is,
+ * so the latest rate is the best guess of the rest; time spent saving
+ * checkpoints is left out), and fixes the run's length: the steps taken plus
+ * that rate times the time left, less the share of it that timed saves
+ * (checkpoint_seconds) will take at the last save's duration and, since 0.7.1,
+ * less the save that ends the run.  It sets NERF_PARAM_DECAY_START to the
+ * current step and NERF_PARAM_DECAY_STEPS to that length, records the fit in
+ * the model (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
+ * trains to the length.  Since 0.6.2, when half of @p seconds has passed the
+ * same call fits the length once more, to the rate over the quarter of the
+ * budget before (steps are often still getting faster at the first fit); since
+ * 0.7.1 again at three quarters and nine tenths of @p seconds, each to the rate
+ * over the quarter of the time before it or since the fit before, whichever is
+ * shorter (so steps that turn slower late in a run shorten it to the time
+ * left).  At each of these fits NERF_PARAM_DECAY_STEPS and the recorded length
+ * move and the decay's start stays, so the learning rate moves by a few
+ * percent.  From each fit on, the run is a plain schedule: a model saved after
+ * it, loaded and given to nerf_trainer_run_for() or nerf_trainer_run()
+ * continues bit for bit to its recorded length, and two runs that fixed the
+ * same lengths at the same steps train the same weights.  A FITTED model trains
+ * on to its recorded length without measuring or fitting again; so a model
+ * saved between two fits and resumed ends at the length fitted last before the
+ * save, where the unbroken run would have moved it (each fit depends on the
+ * clock as the first does).
  *
  * The run ends at the fitted length (NERF_OK).  Should steps turn slower
  * than measured, it ends when @p seconds and a tenth have passed
