@@ -274,11 +274,11 @@ typedef struct slowing_late {
 
 static int slow_late(const nerf_progress *p, void *user)
 {
+    (void)p;
     slowing_late *w = user;
     if (now() - w->start >= w->from) {
         nanosleep(&w->pause, NULL);
     }
-    (void)p;
     return 0;
 }
 

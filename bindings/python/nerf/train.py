@@ -96,7 +96,8 @@ class Trainer(_handle.ProgressHandle):
         measured, then the run's length is fixed and recorded in the model
         (:attr:`nerf.Model.schedule`), so that a saved model resumes bit for
         bit; at a half, three quarters and nine tenths of the time the
-        length is fitted again to the rate then.  A model already fitted trains on to its recorded length.
+        length is fitted again to the rate then.  A model already fitted
+        trains on to its recorded length.
 
         Returns the figures of the last step.  Raises NerfCancelled when the
         callback or :meth:`cancel` stopped the run, or when the steps ran so
