@@ -30,6 +30,14 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+static struct timespec timespec_of(double seconds)
+{
+    struct timespec ts;
+    ts.tv_sec = (time_t)seconds;
+    ts.tv_nsec = (long)((seconds - (double)ts.tv_sec) * 1e9);
+    return ts;
+}
+
 static nerf_schedule schedule_of(const nerf_model *m)
 {
     nerf_schedule sc;
@@ -206,9 +214,7 @@ static int slow_after_the_fit(const nerf_progress *p, void *user)
     if (w->first_total == 0) {
         w->first_total = sc.total_steps;
         /* Four steps' time asleep after each: five times slower. */
-        const double pause = 4.0 / sc.steps_per_second;
-        w->pause.tv_sec = (time_t)pause;
-        w->pause.tv_nsec = (long)((pause - (double)w->pause.tv_sec) * 1e9);
+        w->pause = timespec_of(4.0 / sc.steps_per_second);
     }
     nanosleep(&w->pause, NULL);
     return 0;
@@ -311,10 +317,7 @@ TEST(fits_again_late_in_the_budget)
     nerf_model_destroy(probe);
     /* Enough steps in the last tenth for the fit at 0.9 to have room. */
     const double budget = fmax(2.0, 150.0 * step);
-    const double pause = 4.0 * step;
-    slowing_late w = {.from = 0.6 * budget};
-    w.pause.tv_sec = (time_t)pause;
-    w.pause.tv_nsec = (long)((pause - (double)w.pause.tv_sec) * 1e9);
+    slowing_late w = {.from = 0.6 * budget, .pause = timespec_of(4.0 * step)};
     nerf_trainer_set_progress(t, slow_late, &w);
     nerf_log_set_default(count_refits, &w, NERF_LOG_INFO);
     w.start = t0 = now();
