@@ -51,6 +51,17 @@
 #define CACHED_ENTRIES 1024u
 #define MAX_BLOCKS 64
 
+const char floor_method[] =
+    "the hash grid's distinct corners of the step, each read and given a "
+    "gradient add at the random-access cost measured on the model's own "
+    "tables with every thread issuing independent accesses, and the rest "
+    "of the 8 reads and adds per sample and level at a cached access's "
+    "cost; the network's forward, dX and dW products at the measured fp32 "
+    "FMA peak; Adam: the layers at a streaming pass's rate, and the table "
+    "at the lesser of 4 random 64-byte line updates (parameters, "
+    "gradients, moments) for each line holding a touched entry and a "
+    "streaming pass over all of it; a refresh's density queries per step";
+
 static uint64_t next_random(uint64_t *s)
 {
     /* xorshift64*: the bench's own stream, independent of the library's. */

@@ -41,19 +41,10 @@ static cJSON *floor_json(const figures *f)
         return cJSON_CreateNull();
     }
     cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "method",
-                            "hash grid: a read and a gradient add for each "
-                            "distinct corner of the step at the random-access "
-                            "cost measured on the model's tables, all "
-                            "threads, and the rest of the 8 per sample and "
-                            "level at a cached access's cost; "
-                            "mlp: forward + dX + dW products at the fp32 FMA "
-                            "peak; optimiser: the layers at a streaming "
-                            "pass's rate, and the table at the lesser of 4 "
-                            "random line updates per touched 64-byte line "
-                            "and a streaming pass over it; grid: a "
-                            "refresh's density queries "
-                            "per step; share = sum / mean step");
+    char method[1024];
+    snprintf(method, sizeof method, "%s; share = sum / mean step",
+             floor_method);
+    cJSON_AddStringToObject(o, "method", method);
     cJSON_AddNumberToObject(o, "peak_gflops", fl->peak_gflops);
     cJSON_AddStringToObject(o, "peak_isa", fl->isa);
     cJSON_AddNumberToObject(o, "threads", fl->threads);

@@ -603,21 +603,10 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 NERF__GRID_EVERY);
         fprintf(out,
                 "fast, step floor: what the same step must cost at least "
-                "here (nerf-bench-floor.c, docs/performance.md): the hash "
-                "grid's distinct corners of the step, each read and given a "
-                "gradient add at the random-access cost measured on the "
-                "model's own tables with every thread issuing independent "
-                "accesses, and the rest of the 8 reads and adds per sample "
-                "and level at a cached access's cost; the network's "
-                "forward, dX and dW products at the measured fp32 FMA peak; "
-                "Adam: the layers at a streaming "
-                "pass's rate, and the table at the lesser of 4 random "
-                "64-byte line updates (parameters, gradients, moments) for "
-                "each line holding a touched entry and a streaming pass "
-                "over all of it; a refresh's density queries / %u.  In "
+                "here (nerf-bench-floor.c, docs/performance.md): %s.  In "
                 "brackets: floor / measured part (100%%: at the floor); "
                 "fast_floor_share = floor sum / mean step.\n",
-                NERF__GRID_EVERY);
+                floor_method);
     }
     for (int i = 0; i < n; i++) {
         if (fs[i].ran && !fs[i].rss_skipped && fs[i].rss.ok) {

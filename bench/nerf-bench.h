@@ -173,6 +173,9 @@ typedef struct fast_floor {
 
 /* GFLOP/s of fp32 fused multiply-adds on every thread of the pool. */
 double peak_gflops(const char **isa_out);
+/* How the floor is measured, in one sentence, for the table and the
+ * JSON. */
+extern const char floor_method[];
 /* After time_breakdown() on the same trainer; writes the model. */
 int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
 /* Parameters of network 0 (a hash-grid one) with a gradient in m->grads:
