@@ -50,7 +50,8 @@ static const char usage[] =
     "                --resume continues the same run bit for bit); with\n"
     "                --steps: stop at whichever comes first (default none)\n"
     "  --downscale K load images K times smaller (default 1)\n"
-    "  --batch N     rays per step (default 1024)\n"
+    "  --batch N     rays per step (default 2048 for fast, else 1024;\n"
+    "                --resume: the batch MODEL was trained with)\n"
     "  --seed N      seed of initialisation and sampling (default 0)\n"
     "  --lr RATE     initial learning rate, decaying exponentially over the\n"
     "                run (default 5e-4 for reference, 5e-3 for tiny, 1e-2\n"
@@ -61,7 +62,8 @@ static const char usage[] =
     "                end; default: every 2 minutes of training, since a\n"
     "                save of the fast preset's 140 MB takes seconds)\n"
     "  --resume      continue from MODEL if it exists (same data, preset,\n"
-    "                batch and seed give the same result as an unbroken run;\n"
+    "                batch and seed give the same result as an unbroken run,\n"
+    "                and MODEL keeps its batch unless --batch is given;\n"
     "                default off: start afresh); a --preset other than\n"
     "                MODEL's is refused, and data unlike what MODEL was\n"
     "                trained on is warned about\n"
@@ -69,7 +71,7 @@ static const char usage[] =
     "                --resume or --overwrite, an existing MODEL is refused)\n"
     "  --batch-samples N  a step takes rays until their samples reach N\n"
     "                (--batch is then the most rays a step takes; default 0:\n"
-    "                always --batch rays)\n"
+    "                always --batch rays; --resume: MODEL's)\n"
     "  --random-background 0|1  1: train each ray of images with alpha\n"
     "                (Blender scenes) against a random background colour, so\n"
     "                that empty space cannot pass for the background (default\n"
@@ -170,6 +172,7 @@ typedef struct args {
     int preset_given;
     int steps_given;
     int lr_given;
+    int batch_given, batch_samples_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
     int space;     /* nerf_space; -1: the dataset's */
@@ -189,7 +192,6 @@ static int parse(int argc, char **argv, args *a)
     a->preset = NERF_PRESET_TINY;
     a->steps = 2000;
     a->downscale = 1;
-    a->batch = 1024;
     a->every = UINT64_MAX; /* not given: timed saves */
     a->random_bg = -1;
     a->matmul = -1;
@@ -235,6 +237,7 @@ static int parse(int argc, char **argv, args *a)
             bad = cli_uint(v, 1, 256, &a->downscale);
         } else if (strcmp(k, "--batch") == 0) {
             bad = cli_uint(v, 1, 1u << 20, &a->batch);
+            a->batch_given = 1;
         } else if (strcmp(k, "--seed") == 0) {
             bad = cli_uint(v, 0, UINT64_MAX, &a->seed);
         } else if (strcmp(k, "--checkpoint-every") == 0) {
@@ -248,6 +251,7 @@ static int parse(int argc, char **argv, args *a)
             a->lr_given = 1;
         } else if (strcmp(k, "--batch-samples") == 0) {
             bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
+            a->batch_samples_given = 1;
         } else if (strcmp(k, "--matmul") == 0) {
             a->matmul = matmul_parse(v);
             bad = a->matmul < 0;
@@ -505,6 +509,32 @@ static void report_budget(const nerf_model *m, int rc)
     }
 }
 
+/*
+ * Rays and samples a step, as given, else as the resumed model was trained
+ * (a run goes on bit for bit only at its batch), else the preset's: the
+ * fast preset's per-step work beside the rays (Adam over the whole table,
+ * a share of the grid refresh) pays better over 2048, which reached
+ * 0.4-0.7 dB more than 1024 in ten minutes of lego on three machines
+ * (docs/performance.md).  A checkpoint of nerf-train before 0.8 records
+ * no batch, and was trained at its default of 1024 unless told otherwise.
+ */
+static void choose_batch(const args *a, const nerf_model *m, int resumed,
+                         nerf_trainer_options *to)
+{
+    uint32_t rays = 0, samples = 0;
+    nerf_model_training_batch(m, &rays, &samples);
+    if (rays == 0) {
+        rays = resumed || setup_model_preset(m) != NERF_PRESET_FAST ? 1024
+                                                                    : 2048;
+    } else if (D.rank == 0 && !a->batch_given) {
+        fprintf(stderr, PROG ": %u rays a step, as %s was trained\n",
+                (unsigned)rays, a->out);
+    }
+    to->batch_rays = a->batch_given ? (uint32_t)a->batch : rays;
+    to->batch_samples =
+        a->batch_samples_given ? (uint32_t)a->batch_samples : samples;
+}
+
 static int run(int argc, char **argv)
 {
     cli_blas_single_thread();
@@ -528,6 +558,7 @@ static int run(int argc, char **argv)
     nerf_sampler *s = NULL;
     nerf_trainer *t = NULL;
     int rc = resume_model(&a, &hooks, &m);
+    const int resumed = m != NULL;
     nerf_dataset_options dopt;
     NERF_DATASET_OPTIONS_INIT(&dopt);
     dopt.downscale = (uint32_t)a.downscale;
@@ -545,8 +576,7 @@ static int run(int argc, char **argv)
     if (rc == NERF_OK) {
         nerf_trainer_options to;
         NERF_TRAINER_OPTIONS_INIT(&to);
-        to.batch_rays = (uint32_t)a.batch;
-        to.batch_samples = (uint32_t)a.batch_samples;
+        choose_batch(&a, m, resumed, &to);
         to.checkpoint_every = a.every == UINT64_MAX ? 0 : (uint32_t)a.every;
         to.checkpoint_seconds = a.every == UINT64_MAX ? SAVE_SECONDS : 0.0;
         nerf_model_options mo;

@@ -62,8 +62,10 @@ fi
 [ "$(field full.txt matmul)" = "$matmul" ] ||
   fail "matmul: $(field full.txt matmul), expected $matmul"
 [ "$(field full.txt space)" = "box" ] || fail "space"
-[ "$(field full.txt holds)" = "weights, optimiser moments, render settings, data record" ] ||
+[ "$(field full.txt holds)" = "weights, optimiser moments, render settings, data record, batch record" ] ||
   fail "holds: $(field full.txt holds)"
+[ "$(field full.txt batch)" = "rays 64, samples 0" ] ||
+  fail "batch: $(field full.txt batch)"
 field full.txt data | grep -q "^4 images of 16x16 (blender, mean colour" ||
   fail "data: $(field full.txt data)"
 field full.txt encoding | grep -q "positions frequency, frequencies 10" ||
@@ -79,7 +81,7 @@ echo "checkpoint $full bytes, weights-only export $part bytes"
 [ "$full" = "$(wc -c <"$work/model.nerf")" ] || fail "checkpoint size"
 [ "$part" = "$(wc -c <"$work/weights.nerf")" ] || fail "export size"
 [ $((2 * part)) -lt "$full" ] || fail "the export is not smaller"
-[ "$(field export.txt holds)" = "weights, render settings, data record" ] ||
+[ "$(field export.txt holds)" = "weights, render settings, data record, batch record" ] ||
   fail "export holds: $(field export.txt holds)"
 [ "$(field export.txt parameters)" = "$(field full.txt parameters)" ] ||
   fail "parameters"
@@ -94,6 +96,7 @@ assert d["preset"] == "tiny" and d["step"] == 2, d
 assert d["parameters"] == int(sys.argv[2]), d
 assert d["encoding"]["positions"] == "frequency", d
 assert d["render"]["background"] == "white" and d["render"]["n_fine"] == 64, d
+assert d["batch"] == {"rays": 64, "samples": 0}, d
 PY
 
 # The export renders and evaluates; training does not resume from it.

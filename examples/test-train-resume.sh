@@ -2,11 +2,13 @@
 # nerf-train on an existing MODEL: refused without --resume or --overwrite
 # (nothing trained, MODEL untouched); --overwrite replaces it; --resume
 # continues it, but not with another --preset, and warns when the data is
-# not what MODEL was trained on.
+# not what MODEL was trained on.  The batch: MODEL records it, --resume
+# keeps it unless --batch is given, and another is warned about; the fast
+# preset's default is 2048 rays.
 #
-#   test-train-resume.sh NERF-SCENE NERF-TRAIN
+#   test-train-resume.sh NERF-SCENE NERF-TRAIN NERF-INFO
 set -eu
-scene=$1 train=$2
+scene=$1 train=$2 info=$3
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-train-resume.XXXXXX")
 trap 'rm -rf "$work"' EXIT
@@ -86,4 +88,36 @@ run overwrite.log --steps 1 --overwrite
 [ "$status" -eq 0 ] || { cat "$work/overwrite.log"; fail "overwrite"; }
 grep -q "step 1, .*saved $work/model.nerf" "$work/overwrite.log" ||
   { cat "$work/overwrite.log"; fail "overwrite: not a new model"; }
+
+# batch MODEL: the rays and samples a step nerf-info says MODEL records.
+batch() {
+  "$info" "$work/$1" | sed -n 's/^batch *rays \([0-9]*\), samples \([0-9]*\)$/\1 \2/p'
+}
+# (model.nerf: --batch 64 --steps 1 --overwrite above.)
+[ "$(batch model.nerf)" = "64 0" ] || fail "batch not recorded: $(batch model.nerf)"
+# resume LOG STEPS ARGS...: --resume model.nerf to STEPS.
+resume() {
+  log=$1 steps=$2
+  shift 2
+  "$train" --data "$work/scene" --out "$work/model.nerf" --steps "$steps" \
+    --resume "$@" 2>"$work/$log" || { cat "$work/$log"; fail "$log: status"; }
+}
+resume keep.log 2
+grep -q "^nerf-train: 64 rays a step, as $work/model.nerf was trained" \
+  "$work/keep.log" || { cat "$work/keep.log"; fail "keep: batch not kept"; }
+grep -q "trained at" "$work/keep.log" && { cat "$work/keep.log"; fail "keep: warned"; }
+resume other-batch.log 3 --batch 32 --batch-samples 500
+grep -q "^nerf-train: trainer: the model was trained at 64 rays a step (batch_samples 0) and this trainer takes 32 (batch_samples 500)" \
+  "$work/other-batch.log" || { cat "$work/other-batch.log"; fail "other batch: no warning"; }
+[ "$(batch model.nerf)" = "32 500" ] || fail "other batch: $(batch model.nerf)"
+resume keep-both.log 4
+grep -q "up to 32 rays of 500 samples per step" "$work/keep-both.log" ||
+  { cat "$work/keep-both.log"; fail "keep both: trainer's batch"; }
+grep -q "trained at" "$work/keep-both.log" &&
+  { cat "$work/keep-both.log"; fail "keep both: warned"; }
+# A new model of the fast preset: 2048 rays a step unless told.
+"$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast --steps 1 \
+  --checkpoint-every 0 2>"$work/fast.log" ||
+  { cat "$work/fast.log"; fail "fast: status"; }
+[ "$(batch fast.nerf)" = "2048 0" ] || fail "fast: $(batch fast.nerf)"
 echo "ok   nerf-train on an existing model"

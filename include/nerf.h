@@ -599,6 +599,11 @@ NERF_API int nerf_model_export(const nerf_model *model, const char *path);
                                            trained the model on
                                            (nerf_model_training_data()),
                                            kept by checkpoints. */
+#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< Since 0.8: the batch a
+                                           trainer last trained the model
+                                           with
+                                           (nerf_model_training_batch()),
+                                           kept by checkpoints. */
 
 /**
  * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
@@ -619,6 +624,21 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model);
  */
 NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
                                       size_t size);
+
+/**
+ * Since 0.8: the batch @p model was last trained with, as its trainer
+ * recorded it: nerf_trainer_options.batch_rays into @p rays and
+ * batch_samples into @p samples.  Both 0 when nothing is recorded
+ * (nerf_model_contents() lacks NERF_MODEL_HAS_BATCH_RECORD: a model never
+ * trained, or a checkpoint of libnerf before 0.8).  A run resumed from a
+ * checkpoint goes on bit for bit as the unbroken run only with the batch
+ * it began with, so a caller that resumes takes this one;
+ * nerf_trainer_create() warns when a model that has taken steps is given
+ * another.
+ * @return NERF_OK, or NERF_EINVAL (a NULL argument).
+ */
+NERF_API int nerf_model_training_batch(const nerf_model *model,
+                                       uint32_t *rays, uint32_t *samples);
 
 /**
  * Create a model with @p opts and fill its weights from a NumPy .npz file

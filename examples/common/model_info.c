@@ -179,6 +179,14 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
             cJSON_AddStringToObject(o, "data", data);
         }
     }
+    if (c & NERF_MODEL_HAS_BATCH_RECORD) {
+        uint32_t rays = 0, samples = 0;
+        nerf_model_training_batch(model, &rays, &samples);
+        cJSON_AddItemToArray(holds, cJSON_CreateString("batch record"));
+        cJSON *b = cJSON_AddObjectToObject(o, "batch");
+        cJSON_AddNumberToObject(b, "rays", rays);
+        cJSON_AddNumberToObject(b, "samples", samples);
+    }
     cJSON_AddItemToObject(o, "render", render_object(model));
     return o;
 }

@@ -71,8 +71,12 @@
  * (model/schedule.h): a reader that does not know it would resume on
  * another learning-rate schedule. */
 #define TAG_SCHEDULE (TAG_REQUIRED | 14u)
+/* Optional: the batch the model was trained with (nerf_model_training_
+ * batch()), so that a resume can take it.  A reader that does not know it
+ * resumes with its caller's batch, as before. */
+#define TAG_BATCH 15u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 14
+#define N_SECTIONS 15
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
@@ -80,6 +84,7 @@
 #define RENDER_INDEX 11
 #define WEIGHTS_ONLY_INDEX 12
 #define SCHEDULE_INDEX 13
+#define BATCH_INDEX 14
 #define ADAM_M_INDEX 3
 #define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
@@ -93,6 +98,7 @@
 #define OCCUPANCY_HEAD 16u /* u32 resolution, u32 reserved, u64 updates */
 #define TRAINING2_SIZE 8u /* f64 weight decay */
 #define RENDER_SIZE 64u /* 16 u32 words: see put_render */
+#define BATCH_SIZE 8u   /* u32 batch_rays, u32 batch_samples */
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
@@ -342,6 +348,14 @@ static unsigned char *put_schedule(unsigned char *p, const nerf_model *m)
     return p + NERF__SCHEDULE_SIZE;
 }
 
+static unsigned char *put_batch(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_BATCH, BATCH_SIZE);
+    nerf__store_le32(p, m->batch_rays);
+    nerf__store_le32(p + 4, m->batch_samples);
+    return p + BATCH_SIZE;
+}
+
 static size_t payload_size(const nerf_model *m, bool weights_only)
 {
     /* A weights-only file trades the two moment sections for its empty
@@ -354,7 +368,8 @@ static size_t payload_size(const nerf_model *m, bool weights_only)
            word_sections_size(m) +
            (m->has_render ? SECTION_HEAD + RENDER_SIZE : 0) +
            (weights_only ? SECTION_HEAD : 0) + data_size(m) +
-           (has_schedule(m) ? SECTION_HEAD + NERF__SCHEDULE_SIZE : 0);
+           (has_schedule(m) ? SECTION_HEAD + NERF__SCHEDULE_SIZE : 0) +
+           (m->batch_rays > 0 ? SECTION_HEAD + BATCH_SIZE : 0);
 }
 
 static void build_payload(const nerf_model *m, bool weights_only,
@@ -383,7 +398,10 @@ static void build_payload(const nerf_model *m, bool weights_only,
         p = put_data(p, m);
     }
     if (has_schedule(m)) {
-        put_schedule(p, m);
+        p = put_schedule(p, m);
+    }
+    if (m->batch_rays > 0) {
+        put_batch(p, m);
     }
 }
 
@@ -630,7 +648,7 @@ static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
     "training state (0.2)", "matmul", "space", "data", "render settings",
-    "weights-only marker", "schedule"};
+    "weights-only marker", "schedule", "batch"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -652,7 +670,8 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
                                       : tag == TAG_OCCUPANCY ||
                                             tag == TAG_TRAINING2 ||
                                             tag == TAG_MATMUL ||
-                                            tag == TAG_RENDER;
+                                            tag == TAG_RENDER ||
+                                            tag == TAG_BATCH;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -968,6 +987,23 @@ static int get_render(const char *path, nerf_model *m, const unsigned char *b,
     return NERF_OK;
 }
 
+/* A batch no trainer takes would be refused by the one a resume makes. */
+static int get_batch(const char *path, nerf_model *m, const unsigned char *b,
+                     uint64_t len)
+{
+    const uint32_t rays = len == BATCH_SIZE ? nerf__load_le32(b) : 0;
+    const uint32_t samples = len == BATCH_SIZE ? nerf__load_le32(b + 4) : 0;
+    if (rays < 1 || rays > NERF__BATCH_RAYS_MAX ||
+        samples > NERF__BATCH_SAMPLES_MAX) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
+                           "batch section has the wrong size or holds a "
+                           "batch no trainer takes)", path);
+    }
+    m->batch_rays = rays;
+    m->batch_samples = samples;
+    return NERF_OK;
+}
+
 static int build_model(const nerf__env *env, const char *path,
                        const unsigned char *payload, size_t size,
                        nerf_model **out)
@@ -1000,6 +1036,13 @@ static int build_model(const nerf__env *env, const char *path,
     }
     if (s.body[RENDER_INDEX] != NULL) {
         rc = get_render(path, m, s.body[RENDER_INDEX], s.len[RENDER_INDEX]);
+        if (rc != NERF_OK) {
+            nerf_model_destroy(m);
+            return rc;
+        }
+    }
+    if (s.body[BATCH_INDEX] != NULL) {
+        rc = get_batch(path, m, s.body[BATCH_INDEX], s.len[BATCH_INDEX]);
         if (rc != NERF_OK) {
             nerf_model_destroy(m);
             return rc;

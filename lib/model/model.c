@@ -480,7 +480,22 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model)
     if (model->data.known) {
         c |= NERF_MODEL_HAS_DATA_RECORD;
     }
+    if (model->batch_rays > 0) {
+        c |= NERF_MODEL_HAS_BATCH_RECORD;
+    }
     return c;
+}
+
+NERF_API int nerf_model_training_batch(const nerf_model *model,
+                                       uint32_t *rays, uint32_t *samples)
+{
+    if (model == NULL || rays == NULL || samples == NULL) {
+        return nerf__error(NERF_EINVAL, "nerf_model_training_batch: NULL "
+                           "argument");
+    }
+    *rays = model->batch_rays;
+    *samples = model->batch_samples;
+    return NERF_OK;
 }
 
 NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,

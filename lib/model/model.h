@@ -59,7 +59,17 @@ struct nerf_model {
     bool has_render;
     nerf_sampler_options render_sampler;
     uint32_t render_white;
+    /* The batch its trainer took (nerf_trainer_options.batch_rays and
+     * batch_samples; checkpoints keep it), so that a resume can take the
+     * same one: a run goes on bit for bit only at the batch it began
+     * with.  batch_rays 0: nothing recorded. */
+    uint32_t batch_rays, batch_samples;
 };
+
+/* The most rays and samples a training step takes
+ * (nerf_trainer_options.batch_rays, batch_samples). */
+#define NERF__BATCH_RAYS_MAX (1u << 20)
+#define NERF__BATCH_SAMPLES_MAX (1u << 26)
 
 /* Cells per axis of a model's occupancy grid. */
 #define NERF__MODEL_GRID_RESOLUTION 128u

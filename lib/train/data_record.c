@@ -1,8 +1,9 @@
 /*
- * The trainer's record of the data it trains on (model/fingerprint.h):
- * compared with the model's record, which a resumed checkpoint carries, so
- * that training lego's model on fern, or on another downscale, is not
- * silent; then recorded in the model, for its next checkpoint.
+ * The trainer's record of the data it trains on (model/fingerprint.h) and
+ * of its batch: compared with the model's records, which a resumed
+ * checkpoint carries, so that training lego's model on fern, or on another
+ * downscale, or going on at another batch, is not silent; then recorded in
+ * the model, for its next checkpoint.
  */
 #include <string.h>
 
@@ -55,4 +56,22 @@ void nerf__trainer_record_data(nerf_trainer *t)
                   "trained on %s, this dataset has %s", what, a, b);
     }
     t->model->data = now;
+}
+
+void nerf__trainer_record_batch(nerf_trainer *t)
+{
+    nerf_model *m = t->model;
+    const uint32_t rays = t->opts.batch_rays;
+    const uint32_t samples = t->opts.batch_samples;
+    if (m->step > 0 && m->batch_rays > 0 &&
+        (m->batch_rays != rays || m->batch_samples != samples)) {
+        nerf__log(&t->env, NERF_LOG_WARN, "trainer: the model was trained "
+                  "at %u rays a step (batch_samples %u) and this trainer "
+                  "takes %u (batch_samples %u): its steps go on, but not as "
+                  "the run it was saved from would have gone on",
+                  (unsigned)m->batch_rays, (unsigned)m->batch_samples,
+                  (unsigned)rays, (unsigned)samples);
+    }
+    m->batch_rays = rays;
+    m->batch_samples = samples;
 }

@@ -33,7 +33,7 @@ static int check_options(const void *opts)
 {
     const nerf_trainer_options *o = opts;
     const char *what = NULL;
-    if (o->batch_rays < 1 || o->batch_rays > (1u << 20)) {
+    if (o->batch_rays < 1 || o->batch_rays > NERF__BATCH_RAYS_MAX) {
         what = "batch_rays must be 1..1048576";
     } else if (!(o->precrop_fraction > 0.0f && o->precrop_fraction <= 1.0f)) {
         what = "precrop_fraction must be in (0, 1]";
@@ -46,7 +46,7 @@ static int check_options(const void *opts)
         what = "checkpoint_every needs a checkpoint_path";
     } else if (o->reserved0 != 0) {
         what = "reserved0 must be 0";
-    } else if (o->batch_samples > (1u << 26)) {
+    } else if (o->batch_samples > NERF__BATCH_SAMPLES_MAX) {
         what = "batch_samples must be 0..67108864";
     } else if (o->random_background != 0 && o->random_background != 1) {
         what = "random_background must be 0 or 1";
@@ -280,6 +280,7 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
               t->march ? 0.0 : (double)t->noise_std, t->opts.precrop_steps,
               t->march ? ", ray marching through the occupancy grid" : "");
     nerf__trainer_record_data(t);
+    nerf__trainer_record_batch(t);
     *out = t;
     return NERF_OK;
 }

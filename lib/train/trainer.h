@@ -136,4 +136,8 @@ int nerf__trainer_check_workers(nerf_trainer *t, bool first);
  */
 void nerf__trainer_record_data(nerf_trainer *t);
 
+/* The same for the trainer's batch (model->batch_rays, batch_samples),
+ * warning when a model that has taken steps was trained at another. */
+void nerf__trainer_record_batch(nerf_trainer *t);
+
 #endif

@@ -353,6 +353,53 @@ static void edit_schedule_twice(payload *p)
     add_section(p, 0x8000000eu, schedule_section, sizeof schedule_section);
 }
 
+/* The batch (optional tag 15): u32 rays, u32 samples. */
+static uint32_t batch_rays, batch_samples, batch_len = 8;
+
+static void edit_add_batch(payload *p)
+{
+    unsigned char b[12] = {0};
+    put32(b, batch_rays);
+    put32(b + 4, batch_samples);
+    add_section(p, 15u, b, batch_len);
+}
+
+static void edit_add_two_batches(payload *p)
+{
+    edit_add_batch(p);
+    edit_add_batch(p);
+}
+
+TEST(forged_batch_sections)
+{
+    batch_rays = 4096;
+    batch_samples = 1u << 18;
+    forge("batch of 4096 rays", edit_add_batch, NERF_OK);
+    char path[128];
+    path_in(path, sizeof path, "forged.ckpt");
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    uint32_t rays = 0, samples = 0;
+    CHECK_OK(nerf_model_training_batch(m, &rays, &samples));
+    CHECK_EQ_INT((int)rays, 4096);
+    CHECK_EQ_INT((int)samples, 1 << 18);
+    CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_BATCH_RECORD);
+    nerf_model_destroy(m);
+    batch_len = 12;
+    forge("batch section of 12 bytes", edit_add_batch, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "batch section") != NULL);
+    batch_len = 8;
+    batch_rays = 0;
+    forge("batch of 0 rays", edit_add_batch, NERF_EFORMAT);
+    batch_rays = (1u << 20) + 1;
+    forge("batch past the trainer's limit", edit_add_batch, NERF_EFORMAT);
+    batch_rays = 64;
+    batch_samples = (1u << 26) + 1;
+    forge("sample budget past the limit", edit_add_batch, NERF_EFORMAT);
+    batch_samples = 0;
+    forge("two batch sections", edit_add_two_batches, NERF_EFORMAT);
+}
+
 TEST(forged_schedule_sections)
 {
     forge("schedule cut short", edit_schedule_short, NERF_EFORMAT);
@@ -855,6 +902,7 @@ int main(void)
     RUN(forged_payloads);
     RUN(forged_weights_only_and_render_sections);
     RUN(forged_schedule_sections);
+    RUN(forged_batch_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
     RUN(matmul_section);

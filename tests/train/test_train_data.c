@@ -1,8 +1,9 @@
 /*
- * The trainer's record of its data: a model trained on one dataset and
- * trained on another warns (through the hooks, naming what differs and
- * both datasets); the same data, a fresh model, or a checkpoint without a
- * record (older files) does not; and the record travels in checkpoints.
+ * The trainer's records of its data and its batch: a model trained on one
+ * dataset and trained on another warns (through the hooks, naming what
+ * differs and both datasets), as does one trained on at another batch;
+ * the same data and batch, a fresh model, or a checkpoint without a
+ * record (older files) does not; and the records travel in checkpoints.
  */
 #include <stdio.h>
 #include <string.h>
@@ -23,9 +24,11 @@ static void keep_warnings(int level, const char *msg, void *user)
     }
 }
 
-/* A trainer for m on ds (its warnings counted afresh), made and dropped:
- * creating it is what records and compares the data. */
-static void train_on(nerf_model *m, nerf_dataset *ds)
+/* A trainer for m on ds at `rays` and `samples` a step (its warnings
+ * counted afresh), made and dropped after a step: creating it is what
+ * records and compares the data and the batch. */
+static void train_batch(nerf_model *m, nerf_dataset *ds, uint32_t rays,
+                        uint32_t samples)
 {
     nerf_hooks h;
     NERF_HOOKS_INIT(&h);
@@ -33,7 +36,8 @@ static void train_on(nerf_model *m, nerf_dataset *ds)
     h.log_level = NERF_LOG_WARN;
     nerf_trainer_options o;
     NERF_TRAINER_OPTIONS_INIT(&o);
-    o.batch_rays = 32;
+    o.batch_rays = rays;
+    o.batch_samples = samples;
     o.hooks = &h;
     nerf_sampler *s = tiny_sampler(1);
     nerf_trainer *t = NULL;
@@ -48,6 +52,11 @@ static void train_on(nerf_model *m, nerf_dataset *ds)
     }
     nerf_trainer_destroy(t);
     nerf_sampler_destroy(s);
+}
+
+static void train_on(nerf_model *m, nerf_dataset *ds)
+{
+    train_batch(m, ds, 32, 0);
 }
 
 static nerf_model *save_and_load(nerf_model *m)
@@ -119,6 +128,68 @@ TEST(no_record_no_warning)
     nerf_model_destroy(m);
 }
 
+static void check_batch(const nerf_model *m, uint32_t rays, uint32_t samples)
+{
+    uint32_t r = 7, s = 7;
+    CHECK_OK(nerf_model_training_batch(m, &r, &s));
+    CHECK_EQ_INT((int)r, (int)rays);
+    CHECK_EQ_INT((int)s, (int)samples);
+    CHECK_EQ_INT(nerf_model_contents(m) & NERF_MODEL_HAS_BATCH_RECORD,
+                 rays > 0 ? NERF_MODEL_HAS_BATCH_RECORD : 0);
+}
+
+TEST(batch_recorded_and_saved)
+{
+    nerf_model *m = tiny_model(1);
+    check_batch(m, 0, 0);
+    uint32_t r = 0;
+    CHECK_EQ_INT(nerf_model_training_batch(NULL, &r, &r), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_training_batch(m, NULL, &r), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_model_training_batch(m, &r, NULL), NERF_EINVAL);
+    train_batch(m, a.train, 48, 300);
+    CHECK_EQ_INT(n_warnings, 0);
+    check_batch(m, 48, 300);
+    m = save_and_load(m);
+    check_batch(m, 48, 300);
+    /* Resumed at the same batch: nothing to say. */
+    train_batch(m, a.train, 48, 300);
+    CHECK_EQ_INT(n_warnings, 0);
+    nerf_model_destroy(m);
+}
+
+TEST(other_batch_warns)
+{
+    nerf_model *m = save_and_load(tiny_model(1));
+    train_batch(m, a.train, 48, 0);
+    m = save_and_load(m);
+    train_batch(m, a.train, 32, 0);
+    CHECK_EQ_INT(n_warnings, 1);
+    printf("  %s\n", warnings);
+    CHECK(strstr(warnings, "trained at 48 rays a step (batch_samples 0) "
+                           "and this trainer takes 32 (batch_samples 0)") !=
+          NULL);
+    check_batch(m, 32, 0);
+    /* The sample budget is part of the batch. */
+    train_batch(m, a.train, 32, 500);
+    CHECK_EQ_INT(n_warnings, 1);
+    check_batch(m, 32, 500);
+    nerf_model_destroy(m);
+}
+
+TEST(batch_no_record_no_warning)
+{
+    /* A model with steps from a checkpoint written before the record. */
+    nerf_model *m = tiny_model(1);
+    train_on(m, a.train);
+    m->batch_rays = m->batch_samples = 0;
+    m = save_and_load(m);
+    check_batch(m, 0, 0);
+    train_batch(m, a.train, 64, 0);
+    CHECK_EQ_INT(n_warnings, 0);
+    check_batch(m, 64, 0);
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     if (fixture_open(&a, 16, 4, 0) != NERF_OK ||
@@ -129,6 +200,9 @@ int main(void)
     RUN(recorded_and_saved);
     RUN(other_data_warns);
     RUN(no_record_no_warning);
+    RUN(batch_recorded_and_saved);
+    RUN(other_batch_warns);
+    RUN(batch_no_record_no_warning);
     fixture_close(&a);
     fixture_close(&b);
     HARNESS_EXIT();

@@ -50,10 +50,12 @@ MODEL_HAS_OPTIMIZER = 0x1
 MODEL_HAS_OCCUPANCY = 0x2
 MODEL_HAS_RENDER_SETTINGS = 0x4
 MODEL_HAS_DATA_RECORD = 0x8
+MODEL_HAS_BATCH_RECORD = 0x10
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
             MODEL_HAS_RENDER_SETTINGS: "render_settings",
-            MODEL_HAS_DATA_RECORD: "data_record"}
+            MODEL_HAS_DATA_RECORD: "data_record",
+            MODEL_HAS_BATCH_RECORD: "batch_record"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -240,7 +242,8 @@ class Model(_handle.Handle):
         absent for a weights-only export), ``"occupancy"`` (a trained
         occupancy grid), ``"render_settings"`` (recorded by training),
         ``"data_record"`` (what data training last used:
-        :attr:`training_data`)."""
+        :attr:`training_data`), ``"batch_record"`` (the batch it used:
+        :attr:`training_batch`)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)
@@ -254,6 +257,18 @@ class Model(_handle.Handle):
         with self._using() as ptr:
             lib.nerf_model_training_data(ptr, buf, len(buf))
         return buf.value.decode("utf-8", "replace")
+
+    @property
+    def training_batch(self) -> Optional[Tuple[int, int]]:
+        """``(batch_rays, batch_samples)`` of the trainer that last
+        trained the model (``nerf_model_training_batch``), or None when
+        nothing is recorded.  A resumed run goes on bit for bit only at
+        the batch it began with: give these to the :class:`Trainer`."""
+        rays, samples = ctypes.c_uint32(0), ctypes.c_uint32(0)
+        with self._using() as ptr:
+            lib.nerf_model_training_batch(ptr, ctypes.byref(rays),
+                                          ctypes.byref(samples))
+        return (rays.value, samples.value) if rays.value else None
 
     @property
     def schedule(self) -> dict:

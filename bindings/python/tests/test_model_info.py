@@ -67,8 +67,10 @@ class Export(TestCase):
     def test_weights_only_export(self):
         model, _ = trained()
         self.assertEqual(model.contents,
-                         {"optimizer", "render_settings", "data_record"})
+                         {"optimizer", "render_settings", "data_record",
+                          "batch_record"})
         self.assertIn("images of 16x16 (blender", model.training_data)
+        self.assertEqual(model.training_batch, (64, 0))
         full = os.path.join(_support.tmpdir(), "full.nerf")
         part = os.path.join(_support.tmpdir(), "weights.nerf")
         model.save(full)
@@ -77,8 +79,13 @@ class Export(TestCase):
               % (os.path.getsize(full), os.path.getsize(part)))
         self.assertLess(2 * os.path.getsize(part), os.path.getsize(full))
         back = nerf.Model.load(part)
-        self.assertEqual(back.contents, {"render_settings", "data_record"})
+        self.assertEqual(back.contents, {"render_settings", "data_record",
+                                         "batch_record"})
         self.assertEqual(back.training_data, model.training_data)
+        self.assertEqual(back.training_batch, (64, 0))
+        fresh = nerf.Model("tiny")
+        self.assertIsNone(fresh.training_batch)
+        self.assertNotIn("batch_record", fresh.contents)
         self.assertEqual(back.step, 2)
         pos = [[0.1, 0.2, 0.3]]
         self.assertEqual(flat(back.query(pos, [[0.0, 0.0, 1.0]])[0]),
