@@ -38,6 +38,7 @@
 #include <oneapi/dnnl/dnnl.h>
 #include <oneapi/dnnl/dnnl_debug.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -77,31 +78,53 @@ static struct {
                            * application never destroyed point at it */
 } global = {.once = PTHREAD_ONCE_INIT};
 
-/* oneDNN fixes a primitive's thread count at creation and uses the
- * calling thread's OpenMP count: make it 1 for the duration of a call,
- * and give the application its own setting back afterwards. */
-static int threads_enter(void)
+/* What a thread changes about itself while it calls oneDNN, to give back
+ * afterwards. */
+typedef struct thread_state {
+    int omp_threads;
+    sigset_t signals;
+} thread_state;
+
+/*
+ * oneDNN fixes a primitive's thread count at creation and uses the
+ * calling thread's OpenMP count: make it 1 for the duration of a call.
+ *
+ * And hold back the signals a handler could catch: the generated gemm
+ * kernels of oneDNN 2.x (jit_avx512_common_gemm_f32, which some fp32
+ * products get) point the stack pointer into a heap buffer while they
+ * run, so a signal handled on the thread then writes its frame over the
+ * heap (oneDNN issue 4845, fixed in 2026).  nerf-train's Ctrl-C corrupted
+ * the heap about one time in ten that way.  A signal held back is handled
+ * by another thread of the process, or here once the call is over.
+ * Faults are left alone: a fault inside a kernel is not a frame to save.
+ */
+static void threads_enter(thread_state *ts)
 {
+    sigset_t all;
+    sigfillset(&all);
+    const int faults[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL};
+    for (size_t i = 0; i < sizeof faults / sizeof faults[0]; i++) {
+        sigdelset(&all, faults[i]);
+    }
+    pthread_sigmask(SIG_BLOCK, &all, &ts->signals);
 #if USE_OMP
-    int saved = omp_get_max_threads();
-    if (saved != 1) {
+    ts->omp_threads = omp_get_max_threads();
+    if (ts->omp_threads != 1) {
         omp_set_num_threads(1);
     }
-    return saved;
 #else
-    return 1;
+    ts->omp_threads = 1;
 #endif
 }
 
-static void threads_leave(int saved)
+static void threads_leave(const thread_state *ts)
 {
 #if USE_OMP
-    if (saved != 1) {
-        omp_set_num_threads(saved);
+    if (ts->omp_threads != 1) {
+        omp_set_num_threads(ts->omp_threads);
     }
-#else
-    (void)saved;
 #endif
+    pthread_sigmask(SIG_SETMASK, &ts->signals, NULL);
 }
 
 enum { F_BIAS = 1, F_RELU = 2, F_SUM = 4 };
@@ -215,9 +238,10 @@ static const char *matmul_made(dnnl_data_type_t dt, const char *cannot,
     const prim_key key = {32, 32, 32, 32, 1, 1, 32, 32, F_BIAS | F_RELU, dt};
     dnnl_primitive_desc_t pd = NULL;
     dnnl_memory_desc_t md[4];
-    int saved = threads_enter();
+    thread_state ts;
+    threads_enter(&ts);
     dnnl_status_t st = make_pd(&key, &pd, md);
-    threads_leave(saved);
+    threads_leave(&ts);
     const char *impl = NULL;
     if (st == dnnl_success) {
         st = dnnl_primitive_desc_query(pd, dnnl_query_impl_info_str, 0, &impl);
@@ -543,12 +567,13 @@ static int get_prim(nerf__onednn *b, const prim_key *key, prim_entry **out)
     }
     e->key = *key;
     dnnl_primitive_desc_t pd = NULL;
-    int saved = threads_enter();
+    thread_state ts;
+    threads_enter(&ts);
     dnnl_status_t st = make_pd(key, &pd, e->md);
     if (st == dnnl_success) {
         st = dnnl_primitive_create(&e->prim, pd);
     }
-    threads_leave(saved);
+    threads_leave(&ts);
     if (st == dnnl_success) {
         const dnnl_memory_desc_t *smd =
             dnnl_primitive_desc_query_md(pd, dnnl_query_scratchpad_md, 0);
@@ -737,14 +762,15 @@ static dnnl_status_t run_piece(const prim_entry *e, dnnl_stream_t stream,
 }
 
 /* The end of a block's pieces: wait for them, give back the thread's
- * OpenMP setting, and keep the first failure of any block in *status. */
-static void block_done(slot *sl, dnnl_status_t st, int saved,
+ * OpenMP setting and signals, and keep the first failure of any block in
+ * *status. */
+static void block_done(slot *sl, dnnl_status_t st, const thread_state *ts,
                        atomic_int *status)
 {
     if (st == dnnl_success) {
         st = dnnl_stream_wait(sl->stream);
     }
-    threads_leave(saved);
+    threads_leave(ts);
     if (st != dnnl_success) {
         int none = dnnl_success;
         atomic_compare_exchange_strong(status, &none, (int)st);
@@ -784,7 +810,8 @@ static void rows_block(void *ctx, size_t t)
     slot *sl = &j->s->slots[t];
     size_t lo, hi;
     block_range(j->n, j->blocks, t, &lo, &hi);
-    int saved = threads_enter();
+    thread_state ts;
+    threads_enter(&ts);
     dnnl_status_t st = dnnl_success;
     size_t r = lo;
     for (int e = ROW_LOG2; e >= 1 && st == dnnl_success; e--) {
@@ -822,7 +849,7 @@ static void rows_block(void *ctx, size_t t)
             memcpy(j->c + r * j->ldc, pc, j->cols * sizeof *pc);
         }
     }
-    block_done(sl, st, saved, &j->status);
+    block_done(sl, st, &ts, &j->status);
 }
 
 static unsigned blocks_for(const nerf__onednn_scratch *s, size_t units)
@@ -938,7 +965,8 @@ static void wgrad_block(void *ctx, size_t t)
     }
     prim_entry *const *by = j->by[hi - lo == j->narrow ? 0 : 1];
     const size_t mo = j->by_rows ? lo : 0, no = j->by_rows ? 0 : lo;
-    int saved = threads_enter();
+    thread_state ts;
+    threads_enter(&ts);
     dnnl_status_t st = dnnl_success;
     size_t r = 0;
     for (int e = K_LOG2; e >= 0 && st == dnnl_success; e--) {
@@ -954,7 +982,7 @@ static void wgrad_block(void *ctx, size_t t)
             }
         }
     }
-    block_done(sl, st, saved, &j->status);
+    block_done(sl, st, &ts, &j->status);
 }
 
 static int weight_product(nerf__onednn *b, nerf__onednn_scratch *s, size_t n,
