@@ -89,6 +89,16 @@ static void add_section(payload *p, uint32_t tag, const void *data, size_t len)
     memcpy(s->data, data, len);
 }
 
+/* A section of two u32 words, cut or padded with zeros to len (<= 12). */
+static void add_two_words(payload *p, uint32_t tag, uint32_t a, uint32_t b,
+                          size_t len)
+{
+    unsigned char body[12] = {0};
+    put32(body, a);
+    put32(body + 4, b);
+    add_section(p, tag, body, len);
+}
+
 TEST(payload_layout_is_as_documented)
 {
     size_t size = 0;
@@ -358,10 +368,7 @@ static uint32_t batch_rays, batch_samples, batch_len = 8;
 
 static void edit_add_batch(payload *p)
 {
-    unsigned char b[12] = {0};
-    put32(b, batch_rays);
-    put32(b + 4, batch_samples);
-    add_section(p, 15u, b, batch_len);
+    add_two_words(p, 15u, batch_rays, batch_samples, batch_len);
 }
 
 static void edit_add_two_batches(payload *p)
@@ -675,10 +682,7 @@ static size_t matmul_len;
 
 static void edit_add_matmul(payload *p)
 {
-    unsigned char body[12] = {0};
-    put32(body, matmul_value);
-    put32(body + 4, matmul_reserved);
-    add_section(p, 0x00000009u, body, matmul_len);
+    add_two_words(p, 0x00000009u, matmul_value, matmul_reserved, matmul_len);
 }
 
 static void edit_options2_reserved(payload *p)

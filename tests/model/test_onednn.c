@@ -518,6 +518,19 @@ TEST(gradients_match_fp32)
     compare_gradients(NERF_PRESET_TINY, "tiny");
 }
 
+/* Network net's parameter gradients for d_rgb at n points, into g. */
+static void gradients_of(nerf_model *m, int net, size_t n, const float *pos,
+                         const float *dir, const float *d_rgb, float *g)
+{
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    nerf__model_zero_grad(m);
+    CHECK_OK(nerf__model_forward(m, net, &ws, n, pos, dir, NULL, NULL));
+    CHECK_OK(nerf__model_backward(m, net, &ws, d_rgb, NULL));
+    nerf__workspace_release(&m->env, &ws);
+    memcpy(g, m->grads, m->n_params * sizeof(float));
+}
+
 /*
  * Repeating a forward and a backward gives the same bits, and a row's
  * output does not depend on which rows share its call (so images do not
@@ -554,25 +567,18 @@ TEST(deterministic)
         CHECK(memcmp(&sigma, a + 3 * n + i * 97, sizeof sigma) == 0);
     }
     /* Gradients: twice the same. */
-    float *g = malloc(m->n_params * sizeof(float));
+    float *g[2] = {malloc(m->n_params * sizeof(float)),
+                   malloc(m->n_params * sizeof(float))};
     float *d_rgb = malloc(n * 3 * sizeof(float));
     for (size_t i = 0; i < 3 * n; i++) {
         d_rgb[i] = uniform(-1.0f, 1.0f);
     }
     for (int rep = 0; rep < 2; rep++) {
-        nerf__workspace ws;
-        memset(&ws, 0, sizeof ws);
-        nerf__model_zero_grad(m);
-        CHECK_OK(nerf__model_forward(m, 1, &ws, n, pos, dir, NULL, NULL));
-        CHECK_OK(nerf__model_backward(m, 1, &ws, d_rgb, NULL));
-        nerf__workspace_release(&m->env, &ws);
-        if (rep == 0) {
-            memcpy(g, m->grads, m->n_params * sizeof(float));
-        } else {
-            CHECK(memcmp(g, m->grads, m->n_params * sizeof(float)) == 0);
-        }
+        gradients_of(m, 1, n, pos, dir, d_rgb, g[rep]);
     }
-    free(g);
+    CHECK(memcmp(g[0], g[1], m->n_params * sizeof(float)) == 0);
+    free(g[0]);
+    free(g[1]);
     free(d_rgb);
     free(pos);
     free(dir);
@@ -598,18 +604,6 @@ static void count_alarm(int sig)
     alarms++;
 }
 
-static void gradients_of(nerf_model *m, size_t n, const float *pos,
-                         const float *dir, const float *d_rgb, float *g)
-{
-    nerf__workspace ws;
-    memset(&ws, 0, sizeof ws);
-    nerf__model_zero_grad(m);
-    CHECK_OK(nerf__model_forward(m, 0, &ws, n, pos, dir, NULL, NULL));
-    CHECK_OK(nerf__model_backward(m, 0, &ws, d_rgb, NULL));
-    nerf__workspace_release(&m->env, &ws);
-    memcpy(g, m->grads, m->n_params * sizeof(float));
-}
-
 TEST(signals_during_products)
 {
     nerf_model *m = make_model(NERF_PRESET_TINY, kind);
@@ -626,7 +620,7 @@ TEST(signals_during_products)
     for (size_t i = 0; i < 3 * n; i++) {
         d_rgb[i] = uniform(-1.0f, 1.0f);
     }
-    gradients_of(m, n, pos, dir, d_rgb, want);
+    gradients_of(m, 0, n, pos, dir, d_rgb, want);
     struct sigaction sa, old_sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = count_alarm;
@@ -639,7 +633,7 @@ TEST(signals_during_products)
     int same = 0;
     const int rounds = 30;
     for (int r = 0; r < rounds; r++) {
-        gradients_of(m, n, pos, dir, d_rgb, got);
+        gradients_of(m, 0, n, pos, dir, d_rgb, got);
         same += memcmp(got, want, m->n_params * sizeof(float)) == 0;
     }
     setitimer(ITIMER_REAL, &off, NULL);
