@@ -2035,9 +2035,14 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * 0.7.1 again at three quarters and nine tenths of @p seconds, each to the rate
  * over the quarter of the time before it or since the fit before, whichever is
  * shorter (so steps that turn slower late in a run shorten it to the time
- * left).  At each of these fits NERF_PARAM_DECAY_STEPS and the recorded length
- * move and the decay's start stays, so the learning rate moves by a few
- * percent.  From each fit on, the run is a plain schedule: a model saved after
+ * left).  Since 0.8 a run that reaches its length before the next of these
+ * fits it again then, to the rate since the fit before (steps that got
+ * faster than measured, as a marching sampler's do for minutes, ended short
+ * budgets at half their time).  At each of these fits
+ * NERF_PARAM_DECAY_STEPS and the recorded length move and the decay's start
+ * stays, so the learning rate moves by a few percent (more at a fit that
+ * finds the run at its length, where the rate had decayed to the final
+ * one).  From each fit on, the run is a plain schedule: a model saved after
  * it, loaded and given to nerf_trainer_run_for() or nerf_trainer_run()
  * continues bit for bit to its recorded length, and two runs that fixed the
  * same lengths at the same steps train the same weights.  A FITTED model trains

@@ -1,6 +1,7 @@
 /* Training to a time budget: the measured fit, the held rate, the recorded
  * length, the fits again at a half, three quarters and nine tenths of the
- * budget, and resuming bit for bit after the fit. */
+ * budget or when the length is reached before, and resuming bit for bit
+ * after the fit. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -345,6 +346,69 @@ TEST(fits_again_late_in_the_budget)
     nerf_sampler_destroy(s);
 }
 
+/* Steps slowed while the rate is measured, as a marching sampler's are
+ * before its grid knows where the scene is. */
+typedef struct slow_first {
+    nerf_model *m;
+    struct timespec pause;
+} slow_first;
+
+static int slow_while_measuring(const nerf_progress *p, void *user)
+{
+    (void)p;
+    slow_first *w = user;
+    if (schedule_of(w->m).state == NERF_SCHEDULE_MEASURING) {
+        nanosleep(&w->pause, NULL);
+    }
+    return 0;
+}
+
+/*
+ * Steps five times faster after the fit than measured: the fitted length
+ * is reached at about 0.4 of the budget, before the fit at half.  Fitted
+ * again then, to the rate since the fit, the run goes on to its budget;
+ * without, it ended there.
+ */
+TEST(fits_again_when_the_steps_get_faster)
+{
+    nerf_sampler *s = tiny_sampler(13);
+    nerf_model *m = tiny_model(14);
+    nerf_trainer *t = make_trainer(m, s);
+    nerf_model *probe = tiny_model(14);
+    nerf_trainer *pt = make_trainer(probe, s);
+    double t0 = now();
+    CHECK_OK(nerf_trainer_run(pt, 5, NULL));
+    const double step = (now() - t0) / 5.0;
+    nerf_trainer_destroy(pt);
+    nerf_model_destroy(probe);
+    const double budget = fmax(2.0, 150.0 * step);
+    slow_first w = {.m = m, .pause = timespec_of(4.0 * step)};
+    slowing_late counted = {0};
+    nerf_trainer_set_progress(t, slow_while_measuring, &w);
+    nerf_log_set_default(count_refits, &counted, NERF_LOG_INFO);
+    t0 = now();
+    int rc = nerf_trainer_run_for(t, budget, NULL);
+    const double took = now() - t0;
+    nerf_log_set_default(NULL, NULL, NERF_LOG_INFO);
+    nerf_schedule sc = schedule_of(m);
+    printf("  %d fits again, %llu steps, %.2f s of %.2f (%s)\n",
+           counted.refits, (unsigned long long)sc.total_steps, took, budget,
+           rc == NERF_OK ? "ended" : nerf_last_error());
+    CHECK(sc.state == NERF_SCHEDULE_FITTED);
+    CHECK(counted.refits >= 1);
+    CHECK(took > 0.8 * budget);
+    if (rc == NERF_OK) {
+        CHECK(nerf_model_step(m) == sc.total_steps);
+        CHECK(took < 1.1 * budget + 5.0 * step);
+    } else {
+        CHECK(rc == NERF_ECANCELLED &&
+              strstr(nerf_last_error(), "out of time") != NULL);
+    }
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+    nerf_sampler_destroy(s);
+}
+
 /* Saved before its fit, a model measures again when resumed. */
 TEST(measuring_resumes_by_measuring)
 {
@@ -452,6 +516,7 @@ int main(void)
     RUN(fits_the_length_and_ends_there);
     RUN(fits_again_at_half_the_budget);
     RUN(fits_again_late_in_the_budget);
+    RUN(fits_again_when_the_steps_get_faster);
     RUN(resume_after_the_fit_is_bit_identical);
     RUN(measuring_resumes_by_measuring);
     RUN(plain_schedule_and_bad_arguments);

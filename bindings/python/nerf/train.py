@@ -95,8 +95,9 @@ class Trainer(_handle.ProgressHandle):
         the rate holds for the first quarter while the step rate is
         measured, then the run's length is fixed and recorded in the model
         (:attr:`nerf.Model.schedule`), so that a saved model resumes bit for
-        bit; at a half, three quarters and nine tenths of the time the
-        length is fitted again to the rate then.  A model already fitted
+        bit; at a half, three quarters and nine tenths of the time (or
+        when the run reaches it before) the length is fitted again to the
+        rate then.  A model already fitted
         trains on to its recorded length.
 
         Returns the figures of the last step.  Raises NerfCancelled when the
