@@ -276,7 +276,6 @@ TEST(fits_again_at_half_the_budget)
 typedef struct slowing_late {
     double start, from; /* slow from this many seconds after start */
     struct timespec pause;
-    int refits; /* "fitted again" lines logged */
 } slowing_late;
 
 static int slow_late(const nerf_progress *p, void *user)
@@ -292,8 +291,63 @@ static int slow_late(const nerf_progress *p, void *user)
 static void count_refits(int level, const char *msg, void *user)
 {
     (void)level;
-    slowing_late *w = user;
-    w->refits += strstr(msg, "the length fitted again") != NULL;
+    int *refits = user;
+    *refits += strstr(msg, "the length fitted again") != NULL;
+}
+
+/* The time of a plain step, from a few steps of another model. */
+static double step_seconds(nerf_sampler *s, uint64_t seed)
+{
+    nerf_model *probe = tiny_model(seed);
+    nerf_trainer *pt = make_trainer(probe, s);
+    const double t0 = now();
+    CHECK_OK(nerf_trainer_run(pt, 5, NULL));
+    const double step = (now() - t0) / 5.0;
+    nerf_trainer_destroy(pt);
+    nerf_model_destroy(probe);
+    return step;
+}
+
+/* What a run to a budget did, its "fitted again" log lines counted. */
+typedef struct budget_run {
+    int rc, refits;
+    double took;
+    nerf_schedule sc;
+} budget_run;
+
+static budget_run run_counting_refits(nerf_trainer *t, nerf_model *m,
+                                      double budget)
+{
+    budget_run b = {0};
+    nerf_log_set_default(count_refits, &b.refits, NERF_LOG_INFO);
+    const double t0 = now();
+    b.rc = nerf_trainer_run_for(t, budget, NULL);
+    b.took = now() - t0;
+    nerf_log_set_default(NULL, NULL, NERF_LOG_INFO);
+    b.sc = schedule_of(m);
+    printf("  %d fits again, %llu steps, %.2f s of %.2f (%s)\n", b.refits,
+           (unsigned long long)b.sc.total_steps, b.took, budget,
+           b.rc == NERF_OK ? "ended" : nerf_last_error());
+    CHECK(b.sc.state == NERF_SCHEDULE_FITTED);
+    return b;
+}
+
+/*
+ * Ended at its length within a tenth past the budget and a few steps: not
+ * a tighter time, a busy machine's steps vary by more than the last fit
+ * can foresee.  Or, on a machine so busy that even the slowed steps vary
+ * by a fifth, out of time, and said so.
+ */
+static void check_ended(const budget_run *b, const nerf_model *m,
+                        double budget, double step)
+{
+    if (b->rc == NERF_OK) {
+        CHECK(nerf_model_step(m) == b->sc.total_steps);
+        CHECK(b->took < 1.1 * budget + 5.0 * step);
+    } else {
+        CHECK(b->rc == NERF_ECANCELLED &&
+              strstr(nerf_last_error(), "out of time") != NULL);
+    }
 }
 
 /*
@@ -308,39 +362,15 @@ TEST(fits_again_late_in_the_budget)
     nerf_sampler *s = tiny_sampler(11);
     nerf_model *m = tiny_model(12);
     nerf_trainer *t = make_trainer(m, s);
-    /* The step time, from a few plain steps of another model. */
-    nerf_model *probe = tiny_model(12);
-    nerf_trainer *pt = make_trainer(probe, s);
-    double t0 = now();
-    CHECK_OK(nerf_trainer_run(pt, 5, NULL));
-    const double step = (now() - t0) / 5.0;
-    nerf_trainer_destroy(pt);
-    nerf_model_destroy(probe);
+    const double step = step_seconds(s, 12);
     /* Enough steps in the last tenth for the fit at 0.9 to have room. */
     const double budget = fmax(2.0, 150.0 * step);
     slowing_late w = {.from = 0.6 * budget, .pause = timespec_of(4.0 * step)};
     nerf_trainer_set_progress(t, slow_late, &w);
-    nerf_log_set_default(count_refits, &w, NERF_LOG_INFO);
-    w.start = t0 = now();
-    int rc = nerf_trainer_run_for(t, budget, NULL);
-    const double took = now() - t0;
-    nerf_log_set_default(NULL, NULL, NERF_LOG_INFO);
-    nerf_schedule sc = schedule_of(m);
-    printf("  %d fits again, %llu steps, %.2f s of %.2f (%s)\n", w.refits,
-           (unsigned long long)sc.total_steps, took, budget,
-           rc == NERF_OK ? "ended" : nerf_last_error());
-    CHECK(sc.state == NERF_SCHEDULE_FITTED);
-    CHECK(w.refits >= 2 && w.refits <= 3);
-    if (rc == NERF_OK) {
-        /* Not a tighter time: a busy machine's steps vary by more than
-         * the last fit can foresee.  The fits are what is checked. */
-        CHECK(nerf_model_step(m) == sc.total_steps);
-        CHECK(took < 1.1 * budget + 5.0 * step);
-    } else {
-        /* A machine so busy that even the slowed steps vary by a fifth. */
-        CHECK(rc == NERF_ECANCELLED &&
-              strstr(nerf_last_error(), "out of time") != NULL);
-    }
+    w.start = now();
+    const budget_run b = run_counting_refits(t, m, budget);
+    CHECK(b.refits >= 2 && b.refits <= 3);
+    check_ended(&b, m, budget, step);
     nerf_trainer_destroy(t);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
@@ -374,36 +404,14 @@ TEST(fits_again_when_the_steps_get_faster)
     nerf_sampler *s = tiny_sampler(13);
     nerf_model *m = tiny_model(14);
     nerf_trainer *t = make_trainer(m, s);
-    nerf_model *probe = tiny_model(14);
-    nerf_trainer *pt = make_trainer(probe, s);
-    double t0 = now();
-    CHECK_OK(nerf_trainer_run(pt, 5, NULL));
-    const double step = (now() - t0) / 5.0;
-    nerf_trainer_destroy(pt);
-    nerf_model_destroy(probe);
+    const double step = step_seconds(s, 14);
     const double budget = fmax(2.0, 150.0 * step);
     slow_first w = {.m = m, .pause = timespec_of(4.0 * step)};
-    slowing_late counted = {0};
     nerf_trainer_set_progress(t, slow_while_measuring, &w);
-    nerf_log_set_default(count_refits, &counted, NERF_LOG_INFO);
-    t0 = now();
-    int rc = nerf_trainer_run_for(t, budget, NULL);
-    const double took = now() - t0;
-    nerf_log_set_default(NULL, NULL, NERF_LOG_INFO);
-    nerf_schedule sc = schedule_of(m);
-    printf("  %d fits again, %llu steps, %.2f s of %.2f (%s)\n",
-           counted.refits, (unsigned long long)sc.total_steps, took, budget,
-           rc == NERF_OK ? "ended" : nerf_last_error());
-    CHECK(sc.state == NERF_SCHEDULE_FITTED);
-    CHECK(counted.refits >= 1);
-    CHECK(took > 0.8 * budget);
-    if (rc == NERF_OK) {
-        CHECK(nerf_model_step(m) == sc.total_steps);
-        CHECK(took < 1.1 * budget + 5.0 * step);
-    } else {
-        CHECK(rc == NERF_ECANCELLED &&
-              strstr(nerf_last_error(), "out of time") != NULL);
-    }
+    const budget_run b = run_counting_refits(t, m, budget);
+    CHECK(b.refits >= 1);
+    CHECK(b.took > 0.8 * budget);
+    check_ended(&b, m, budget, step);
     nerf_trainer_destroy(t);
     nerf_model_destroy(m);
     nerf_sampler_destroy(s);
