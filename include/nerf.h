@@ -480,7 +480,17 @@ typedef enum nerf_param {
      * lr(t) = lr0 (lr1/lr0)^((t - start) / (steps - start)) for t > start.
      * Default 0 (the paper's schedule).  nerf_trainer_run_for() sets it
      * to the step where it fits the schedule to its time budget. */
-    NERF_PARAM_DECAY_START = 107
+    NERF_PARAM_DECAY_START = 107,
+    /** Since 0.9.  Over this many last steps up to DECAY_STEPS (the
+     * schedule's end, which nerf_trainer_run_for() fits to its budget)
+     * the model keeps an exponential moving average of its weights
+     * (each step keeps 0.95 of it, as Mueller et al.'s), and the step
+     * that reaches DECAY_STEPS makes that average the weights.  Training
+     * past the end goes on from it.  It holds a second copy of the
+     * weights during those steps, and a checkpoint saved then carries it.
+     * Default 0 (off; the paper's models); 100 for hash-grid models.  A
+     * checkpoint from before 0.9 resumes with 0. */
+    NERF_PARAM_AVERAGE_STEPS = 108
 } nerf_param;
 
 /**

@@ -114,10 +114,11 @@ static cJSON *schedule_object(const nerf_model *model)
     memset(&sc, 0, sizeof sc);
     sc.struct_size = sizeof sc;
     nerf_model_schedule(model, &sc);
-    double lr0 = 0.0, lr1 = 0.0, start = 0.0;
+    double lr0 = 0.0, lr1 = 0.0, start = 0.0, average = 0.0;
     nerf_model_get_param(model, NERF_PARAM_LEARNING_RATE, &lr0);
     nerf_model_get_param(model, NERF_PARAM_LEARNING_RATE_FINAL, &lr1);
     nerf_model_get_param(model, NERF_PARAM_DECAY_START, &start);
+    nerf_model_get_param(model, NERF_PARAM_AVERAGE_STEPS, &average);
     cJSON *o = cJSON_CreateObject();
     static const char *const kinds[] = {"steps", "measuring", "fitted"};
     cJSON_AddStringToObject(o, "kind", sc.state < 3 ? kinds[sc.state] : "?");
@@ -126,6 +127,9 @@ static cJSON *schedule_object(const nerf_model *model)
     if (sc.state != NERF_SCHEDULE_MEASURING) {
         cJSON_AddNumberToObject(o, "decay_start", start);
         cJSON_AddNumberToObject(o, "steps", (double)sc.total_steps);
+    }
+    if (average > 0.0) {
+        cJSON_AddNumberToObject(o, "average_steps", average);
     }
     if (sc.state != NERF_SCHEDULE_STEPS) {
         cJSON_AddNumberToObject(o, "budget_seconds", sc.budget_seconds);

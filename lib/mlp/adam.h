@@ -15,6 +15,9 @@ typedef struct nerf__adam {
      * decay_steps: a time budget measures its step rate at lr before it
      * knows over how many steps to decay (0: decay from the start). */
     double decay_start;
+    /* The weights become their average over this many last steps before
+     * decay_steps (model/average.h); 0: off. */
+    double average_steps;
 } nerf__adam;
 
 /* lr(step) = lr (lr_final / lr)^((step - decay_start) / (decay_steps -

@@ -13,6 +13,7 @@
 
 #include <zlib.h>
 
+#include "average.h"
 #include "byteorder.h"
 #include "file_io.h"
 #include "fingerprint.h"
@@ -75,8 +76,12 @@
  * batch()), so that a resume can take it.  A reader that does not know it
  * resumes with its caller's batch, as before. */
 #define TAG_BATCH 15u
+/* Optional: the steps the weights are averaged over before the schedule's
+ * end, and the average while it runs (model/average.h).  A reader that
+ * does not know it resumes without averaging. */
+#define TAG_AVERAGE 16u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 15
+#define N_SECTIONS 16
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
@@ -85,6 +90,7 @@
 #define WEIGHTS_ONLY_INDEX 12
 #define SCHEDULE_INDEX 13
 #define BATCH_INDEX 14
+#define AVERAGE_INDEX 15
 #define ADAM_M_INDEX 3
 #define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
@@ -356,6 +362,20 @@ static unsigned char *put_batch(unsigned char *p, const nerf_model *m)
     return p + BATCH_SIZE;
 }
 
+/* A weights-only file trains no further, and leaves the average out. */
+static bool has_average(const nerf_model *m, bool weights_only)
+{
+    return !weights_only && nerf__average_saved(m);
+}
+
+static unsigned char *put_average(unsigned char *p, const nerf_model *m)
+{
+    const uint64_t len = nerf__average_size(m);
+    p = put_section(p, TAG_AVERAGE, len);
+    nerf__average_store(p, m);
+    return p + len;
+}
+
 static size_t payload_size(const nerf_model *m, bool weights_only)
 {
     /* A weights-only file trades the two moment sections for its empty
@@ -369,7 +389,9 @@ static size_t payload_size(const nerf_model *m, bool weights_only)
            (m->has_render ? SECTION_HEAD + RENDER_SIZE : 0) +
            (weights_only ? SECTION_HEAD : 0) + data_size(m) +
            (has_schedule(m) ? SECTION_HEAD + NERF__SCHEDULE_SIZE : 0) +
-           (m->batch_rays > 0 ? SECTION_HEAD + BATCH_SIZE : 0);
+           (m->batch_rays > 0 ? SECTION_HEAD + BATCH_SIZE : 0) +
+           (has_average(m, weights_only)
+                ? SECTION_HEAD + nerf__average_size(m) : 0);
 }
 
 static void build_payload(const nerf_model *m, bool weights_only,
@@ -401,7 +423,10 @@ static void build_payload(const nerf_model *m, bool weights_only,
         p = put_schedule(p, m);
     }
     if (m->batch_rays > 0) {
-        put_batch(p, m);
+        p = put_batch(p, m);
+    }
+    if (has_average(m, weights_only)) {
+        put_average(p, m);
     }
 }
 
@@ -648,7 +673,7 @@ static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
     "training state (0.2)", "matmul", "space", "data", "render settings",
-    "weights-only marker", "schedule", "batch"};
+    "weights-only marker", "schedule", "batch", "average"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -671,7 +696,8 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
                                             tag == TAG_TRAINING2 ||
                                             tag == TAG_MATMUL ||
                                             tag == TAG_RENDER ||
-                                            tag == TAG_BATCH;
+                                            tag == TAG_BATCH ||
+                                            tag == TAG_AVERAGE;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -1046,6 +1072,20 @@ static int build_model(const nerf__env *env, const char *path,
         if (rc != NERF_OK) {
             nerf_model_destroy(m);
             return rc;
+        }
+    }
+    /* A file without the section was made before averaging, or without
+     * it: it goes on without. */
+    m->adam.average_steps = 0.0;
+    if (s.body[AVERAGE_INDEX] != NULL) {
+        bool oom = false;
+        const char *bad = nerf__average_parse(
+            s.body[AVERAGE_INDEX], s.len[AVERAGE_INDEX], m, &oom);
+        if (bad != NULL) {
+            nerf_model_destroy(m);
+            return oom ? nerf__error(NERF_ENOMEM, "%s: %s", path, bad)
+                       : nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                                     "(%s)", path, bad);
         }
     }
     if (s.body[SCHEDULE_INDEX] != NULL) {

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "average.h"
 #include "gemm_onednn.h"
 #include "network_fused.h"
 #include "occupancy.h"
@@ -344,9 +345,11 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
     if (opts->encoding == NERF_ENCODING_HASHGRID) {
         /* Mueller et al.'s Adam: beta2 0.99 and a tiny eps, which the
          * rarely touched hash entries need to move at all. */
-        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15, 1e-6, 0.0};
+        m->adam = (nerf__adam){1e-2, 1e-3, 20000.0, 0.9, 0.99, 1e-15, 1e-6,
+                               0.0, NERF__AVERAGE_STEPS_FAST};
     } else {
-        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0, 0.0};
+        m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0,
+                               0.0, 0.0};
     }
     float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
     for (int i = 0; i < 4; i++) {
@@ -433,6 +436,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->grads);
     nerf__free(&env, model->adam_m);
     nerf__free(&env, model->adam_v);
+    nerf__average_free(model);
     nerf__onednn_destroy(model->onednn);
     nerf__occupancy_destroy(model->grid);
     nerf__free(&env, model);
@@ -678,8 +682,12 @@ static void adam_range(nerf_model *m, double lr, size_t begin, size_t end,
                       flags);
 }
 
-void nerf__model_adam_step(nerf_model *m)
+int nerf__model_adam_step(nerf_model *m)
 {
+    int rc = nerf__average_reserve(m);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     double lr = nerf__adam_rate(&m->adam, m->step);
     m->step++;
     for (uint32_t i = 0; i < m->n_nets; i++) {
@@ -695,5 +703,7 @@ void nerf__model_adam_step(nerf_model *m)
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }
     m->grads_dirty = false;
+    nerf__average_step(m);
     nerf__model_weights_changed(m);
+    return NERF_OK;
 }

@@ -64,6 +64,11 @@ struct nerf_model {
      * same one: a run goes on bit for bit only at the batch it began
      * with.  batch_rays 0: nothing recorded. */
     uint32_t batch_rays, batch_samples;
+    /* The average of the weights over the schedule's last steps
+     * (average.h): allocated for them, and running once its first step
+     * has been taken. */
+    float *average;
+    bool averaging;
 };
 
 /* The most rays and samples a training step takes
@@ -174,7 +179,9 @@ void nerf__model_zero_grad(nerf_model *m);
 /* Zero the gradients unless they are known to be zero already. */
 void nerf__model_clear_grad(nerf_model *m);
 
-/* Take one Adam step with the scheduled learning rate; step++. */
-void nerf__model_adam_step(nerf_model *m);
+/* Take one Adam step with the scheduled learning rate; step++.  NERF_OK,
+ * or NERF_ENOMEM (the average of the weights, average.h) with nothing
+ * changed. */
+int nerf__model_adam_step(nerf_model *m);
 
 #endif

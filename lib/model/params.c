@@ -19,6 +19,8 @@ static const param_info params[] = {
     {NERF_PARAM_ADAM_EPS, 1e-30, 1.0, offsetof(nerf__adam, eps)},
     {NERF_PARAM_WEIGHT_DECAY, 0.0, 1.0, offsetof(nerf__adam, weight_decay)},
     {NERF_PARAM_DECAY_START, 0.0, 1e15, offsetof(nerf__adam, decay_start)},
+    {NERF_PARAM_AVERAGE_STEPS, 0.0, 1e15,
+     offsetof(nerf__adam, average_steps)},
 };
 
 static const param_info *find(int key)

@@ -163,7 +163,10 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
         return rc;
     }
     double lr = nerf__adam_rate(&m->adam, m->step);
-    nerf__model_adam_step(m);
+    rc = nerf__model_adam_step(m);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     stats->struct_size = sizeof *stats;
     stats->step = m->step;
     stats->loss = loss;

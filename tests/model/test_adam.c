@@ -14,7 +14,7 @@ TEST(three_steps_by_hand)
     static const double want_m[3] = {0.05, -0.055, -0.0245};
     static const double want_v[3] = {0.00025, 0.00124975, 0.00131100025};
     static const float g[3] = {0.5f, -1.0f, 0.25f};
-    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.999, 1e-7, 0.0, 0.0};
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.999, 1e-7, 0.0, 0.0, 0.0};
     float p = 1.0f, m = 0.0f, v = 0.0f;
     for (int t = 0; t < 3; t++) {
         float grad = g[t];
@@ -29,7 +29,7 @@ TEST(three_steps_by_hand)
 /* Weight decay adds wd * p to the gradient before the moments see it. */
 TEST(weight_decay)
 {
-    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.25, 0.0};
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.25, 0.0, 0.0};
     float p[2] = {2.0f, 2.0f}, g[2] = {0.5f, 0.5f}, m[2] = {0}, v[2] = {0};
     nerf__adam_update(&hp, 1, 0.1, 1, &p[0], &g[0], &m[0], &v[0],
                       NERF__ADAM_DECAY);
@@ -47,7 +47,7 @@ TEST(weight_decay)
  * were, moments included, and updates the others as a dense one would. */
 TEST(sparse_skips_untouched)
 {
-    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.5, 0.0};
+    nerf__adam hp = {0.1, 0.1, 1.0, 0.9, 0.99, 1e-15, 0.5, 0.0, 0.0};
     enum { N = 64 };
     float ps[N], gs[N], ms[N], vs[N], pd[N], gd[N], md[N], vd[N];
     for (int i = 0; i < N; i++) {
@@ -129,7 +129,7 @@ TEST(model_regions)
 
 TEST(schedule)
 {
-    nerf__adam hp = {5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0, 0.0};
+    nerf__adam hp = {5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0, 0.0, 0.0};
     CHECK_NEAR(nerf__adam_rate(&hp, 0), 5e-4, 1e-15);
     CHECK_NEAR(nerf__adam_rate(&hp, 250000), 5e-5, 1e-15);
     CHECK_NEAR(nerf__adam_rate(&hp, 125000), sqrt(5e-4 * 5e-5), 1e-15);
@@ -140,7 +140,7 @@ TEST(schedule)
  * bit. */
 TEST(schedule_with_a_start)
 {
-    nerf__adam hp = {1e-2, 1e-3, 1000.0, 0.9, 0.99, 1e-15, 0.0, 200.0};
+    nerf__adam hp = {1e-2, 1e-3, 1000.0, 0.9, 0.99, 1e-15, 0.0, 200.0, 0.0};
     CHECK(nerf__adam_rate(&hp, 0) == 1e-2);
     CHECK(nerf__adam_rate(&hp, 200) == 1e-2);
     CHECK_NEAR(nerf__adam_rate(&hp, 600), sqrt(1e-2 * 1e-3), 1e-15);

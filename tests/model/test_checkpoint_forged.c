@@ -407,6 +407,85 @@ TEST(forged_batch_sections)
     forge("two batch sections", edit_add_two_batches, NERF_EFORMAT);
 }
 
+/* The average (optional tag 16): f64 steps, u32 running, u32 reserved,
+ * then the running average's n floats. */
+static double average_steps;
+static uint32_t average_running, average_reserved;
+static size_t average_floats; /* floats to append */
+static int average_copies = 1;
+
+static void edit_add_average(payload *p)
+{
+    const uint64_t n = le64(p->s[1].data + 56);
+    if (average_floats == SIZE_MAX) {
+        average_floats = (size_t)n;
+    }
+    size_t len = 16 + 4 * average_floats;
+    unsigned char *body = calloc(1, len);
+    uint64_t bits;
+    memcpy(&bits, &average_steps, sizeof bits);
+    put32(body, (uint32_t)bits);
+    put32(body + 4, (uint32_t)(bits >> 32));
+    put32(body + 8, average_running);
+    put32(body + 12, average_reserved);
+    for (size_t i = 0; i < average_floats; i++) {
+        const float f = 0.5f + (float)i;
+        uint32_t w;
+        memcpy(&w, &f, sizeof w);
+        put32(body + 16 + 4 * i, w);
+    }
+    for (int c = 0; c < average_copies; c++) {
+        add_section(p, 16u, body, len);
+    }
+    free(body);
+}
+
+static void forge_average(const char *name, double steps, uint32_t running,
+                          size_t floats, int want)
+{
+    average_steps = steps;
+    average_running = running;
+    average_floats = floats;
+    forge(name, edit_add_average, want);
+}
+
+TEST(forged_average_sections)
+{
+    forge_average("average over 50 steps", 50.0, 0, 0, NERF_OK);
+    char path[128];
+    path_in(path, sizeof path, "forged.ckpt");
+    nerf_model *m = NULL;
+    double k = -1.0;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_AVERAGE_STEPS, &k));
+    CHECK(k == 50.0);
+    CHECK(m && !m->averaging);
+    nerf_model_destroy(m);
+    /* A running average comes back as it was saved. */
+    forge_average("running average", 50.0, 1, SIZE_MAX, NERF_OK);
+    m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    CHECK(m && m->averaging && m->average != NULL);
+    if (m && m->average) {
+        CHECK(m->average[0] == 0.5f && m->average[3] == 3.5f);
+    }
+    nerf_model_destroy(m);
+    forge_average("running flag without the average", 50.0, 1, 0,
+                  NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "average section") != NULL);
+    forge_average("an average not running", 50.0, 0, SIZE_MAX, NERF_EFORMAT);
+    forge_average("running flag 2", 50.0, 2, 0, NERF_EFORMAT);
+    forge_average("negative steps", -1.0, 0, 0, NERF_EFORMAT);
+    forge_average("NaN steps", NAN, 0, 0, NERF_EFORMAT);
+    forge_average("steps past 10^15", 2e15, 0, 0, NERF_EFORMAT);
+    average_reserved = 1;
+    forge_average("reserved field set", 50.0, 0, 0, NERF_EFORMAT);
+    average_reserved = 0;
+    average_copies = 2;
+    forge_average("two average sections", 50.0, 0, 0, NERF_EFORMAT);
+    average_copies = 1;
+}
+
 TEST(forged_schedule_sections)
 {
     forge("schedule cut short", edit_schedule_short, NERF_EFORMAT);
@@ -505,6 +584,10 @@ static nerf_model *grid_model(void)
         CHECK_OK(nerf__occupancy_update(m->grid, ball_density, NULL,
                                         m->grid->cells));
         CHECK_OK(nerf__occupancy_update(m->grid, ball_density, NULL, 1000));
+        /* Without averaging, the grid is its file's last section, as the
+         * tests below take it (forged_average_sections covers that
+         * section). */
+        CHECK_OK(nerf_model_set_param(m, NERF_PARAM_AVERAGE_STEPS, 0.0));
     }
     return m;
 }
@@ -905,6 +988,7 @@ int main(void)
     RUN(payload_layout_is_as_documented);
     RUN(forged_payloads);
     RUN(forged_weights_only_and_render_sections);
+    RUN(forged_average_sections);
     RUN(forged_schedule_sections);
     RUN(forged_batch_sections);
     RUN(forged_section_framing);

@@ -24,6 +24,7 @@ PARAM_ADAM_BETA2 = 104
 PARAM_ADAM_EPS = 105
 PARAM_WEIGHT_DECAY = 106
 PARAM_DECAY_START = 107  # since libnerf 0.5
+PARAM_AVERAGE_STEPS = 108  # since libnerf 0.9
 
 #: Parameter names accepted wherever a parameter key is expected.
 PARAMS = {
@@ -35,6 +36,7 @@ PARAMS = {
     "adam_eps": PARAM_ADAM_EPS,
     "weight_decay": PARAM_WEIGHT_DECAY,
     "decay_start": PARAM_DECAY_START,
+    "average_steps": PARAM_AVERAGE_STEPS,
 }
 
 

@@ -96,8 +96,17 @@ class Params(TestCase):
             self.assertEqual(nerf.param_bounds("weight_decay"), (0.0, 1.0))
             with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL):
                 m.set_param("weight_decay", -1e-6)
+            # The weights' average over the schedule's last steps: off for
+            # the paper's network, 100 steps for a hash-grid model.
+            self.assertEqual(m.get_param("average_steps"), 0.0)
+            self.assertEqual(nerf.PARAMS["average_steps"],
+                             nerf.PARAM_AVERAGE_STEPS)
+            self.assertEqual(nerf.param_bounds("average_steps"), (0.0, 1e15))
         with nerf.Model(preset="fast", hash_log2_size=10) as m:
             self.assertAlmostEqual(m.get_param("weight_decay"), 1e-6)
+            self.assertEqual(m.get_param("average_steps"), 100.0)
+            m.set_param("average_steps", 0)
+            self.assertEqual(m.get_param("average_steps"), 0.0)
 
 
 class Query(TestCase):
