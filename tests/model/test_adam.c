@@ -5,6 +5,7 @@
 #include "../harness.h"
 #include "adam.h"
 #include "model.h"
+#include "small_grid.h"
 
 TEST(three_steps_by_hand)
 {
@@ -86,11 +87,7 @@ TEST(sparse_skips_untouched)
 TEST(model_regions)
 {
     nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_levels = 2;
-    o.hash_log2_size = 10;
-    o.hash_max_resolution = 32;
+    small_grid_options(&o);
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
     if (m == NULL) {

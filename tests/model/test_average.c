@@ -11,18 +11,14 @@
 #include "../harness.h"
 #include "average.h"
 #include "model.h"
+#include "small_grid.h"
 
 static char tmpdir[] = "/tmp/nerf-average-XXXXXX";
 
-/* A small hash-grid model, so that the table's sparse updates are in. */
 static nerf_model *small_grid_model(void)
 {
     nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_levels = 2;
-    o.hash_log2_size = 10;
-    o.hash_max_resolution = 32;
+    small_grid_options(&o);
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
     return m;

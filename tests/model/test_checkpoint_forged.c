@@ -6,6 +6,7 @@
  */
 #include "../harness.h"
 #include "ckpt_fixture.h"
+#include "small_grid.h"
 
 /* ---- forged payloads with valid CRCs ------------------------------------ */
 
@@ -571,11 +572,7 @@ static int ball_density(void *ctx, size_t n, const float *xyz, float *sigma)
 static nerf_model *grid_model(void)
 {
     nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_levels = 2;
-    o.hash_log2_size = 10;
-    o.hash_max_resolution = 32;
+    small_grid_options(&o);
     o.seed = 77;
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
