@@ -71,8 +71,9 @@ static const char usage[] =
     "  --overwrite   replace MODEL if it exists (default off: without\n"
     "                --resume or --overwrite, an existing MODEL is refused)\n"
     "  --batch-samples N  a step takes rays until their samples reach N\n"
-    "                (--batch is then the most rays a step takes; default 0:\n"
-    "                always --batch rays; --resume: MODEL's)\n"
+    "                (--batch is then the most rays a step takes; 0: always\n"
+    "                --batch rays; default 131072 for fast without --batch,\n"
+    "                else 0; --resume: MODEL's)\n"
     "  --random-background 0|1  1: train each ray of images with alpha\n"
     "                (Blender scenes) against a random background colour, so\n"
     "                that empty space cannot pass for the background (default\n"
@@ -510,14 +511,22 @@ static void report_budget(const nerf_model *m, int rc)
     }
 }
 
+/* 64 samples a ray of the fast preset's 2048: a lego ray takes about 40
+ * once the grid is carved. */
+#define FAST_SAMPLES 131072u
+
 /*
  * Rays and samples a step, as given, else as the resumed model was trained
  * (a run goes on bit for bit only at its batch), else the preset's: the
  * fast preset's per-step work beside the rays (Adam over the whole table,
  * a share of the grid refresh) pays better over 2048, which reached
  * 0.4-0.7 dB more than 1024 in ten minutes of lego on three machines
- * (docs/performance.md).  A checkpoint of nerf-train before 0.8 records
- * no batch, and was trained at its default of 1024 unless told otherwise.
+ * (docs/performance.md).  Those 2048 rays take at most FAST_SAMPLES
+ * samples: while the occupancy grid is still uncarved a ray marches
+ * hundreds, and the cap keeps the first steps as cheap as the later ones,
+ * so that the grid, refreshed every 16 steps, is carved sooner.  A
+ * checkpoint of nerf-train before 0.8 records no batch, and was trained at
+ * its default of 1024 unless told otherwise.
  */
 static void choose_batch(const args *a, const nerf_model *m, int resumed,
                          nerf_trainer_options *to)
@@ -525,8 +534,10 @@ static void choose_batch(const args *a, const nerf_model *m, int resumed,
     uint32_t rays = 0, samples = 0;
     nerf_model_training_batch(m, &rays, &samples);
     if (rays == 0) {
-        rays = resumed || setup_model_preset(m) != NERF_PRESET_FAST ? 1024
-                                                                    : 2048;
+        const int fast = !resumed && setup_model_preset(m) == NERF_PRESET_FAST;
+        rays = fast ? 2048 : 1024;
+        /* A --batch of its own is taken whole, as before 0.9. */
+        samples = fast && !a->batch_given ? FAST_SAMPLES : 0;
     } else if (D.rank == 0 && !a->batch_given) {
         fprintf(stderr, PROG ": %u rays a step, as %s was trained\n",
                 (unsigned)rays, a->out);

@@ -4,7 +4,7 @@
 # continues it, but not with another --preset, and warns when the data is
 # not what MODEL was trained on.  The batch: MODEL records it, --resume
 # keeps it unless --batch is given, and another is warned about; the fast
-# preset's default is 2048 rays.
+# preset's default is 2048 rays of at most 131072 samples.
 #
 #   test-train-resume.sh NERF-SCENE NERF-TRAIN NERF-INFO
 set -eu
@@ -115,9 +115,14 @@ grep -q "up to 32 rays of 500 samples per step" "$work/keep-both.log" ||
   { cat "$work/keep-both.log"; fail "keep both: trainer's batch"; }
 grep -q "trained at" "$work/keep-both.log" &&
   { cat "$work/keep-both.log"; fail "keep both: warned"; }
-# A new model of the fast preset: 2048 rays a step unless told.
+# A new model of the fast preset: 2048 rays of at most 131072 samples a
+# step unless told; a --batch of its own is taken whole.
 "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast --steps 1 \
   --checkpoint-every 0 2>"$work/fast.log" ||
   { cat "$work/fast.log"; fail "fast: status"; }
-[ "$(batch fast.nerf)" = "2048 0" ] || fail "fast: $(batch fast.nerf)"
+[ "$(batch fast.nerf)" = "2048 131072" ] || fail "fast: $(batch fast.nerf)"
+"$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast --steps 1 \
+  --checkpoint-every 0 --batch 512 --overwrite 2>"$work/fast512.log" ||
+  { cat "$work/fast512.log"; fail "fast 512: status"; }
+[ "$(batch fast.nerf)" = "512 0" ] || fail "fast 512: $(batch fast.nerf)"
 echo "ok   nerf-train on an existing model"
