@@ -75,16 +75,11 @@ uint64_t nerf__average_size(const nerf_model *m)
            (m->averaging ? 4 * (uint64_t)m->n_params : 0);
 }
 
-void nerf__average_store(unsigned char *p, const nerf_model *m)
+void nerf__average_store_head(unsigned char *p, const nerf_model *m)
 {
     nerf__store_lef64(p, m->adam.average_steps);
     nerf__store_le32(p + 8, m->averaging ? 1u : 0u);
     nerf__store_le32(p + 12, 0);
-    if (m->averaging) {
-        for (size_t i = 0; i < m->n_params; i++) {
-            nerf__store_lef32(p + NERF__AVERAGE_HEAD + 4 * i, m->average[i]);
-        }
-    }
 }
 
 const char *nerf__average_parse(const unsigned char *p, uint64_t len,
@@ -112,9 +107,6 @@ const char *nerf__average_parse(const unsigned char *p, uint64_t len,
         if (m->average == NULL) {
             *oom = true;
             return "out of memory for the average of the weights";
-        }
-        for (size_t i = 0; i < m->n_params; i++) {
-            m->average[i] = nerf__load_lef32(p + NERF__AVERAGE_HEAD + 4 * i);
         }
         m->averaging = true;
     }

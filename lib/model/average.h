@@ -43,11 +43,13 @@ void nerf__average_step(struct nerf_model *m);
 bool nerf__average_saved(const struct nerf_model *m);
 uint64_t nerf__average_size(const struct nerf_model *m);
 
-void nerf__average_store(unsigned char *p, const struct nerf_model *m);
+/* The section's head; the checkpoint writes the floats after it. */
+void nerf__average_store_head(unsigned char *p, const struct nerf_model *m);
 
-/* From a section body of len bytes into m (whose n_params is set); NULL,
- * or why the body is corrupt.  *oom is set when the average could not be
- * allocated. */
+/* From a section body of len bytes into m (whose n_params is set): the
+ * parameter, and when running, the buffer the caller fills with the
+ * floats after the head.  NULL, or why the body is corrupt.  *oom is set
+ * when the average could not be allocated. */
 const char *nerf__average_parse(const unsigned char *p, uint64_t len,
                                 struct nerf_model *m, bool *oom);
 

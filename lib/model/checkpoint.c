@@ -275,14 +275,20 @@ static unsigned char *put_training2(unsigned char *p, const nerf_model *m)
     return p + TRAINING2_SIZE;
 }
 
-static unsigned char *put_floats(unsigned char *p, uint32_t tag,
-                                 const float *x, size_t n)
+static unsigned char *store_floats(unsigned char *p, const float *x,
+                                   size_t n)
 {
-    p = put_section(p, tag, (uint64_t)n * 4);
     for (size_t i = 0; i < n; i++) {
         nerf__store_lef32(p + 4 * i, x[i]);
     }
     return p + 4 * n;
+}
+
+static unsigned char *put_floats(unsigned char *p, uint32_t tag,
+                                 const float *x, size_t n)
+{
+    p = put_section(p, tag, (uint64_t)n * 4);
+    return store_floats(p, x, n);
 }
 
 /* The occupancy grid: its EMA and update counter, from which loading
@@ -368,12 +374,13 @@ static bool has_average(const nerf_model *m, bool weights_only)
     return !weights_only && nerf__average_saved(m);
 }
 
+/* The head, then the running average's floats. */
 static unsigned char *put_average(unsigned char *p, const nerf_model *m)
 {
-    const uint64_t len = nerf__average_size(m);
-    p = put_section(p, TAG_AVERAGE, len);
-    nerf__average_store(p, m);
-    return p + len;
+    p = put_section(p, TAG_AVERAGE, nerf__average_size(m));
+    nerf__average_store_head(p, m);
+    p += NERF__AVERAGE_HEAD;
+    return m->averaging ? store_floats(p, m->average, m->n_params) : p;
 }
 
 static size_t payload_size(const nerf_model *m, bool weights_only)
@@ -1086,6 +1093,10 @@ static int build_model(const nerf__env *env, const char *path,
             return oom ? nerf__error(NERF_ENOMEM, "%s: %s", path, bad)
                        : nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
                                      "(%s)", path, bad);
+        }
+        if (m->averaging) {
+            get_floats(s.body[AVERAGE_INDEX] + NERF__AVERAGE_HEAD,
+                       m->average, m->n_params);
         }
     }
     if (s.body[SCHEDULE_INDEX] != NULL) {
