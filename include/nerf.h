@@ -465,8 +465,15 @@ typedef enum nerf_param {
                                                DECAY_STEPS; default 5e-5. */
     NERF_PARAM_DECAY_STEPS = 102,         /**< Default 250000: lr(t) =
                                                lr0 (lr1/lr0)^(t/steps). */
-    NERF_PARAM_ADAM_BETA1 = 103,          /**< Default 0.9. */
-    NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999. */
+    /** Default 0.9.  Adam's bias corrections go by the step count, but
+     * for a hash table's parameters (since 0.10) by each one's own count
+     * of updates, as Mueller et al.'s: a step leaves the parameters it
+     * did not touch, moments and count included, as they were.  A model
+     * resumed from a checkpoint of an older libnerf goes on by the step,
+     * as it was trained. */
+    NERF_PARAM_ADAM_BETA1 = 103,
+    NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999; 0.99 for
+                                               hash-grid models. */
     NERF_PARAM_ADAM_EPS = 105,            /**< Default 1e-7 (the paper's);
                                                1e-15 for hash-grid models
                                                (Mueller et al.'s). */

@@ -80,8 +80,12 @@
  * end, and the average while it runs (model/average.h).  A reader that
  * does not know it resumes without averaging. */
 #define TAG_AVERAGE 16u
+/* Optional: each hash-table parameter's count of Adam updates, which its
+ * corrections go by (model.h).  A reader that does not know it resumes
+ * correcting by the step, as before 0.10. */
+#define TAG_ADAM_COUNTS 17u
 #define N_REQUIRED_SECTIONS 6
-#define N_SECTIONS 16
+#define N_SECTIONS 17
 #define OCCUPANCY_INDEX 6
 #define TRAINING2_INDEX 7
 #define MATMUL_INDEX 8
@@ -91,6 +95,7 @@
 #define SCHEDULE_INDEX 13
 #define BATCH_INDEX 14
 #define AVERAGE_INDEX 15
+#define ADAM_COUNTS_INDEX 16
 #define ADAM_M_INDEX 3
 #define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
@@ -374,6 +379,22 @@ static bool has_average(const nerf_model *m, bool weights_only)
     return !weights_only && nerf__average_saved(m);
 }
 
+/* A weights-only file trains no further, and leaves the counts out; so
+ * does a model that corrects by the step. */
+static bool has_counts(const nerf_model *m, bool weights_only)
+{
+    return !weights_only && m->counted && m->n_counts > 0;
+}
+
+static unsigned char *put_counts(unsigned char *p, const nerf_model *m)
+{
+    p = put_section(p, TAG_ADAM_COUNTS, 2 * (uint64_t)m->n_counts);
+    for (size_t i = 0; i < m->n_counts; i++) {
+        nerf__store_le16(p + 2 * i, m->adam_counts[i]);
+    }
+    return p + 2 * m->n_counts;
+}
+
 /* The head, then the running average's floats. */
 static unsigned char *put_average(unsigned char *p, const nerf_model *m)
 {
@@ -398,7 +419,9 @@ static size_t payload_size(const nerf_model *m, bool weights_only)
            (has_schedule(m) ? SECTION_HEAD + NERF__SCHEDULE_SIZE : 0) +
            (m->batch_rays > 0 ? SECTION_HEAD + BATCH_SIZE : 0) +
            (has_average(m, weights_only)
-                ? SECTION_HEAD + nerf__average_size(m) : 0);
+                ? SECTION_HEAD + nerf__average_size(m) : 0) +
+           (has_counts(m, weights_only) ? SECTION_HEAD + 2 * m->n_counts
+                                        : 0);
 }
 
 static void build_payload(const nerf_model *m, bool weights_only,
@@ -433,7 +456,10 @@ static void build_payload(const nerf_model *m, bool weights_only,
         p = put_batch(p, m);
     }
     if (has_average(m, weights_only)) {
-        put_average(p, m);
+        p = put_average(p, m);
+    }
+    if (has_counts(m, weights_only)) {
+        put_counts(p, m);
     }
 }
 
@@ -680,7 +706,8 @@ static const char *const section_names[N_SECTIONS] = {
     "options", "training state", "parameters", "Adam first moments",
     "Adam second moments", "options (0.2)", "occupancy grid",
     "training state (0.2)", "matmul", "space", "data", "render settings",
-    "weights-only marker", "schedule", "batch", "average"};
+    "weights-only marker", "schedule", "batch", "average",
+    "Adam update counts"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -704,7 +731,8 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
                                             tag == TAG_MATMUL ||
                                             tag == TAG_RENDER ||
                                             tag == TAG_BATCH ||
-                                            tag == TAG_AVERAGE;
+                                            tag == TAG_AVERAGE ||
+                                            tag == TAG_ADAM_COUNTS;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -763,6 +791,11 @@ static int split_sections(const nerf__env *env, const char *path,
                                "weights-only file with %s)", path,
                                section_names[i]);
         }
+    }
+    if (weights_only && s->body[ADAM_COUNTS_INDEX] != NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (a "
+                           "weights-only file with %s)", path,
+                           section_names[ADAM_COUNTS_INDEX]);
     }
     if (weights_only && s->len[WEIGHTS_ONLY_INDEX] != 0) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
@@ -970,6 +1003,31 @@ static void get_floats(const unsigned char *p, float *x, size_t n)
     }
 }
 
+/* The update counts into m.  A file with moments but without counts was
+ * trained correcting by the step, and goes on so. */
+static int get_counts(const char *path, nerf_model *m, const sections *s)
+{
+    const unsigned char *b = s->body[ADAM_COUNTS_INDEX];
+    if (b == NULL) {
+        if (s->body[WEIGHTS_ONLY_INDEX] == NULL) {
+            m->counted = false;
+        }
+        return NERF_OK;
+    }
+    if (m->n_counts == 0 || s->len[ADAM_COUNTS_INDEX] != 2 * m->n_counts) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the Adam "
+                           "update counts are %llu bytes for a hash table of "
+                           "%zu parameters)", path,
+                           (unsigned long long)s->len[ADAM_COUNTS_INDEX],
+                           m->n_counts);
+    }
+    for (size_t i = 0; i < m->n_counts; i++) {
+        m->adam_counts[i] = nerf__load_le16(b + 2 * i);
+    }
+    m->counted = true;
+    return NERF_OK;
+}
+
 /*
  * The render settings into the model.  Only what the file format decides
  * is checked here; the sampler's own checks run when a sampler is made of
@@ -1115,6 +1173,11 @@ static int build_model(const nerf__env *env, const char *path,
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the data "
                            "section is too short or holds a value that is "
                            "not a number)", path);
+    }
+    rc = get_counts(path, m, &s);
+    if (rc != NERF_OK) {
+        nerf_model_destroy(m);
+        return rc;
     }
     get_floats(s.body[2], m->params, m->n_params);
     m->weights_only = s.body[WEIGHTS_ONLY_INDEX] != NULL;

@@ -30,6 +30,16 @@ struct nerf_model {
     float *adam_m;
     float *adam_v;
     uint64_t step;           /* optimiser steps taken */
+    /* Hash-grid models: each table entry's count of updates, which its
+     * Adam corrections go by (adam.h, counted updates), the tables of
+     * both networks back to back; NULL without a hash grid.  A model
+     * resumed from a checkpoint of a libnerf before 0.10, which kept no
+     * counts, goes on correcting by the step (counted false), as the run
+     * it continues did. */
+    uint16_t *adam_counts;
+    size_t n_counts;
+    bool counted;
+    nerf__adam_table adam_table;
     /* Whether grads may hold anything but zeros: the Adam step zeroes
      * them as it reads them, so that training needs no separate pass. */
     bool grads_dirty;

@@ -1,4 +1,5 @@
 /* Adam and the learning-rate schedule against hand-computed numbers. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -124,6 +125,126 @@ TEST(model_regions)
     nerf_model_destroy(m);
 }
 
+/* The corrections by count: as the formula gives them up to the first
+ * count at which both are 1 in float, which the table ends with. */
+TEST(counted_table)
+{
+    nerf__env env;
+    nerf__env_default(&env);
+    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
+    nerf__adam_table t = {0};
+    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
+    CHECK(t.len > 1000 && t.len < 4000);
+    for (uint32_t k = 1; k < t.len; k++) {
+        CHECK(t.inv_c1[k] == (float)(1.0 / (1.0 - pow(0.9, (double)k))));
+        CHECK(t.inv_sqrt_c2[k] ==
+              (float)(1.0 / sqrt(1.0 - pow(0.99, (double)k))));
+    }
+    CHECK(t.inv_c1[t.len - 1] == 1.0f && t.inv_sqrt_c2[t.len - 1] == 1.0f);
+    CHECK(t.inv_sqrt_c2[t.len - 2] > 1.0f);
+    const float *before = t.inv_c1;
+    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
+    CHECK(t.inv_c1 == before); /* same betas: kept */
+    /* A beta2 so close to 1 that the corrections are not 1 by the last
+     * count: the table runs to it. */
+    hp.beta2 = 0.9999;
+    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
+    CHECK_EQ_INT(t.len, NERF__ADAM_COUNT_MAX + 1);
+    CHECK(t.inv_sqrt_c2[t.len - 1] > 1.0f);
+    hp.beta1 = hp.beta2 = 0.0;
+    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
+    CHECK_EQ_INT(t.len, 2);
+    nerf__adam_table_free(&env, &t);
+    CHECK(t.len == 0 && t.inv_c1 == NULL);
+}
+
+/* A counted update corrects each touched entry by its own count: an entry
+ * touched for the first time at step 50 moves as step 1 of Adam would,
+ * and one whose count is at the maximum as any late step would. */
+TEST(counted_update)
+{
+    nerf__env env;
+    nerf__env_default(&env);
+    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
+    nerf__adam_table t = {0};
+    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
+    enum { N = 4 };
+    float p[N] = {0.5f, -0.25f, 0.125f, 1.0f}, g[N], m[N] = {0}, v[N] = {0};
+    uint16_t k[N] = {0, 0, 7, NERF__ADAM_COUNT_MAX};
+    float pr = p[0], mr = 0.0f, vr = 0.0f; /* entry 0 by the plain rule */
+    const float m2 = 0.125f, v2 = 0.0625f;
+    m[2] = m2;
+    v[2] = v2;
+    m[3] = m2;
+    v[3] = v2;
+    for (uint64_t step = 50; step < 53; step++) {
+        const float grad = 0.25f * (float)(step - 48);
+        g[0] = g[2] = g[3] = grad;
+        g[1] = 0.0f;
+        nerf__adam_update_counted(&hp, &t, 1e-2, N, p, g, m, v, k);
+        float gr = grad;
+        nerf__adam_update(&hp, step - 49, 1e-2, 1, &pr, &gr, &mr, &vr,
+                          NERF__ADAM_SPARSE);
+        CHECK(g[0] == 0.0f && g[2] == 0.0f && g[3] == 0.0f);
+        CHECK_NEAR(p[0], pr, 1e-6);
+        CHECK(m[0] == mr && v[0] == vr);
+    }
+    CHECK_EQ_INT(k[0], 3);
+    CHECK_EQ_INT(k[1], 0); /* untouched: count and values kept */
+    CHECK(p[1] == -0.25f && m[1] == 0.0f && v[1] == 0.0f);
+    CHECK_EQ_INT(k[2], 10);
+    CHECK_EQ_INT(k[3], NERF__ADAM_COUNT_MAX);
+    /* At the maximum count the corrections are 1: the step is the
+     * uncorrected one. */
+    float p3 = 1.0f, m3 = m2, v3 = v2;
+    for (int s = 0; s < 3; s++) {
+        const float grad = 0.25f * (float)(s + 2);
+        m3 = 0.9f * m3 + (float)(1.0 - 0.9) * grad;
+        v3 = 0.99f * v3 + (float)(1.0 - 0.99) * grad * grad;
+        p3 -= 1e-2f * m3 / (sqrtf(v3) + 1e-15f);
+    }
+    CHECK_NEAR(p[3], p3, 1e-6);
+    nerf__adam_table_free(&env, &t);
+}
+
+/* A hash-grid model counts the updates of its table's parameters, not of
+ * its layers', and refits the corrections when its betas change. */
+TEST(model_counts)
+{
+    nerf_model_options o;
+    small_grid_options(&o);
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m == NULL) {
+        return;
+    }
+    const size_t table = m->nets[0].pos_params;
+    CHECK(m->counted && m->n_counts == m->nets[0].pos_enc.u.hash.count);
+    for (int step = 0; step < 2; step++) {
+        nerf__model_zero_grad(m);
+        m->grads[table + 1] = 0.5f;
+        m->grads[table + 2 + (size_t)step] = 0.5f;
+        m->grads[m->n_params - 1] = 0.5f; /* a layer's */
+        CHECK_OK(nerf__model_adam_step(m));
+    }
+    CHECK_EQ_INT(m->adam_counts[0], 0);
+    CHECK_EQ_INT(m->adam_counts[1], 2);
+    CHECK_EQ_INT(m->adam_counts[2], 1);
+    CHECK_EQ_INT(m->adam_counts[3], 1);
+    const uint32_t len = m->adam_table.len;
+    CHECK_OK(nerf_model_set_param(m, NERF_PARAM_ADAM_BETA2, 0.999));
+    CHECK_OK(nerf__model_adam_step(m));
+    CHECK(m->adam_table.len > len && m->adam_table.beta2 == 0.999);
+    nerf_model_destroy(m);
+
+    /* The paper's models have no table to count for. */
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, NERF_PRESET_TINY);
+    CHECK_OK(nerf_model_create(&m, &o));
+    CHECK(m && !m->counted && m->adam_counts == NULL);
+    nerf_model_destroy(m);
+}
+
 TEST(schedule)
 {
     nerf__adam hp = {5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0, 0.0, 0.0};
@@ -183,6 +304,9 @@ int main(void)
     RUN(weight_decay);
     RUN(sparse_skips_untouched);
     RUN(model_regions);
+    RUN(counted_table);
+    RUN(counted_update);
+    RUN(model_counts);
     RUN(schedule);
     RUN(schedule_with_a_start);
     RUN(model_step_uses_schedule);

@@ -90,6 +90,31 @@ static void add_section(payload *p, uint32_t tag, const void *data, size_t len)
     memcpy(s->data, data, len);
 }
 
+/* Remove the sections tagged tag. */
+static void drop_tag(payload *p, uint32_t tag)
+{
+    for (int i = 0; i < p->n;) {
+        if (p->s[i].tag == tag) {
+            free(p->s[i].data);
+            memmove(&p->s[i], &p->s[i + 1],
+                    (size_t)(p->n - i - 1) * sizeof p->s[0]);
+            p->n--;
+        } else {
+            i++;
+        }
+    }
+}
+
+/* The tests of the occupancy grid take it for its file's last section, as
+ * a hash-grid model's files had it before the Adam update counts (tag 17,
+ * which forged_counts_sections covers) came after it. */
+static void split_grid_payload(const unsigned char *file, size_t size,
+                               payload *p)
+{
+    split_payload(file, size, p);
+    drop_tag(p, 17u);
+}
+
 /* A section of two u32 words, cut or padded with zeros to len (<= 12). */
 static void add_two_words(payload *p, uint32_t tag, uint32_t a, uint32_t b,
                           size_t len)
@@ -599,7 +624,7 @@ static void forge_grid(const char *name, void (*edit)(payload *), int want,
     size_t size = 0;
     unsigned char *file = slurp(path, &size);
     payload p;
-    split_payload(file, size, &p);
+    split_grid_payload(file, size, &p);
     if (edit) {
         edit(&p);
     }
@@ -658,7 +683,7 @@ TEST(occupancy_grid_section)
     size_t size = 0;
     unsigned char *file = slurp(path, &size);
     payload p;
-    split_payload(file, size, &p);
+    split_grid_payload(file, size, &p);
     /* Optional tag 7, last: u32 resolution, u32 0, u64 updates, then the
      * EMA of every cell as f32, x fastest. */
     CHECK_EQ_INT(p.n, 8);
@@ -703,7 +728,7 @@ TEST(occupancy_grid_section)
         CHECK_OK(nerf_model_save(m, gpath));
         unsigned char *gfile = slurp(gpath, &gsize);
         payload gp;
-        split_payload(gfile, gsize, &gp);
+        split_grid_payload(gfile, gsize, &gp);
         if (gp.n == 8) {
             add_section(&p, gp.s[7].tag, gp.s[7].data, gp.s[7].len);
             write_payload(path, &p, NULL, 0);
@@ -730,7 +755,7 @@ TEST(occupancy_grid_section)
     m = grid_model();
     CHECK_OK(nerf_model_save(m, path));
     file = slurp(path, &size);
-    split_payload(file, size, &p);
+    split_grid_payload(file, size, &p);
     free(p.s[6].data);
     p.s[6] = p.s[7];
     p.n--;
@@ -744,6 +769,115 @@ TEST(occupancy_grid_section)
     free_payload(&p);
     free(file);
     forge_grid("sections as saved", NULL, NERF_OK, false);
+}
+
+/*
+ * A hash-grid model's Adam update counts: optional tag 17, last, a u16 for
+ * each table parameter.  Without it a file with moments resumes correcting
+ * by the step (a file from before 0.10); a wrong size, counts for a model
+ * without a table, or counts in a weights-only file are refused.
+ */
+static void save_counted(const char *path, payload *p, unsigned char **file)
+{
+    nerf_model *m = grid_model();
+    if (m == NULL) {
+        p->n = 0;
+        *file = NULL;
+        return;
+    }
+    for (int step = 0; step < 3; step++) {
+        nerf__model_zero_grad(m);
+        for (size_t i = 0; i <= (size_t)step; i++) {
+            m->grads[m->nets[0].pos_params + 5 * i] = 0.25f;
+        }
+        CHECK_OK(nerf__model_adam_step(m));
+    }
+    CHECK_OK(nerf_model_save(m, path));
+    nerf_model_destroy(m);
+    size_t size = 0;
+    *file = slurp(path, &size);
+    split_payload(*file, size, p);
+}
+
+static void load_counted(const char *path, const payload *p, int want,
+                         const char *what)
+{
+    write_payload(path, p, NULL, 0);
+    if (want != NERF_OK) {
+        expect_load_fails(path, want, what);
+        return;
+    }
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    nerf_model_destroy(m);
+}
+
+TEST(forged_counts_sections)
+{
+    char path[128];
+    path_in(path, sizeof path, "counts.ckpt");
+    payload p;
+    unsigned char *file = NULL;
+    save_counted(path, &p, &file);
+    const section *c = p.n > 0 ? &p.s[p.n - 1] : NULL;
+    CHECK(c && c->tag == 17u);
+    if (c == NULL || c->tag != 17u) {
+        free_payload(&p);
+        free(file);
+        return;
+    }
+    /* The first entries were touched by 3, 2 and 1 of the steps. */
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    CHECK(m && m->counted && c->len == 2 * m->n_counts);
+    if (m && c->len == 2 * m->n_counts) {
+        const uint16_t want[3] = {3, 2, 1};
+        for (int i = 0; i < 3; i++) {
+            CHECK_EQ_INT(c->data[10 * i] | c->data[10 * i + 1] << 8,
+                         want[i]);
+            CHECK_EQ_INT(m->adam_counts[5 * i], want[i]);
+        }
+        CHECK_EQ_INT(m->adam_counts[1], 0);
+    }
+    nerf_model_destroy(m);
+
+    /* Without the section: corrected by the step, as it was trained. */
+    section kept = *c;
+    p.n--;
+    write_payload(path, &p, NULL, 0);
+    m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    CHECK(m && !m->counted);
+    nerf_model_destroy(m);
+
+    p.s[p.n++] = kept;
+    p.s[p.n - 1].len -= 2;
+    load_counted(path, &p, NERF_EFORMAT, "counts cut short");
+    CHECK(strstr(nerf_last_error(), "Adam update counts") != NULL);
+    p.s[p.n - 1].len += 2;
+    load_counted(path, &p, NERF_OK, "counts as saved");
+    add_section(&p, kept.tag, kept.data, kept.len);
+    load_counted(path, &p, NERF_EFORMAT, "two counts sections");
+    free(p.s[--p.n].data);
+
+    /* A weights-only file keeps no optimiser state. */
+    drop_tag(&p, 0x80000004u);
+    drop_tag(&p, 0x80000005u);
+    add_section(&p, 0x8000000Du, "", 0);
+    load_counted(path, &p, NERF_EFORMAT, "weights-only file with counts");
+    CHECK(strstr(nerf_last_error(), "weights-only") != NULL);
+
+    /* A frequency-encoding model has no table to count for. */
+    size_t size = 0;
+    unsigned char *tiny_file = good_file(&size);
+    payload tiny;
+    split_payload(tiny_file, size, &tiny);
+    add_section(&tiny, kept.tag, kept.data, 2);
+    load_counted(path, &tiny, NERF_EFORMAT, "counts for a tiny model");
+    free_payload(&tiny);
+    free(tiny_file);
+    free_payload(&p);
+    free(file);
 }
 
 /*
@@ -990,6 +1124,7 @@ int main(void)
     RUN(forged_batch_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
+    RUN(forged_counts_sections);
     RUN(matmul_section);
     RUN(data_section);
     remove_tree(tmpdir);
