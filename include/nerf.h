@@ -621,6 +621,15 @@ NERF_API int nerf_model_export(const nerf_model *model, const char *path);
                                            with
                                            (nerf_model_training_batch()),
                                            kept by checkpoints. */
+#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Since 0.10: each
+                                           hash-table parameter's Adam
+                                           corrections by its own count of
+                                           updates (hash-grid models), kept
+                                           by checkpoints.  A hash-grid
+                                           model loaded with the moments
+                                           but without them, from an older
+                                           libnerf's file, corrects by the
+                                           step, as it was trained. */
 
 /**
  * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*

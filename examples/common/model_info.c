@@ -170,6 +170,9 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
     if (c & NERF_MODEL_HAS_OPTIMIZER) {
         cJSON_AddItemToArray(holds, cJSON_CreateString("optimiser moments"));
     }
+    if (c & NERF_MODEL_HAS_ADAM_CORRECTIONS) {
+        cJSON_AddItemToArray(holds, cJSON_CreateString("Adam corrections"));
+    }
     if (c & NERF_MODEL_HAS_OCCUPANCY) {
         cJSON_AddItemToArray(holds, cJSON_CreateString("occupancy grid"));
     }

@@ -80,10 +80,10 @@
  * end, and the average while it runs (model/average.h).  A reader that
  * does not know it resumes without averaging. */
 #define TAG_AVERAGE 16u
-/* Optional: each hash-table parameter's count of Adam updates, which its
- * corrections go by (model.h).  A reader that does not know it resumes
- * correcting by the step, as before 0.10. */
-#define TAG_ADAM_COUNTS 17u
+/* Optional: each hash-table parameter's Adam corrections by its own count
+ * of updates (model.h).  A reader that does not know it resumes correcting
+ * by the step, as before 0.10. */
+#define TAG_ADAM_CORRECTIONS 17u
 #define N_REQUIRED_SECTIONS 6
 #define N_SECTIONS 17
 #define OCCUPANCY_INDEX 6
@@ -95,7 +95,7 @@
 #define SCHEDULE_INDEX 13
 #define BATCH_INDEX 14
 #define AVERAGE_INDEX 15
-#define ADAM_COUNTS_INDEX 16
+#define ADAM_CORRECTIONS_INDEX 16
 #define ADAM_M_INDEX 3
 #define ADAM_V_INDEX 4
 #define WORD_SIZE 8u /* the matmul and space sections: u32 value, u32 0 */
@@ -379,20 +379,11 @@ static bool has_average(const nerf_model *m, bool weights_only)
     return !weights_only && nerf__average_saved(m);
 }
 
-/* A weights-only file trains no further, and leaves the counts out; so
- * does a model that corrects by the step. */
-static bool has_counts(const nerf_model *m, bool weights_only)
+/* A weights-only file trains no further, and leaves the corrections out;
+ * so does a model that corrects by the step. */
+static bool has_corrections(const nerf_model *m, bool weights_only)
 {
-    return !weights_only && m->counted && m->n_counts > 0;
-}
-
-static unsigned char *put_counts(unsigned char *p, const nerf_model *m)
-{
-    p = put_section(p, TAG_ADAM_COUNTS, 2 * (uint64_t)m->n_counts);
-    for (size_t i = 0; i < m->n_counts; i++) {
-        nerf__store_le16(p + 2 * i, m->adam_counts[i]);
-    }
-    return p + 2 * m->n_counts;
+    return !weights_only && m->corrected && m->n_table > 0;
 }
 
 /* The head, then the running average's floats. */
@@ -420,8 +411,8 @@ static size_t payload_size(const nerf_model *m, bool weights_only)
            (m->batch_rays > 0 ? SECTION_HEAD + BATCH_SIZE : 0) +
            (has_average(m, weights_only)
                 ? SECTION_HEAD + nerf__average_size(m) : 0) +
-           (has_counts(m, weights_only) ? SECTION_HEAD + 2 * m->n_counts
-                                        : 0);
+           (has_corrections(m, weights_only)
+                ? SECTION_HEAD + 8 * m->n_table : 0);
 }
 
 static void build_payload(const nerf_model *m, bool weights_only,
@@ -458,8 +449,8 @@ static void build_payload(const nerf_model *m, bool weights_only,
     if (has_average(m, weights_only)) {
         p = put_average(p, m);
     }
-    if (has_counts(m, weights_only)) {
-        put_counts(p, m);
+    if (has_corrections(m, weights_only)) {
+        put_floats(p, TAG_ADAM_CORRECTIONS, m->adam_r, 2 * m->n_table);
     }
 }
 
@@ -707,7 +698,7 @@ static const char *const section_names[N_SECTIONS] = {
     "Adam second moments", "options (0.2)", "occupancy grid",
     "training state (0.2)", "matmul", "space", "data", "render settings",
     "weights-only marker", "schedule", "batch", "average",
-    "Adam update counts"};
+    "Adam corrections"};
 
 static int take_section(const nerf__env *env, const char *path, sections *s,
                         uint32_t tag, const unsigned char *body, uint64_t len)
@@ -732,7 +723,7 @@ static int take_section(const nerf__env *env, const char *path, sections *s,
                                             tag == TAG_RENDER ||
                                             tag == TAG_BATCH ||
                                             tag == TAG_AVERAGE ||
-                                            tag == TAG_ADAM_COUNTS;
+                                            tag == TAG_ADAM_CORRECTIONS;
     if (known) {
         if (s->body[index] != NULL) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (two "
@@ -792,10 +783,10 @@ static int split_sections(const nerf__env *env, const char *path,
                                section_names[i]);
         }
     }
-    if (weights_only && s->body[ADAM_COUNTS_INDEX] != NULL) {
+    if (weights_only && s->body[ADAM_CORRECTIONS_INDEX] != NULL) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (a "
                            "weights-only file with %s)", path,
-                           section_names[ADAM_COUNTS_INDEX]);
+                           section_names[ADAM_CORRECTIONS_INDEX]);
     }
     if (weights_only && s->len[WEIGHTS_ONLY_INDEX] != 0) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the "
@@ -1003,28 +994,35 @@ static void get_floats(const unsigned char *p, float *x, size_t n)
     }
 }
 
-/* The update counts into m.  A file with moments but without counts was
+/* The corrections into m.  A file with moments but without them was
  * trained correcting by the step, and goes on so. */
-static int get_counts(const char *path, nerf_model *m, const sections *s)
+static int get_corrections(const char *path, nerf_model *m,
+                           const sections *s)
 {
-    const unsigned char *b = s->body[ADAM_COUNTS_INDEX];
+    const unsigned char *b = s->body[ADAM_CORRECTIONS_INDEX];
     if (b == NULL) {
         if (s->body[WEIGHTS_ONLY_INDEX] == NULL) {
-            m->counted = false;
+            m->corrected = false;
         }
         return NERF_OK;
     }
-    if (m->n_counts == 0 || s->len[ADAM_COUNTS_INDEX] != 2 * m->n_counts) {
+    const uint64_t len = s->len[ADAM_CORRECTIONS_INDEX];
+    if (m->n_table == 0 || len != 8 * (uint64_t)m->n_table) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (the Adam "
-                           "update counts are %llu bytes for a hash table of "
-                           "%zu parameters)", path,
-                           (unsigned long long)s->len[ADAM_COUNTS_INDEX],
-                           m->n_counts);
+                           "corrections are %llu bytes for a hash table of "
+                           "%zu parameters)", path, (unsigned long long)len,
+                           m->n_table);
     }
-    for (size_t i = 0; i < m->n_counts; i++) {
-        m->adam_counts[i] = nerf__load_le16(b + 2 * i);
+    get_floats(b, m->adam_r, 2 * m->n_table);
+    for (size_t i = 0; i < 2 * m->n_table; i++) {
+        /* beta^k for k from 0 on; the negation catches NaN. */
+        if (!(m->adam_r[i] >= 0.0f && m->adam_r[i] <= 1.0f)) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (Adam "
+                               "correction %zu is %g, not within 0 to 1)",
+                               path, i, (double)m->adam_r[i]);
+        }
     }
-    m->counted = true;
+    m->corrected = true;
     return NERF_OK;
 }
 
@@ -1174,7 +1172,7 @@ static int build_model(const nerf__env *env, const char *path,
                            "section is too short or holds a value that is "
                            "not a number)", path);
     }
-    rc = get_counts(path, m, &s);
+    rc = get_corrections(path, m, &s);
     if (rc != NERF_OK) {
         nerf_model_destroy(m);
         return rc;

@@ -360,15 +360,18 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         }
     }
     for (uint32_t i = 0; i < m->n_nets; i++) {
-        m->n_counts += nerf__encoding_params(&m->nets[i].pos_enc);
+        m->n_table += nerf__encoding_params(&m->nets[i].pos_enc);
     }
-    if (m->n_counts > 0) {
-        m->adam_counts = nerf__calloc(env, m->n_counts, sizeof(uint16_t));
-        if (m->adam_counts == NULL) {
+    if (m->n_table > 0) {
+        m->adam_r = nerf__alloc(env, 2 * m->n_table * sizeof(float));
+        if (m->adam_r == NULL) {
             nerf_model_destroy(m);
             return NERF_ENOMEM;
         }
-        m->counted = true;
+        for (size_t i = 0; i < 2 * m->n_table; i++) {
+            m->adam_r[i] = 1.0f; /* beta^0: no update yet */
+        }
+        m->corrected = true;
     }
     if (opts->matmul != NERF_MATMUL_FP32) {
         int rc = onednn_setup(m);
@@ -447,8 +450,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->grads);
     nerf__free(&env, model->adam_m);
     nerf__free(&env, model->adam_v);
-    nerf__free(&env, model->adam_counts);
-    nerf__adam_table_free(&env, &model->adam_table);
+    nerf__free(&env, model->adam_r);
     nerf__average_free(model);
     nerf__onednn_destroy(model->onednn);
     nerf__occupancy_destroy(model->grid);
@@ -499,6 +501,9 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model)
     }
     if (model->batch_rays > 0) {
         c |= NERF_MODEL_HAS_BATCH_RECORD;
+    }
+    if (model->corrected && !model->weights_only) {
+        c |= NERF_MODEL_HAS_ADAM_CORRECTIONS;
     }
     return c;
 }
@@ -695,33 +700,30 @@ static void adam_range(nerf_model *m, double lr, size_t begin, size_t end,
                       flags);
 }
 
-/* The sparse update of a table of n entries from params[begin] on, whose
- * counts start at counts[0]. */
+/* The sparse update of a table of n parameters from params[begin] on,
+ * whose corrections are the at-th of adam_r's. */
 static void adam_table(nerf_model *m, double lr, size_t begin, size_t n,
-                       uint16_t *counts)
+                       size_t at)
 {
-    if (!m->counted) {
+    if (!m->corrected) {
         adam_range(m, lr, begin, begin + n, NERF__ADAM_SPARSE);
         return;
     }
-    nerf__adam_update_counted(&m->adam, &m->adam_table, lr, n,
-                              m->params + begin, m->grads + begin,
-                              m->adam_m + begin, m->adam_v + begin, counts);
+    float *r1 = m->adam_r + at, *r2 = m->adam_r + m->n_table + at;
+    nerf__adam_update_corrected(&m->adam, lr, n, m->params + begin,
+                                m->grads + begin, m->adam_m + begin,
+                                m->adam_v + begin, r1, r2);
 }
 
 int nerf__model_adam_step(nerf_model *m)
 {
     int rc = nerf__average_reserve(m);
-    if (rc == NERF_OK && m->counted) {
-        /* The betas are parameters: a change refits the corrections. */
-        rc = nerf__adam_table_fit(&m->env, &m->adam_table, &m->adam);
-    }
     if (rc != NERF_OK) {
         return rc;
     }
     double lr = nerf__adam_rate(&m->adam, m->step);
     m->step++;
-    uint16_t *counts = m->adam_counts;
+    size_t at = 0;
     for (uint32_t i = 0; i < m->n_nets; i++) {
         const nerf__network *net = &m->nets[i];
         size_t layers = net->offset;
@@ -730,8 +732,8 @@ int nerf__model_adam_step(nerf_model *m)
             /* The encoding's parameters (a hash table) come first in a
              * network's slice; a step touches few of their entries. */
             layers = net->pos_params + enc;
-            adam_table(m, lr, net->pos_params, enc, counts);
-            counts += enc;
+            adam_table(m, lr, net->pos_params, enc, at);
+            at += enc;
         }
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }

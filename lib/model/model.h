@@ -30,16 +30,17 @@ struct nerf_model {
     float *adam_m;
     float *adam_v;
     uint64_t step;           /* optimiser steps taken */
-    /* Hash-grid models: each table entry's count of updates, which its
-     * Adam corrections go by (adam.h, counted updates), the tables of
-     * both networks back to back; NULL without a hash grid.  A model
-     * resumed from a checkpoint of a libnerf before 0.10, which kept no
-     * counts, goes on correcting by the step (counted false), as the run
-     * it continues did. */
-    uint16_t *adam_counts;
-    size_t n_counts;
-    bool counted;
-    nerf__adam_table adam_table;
+    /* Hash-grid models: the Adam corrections of each table parameter by
+     * its own count k of updates (adam.h, corrected updates): beta1^k for
+     * the tables of both networks back to back, then beta2^k likewise
+     * (2 n_table floats, 1 before a first update); NULL without a hash
+     * grid.  A model resumed from a
+     * checkpoint of a libnerf before 0.10, which kept none, goes on
+     * correcting by the step (corrected false), as the run it continues
+     * did. */
+    float *adam_r;
+    size_t n_table;
+    bool corrected;
     /* Whether grads may hold anything but zeros: the Adam step zeroes
      * them as it reads them, so that training needs no separate pass. */
     bool grads_dirty;

@@ -125,91 +125,66 @@ TEST(model_regions)
     nerf_model_destroy(m);
 }
 
-/* The corrections by count: as the formula gives them up to the first
- * count at which both are 1 in float, which the table ends with. */
-TEST(counted_table)
+/* A corrected update corrects each touched parameter by its own count of
+ * updates: one touched for the first time at step 50 moves as step 1 of
+ * Adam would, one untouched stays as it was, corrections included, and
+ * one whose corrections have reached 1 takes the uncorrected step. */
+TEST(corrected_update)
 {
-    nerf__env env;
-    nerf__env_default(&env);
     nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
-    nerf__adam_table t = {0};
-    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
-    CHECK(t.len > 1000 && t.len < 4000);
-    for (uint32_t k = 1; k < t.len; k++) {
-        CHECK(t.inv_c1[k] == (float)(1.0 / (1.0 - pow(0.9, (double)k))));
-        CHECK(t.inv_sqrt_c2[k] ==
-              (float)(1.0 / sqrt(1.0 - pow(0.99, (double)k))));
-    }
-    CHECK(t.inv_c1[t.len - 1] == 1.0f && t.inv_sqrt_c2[t.len - 1] == 1.0f);
-    CHECK(t.inv_sqrt_c2[t.len - 2] > 1.0f);
-    const float *before = t.inv_c1;
-    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
-    CHECK(t.inv_c1 == before); /* same betas: kept */
-    /* A beta2 so close to 1 that the corrections are not 1 by the last
-     * count: the table runs to it. */
-    hp.beta2 = 0.9999;
-    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
-    CHECK_EQ_INT(t.len, NERF__ADAM_COUNT_MAX + 1);
-    CHECK(t.inv_sqrt_c2[t.len - 1] > 1.0f);
-    hp.beta1 = hp.beta2 = 0.0;
-    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
-    CHECK_EQ_INT(t.len, 2);
-    nerf__adam_table_free(&env, &t);
-    CHECK(t.len == 0 && t.inv_c1 == NULL);
-}
-
-/* A counted update corrects each touched entry by its own count: an entry
- * touched for the first time at step 50 moves as step 1 of Adam would,
- * and one whose count is at the maximum as any late step would. */
-TEST(counted_update)
-{
-    nerf__env env;
-    nerf__env_default(&env);
-    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
-    nerf__adam_table t = {0};
-    CHECK_OK(nerf__adam_table_fit(&env, &t, &hp));
-    enum { N = 4 };
-    float p[N] = {0.5f, -0.25f, 0.125f, 1.0f}, g[N], m[N] = {0}, v[N] = {0};
-    uint16_t k[N] = {0, 0, 7, NERF__ADAM_COUNT_MAX};
-    float pr = p[0], mr = 0.0f, vr = 0.0f; /* entry 0 by the plain rule */
+    enum { N = 3 };
+    float p[N] = {0.5f, -0.25f, 1.0f}, g[N], m[N] = {0}, v[N] = {0};
+    float r1[N] = {1.0f, 1.0f, 0.0f}, r2[N] = {1.0f, 1.0f, 0.0f};
     const float m2 = 0.125f, v2 = 0.0625f;
     m[2] = m2;
     v[2] = v2;
-    m[3] = m2;
-    v[3] = v2;
-    for (uint64_t step = 50; step < 53; step++) {
-        const float grad = 0.25f * (float)(step - 48);
-        g[0] = g[2] = g[3] = grad;
+    float pr = p[0], mr = 0.0f, vr = 0.0f; /* entry 0 by the plain rule */
+    for (uint64_t step = 50; step < 80; step++) {
+        const float grad = 0.25f * (float)(step % 5 + 1);
+        g[0] = g[2] = grad;
         g[1] = 0.0f;
-        nerf__adam_update_counted(&hp, &t, 1e-2, N, p, g, m, v, k);
+        nerf__adam_update_corrected(&hp, 1e-2, N, p, g, m, v, r1, r2);
         float gr = grad;
-        nerf__adam_update(&hp, step - 49, 1e-2, 1, &pr, &gr, &mr, &vr,
+        const uint64_t k = step - 49;
+        nerf__adam_update(&hp, k, 1e-2, 1, &pr, &gr, &mr, &vr,
                           NERF__ADAM_SPARSE);
-        CHECK(g[0] == 0.0f && g[2] == 0.0f && g[3] == 0.0f);
-        CHECK_NEAR(p[0], pr, 1e-6);
+        CHECK(g[0] == 0.0f && g[2] == 0.0f);
         CHECK(m[0] == mr && v[0] == vr);
+        CHECK_NEAR(p[0], pr, 1e-6);
+        CHECK_NEAR(r1[0], pow(0.9, (double)k), 1e-6);
+        CHECK_NEAR(r2[0], pow(0.99, (double)k), 1e-6);
     }
-    CHECK_EQ_INT(k[0], 3);
-    CHECK_EQ_INT(k[1], 0); /* untouched: count and values kept */
+    /* Untouched: values and corrections as they were. */
     CHECK(p[1] == -0.25f && m[1] == 0.0f && v[1] == 0.0f);
-    CHECK_EQ_INT(k[2], 10);
-    CHECK_EQ_INT(k[3], NERF__ADAM_COUNT_MAX);
-    /* At the maximum count the corrections are 1: the step is the
-     * uncorrected one. */
+    CHECK(r1[1] == 1.0f && r2[1] == 1.0f);
+    /* Powers at 0 (corrections of 1) stay 0. */
+    CHECK(r1[2] == 0.0f && r2[2] == 0.0f);
     float p3 = 1.0f, m3 = m2, v3 = v2;
-    for (int s = 0; s < 3; s++) {
-        const float grad = 0.25f * (float)(s + 2);
+    for (uint64_t step = 50; step < 80; step++) {
+        const float grad = 0.25f * (float)(step % 5 + 1);
         m3 = 0.9f * m3 + (float)(1.0 - 0.9) * grad;
         v3 = 0.99f * v3 + (float)(1.0 - 0.99) * grad * grad;
         p3 -= 1e-2f * m3 / (sqrtf(v3) + 1e-15f);
     }
-    CHECK_NEAR(p[3], p3, 1e-6);
-    nerf__adam_table_free(&env, &t);
+    CHECK_NEAR(p[2], p3, 1e-6);
+    /* The powers go to 0 without passing through subnormals: flushed
+     * below 2^-26, where 1 - beta^k is 1 in float anyway. */
+    for (int k = 0; k < 2000; k++) {
+        g[0] = 0.5f;
+        const float r2_was = r2[0];
+        nerf__adam_update_corrected(&hp, 1e-2, 1, p, g, m, v, r1, r2);
+        CHECK(r1[0] == 0.0f || r1[0] >= 0x1p-26f);
+        CHECK(r2[0] == 0.0f || r2[0] >= 0x1p-26f);
+        if (r2_was > 0.0f && r2[0] == 0.0f) {
+            CHECK(1.0f - r2_was * 0.99f == 1.0f);
+        }
+    }
+    CHECK(r1[0] == 0.0f && r2[0] == 0.0f);
 }
 
-/* A hash-grid model counts the updates of its table's parameters, not of
- * its layers', and refits the corrections when its betas change. */
-TEST(model_counts)
+/* A hash-grid model keeps corrections for its table's parameters, not
+ * for its layers'. */
+TEST(model_corrections)
 {
     nerf_model_options o;
     small_grid_options(&o);
@@ -218,8 +193,8 @@ TEST(model_counts)
     if (m == NULL) {
         return;
     }
-    const size_t table = m->nets[0].pos_params;
-    CHECK(m->counted && m->n_counts == m->nets[0].pos_enc.u.hash.count);
+    const size_t table = m->nets[0].pos_params, t = m->n_table;
+    CHECK(m->corrected && t == m->nets[0].pos_enc.u.hash.count);
     for (int step = 0; step < 2; step++) {
         nerf__model_zero_grad(m);
         m->grads[table + 1] = 0.5f;
@@ -227,21 +202,19 @@ TEST(model_counts)
         m->grads[m->n_params - 1] = 0.5f; /* a layer's */
         CHECK_OK(nerf__model_adam_step(m));
     }
-    CHECK_EQ_INT(m->adam_counts[0], 0);
-    CHECK_EQ_INT(m->adam_counts[1], 2);
-    CHECK_EQ_INT(m->adam_counts[2], 1);
-    CHECK_EQ_INT(m->adam_counts[3], 1);
-    const uint32_t len = m->adam_table.len;
-    CHECK_OK(nerf_model_set_param(m, NERF_PARAM_ADAM_BETA2, 0.999));
-    CHECK_OK(nerf__model_adam_step(m));
-    CHECK(m->adam_table.len > len && m->adam_table.beta2 == 0.999);
+    /* 0.9^k, then 0.99^k, for k updates. */
+    CHECK(m->adam_r[t + 0] == 1.0f && m->adam_r[0] == 1.0f);
+    CHECK_NEAR(m->adam_r[t + 1], 0.99 * 0.99, 1e-7);
+    CHECK_NEAR(m->adam_r[t + 2], 0.99, 1e-7);
+    CHECK_NEAR(m->adam_r[t + 3], 0.99, 1e-7);
+    CHECK_NEAR(m->adam_r[1], 0.9 * 0.9, 1e-7);
     nerf_model_destroy(m);
 
-    /* The paper's models have no table to count for. */
+    /* The paper's models have no table to correct. */
     NERF_MODEL_OPTIONS_INIT(&o);
     nerf_model_options_preset(&o, NERF_PRESET_TINY);
     CHECK_OK(nerf_model_create(&m, &o));
-    CHECK(m && !m->counted && m->adam_counts == NULL);
+    CHECK(m && !m->corrected && m->adam_r == NULL);
     nerf_model_destroy(m);
 }
 
@@ -304,9 +277,8 @@ int main(void)
     RUN(weight_decay);
     RUN(sparse_skips_untouched);
     RUN(model_regions);
-    RUN(counted_table);
-    RUN(counted_update);
-    RUN(model_counts);
+    RUN(corrected_update);
+    RUN(model_corrections);
     RUN(schedule);
     RUN(schedule_with_a_start);
     RUN(model_step_uses_schedule);

@@ -106,8 +106,8 @@ static void drop_tag(payload *p, uint32_t tag)
 }
 
 /* The tests of the occupancy grid take it for its file's last section, as
- * a hash-grid model's files had it before the Adam update counts (tag 17,
- * which forged_counts_sections covers) came after it. */
+ * a hash-grid model's files had it before the Adam corrections (tag 17,
+ * which forged_corrections_sections covers) came after it. */
 static void split_grid_payload(const unsigned char *file, size_t size,
                                payload *p)
 {
@@ -772,12 +772,15 @@ TEST(occupancy_grid_section)
 }
 
 /*
- * A hash-grid model's Adam update counts: optional tag 17, last, a u16 for
- * each table parameter.  Without it a file with moments resumes correcting
- * by the step (a file from before 0.10); a wrong size, counts for a model
- * without a table, or counts in a weights-only file are refused.
+ * A hash-grid model's Adam corrections: optional tag 17, last, t f32
+ * beta1^k then t f32 beta2^k for its t table parameters, k each one's
+ * count of updates.  Without it a file with
+ * moments resumes correcting by the step (a file from before 0.10); a
+ * wrong size, a value outside 0 to 1, corrections for a model without a
+ * table, or in a weights-only file are refused.
  */
-static void save_counted(const char *path, payload *p, unsigned char **file)
+static void save_corrected(const char *path, payload *p,
+                           unsigned char **file)
 {
     nerf_model *m = grid_model();
     if (m == NULL) {
@@ -799,8 +802,8 @@ static void save_counted(const char *path, payload *p, unsigned char **file)
     split_payload(*file, size, p);
 }
 
-static void load_counted(const char *path, const payload *p, int want,
-                         const char *what)
+static void load_corrected(const char *path, const payload *p, int want,
+                           const char *what)
 {
     write_payload(path, p, NULL, 0);
     if (want != NERF_OK) {
@@ -812,32 +815,42 @@ static void load_counted(const char *path, const payload *p, int want,
     nerf_model_destroy(m);
 }
 
-TEST(forged_counts_sections)
+static float f32_at(const unsigned char *b)
+{
+    uint32_t u = le32(b);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+TEST(forged_corrections_sections)
 {
     char path[128];
-    path_in(path, sizeof path, "counts.ckpt");
+    path_in(path, sizeof path, "corrections.ckpt");
     payload p;
     unsigned char *file = NULL;
-    save_counted(path, &p, &file);
-    const section *c = p.n > 0 ? &p.s[p.n - 1] : NULL;
+    save_corrected(path, &p, &file);
+    section *c = p.n > 0 ? &p.s[p.n - 1] : NULL;
     CHECK(c && c->tag == 17u);
     if (c == NULL || c->tag != 17u) {
         free_payload(&p);
         free(file);
         return;
     }
-    /* The first entries were touched by 3, 2 and 1 of the steps. */
+    /* Parameters 0, 5 and 10 were touched by 3, 2 and 1 of the steps. */
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_load(&m, path, NULL));
-    CHECK(m && m->counted && c->len == 2 * m->n_counts);
-    if (m && c->len == 2 * m->n_counts) {
-        const uint16_t want[3] = {3, 2, 1};
+    CHECK(m && m->corrected && c->len == 8 * m->n_table);
+    CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_ADAM_CORRECTIONS);
+    const size_t t = m ? m->n_table : 0;
+    if (m && c->len == 8 * t) {
         for (int i = 0; i < 3; i++) {
-            CHECK_EQ_INT(c->data[10 * i] | c->data[10 * i + 1] << 8,
-                         want[i]);
-            CHECK_EQ_INT(m->adam_counts[5 * i], want[i]);
+            const double k = 3 - i;
+            CHECK_NEAR(f32_at(c->data + 20 * i), pow(0.9, k), 1e-6);
+            CHECK_NEAR(f32_at(c->data + 4 * t + 20 * i), pow(0.99, k), 1e-6);
+            CHECK(m->adam_r[5 * i] == f32_at(c->data + 20 * i));
         }
-        CHECK_EQ_INT(m->adam_counts[1], 0);
+        CHECK(m->adam_r[1] == 1.0f && m->adam_r[t + 1] == 1.0f);
     }
     nerf_model_destroy(m);
 
@@ -847,33 +860,45 @@ TEST(forged_counts_sections)
     write_payload(path, &p, NULL, 0);
     m = NULL;
     CHECK_OK(nerf_model_load(&m, path, NULL));
-    CHECK(m && !m->counted);
+    CHECK(m && !m->corrected);
+    CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_ADAM_CORRECTIONS));
     nerf_model_destroy(m);
 
     p.s[p.n++] = kept;
-    p.s[p.n - 1].len -= 2;
-    load_counted(path, &p, NERF_EFORMAT, "counts cut short");
-    CHECK(strstr(nerf_last_error(), "Adam update counts") != NULL);
-    p.s[p.n - 1].len += 2;
-    load_counted(path, &p, NERF_OK, "counts as saved");
+    c = &p.s[p.n - 1];
+    c->len -= 4;
+    load_corrected(path, &p, NERF_EFORMAT, "corrections cut short");
+    CHECK(strstr(nerf_last_error(), "Adam corrections") != NULL);
+    c->len += 4;
+    const uint32_t bad[3] = {0xbf800000u /* -1 */, 0x3f800001u /* 1+ */,
+                             0x7fc00000u /* NaN */};
+    for (int i = 0; i < 3; i++) {
+        const uint32_t was = le32(c->data + 8);
+        put32(c->data + 8, bad[i]);
+        load_corrected(path, &p, NERF_EFORMAT, "a correction out of range");
+        CHECK(strstr(nerf_last_error(), "Adam correction 2 ") != NULL);
+        put32(c->data + 8, was);
+    }
+    load_corrected(path, &p, NERF_OK, "corrections as saved");
     add_section(&p, kept.tag, kept.data, kept.len);
-    load_counted(path, &p, NERF_EFORMAT, "two counts sections");
+    load_corrected(path, &p, NERF_EFORMAT, "two corrections sections");
     free(p.s[--p.n].data);
 
     /* A weights-only file keeps no optimiser state. */
     drop_tag(&p, 0x80000004u);
     drop_tag(&p, 0x80000005u);
     add_section(&p, 0x8000000Du, "", 0);
-    load_counted(path, &p, NERF_EFORMAT, "weights-only file with counts");
+    load_corrected(path, &p, NERF_EFORMAT,
+                   "weights-only file with corrections");
     CHECK(strstr(nerf_last_error(), "weights-only") != NULL);
 
-    /* A frequency-encoding model has no table to count for. */
+    /* A frequency-encoding model has no table to correct. */
     size_t size = 0;
     unsigned char *tiny_file = good_file(&size);
     payload tiny;
     split_payload(tiny_file, size, &tiny);
-    add_section(&tiny, kept.tag, kept.data, 2);
-    load_counted(path, &tiny, NERF_EFORMAT, "counts for a tiny model");
+    add_section(&tiny, kept.tag, kept.data, 8);
+    load_corrected(path, &tiny, NERF_EFORMAT, "corrections for a tiny model");
     free_payload(&tiny);
     free(tiny_file);
     free_payload(&p);
@@ -1124,7 +1149,7 @@ int main(void)
     RUN(forged_batch_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
-    RUN(forged_counts_sections);
+    RUN(forged_corrections_sections);
     RUN(matmul_section);
     RUN(data_section);
     remove_tree(tmpdir);

@@ -51,11 +51,13 @@ MODEL_HAS_OCCUPANCY = 0x2
 MODEL_HAS_RENDER_SETTINGS = 0x4
 MODEL_HAS_DATA_RECORD = 0x8
 MODEL_HAS_BATCH_RECORD = 0x10
+MODEL_HAS_ADAM_CORRECTIONS = 0x20
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
             MODEL_HAS_RENDER_SETTINGS: "render_settings",
             MODEL_HAS_DATA_RECORD: "data_record",
-            MODEL_HAS_BATCH_RECORD: "batch_record"}
+            MODEL_HAS_BATCH_RECORD: "batch_record",
+            MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -243,7 +245,10 @@ class Model(_handle.Handle):
         occupancy grid), ``"render_settings"`` (recorded by training),
         ``"data_record"`` (what data training last used:
         :attr:`training_data`), ``"batch_record"`` (the batch it used:
-        :attr:`training_batch`)."""
+        :attr:`training_batch`), ``"adam_corrections"`` (a hash-grid
+        model's Adam corrections of each table parameter by its own count
+        of updates, since 0.10; without them such a model from an older
+        file corrects by the step)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)

@@ -157,6 +157,10 @@ class RenderSettings(TestCase):
     def test_untrained_model_gets_a_guess(self):
         m = nerf.Model(preset="tiny")
         self.assertEqual(m.contents, {"optimizer"})
+        # A hash-grid model corrects its table's parameters by their own
+        # update counts (since 0.10).
+        with nerf.Model(preset="fast", hash_log2_size=10) as g:
+            self.assertEqual(g.contents, {"optimizer", "adam_corrections"})
         so, ro = m.render_settings()
         self.assertEqual((so.n_coarse, so.n_fine), (32, 64))
         self.assertEqual((so.t_near, so.t_far, ro.white_background),
