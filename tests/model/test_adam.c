@@ -83,14 +83,20 @@ TEST(sparse_skips_untouched)
     }
 }
 
-/* A hash-grid model: the table is updated sparsely, the layers densely
- * with weight decay. */
-TEST(model_regions)
+static nerf_model *grid_model(void)
 {
     nerf_model_options o;
     small_grid_options(&o);
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
+    return m;
+}
+
+/* A hash-grid model: the table is updated sparsely, the layers densely
+ * with weight decay. */
+TEST(model_regions)
+{
+    nerf_model *m = grid_model();
     if (m == NULL) {
         return;
     }
@@ -186,10 +192,7 @@ TEST(corrected_update)
  * for its layers'. */
 TEST(model_corrections)
 {
-    nerf_model_options o;
-    small_grid_options(&o);
-    nerf_model *m = NULL;
-    CHECK_OK(nerf_model_create(&m, &o));
+    nerf_model *m = grid_model();
     if (m == NULL) {
         return;
     }
@@ -211,6 +214,7 @@ TEST(model_corrections)
     nerf_model_destroy(m);
 
     /* The paper's models have no table to correct. */
+    nerf_model_options o;
     NERF_MODEL_OPTIONS_INIT(&o);
     nerf_model_options_preset(&o, NERF_PRESET_TINY);
     CHECK_OK(nerf_model_create(&m, &o));
