@@ -468,9 +468,9 @@ typedef enum nerf_param {
     /** Default 0.9.  Adam's bias corrections go by the step count, but
      * for a hash table's parameters (since 0.10) by each one's own count
      * of updates, as Mueller et al.'s: a step leaves the parameters it
-     * did not touch, moments and count included, as they were.  A model
-     * resumed from a checkpoint of an older libnerf goes on by the step,
-     * as it was trained. */
+     * did not touch, moments and corrections included, as they were.
+     * A model resumed from a checkpoint of an older libnerf goes on by
+     * the step, as it was trained. */
     NERF_PARAM_ADAM_BETA1 = 103,
     NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999; 0.99 for
                                                hash-grid models. */

@@ -69,9 +69,9 @@ NERF__MULTIVERSION static void adam_sparse(void *ctx, size_t begin,
     }
 }
 
-/* The loop after it touches no element through two of its arrays: gcc
- * otherwise checks six arrays' overlap at run time, which is more checks
- * than it vectorises behind, restrict or not. */
+/* The loop it precedes never reaches one element through two of its
+ * arrays.  Not told so, gcc checks six arrays' overlap at run time, more
+ * checks than it vectorises behind, restrict or not. */
 #if defined(__clang__)
 #  define NERF__NO_ALIAS_LOOP _Pragma("clang loop vectorize(assume_safety)")
 #elif defined(__GNUC__)
