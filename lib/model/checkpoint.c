@@ -380,10 +380,11 @@ static bool has_average(const nerf_model *m, bool weights_only)
 }
 
 /* A weights-only file trains no further, and leaves the corrections out;
- * so does a model that corrects by the step. */
+ * so does a model that corrects by the step (corrected implies a
+ * table). */
 static bool has_corrections(const nerf_model *m, bool weights_only)
 {
-    return !weights_only && m->corrected && m->n_table > 0;
+    return !weights_only && m->corrected;
 }
 
 /* The head, then the running average's floats. */

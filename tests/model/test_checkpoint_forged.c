@@ -90,6 +90,15 @@ static void add_section(payload *p, uint32_t tag, const void *data, size_t len)
     memcpy(s->data, data, len);
 }
 
+/* The little-endian f32 at b. */
+static float f32_at(const unsigned char *b)
+{
+    uint32_t u = le32(b);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
 /* Remove the sections tagged tag. */
 static void drop_tag(payload *p, uint32_t tag)
 {
@@ -700,9 +709,7 @@ TEST(occupancy_grid_section)
         CHECK_EQ_INT(le32(p.s[7].data + 4), 0);
         CHECK_EQ_INT(le64(p.s[7].data + 8), 2);
         const size_t cell = 70 + 128 * (64 + 128 * 60);
-        uint32_t bits = le32(p.s[7].data + 16 + 4 * cell);
-        float v;
-        memcpy(&v, &bits, sizeof v);
+        const float v = f32_at(p.s[7].data + 16 + 4 * cell);
         CHECK(v == g->ema[cell] && v > 30.0f);
     }
     free_payload(&p);
@@ -813,14 +820,6 @@ static void load_corrected(const char *path, const payload *p, int want,
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_load(&m, path, NULL));
     nerf_model_destroy(m);
-}
-
-static float f32_at(const unsigned char *b)
-{
-    uint32_t u = le32(b);
-    float f;
-    memcpy(&f, &u, sizeof f);
-    return f;
 }
 
 TEST(forged_corrections_sections)
