@@ -86,19 +86,22 @@ static cJSON *breakdown_json(const figures *f)
     }
     const step_shares sh = shares_of(b);
     cJSON *o = cJSON_CreateObject();
-    char method[512];
+    char method[1024];
     snprintf(method, sizeof method,
              "the library's building blocks timed one by one in the bench, "
              "each called as the training step calls it, on the packed "
              "samples of the last timed step, in interleaved rounds (mean "
              "per call); shares are of the sum of the parts; mlp = network "
-             "forward + backward less the encoding; grid = one "
+             "forward + backward less the encoding; opacity_cut = the "
+             "density pass over the marched samples, the other parts on "
+             "those kept up to opacity; grid = one "
              "occupancy-grid refresh / %u; the rest of the step is "
              "step_seconds - sum_seconds",
              NERF__GRID_EVERY);
     cJSON_AddStringToObject(o, "method", method);
     cJSON_AddNumberToObject(o, "rays", (double)b->rays);
     cJSON_AddNumberToObject(o, "samples", (double)b->samples);
+    cJSON_AddNumberToObject(o, "marched_samples", (double)b->marched);
     cJSON_AddNumberToObject(o, "rounds", b->rounds);
     cJSON_AddBoolToObject(o, "march_reproduced_step", b->same_samples);
     cJSON_AddNumberToObject(o, "step_seconds",
@@ -113,6 +116,7 @@ static cJSON *breakdown_json(const figures *f)
     cJSON_AddNumberToObject(sec, "network_backward", b->net_bw);
     cJSON_AddNumberToObject(sec, "composite_forward", b->composite_fw);
     cJSON_AddNumberToObject(sec, "composite_backward", b->composite_bw);
+    cJSON_AddNumberToObject(sec, "opacity_cut", b->opacity_cut);
     cJSON_AddNumberToObject(sec, "zero_grad", b->zero_grad);
     cJSON_AddNumberToObject(sec, "adam", b->adam);
     cJSON_AddNumberToObject(sec, "grid_refresh", b->grid_update);
@@ -122,6 +126,7 @@ static cJSON *breakdown_json(const figures *f)
     cJSON_AddNumberToObject(shares, "encoding", sh.encoding / sh.sum);
     cJSON_AddNumberToObject(shares, "mlp", sh.mlp / sh.sum);
     cJSON_AddNumberToObject(shares, "compositing", sh.compositing / sh.sum);
+    cJSON_AddNumberToObject(shares, "opacity_cut", sh.cut / sh.sum);
     cJSON_AddNumberToObject(shares, "optimiser", sh.optimiser / sh.sum);
     cJSON_AddNumberToObject(shares, "grid", sh.grid / sh.sum);
     return o;

@@ -266,6 +266,10 @@ static void c_comp(char *b, size_t s, const preset_setup *p, const figures *f)
 {
     share_cell(b, s, f, shares_of(&f->bd).compositing);
 }
+static void c_cut(char *b, size_t s, const preset_setup *p, const figures *f)
+{
+    share_cell(b, s, f, shares_of(&f->bd).cut);
+}
 static void c_opt(char *b, size_t s, const preset_setup *p, const figures *f)
 {
     share_cell(b, s, f, shares_of(&f->bd).optimiser);
@@ -293,7 +297,8 @@ static void c_bd_samples(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    snprintf(b, s, "%zu, %d rounds", f->bd.samples, f->bd.rounds);
+    snprintf(b, s, "%zu of %zu marched, %d rounds", f->bd.samples,
+             f->bd.marched, f->bd.rounds);
 }
 /* The floor of a marching step's part, and the measured part's share of
  * it (100%: the part runs at its floor). */
@@ -532,6 +537,7 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, "training step: encoding", c_enc, ps, fs, n);
         row(out, "  MLP", c_mlp, ps, fs, n);
         row(out, "  compositing (march, fwd, bwd)", c_comp, ps, fs, n);
+        row(out, "  opacity cut (density pass)", c_cut, ps, fs, n);
         row(out, "  optimiser (zero grads, Adam)", c_opt, ps, fs, n);
         snprintf(label, sizeof label, "  grid refresh (1/%u per step)",
                  NERF__GRID_EVERY);
@@ -595,7 +601,10 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "beside the mean step.  encoding = hash grid forward + "
                 "backward + SH; MLP = the network's forward + backward "
                 "less the encoding; compositing = march + points, "
-                "composite forward + backward; optimiser = Adam (which "
+                "composite forward + backward; opacity cut = the "
+                "density pass over every marched sample that finds where "
+                "each ray turns opaque (the parts before it run on the "
+                "samples up to there); optimiser = Adam (which "
                 "zeroes the gradients as it reads them); grid refresh = "
                 "one refresh / %u.  The "
                 "rest of the step (ray drawing, loss, direction copies) is "

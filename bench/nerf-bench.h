@@ -125,10 +125,12 @@ const char *rss_method(const rss_result *r, char *buf, size_t size);
  */
 typedef struct step_breakdown {
     bool ok;
-    bool same_samples; /* the bench's march reproduced the step's samples */
-    size_t rays, samples;
+    bool same_samples; /* the bench's march marched the step's samples */
+    size_t rays, samples; /* samples: those kept up to opacity */
+    size_t marched;
     int rounds;
     double march;        /* count + fill + sample points */
+    double opacity_cut;  /* the density pass over the marched samples */
     double hash_fw, hash_bw, sh_fw;
     double net_fw, net_bw; /* whole network: encodings included */
     double composite_fw, composite_bw;
@@ -146,7 +148,7 @@ typedef struct step_breakdown {
 
 /* The categories the figures are reported in, seconds per step. */
 typedef struct step_shares {
-    double encoding, mlp, compositing, optimiser, grid, sum;
+    double encoding, mlp, compositing, cut, optimiser, grid, sum;
 } step_shares;
 
 int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd);

@@ -49,6 +49,17 @@ uint32_t nerf__composite_packed_ray(nerf__composite_state *s, uint32_t n,
     return i;
 }
 
+uint32_t nerf__composite_packed_ray_used(uint32_t n, const float *dt,
+                                         const float *sigma, float eps)
+{
+    float trans = 1.0f;
+    uint32_t i = 0;
+    for (; i < n && !(trans < eps); i++) {
+        trans *= 1.0f - alpha_of(sigma[i], dt[i]);
+    }
+    return i;
+}
+
 void nerf__composite_state_rgb(const nerf__composite_state *s,
                                const float *bg, float rgb[3])
 {

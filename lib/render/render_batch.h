@@ -9,8 +9,9 @@
  * instead (render_march.c): one pass of samples marched through the
  * model's occupancy grid, packed (a variable number per ray), the network
  * on the packed samples, and compositing with early termination.  With
- * `keep` (training) every ray is marched in full at once, so that one
- * forward holds everything the backward needs; without it (rendering) the
+ * `keep` (training) every ray is marched in full at once, a density pass
+ * finds where each turns opaque, and one forward of the samples before
+ * that holds everything the backward needs; without it (rendering) the
  * rays are marched a few samples at a time and each stops being marched
  * once it is opaque, so the network sees few samples past the surfaces.
  */
@@ -92,10 +93,12 @@ typedef struct nerf__batch {
     float *rgb[NERF__PASSES];       /* [n_rays * n_samples, 3] */
     float *sigma[NERF__PASSES];     /* [n_rays * n_samples], noise added */
     float *dir_norm;                /* [n_rays], |d| of the sampled rays */
-    /* Network evaluations of the last batch, all passes and pieces. */
+    /* Network evaluations of the last batch, all passes and pieces (with
+     * marching and keep, the density pass's: every marched sample). */
     size_t n_evaluated;
-    /* Marching: the packed samples of the last batch (with keep, all of
-     * them; otherwise the last piece's), and their points. */
+    /* Marching: the packed samples of the last batch (with keep, each
+     * ray's up to where it turns opaque; otherwise the last piece's), and
+     * their points. */
     nerf__march_samples march;
     float *march_points;            /* [march.total, 3] */
     /* private */

@@ -230,7 +230,6 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
         z.g = nerf__model_grid(m);
         nerf__parallel_for(total, 20, zero_empty, &z);
     }
-    b->n_evaluated += total;
     return rc;
 }
 
@@ -254,6 +253,70 @@ static size_t cut_to_budget(nerf__march_samples *ms, size_t budget)
     return n;
 }
 
+static void count_used(void *ctx, size_t begin, size_t end)
+{
+    const march_job *j = ctx;
+    nerf__batch *b = j->b;
+    const nerf__march_samples *ms = &b->march;
+    for (size_t k = begin; k < end; k++) {
+        const size_t at = ms->offsets[k];
+        b->m_count[k] = nerf__composite_packed_ray_used(
+            (uint32_t)(ms->offsets[k + 1] - at), ms->dt + at,
+            b->m_sigma + at, NERF__COMPOSITE_EPS_DEFAULT);
+    }
+}
+
+/*
+ * Each ray's samples cut where compositing will stop.  Behind a surface a
+ * ray turns opaque and its later samples get no gradient, yet the march
+ * goes on through the occupied cells inside the object: on lego past the
+ * first thousand steps, 55 to 70% of a step's samples.  A density pass
+ * over all of them (the encoding forward and the density layer) finds
+ * where each ray stops, and the forward and backward that keep
+ * activations run on the rest alone.  The densities are the ones the full
+ * forward computes, so the composite stops at the same sample.
+ */
+static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
+                            const march_job *j)
+{
+    nerf__march_samples *ms = &b->march;
+    const size_t total = ms->total, n = j->rays->n;
+    int rc = reserve_packed(b, total, true);
+    if (rc == NERF_OK) {
+        rc = reserve_rays(b, n);
+    }
+    if (rc != NERF_OK || total == 0) {
+        return rc;
+    }
+    nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, b->march_points);
+    const nerf_model *m = s->model;
+    rc = nerf__model_density(m, 0, &b->ws[0], total, b->march_points,
+                             b->m_sigma);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (s->march_zero_empty) {
+        march_job z = *j;
+        z.g = nerf__model_grid(m);
+        nerf__parallel_for(total, 20, zero_empty, &z);
+    }
+    b->n_evaluated += total;
+    nerf__parallel_for(n, 4 * (total / n + 1), count_used, (void *)j);
+    /* Each ray's kept samples are a prefix of its own, so moving them
+     * down in ray order never overwrites one not yet moved. */
+    size_t w = 0;
+    for (size_t k = 0; k < n; k++) {
+        const size_t at = ms->offsets[k], used = b->m_count[k];
+        memmove(ms->t + w, ms->t + at, used * sizeof(float));
+        memmove(ms->dt + w, ms->dt + at, used * sizeof(float));
+        ms->offsets[k] = w;
+        w += used;
+    }
+    ms->offsets[n] = w;
+    ms->total = w;
+    return NERF_OK;
+}
+
 /* Training: every ray marched in full, one forward, one composite. */
 static int march_whole(nerf__batch *b, const nerf__render_setup *s,
                        const nerf__march_rays *all, const nerf__pass_out *out)
@@ -271,6 +334,9 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
         b->n_rays = kept.n;
     }
     march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir, .mo = &mo};
+    if (rc == NERF_OK) {
+        rc = cut_where_opaque(b, s, &j);
+    }
     if (rc == NERF_OK) {
         rc = evaluate(b, s, &j, true, false);
     }
@@ -379,6 +445,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         rc = nerf__march_run(g, &mo, &rays, &b->march);
         if (rc == NERF_OK) {
             rc = evaluate(b, s, &j, false, !first_round);
+            b->n_evaluated += b->march.total;
             first_round = false;
         }
         if (rc != NERF_OK) {

@@ -227,6 +227,9 @@ TEST(early_termination)
             expect++;
         }
         bad += used1[k] != expect && fabs(trans - eps) > 1e-4 * eps;
+        /* The densities alone tell the same count. */
+        bad += nerf__composite_packed_ray_used(n, b.dt + at, b.sigma + at,
+                                               eps) != used1[k];
         for (uint32_t i = used1[k]; i < n; i++) {
             bad += w1[at + i] != 0.0f;
         }

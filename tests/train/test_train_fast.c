@@ -279,6 +279,69 @@ TEST(no_sample_in_an_empty_cell)
 }
 
 /*
+ * A step keeps each ray's samples up to where it turns opaque: the
+ * composite of its forward uses every kept sample (so the density pass
+ * and the forward agree on the densities), and behind the trained
+ * scene's surfaces many marched samples are left out.
+ */
+TEST(training_keeps_samples_up_to_opacity)
+{
+    if (trained == NULL) {
+        FAILF("no trained model");
+        return;
+    }
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = 512;
+    o.precrop_steps = 0;
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, trained, fx.train, sampler, &o));
+    nerf_train_stats st;
+    memset(&st, 0, sizeof st);
+    st.struct_size = sizeof st;
+    CHECK_OK(nerf_trainer_step(t, &st));
+    const nerf__batch *b = &t->batch;
+    const nerf__march_samples *ms = &b->march;
+    const size_t n = ms->n_rays;
+    uint32_t *used = malloc(n * sizeof *used);
+    float *rgb = malloc(3 * n * sizeof *rgb);
+    size_t short_rays = 0;
+    if (used && rgb && n == (size_t)st.rays) {
+        nerf__packed_out po = {.rgb = rgb, .used = used};
+        nerf__composite_packed(&b->packed, &po);
+        for (size_t k = 0; k < n; k++) {
+            short_rays += used[k] != ms->offsets[k + 1] - ms->offsets[k];
+        }
+    } else {
+        FAILF("no batch to look at");
+    }
+    CHECK_EQ_INT(short_rays, 0);
+    printf("  %zu samples marched, %zu kept\n", b->n_evaluated, ms->total);
+    CHECK(ms->total < b->n_evaluated * 9 / 10);
+    free(used);
+    free(rgb);
+    nerf_trainer_destroy(t);
+}
+
+/* The samples the last step marched for its ray k, marched again. */
+static size_t marched_of_ray(nerf_trainer *t, size_t k)
+{
+    const nerf__occupancy *g = nerf__model_grid(t->model);
+    nerf__march_options mo;
+    nerf__render_march_options(&t->setup, g, &mo);
+    nerf__march_rays rays = nerf__render_march_rays(&t->setup, k + 1,
+                                                    t->origins, t->directions);
+    nerf__march_samples ms;
+    nerf__march_samples_init(&ms, &t->model->env);
+    size_t n = 0;
+    if (nerf__march_run(g, &mo, &rays, &ms) == NERF_OK) {
+        n = ms.offsets[k + 1] - ms.offsets[k];
+    }
+    nerf__march_samples_release(&ms);
+    return n;
+}
+
+/*
  * With batch_samples a step takes the fewest first rays of its batch whose
  * marched samples reach the budget.  Run last: it trains the model on.
  */
@@ -305,12 +368,16 @@ TEST(batch_samples_takes_rays_up_to_a_budget)
         const size_t n = (size_t)st.rays;
         CHECK(n >= 1 && n < RAYS && n == ms->n_rays);
         CHECK(ms->total == ms->offsets[n]);
-        CHECK(ms->total >= BUDGET);
-        CHECK(n == 1 || ms->offsets[n - 1] < BUDGET);
-        CHECK(fabs(st.samples_per_ray - (double)ms->total / (double)n) <
+        /* The budget counts marched samples; the batch keeps those before
+         * each ray turns opaque. */
+        const size_t marched = t->batch.n_evaluated;
+        CHECK(marched >= BUDGET && ms->total <= marched);
+        CHECK(n == 1 || marched - marched_of_ray(t, n - 1) < BUDGET);
+        CHECK(fabs(st.samples_per_ray - (double)marched / (double)n) <
               1e-9 * st.samples_per_ray);
-        printf("  step %llu: %zu rays, %zu samples for a budget of %d\n",
-               (unsigned long long)st.step, n, ms->total, BUDGET);
+        printf("  step %llu: %zu rays, %zu samples marched (%zu kept) for a "
+               "budget of %d\n", (unsigned long long)st.step, n, marched,
+               ms->total, BUDGET);
     }
     nerf_trainer_destroy(t);
     /* Out of range. */
@@ -393,6 +460,7 @@ int main(void)
     RUN(skipping_is_rendering_empty_cells_as_empty);
     RUN(no_sample_in_an_empty_cell);
     RUN(depth_finds_the_scene_surface);
+    RUN(training_keeps_samples_up_to_opacity);
     RUN(batch_samples_takes_rays_up_to_a_budget);
     nerf_model_destroy(trained);
     nerf_sampler_destroy(sampler);
