@@ -210,6 +210,7 @@ static int reserve(const nerf__env *env, nerf__workspace *ws,
     ws->n = n;
     ws->keep = keep;
     ws->density_only = density_only;
+    ws->encoded = 0;
     return NERF_OK;
 }
 
@@ -264,6 +265,11 @@ static void encode_positions(const nerf__network *net, const float *params,
                              nerf__workspace *ws, size_t n,
                              const float *positions)
 {
+    const size_t encoded = ws->encoded;
+    ws->encoded = 0;
+    if (encoded == n) {
+        return;
+    }
     const nerf__encoding *e = &net->pos_enc;
     const bool trained = nerf__encoding_params(e) > 0;
     nerf__encoding_forward(e, trained ? params + net->pos_params : NULL, n,

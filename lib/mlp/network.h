@@ -153,6 +153,11 @@ typedef struct nerf__workspace {
      * forward instead of packing them again. */
     bool params_unchanged;
     uint32_t packed_layers; /* layers ws->fused holds, 0 after a reserve */
+    /* Set by a caller who left in enc_pos (and pos, where kept) the
+     * position encodings of the next forward's `encoded` samples, as a
+     * density pass over more samples computed them: that forward then
+     * does not encode the positions again.  The forward resets it. */
+    size_t encoded;
 } nerf__workspace;
 
 /* Floats per sample in each of grad_a and grad_b. */

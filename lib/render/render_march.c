@@ -266,6 +266,14 @@ static void count_used(void *ctx, size_t begin, size_t end)
     }
 }
 
+/* Move `count` rows of `width` floats from row `from` to row `to`. */
+static void move_rows(float *rows, size_t width, size_t to, size_t from,
+                      size_t count)
+{
+    memmove(rows + to * width, rows + from * width,
+            count * width * sizeof(float));
+}
+
 /*
  * Each ray's samples cut where compositing will stop.  Behind a surface a
  * ray turns opaque and its later samples get no gradient, yet the march
@@ -274,24 +282,30 @@ static void count_used(void *ctx, size_t begin, size_t end)
  * over all of them (the encoding forward and the density layer) finds
  * where each ray stops, and the forward and backward that keep
  * activations run on the rest alone.  The densities are the ones the full
- * forward computes, so the composite stops at the same sample.
+ * forward computes, so the composite stops at the same sample.  The pass
+ * runs in the forward's workspace, whose position encodings of the kept
+ * samples are moved down with them, so the forward does not compute
+ * them again.
  */
 static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
                             const march_job *j)
 {
     nerf__march_samples *ms = &b->march;
     const size_t total = ms->total, n = j->rays->n;
+    const nerf_model *m = s->model;
+    nerf__workspace *ws = &b->ws[0];
     int rc = reserve_packed(b, total, true);
     if (rc == NERF_OK) {
         rc = reserve_rays(b, n);
+    }
+    if (rc == NERF_OK && (total > ws->cap || !ws->keep)) {
+        rc = nerf__model_reserve(m, 0, ws, with_headroom(total), true);
     }
     if (rc != NERF_OK || total == 0) {
         return rc;
     }
     nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, b->march_points);
-    const nerf_model *m = s->model;
-    rc = nerf__model_density(m, 0, &b->ws[0], total, b->march_points,
-                             b->m_sigma);
+    rc = nerf__model_density(m, 0, ws, total, b->march_points, b->m_sigma);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -304,16 +318,22 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     nerf__parallel_for(n, 4 * (total / n + 1), count_used, (void *)j);
     /* Each ray's kept samples are a prefix of its own, so moving them
      * down in ray order never overwrites one not yet moved. */
+    const size_t E = m->nets[0].pos_width;
     size_t w = 0;
     for (size_t k = 0; k < n; k++) {
         const size_t at = ms->offsets[k], used = b->m_count[k];
-        memmove(ms->t + w, ms->t + at, used * sizeof(float));
-        memmove(ms->dt + w, ms->dt + at, used * sizeof(float));
+        move_rows(ms->t, 1, w, at, used);
+        move_rows(ms->dt, 1, w, at, used);
+        move_rows(ws->enc_pos, E, w, at, used);
+        if (ws->pos) {
+            move_rows(ws->pos, 3, w, at, used);
+        }
         ms->offsets[k] = w;
         w += used;
     }
     ms->offsets[n] = w;
     ms->total = w;
+    ws->encoded = w;
     return NERF_OK;
 }
 

@@ -281,8 +281,9 @@ TEST(no_sample_in_an_empty_cell)
 /*
  * A step keeps each ray's samples up to where it turns opaque: the
  * composite of its forward uses every kept sample (so the density pass
- * and the forward agree on the densities), and behind the trained
- * scene's surfaces many marched samples are left out.
+ * and the forward agree on the densities), the forward's position
+ * encodings are the kept samples' own, and behind the trained scene's
+ * surfaces many marched samples are left out.
  */
 TEST(training_keeps_samples_up_to_opacity)
 {
@@ -296,30 +297,48 @@ TEST(training_keeps_samples_up_to_opacity)
     o.precrop_steps = 0;
     nerf_trainer *t = NULL;
     CHECK_OK(nerf_trainer_create(&t, trained, fx.train, sampler, &o));
+    /* The weights the step's forward saw: its Adam update changes them. */
+    const size_t P = trained->n_params;
+    float *before = malloc(P * sizeof *before);
+    if (before) {
+        memcpy(before, trained->params, P * sizeof *before);
+    }
     nerf_train_stats st;
     memset(&st, 0, sizeof st);
     st.struct_size = sizeof st;
     CHECK_OK(nerf_trainer_step(t, &st));
     const nerf__batch *b = &t->batch;
     const nerf__march_samples *ms = &b->march;
-    const size_t n = ms->n_rays;
+    const nerf__network *net = &trained->nets[0];
+    const size_t n = ms->n_rays, kept = ms->total, E = net->pos_width;
     uint32_t *used = malloc(n * sizeof *used);
     float *rgb = malloc(3 * n * sizeof *rgb);
+    float *enc = malloc(kept * E * sizeof *enc);
     size_t short_rays = 0;
-    if (used && rgb && n == (size_t)st.rays) {
+    if (used && rgb && enc && before && n == (size_t)st.rays) {
         nerf__packed_out po = {.rgb = rgb, .used = used};
         nerf__composite_packed(&b->packed, &po);
         for (size_t k = 0; k < n; k++) {
             short_rays += used[k] != ms->offsets[k + 1] - ms->offsets[k];
         }
+        /* The encodings the forward took from the density pass are those
+         * of the kept samples. */
+        nerf__encoding_forward(&net->pos_enc, before + net->pos_params, kept,
+                               b->march_points, enc, E);
+        const nerf__workspace *ws = &b->ws[0];
+        CHECK(memcmp(enc, ws->enc_pos, kept * E * sizeof *enc) == 0);
+        CHECK(ws->pos != NULL &&
+              memcmp(ws->pos, b->march_points, 3 * kept * sizeof *enc) == 0);
     } else {
         FAILF("no batch to look at");
     }
     CHECK_EQ_INT(short_rays, 0);
-    printf("  %zu samples marched, %zu kept\n", b->n_evaluated, ms->total);
-    CHECK(ms->total < b->n_evaluated * 9 / 10);
+    printf("  %zu samples marched, %zu kept\n", b->n_evaluated, kept);
+    CHECK(kept < b->n_evaluated * 9 / 10);
     free(used);
     free(rgb);
+    free(enc);
+    free(before);
     nerf_trainer_destroy(t);
 }
 
