@@ -211,7 +211,9 @@ step_shares shares_of(const step_breakdown *b)
      * and the element-wise passes between them. */
     s.mlp = fmax(0.0, b->net_fw + b->net_bw - s.encoding);
     s.compositing = b->march + b->composite_fw + b->composite_bw;
-    s.cut = b->opacity_cut;
+    /* The forward takes the kept samples' position encodings from the
+     * density pass, and the encoding part counts them already. */
+    s.cut = fmax(0.0, b->opacity_cut - b->hash_fw);
     s.optimiser = b->zero_grad + b->adam;
     s.grid = b->grid_update / NERF__GRID_EVERY;
     s.sum = s.encoding + s.mlp + s.compositing + s.cut + s.optimiser +

@@ -92,9 +92,10 @@ static cJSON *breakdown_json(const figures *f)
              "each called as the training step calls it, on the packed "
              "samples of the last timed step, in interleaved rounds (mean "
              "per call); shares are of the sum of the parts; mlp = network "
-             "forward + backward less the encoding; opacity_cut = the "
-             "density pass over the marched samples, the other parts on "
-             "those kept up to opacity; grid = one "
+             "forward + backward less the encoding; opacity_cut share = "
+             "the density pass over the marched samples less the hash "
+             "forward of those kept up to opacity, on which the other "
+             "parts run and whose encodings the forward reuses; grid = one "
              "occupancy-grid refresh / %u; the rest of the step is "
              "step_seconds - sum_seconds",
              NERF__GRID_EVERY);

@@ -294,6 +294,9 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     const size_t total = ms->total, n = j->rays->n;
     const nerf_model *m = s->model;
     nerf__workspace *ws = &b->ws[0];
+    if (total == 0) {
+        return NERF_OK;
+    }
     int rc = reserve_packed(b, total, true);
     if (rc == NERF_OK) {
         rc = reserve_rays(b, n);
@@ -301,7 +304,7 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     if (rc == NERF_OK && (total > ws->cap || !ws->keep)) {
         rc = nerf__model_reserve(m, 0, ws, with_headroom(total), true);
     }
-    if (rc != NERF_OK || total == 0) {
+    if (rc != NERF_OK) {
         return rc;
     }
     nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, b->march_points);
@@ -322,11 +325,13 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     size_t w = 0;
     for (size_t k = 0; k < n; k++) {
         const size_t at = ms->offsets[k], used = b->m_count[k];
-        move_rows(ms->t, 1, w, at, used);
-        move_rows(ms->dt, 1, w, at, used);
-        move_rows(ws->enc_pos, E, w, at, used);
-        if (ws->pos) {
-            move_rows(ws->pos, 3, w, at, used);
+        if (at != w) {
+            move_rows(ms->t, 1, w, at, used);
+            move_rows(ms->dt, 1, w, at, used);
+            move_rows(ws->enc_pos, E, w, at, used);
+            if (ws->pos) {
+                move_rows(ws->pos, 3, w, at, used);
+            }
         }
         ms->offsets[k] = w;
         w += used;
@@ -337,7 +342,8 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     return NERF_OK;
 }
 
-/* Training: every ray marched in full, one forward, one composite. */
+/* Training: every ray marched in full and cut where it turns opaque, one
+ * forward, one composite. */
 static int march_whole(nerf__batch *b, const nerf__render_setup *s,
                        const nerf__march_rays *all, const nerf__pass_out *out)
 {
