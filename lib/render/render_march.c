@@ -188,6 +188,19 @@ static void zero_empty(void *ctx, size_t begin, size_t end)
     }
 }
 
+/* The network's workspace for n samples.  Workspaces grow with headroom,
+ * so that sample counts that vary from batch to batch do not reallocate
+ * every time (and a cut batch finds the room its density pass took). */
+static int reserve_workspace(nerf__batch *b, const nerf_model *m, size_t n,
+                             bool keep)
+{
+    nerf__workspace *ws = &b->ws[0];
+    if (n > ws->cap || (keep && !ws->keep)) {
+        return nerf__model_reserve(m, 0, ws, with_headroom(n), keep);
+    }
+    return NERF_OK;
+}
+
 /* Points, directions and the network over the batch's packed samples.
  * same_params: the model is unchanged since the last call on b, so the
  * network may reuse what it prepared from the weights then. */
@@ -207,14 +220,10 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
         nerf__parallel_for(n, 6 * (total / n + 1), sample_dirs, (void *)j);
         dirs = b->m_dirs;
     }
-    /* Workspaces grow with headroom, so that sample counts that vary from
-     * batch to batch do not reallocate every time. */
     nerf__workspace *ws = &b->ws[0];
-    if (total > ws->cap || (keep && !ws->keep)) {
-        rc = nerf__model_reserve(m, 0, ws, with_headroom(total), keep);
-        if (rc != NERF_OK) {
-            return rc;
-        }
+    rc = reserve_workspace(b, m, total, keep);
+    if (rc != NERF_OK) {
+        return rc;
     }
     ws->params_unchanged = same_params;
     if (keep) {
@@ -301,8 +310,8 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     if (rc == NERF_OK) {
         rc = reserve_rays(b, n);
     }
-    if (rc == NERF_OK && (total > ws->cap || !ws->keep)) {
-        rc = nerf__model_reserve(m, 0, ws, with_headroom(total), true);
+    if (rc == NERF_OK) {
+        rc = reserve_workspace(b, m, total, true);
     }
     if (rc != NERF_OK) {
         return rc;

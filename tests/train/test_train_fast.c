@@ -350,13 +350,13 @@ static size_t marched_of_ray(nerf_trainer *t, size_t k)
     nerf__render_march_options(&t->setup, g, &mo);
     nerf__march_rays rays = nerf__render_march_rays(&t->setup, k + 1,
                                                     t->origins, t->directions);
-    nerf__march_samples ms;
-    nerf__march_samples_init(&ms, &t->model->env);
+    size_t *off = malloc((k + 2) * sizeof *off);
     size_t n = 0;
-    if (nerf__march_run(g, &mo, &rays, &ms) == NERF_OK) {
-        n = ms.offsets[k + 1] - ms.offsets[k];
+    if (off) {
+        nerf__march_count(g, &mo, &rays, off);
+        n = off[k + 1] - off[k];
     }
-    nerf__march_samples_release(&ms);
+    free(off);
     return n;
 }
 
