@@ -50,13 +50,15 @@ uint32_t nerf__composite_packed_ray(nerf__composite_state *s, uint32_t n,
 }
 
 uint32_t nerf__composite_packed_ray_used(uint32_t n, const float *dt,
-                                         const float *sigma, float eps)
+                                         const float *sigma, float eps,
+                                         float *trans)
 {
-    float trans = 1.0f;
+    float T = *trans;
     uint32_t i = 0;
-    for (; i < n && !(trans < eps); i++) {
-        trans *= 1.0f - alpha_of(sigma[i], dt[i]);
+    for (; i < n && !(T < eps); i++) {
+        T *= 1.0f - alpha_of(sigma[i], dt[i]);
     }
+    *trans = T;
     return i;
 }
 

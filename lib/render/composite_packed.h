@@ -66,13 +66,15 @@ uint32_t nerf__composite_packed_ray(nerf__composite_state *s, uint32_t n,
                                     float eps, float *weights);
 
 /*
- * How many of a ray's n samples nerf__composite_packed_ray() would use,
- * from the densities alone: the transmittance in its arithmetic, so that
- * a trainer can leave the rest out of its forward and backward, where
- * their gradients are 0.
+ * How many of a ray's next n samples nerf__composite_packed_ray() would
+ * use, from the densities alone: the transmittance in its arithmetic, so
+ * that a trainer can leave the rest out of its forward and backward, where
+ * their gradients are 0.  *trans: the transmittance before them (1 at the
+ * ray's start), and after those used on return.
  */
 uint32_t nerf__composite_packed_ray_used(uint32_t n, const float *dt,
-                                         const float *sigma, float eps);
+                                         const float *sigma, float eps,
+                                         float *trans);
 
 /* The ray's colour: s->rgb + (1 - s->opacity) bg (bg NULL: black). */
 void nerf__composite_state_rgb(const nerf__composite_state *s,

@@ -21,6 +21,7 @@ void nerf__batch_release(nerf__batch *b)
         nerf__workspace_release(&b->ws_env, &b->ws[p]);
     }
     nerf__render_march_release(b);
+    nerf__opacity_cut_release(&b->cut);
     nerf__free(&b->env, b->block);
     nerf__env env = b->env;
     nerf__batch_init(b, &env);
@@ -336,7 +337,9 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
         for (int p = 0; p < NERF__PASSES; p++) {
             nerf__workspace_release(&b->ws_env, &b->ws[p]);
         }
+        nerf__opacity_cut_release(&b->cut);
         b->ws_env = *nerf__model_env(m);
+        nerf__opacity_cut_init(&b->cut, &b->ws_env);
         b->model = m;
     }
     b->n_rays = n_rays;

@@ -25,6 +25,7 @@
 #include "composite_packed.h"
 #include "march.h"
 #include "model.h"
+#include "opacity_cut.h"
 #include "sampler.h"
 
 /* Pass 0 is the coarse pass, pass 1 the fine one (absent when n_fine = 0). */
@@ -124,6 +125,7 @@ typedef struct nerf__batch {
     nerf__composite_state *m_state;      /* [n_rays] */
     uint32_t *m_first, *m_count, *m_active, *m_act_first; /* [n_rays] */
     float *m_o, *m_d, *m_view;           /* [n_rays, 3], rays going */
+    nerf__opacity_cut cut;               /* a training batch's */
 } nerf__batch;
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env);

@@ -9,6 +9,7 @@
 
 #include "ndc.h"
 #include "occupancy.h"
+#include "opacity_cut.h"
 #include "parallel.h"
 #include "render_batch.h"
 
@@ -262,19 +263,6 @@ static size_t cut_to_budget(nerf__march_samples *ms, size_t budget)
     return n;
 }
 
-static void count_used(void *ctx, size_t begin, size_t end)
-{
-    const march_job *j = ctx;
-    nerf__batch *b = j->b;
-    const nerf__march_samples *ms = &b->march;
-    for (size_t k = begin; k < end; k++) {
-        const size_t at = ms->offsets[k];
-        b->m_count[k] = nerf__composite_packed_ray_used(
-            (uint32_t)(ms->offsets[k + 1] - at), ms->dt + at,
-            b->m_sigma + at, NERF__COMPOSITE_EPS_DEFAULT);
-    }
-}
-
 /* Move `count` rows of `width` floats from row `from` to row `to`. */
 static void move_rows(float *rows, size_t width, size_t to, size_t from,
                       size_t count)
@@ -287,14 +275,13 @@ static void move_rows(float *rows, size_t width, size_t to, size_t from,
  * Each ray's samples cut where compositing will stop.  Behind a surface a
  * ray turns opaque and its later samples get no gradient, yet the march
  * goes on through the occupied cells inside the object: on lego past the
- * first thousand steps, 55 to 70% of a step's samples.  A density pass
- * over all of them (the encoding forward and the density layer) finds
- * where each ray stops, and the forward and backward that keep
- * activations run on the rest alone.  The densities are the ones the full
- * forward computes, so the composite stops at the same sample.  The pass
- * runs in the forward's workspace, whose position encodings of the kept
- * samples are moved down with them, so the forward does not compute
- * them again.
+ * first thousand steps, 55 to 70% of a step's samples.  A density pass in
+ * rounds (opacity_cut.h) finds where each ray stops, evaluating few of
+ * the samples behind, and the forward and backward that keep activations
+ * run on the samples before alone.  The densities are the ones the full
+ * forward computes, so the composite stops at the same sample.  The
+ * pass's position encodings of the kept samples go to the forward's
+ * workspace, so the forward does not compute them again.
  */
 static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
                             const march_job *j)
@@ -317,17 +304,14 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
         return rc;
     }
     nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, b->march_points);
-    rc = nerf__model_density(m, 0, ws, total, b->march_points, b->m_sigma);
+    rc = nerf__opacity_cut_run(
+        &b->cut, m, ms, b->march_points,
+        s->march_zero_empty ? nerf__model_grid(m) : NULL,
+        NERF__COMPOSITE_EPS_DEFAULT, b->m_count, ws->enc_pos);
     if (rc != NERF_OK) {
         return rc;
     }
-    if (s->march_zero_empty) {
-        march_job z = *j;
-        z.g = nerf__model_grid(m);
-        nerf__parallel_for(total, 20, zero_empty, &z);
-    }
     b->n_evaluated += total;
-    nerf__parallel_for(n, 4 * (total / n + 1), count_used, (void *)j);
     /* Each ray's kept samples are a prefix of its own, so moving them
      * down in ray order never overwrites one not yet moved. */
     const size_t E = m->nets[0].pos_width;
@@ -338,9 +322,10 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
             move_rows(ms->t, 1, w, at, used);
             move_rows(ms->dt, 1, w, at, used);
             move_rows(ws->enc_pos, E, w, at, used);
-            if (ws->pos) {
-                move_rows(ws->pos, 3, w, at, used);
-            }
+        }
+        if (ws->pos) {
+            memcpy(ws->pos + 3 * w, b->march_points + 3 * at,
+                   3 * used * sizeof(float));
         }
         ms->offsets[k] = w;
         w += used;

@@ -228,8 +228,22 @@ TEST(early_termination)
         }
         bad += used1[k] != expect && fabs(trans - eps) > 1e-4 * eps;
         /* The densities alone tell the same count. */
+        float T = 1.0f;
         bad += nerf__composite_packed_ray_used(n, b.dt + at, b.sigma + at,
-                                               eps) != used1[k];
+                                               eps, &T) != used1[k];
+        /* And so do they counted in two pieces, the transmittance carried
+         * from the first to the second. */
+        const uint32_t first = n / 3;
+        float T2 = 1.0f;
+        uint32_t u2 = nerf__composite_packed_ray_used(first, b.dt + at,
+                                                      b.sigma + at, eps, &T2);
+        if (u2 == first) {
+            u2 += nerf__composite_packed_ray_used(n - first,
+                                                  b.dt + at + first,
+                                                  b.sigma + at + first, eps,
+                                                  &T2);
+        }
+        bad += u2 != used1[k] || T2 != T;
         for (uint32_t i = used1[k]; i < n; i++) {
             bad += w1[at + i] != 0.0f;
         }

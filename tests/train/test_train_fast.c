@@ -278,12 +278,29 @@ TEST(no_sample_in_an_empty_cell)
     nerf__batch_release(&b);
 }
 
+/* Each of the last step's rays' marched samples, counted again. */
+static size_t *marched_rays(nerf_trainer *t, size_t n)
+{
+    const nerf__occupancy *g = nerf__model_grid(t->model);
+    nerf__march_options mo;
+    nerf__render_march_options(&t->setup, g, &mo);
+    nerf__march_rays rays = nerf__render_march_rays(&t->setup, n,
+                                                    t->origins, t->directions);
+    size_t *off = malloc((n + 1) * sizeof *off);
+    if (off) {
+        nerf__march_count(g, &mo, &rays, off);
+    }
+    return off;
+}
+
 /*
  * A step keeps each ray's samples up to where it turns opaque: the
  * composite of its forward uses every kept sample (so the density pass
- * and the forward agree on the densities), the forward's position
- * encodings are the kept samples' own, and behind the trained scene's
- * surfaces many marched samples are left out.
+ * and the forward agree on the densities), a ray with samples left out is
+ * opaque after its kept ones (so it was not cut short), the forward's
+ * position encodings are the kept samples' own, and behind the trained
+ * scene's surfaces many marched samples are left out, most of them never
+ * evaluated by the density pass.
  */
 TEST(training_keeps_samples_up_to_opacity)
 {
@@ -314,12 +331,25 @@ TEST(training_keeps_samples_up_to_opacity)
     uint32_t *used = malloc(n * sizeof *used);
     float *rgb = malloc(3 * n * sizeof *rgb);
     float *enc = malloc(kept * E * sizeof *enc);
-    size_t short_rays = 0;
-    if (used && rgb && enc && before && n == (size_t)st.rays) {
+    size_t *marched = marched_rays(t, n);
+    size_t short_rays = 0, cut_short = 0, cut = 0;
+    if (used && rgb && enc && before && marched && n == (size_t)st.rays) {
         nerf__packed_out po = {.rgb = rgb, .used = used};
         nerf__composite_packed(&b->packed, &po);
+        const nerf__packed_batch *pb = &b->packed;
         for (size_t k = 0; k < n; k++) {
-            short_rays += used[k] != ms->offsets[k + 1] - ms->offsets[k];
+            const size_t at = ms->offsets[k];
+            const uint32_t m = (uint32_t)(ms->offsets[k + 1] - at);
+            short_rays += used[k] != m;
+            if (m < marched[k + 1] - marched[k]) {
+                nerf__composite_state cs;
+                nerf__composite_state_init(&cs);
+                nerf__composite_packed_ray(&cs, m, pb->t + at, pb->dt + at,
+                                           pb->rgb + 3 * at, pb->sigma + at,
+                                           pb->eps, NULL);
+                cut++;
+                cut_short += !(cs.trans < pb->eps);
+            }
         }
         /* The encodings the forward took from the density pass are those
          * of the kept samples. */
@@ -333,8 +363,14 @@ TEST(training_keeps_samples_up_to_opacity)
         FAILF("no batch to look at");
     }
     CHECK_EQ_INT(short_rays, 0);
-    printf("  %zu samples marched, %zu kept\n", b->n_evaluated, kept);
+    CHECK_EQ_INT(cut_short, 0);
+    CHECK(cut > 0);
+    printf("  %zu samples marched, %zu evaluated by the density pass in %u "
+           "rounds, %zu kept; %zu rays cut\n", b->n_evaluated,
+           b->cut.evaluated, b->cut.rounds, kept, cut);
     CHECK(kept < b->n_evaluated * 9 / 10);
+    CHECK(b->cut.evaluated >= kept && b->cut.evaluated < b->n_evaluated);
+    free(marched);
     free(used);
     free(rgb);
     free(enc);
@@ -345,17 +381,8 @@ TEST(training_keeps_samples_up_to_opacity)
 /* The samples the last step marched for its ray k, marched again. */
 static size_t marched_of_ray(nerf_trainer *t, size_t k)
 {
-    const nerf__occupancy *g = nerf__model_grid(t->model);
-    nerf__march_options mo;
-    nerf__render_march_options(&t->setup, g, &mo);
-    nerf__march_rays rays = nerf__render_march_rays(&t->setup, k + 1,
-                                                    t->origins, t->directions);
-    size_t *off = malloc((k + 2) * sizeof *off);
-    size_t n = 0;
-    if (off) {
-        nerf__march_count(g, &mo, &rays, off);
-        n = off[k + 1] - off[k];
-    }
+    size_t *off = marched_rays(t, k + 1);
+    size_t n = off ? off[k + 1] - off[k] : 0;
     free(off);
     return n;
 }
