@@ -93,7 +93,8 @@ static cJSON *breakdown_json(const figures *f)
              "samples of the last timed step, in interleaved rounds (mean "
              "per call); shares are of the sum of the parts; mlp = network "
              "forward + backward less the encoding; opacity_cut share = "
-             "the density pass over the marched samples less the hash "
+             "the density pass, in rounds of a few samples a ray "
+             "(cut_evaluated_samples), less the hash "
              "forward of those kept up to opacity, on which the other "
              "parts run and whose encodings the forward reuses; grid = one "
              "occupancy-grid refresh / %u; the rest of the step is "
@@ -103,6 +104,8 @@ static cJSON *breakdown_json(const figures *f)
     cJSON_AddNumberToObject(o, "rays", (double)b->rays);
     cJSON_AddNumberToObject(o, "samples", (double)b->samples);
     cJSON_AddNumberToObject(o, "marched_samples", (double)b->marched);
+    cJSON_AddNumberToObject(o, "cut_evaluated_samples",
+                            (double)b->cut_evaluated);
     cJSON_AddNumberToObject(o, "rounds", b->rounds);
     cJSON_AddBoolToObject(o, "march_reproduced_step", b->same_samples);
     cJSON_AddNumberToObject(o, "step_seconds",

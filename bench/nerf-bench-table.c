@@ -297,8 +297,9 @@ static void c_bd_samples(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    snprintf(b, s, "%zu of %zu marched, %d rounds", f->bd.samples,
-             f->bd.marched, f->bd.rounds);
+    snprintf(b, s, "%zu of %zu marched (%zu density), %d rounds",
+             f->bd.samples, f->bd.marched, f->bd.cut_evaluated,
+             f->bd.rounds);
 }
 /* The floor of a marching step's part, and the measured part's share of
  * it (100%: the part runs at its floor). */
@@ -602,9 +603,10 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "backward + SH; MLP = the network's forward + backward "
                 "less the encoding; compositing = march + points, "
                 "composite forward + backward; opacity cut = the "
-                "density pass over every marched sample that finds where "
-                "each ray turns opaque (the other parts run on the samples "
-                "up to there), less the hash forward of those, whose "
+                "density pass, in rounds of a few samples a ray, that "
+                "finds where each ray turns opaque (the other parts run on "
+                "the samples up to there; density: the samples it "
+                "evaluated), less the hash forward of those, whose "
                 "encodings the forward reuses; optimiser = Adam (which "
                 "zeroes the gradients as it reads them); grid refresh = "
                 "one refresh / %u.  The "

@@ -128,9 +128,10 @@ typedef struct step_breakdown {
     bool same_samples; /* the bench's march marched the step's samples */
     size_t rays, samples; /* samples: those kept up to opacity */
     size_t marched;
+    size_t cut_evaluated; /* samples the density pass evaluated */
     int rounds;
     double march;        /* count + fill + sample points */
-    double opacity_cut;  /* the density pass over the marched samples */
+    double opacity_cut;  /* the density pass, in its rounds */
     double hash_fw, hash_bw, sh_fw;
     double net_fw, net_bw; /* whole network: encodings included */
     double composite_fw, composite_bw;
