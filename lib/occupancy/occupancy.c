@@ -428,3 +428,26 @@ int nerf__occupancy_update(nerf__occupancy *g, nerf__density_fn density,
     g->updates++;
     return NERF_OK;
 }
+
+typedef struct zero_job {
+    const nerf__occupancy *g;
+    const float *points;
+    float *sigma;
+} zero_job;
+
+static void zero_range(void *ctx, size_t begin, size_t end)
+{
+    const zero_job *j = ctx;
+    for (size_t i = begin; i < end; i++) {
+        if (!nerf__occupancy_occupied(j->g, j->points + 3 * i)) {
+            j->sigma[i] = 0.0f;
+        }
+    }
+}
+
+void nerf__occupancy_zero_empty(const nerf__occupancy *g, size_t n,
+                                const float *points, float *sigma)
+{
+    zero_job j = {g, points, sigma};
+    nerf__parallel_for(n, 20, zero_range, &j);
+}

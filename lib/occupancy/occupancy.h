@@ -228,4 +228,10 @@ static inline bool nerf__occupancy_occupied(const nerf__occupancy *g,
            nerf__occupancy_bit(g, index);
 }
 
+/* sigma[i] = 0 for each of the n points (points: [n, 3]) in a cell g
+ * marks empty: what a march that skips those cells would have given them
+ * (rendering's and training's march_zero_empty). */
+void nerf__occupancy_zero_empty(const nerf__occupancy *g, size_t n,
+                                const float *points, float *sigma);
+
 #endif

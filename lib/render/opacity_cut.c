@@ -64,8 +64,8 @@ static int reserve_samples(nerf__opacity_cut *c, const nerf_model *m,
                            size_t n)
 {
     if (c->sample_block == NULL || n > c->cap_samples) {
-        n = with_headroom(n);
-        const size_t bytes[] = {3 * n * sizeof(float), n * sizeof(float)};
+        const size_t cap = with_headroom(n);
+        const size_t bytes[] = {3 * cap * sizeof(float), cap * sizeof(float)};
         unsigned char *p = nerf__alloc(&c->env, nerf__carve_size(bytes, 2));
         if (p == NULL) {
             return NERF_ENOMEM;
@@ -74,7 +74,7 @@ static int reserve_samples(nerf__opacity_cut *c, const nerf_model *m,
         c->sample_block = p;
         c->pos = nerf__carve(&p, bytes[0]);
         c->sigma = nerf__carve(&p, bytes[1]);
-        c->cap_samples = n;
+        c->cap_samples = cap;
     }
     /* The same headroom for the network's workspace, which
      * nerf__model_density() would otherwise size to each round. */
@@ -89,12 +89,10 @@ typedef struct round_job {
     nerf__opacity_cut *c;
     const nerf__march_samples *ms;
     const float *points;
-    const nerf__occupancy *zero_in;
     float eps;
     uint32_t *count;
     float *enc;
     size_t width;     /* floats of a position encoding */
-    size_t n_active;
 } round_job;
 
 static void gather_points(void *ctx, size_t begin, size_t end)
@@ -106,17 +104,6 @@ static void gather_points(void *ctx, size_t begin, size_t end)
         const size_t from = j->ms->offsets[k] + j->count[k];
         memcpy(c->pos + 3 * c->start[i], j->points + 3 * from,
                3 * (c->start[i + 1] - c->start[i]) * sizeof(float));
-    }
-}
-
-static void zero_empty(void *ctx, size_t begin, size_t end)
-{
-    const round_job *j = ctx;
-    nerf__opacity_cut *c = j->c;
-    for (size_t i = begin; i < end; i++) {
-        if (!nerf__occupancy_occupied(j->zero_in, c->pos + 3 * i)) {
-            c->sigma[i] = 0.0f;
-        }
     }
 }
 
@@ -159,8 +146,7 @@ int nerf__opacity_cut_run(nerf__opacity_cut *c, const nerf_model *m,
     if (rc != NERF_OK) {
         return rc;
     }
-    round_job j = {.c = c, .ms = ms, .points = points, .zero_in = zero_in,
-                   .eps = eps, .count = count, .enc = enc,
+    round_job j = {.c = c, .ms = ms, .points = points, .eps = eps, .count = count, .enc = enc,
                    .width = m->nets[0].pos_width};
     size_t going = 0;
     for (size_t k = 0; k < n_rays; k++) {
@@ -184,7 +170,6 @@ int nerf__opacity_cut_run(nerf__opacity_cut *c, const nerf_model *m,
         if (rc != NERF_OK) {
             return rc;
         }
-        j.n_active = going;
         nerf__parallel_for(going, 3 * piece, gather_points, &j);
         /* The weights do not change between the rounds. */
         c->ws.params_unchanged = c->rounds > 0;
@@ -194,7 +179,7 @@ int nerf__opacity_cut_run(nerf__opacity_cut *c, const nerf_model *m,
             return rc;
         }
         if (zero_in) {
-            nerf__parallel_for(rows, 20, zero_empty, &j);
+            nerf__occupancy_zero_empty(zero_in, rows, c->pos, c->sigma);
         }
         nerf__parallel_for(going, (4 + j.width / 4) * piece, count_round, &j);
         c->evaluated += rows;

@@ -140,7 +140,6 @@ void nerf__render_march_options(const nerf__render_setup *s,
  * rows of its own rays or samples. */
 typedef struct march_job {
     nerf__batch *b;
-    const nerf__occupancy *g;
     const nerf__march_rays *rays;
     const float *viewdir; /* [rays->n, 3] unit directions of those rays */
     uint32_t max_samples;
@@ -174,17 +173,6 @@ static void sample_dirs(void *ctx, size_t begin, size_t end)
         const float *v = j->viewdir + 3 * k;
         for (size_t i = off[k]; i < off[k + 1]; i++) {
             memcpy(b->m_dirs + 3 * i, v, 3 * sizeof(float));
-        }
-    }
-}
-
-static void zero_empty(void *ctx, size_t begin, size_t end)
-{
-    const march_job *j = ctx;
-    nerf__batch *b = j->b;
-    for (size_t i = begin; i < end; i++) {
-        if (!nerf__occupancy_occupied(j->g, b->march_points + 3 * i)) {
-            b->m_sigma[i] = 0.0f;
         }
     }
 }
@@ -236,9 +224,8 @@ static int evaluate(nerf__batch *b, const nerf__render_setup *s,
     }
     ws->params_unchanged = false;
     if (rc == NERF_OK && s->march_zero_empty) {
-        march_job z = *j;
-        z.g = nerf__model_grid(m);
-        nerf__parallel_for(total, 20, zero_empty, &z);
+        nerf__occupancy_zero_empty(nerf__model_grid(m), total,
+                                   b->march_points, b->m_sigma);
     }
     return rc;
 }
