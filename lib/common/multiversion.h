@@ -10,8 +10,8 @@
  * update) instead of running them one element at a time.
  *
  * The clones compute exactly the same values: the build contracts no
- * multiply-add into a fused one (ISO C mode), and vectorisation never
- * reorders a sum.  Elsewhere (compilers without target_clones, other
+ * multiply-add into a fused one (-ffp-contract=off, meson.build), and
+ * vectorisation never reorders a sum.  Elsewhere (compilers without target_clones, other
  * processors) NERF__MULTIVERSION is empty.
  */
 #ifndef NERF_COMMON_MULTIVERSION_H

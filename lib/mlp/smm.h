@@ -18,9 +18,9 @@
  * which one runs is chosen when the library is loaded (nerf__smm_default).
  * Every element is one chain of multiply-adds in k order from its initial
  * value, whatever the tiling, so the AVX-512 and AVX2 variants give
- * identical bits (both fuse each multiply-add); the portable one leaves
- * fusing to the compiler (gcc in ISO C mode does not) and differs from
- * them by rounding only.
+ * identical bits (both fuse each multiply-add); the portable one does
+ * not fuse (the build says -ffp-contract=off) and differs from them by
+ * rounding only.
  */
 #ifndef NERF_MLP_SMM_H
 #define NERF_MLP_SMM_H

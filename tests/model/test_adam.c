@@ -45,6 +45,41 @@ TEST(weight_decay)
     CHECK_NEAR(p[1], 1.9, 1e-6);
 }
 
+/* The moments come out of two roundings each, a product's and a sum's,
+ * whatever processor the update's code was compiled for: no clone may
+ * fuse a multiply and an add (clang does, where the target has FMA,
+ * unless the build says -ffp-contract=off), or a run's result would
+ * depend on the machine.  Many values, so that a fused sum differs. */
+TEST(moments_rounded_as_written)
+{
+    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
+    enum { N = 1024 };
+    static float p[N], g[N], m[N], v[N], want_m[N], want_v[N];
+    const float b1 = 0.9f, b2 = 0.99f;
+    const float one_b1 = (float)(1.0 - 0.9), one_b2 = (float)(1.0 - 0.99);
+    for (int i = 0; i < N; i++) {
+        p[i] = 0.5f;
+        m[i] = 0.001f * (float)(i % 97) - 0.05f;
+        v[i] = 0.0001f * (float)(i % 89) + 1e-5f;
+        g[i] = 0.0037f * (float)(i % 61) - 0.11f;
+        /* Each product and sum stored, so rounded, before the next. */
+        const float m1 = b1 * m[i], m2 = one_b1 * g[i];
+        want_m[i] = m1 + m2;
+        const float v1 = b2 * v[i], v2 = one_b2 * g[i], v3 = v2 * g[i];
+        want_v[i] = v1 + v3;
+    }
+    nerf__adam_update(&hp, 3, 1e-2, N, p, g, m, v, 0);
+    int differ = 0;
+    for (int i = 0; i < N; i++) {
+        differ += m[i] != want_m[i] || v[i] != want_v[i];
+    }
+    CHECK(differ == 0);
+    if (differ) {
+        printf("  %d of %d moments differ from two roundings each\n", differ,
+               N);
+    }
+}
+
 /* A sparse range leaves entries with a zero gradient exactly as they
  * were, moments included, and updates the others as a dense one would. */
 TEST(sparse_skips_untouched)
@@ -188,6 +223,53 @@ TEST(corrected_update)
     CHECK(r1[0] == 0.0f && r2[0] == 0.0f);
 }
 
+/* A range of many parameters, updated by vectors (masked, skipping those
+ * whose gradients are all zero), gives what updating each parameter alone
+ * gives, bit for bit: 16-wide blocks touched, partly touched and
+ * untouched, and a remainder shorter than one. */
+TEST(corrected_update_in_blocks)
+{
+    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
+    enum { N = 16 * 9 + 5, OFF = 3 };
+    static float p[N], g[N], m[N], v[N], r1[N], r2[N];
+    static float pa[N], ga[N], ma[N], va[N], r1a[N], r2a[N];
+    for (int i = 0; i < N; i++) {
+        p[i] = pa[i] = 0.01f * (float)(i % 13) - 0.05f;
+        m[i] = ma[i] = v[i] = va[i] = 0.0f;
+        r1[i] = r1a[i] = r2[i] = r2a[i] = 1.0f;
+    }
+    for (int step = 0; step < 6; step++) {
+        for (int i = 0; i < N; i++) {
+            /* The range's blocks 2 and 6 untouched; 4 touched at one
+             * parameter; the rest at most parameters, changing with the
+             * step. */
+            const int block = (i - OFF) / 16;
+            const int touched = block == 2 || block == 6 ? 0
+                              : block == 4 ? (i - OFF) % 16 == 7
+                              : (i * 7 + step) % 5 != 0;
+            g[i] = ga[i] = touched ? 0.1f * (float)((i + step) % 9) - 0.4f
+                                   : 0.0f;
+        }
+        nerf__adam_update_corrected(&hp, 1e-2, N - OFF, p + OFF, g + OFF,
+                                    m + OFF, v + OFF, r1 + OFF, r2 + OFF);
+        for (int i = OFF; i < N; i++) {
+            nerf__adam_update_corrected(&hp, 1e-2, 1, pa + i, ga + i, ma + i,
+                                        va + i, r1a + i, r2a + i);
+        }
+    }
+    int differ = 0, changed = 0;
+    for (int i = 0; i < N; i++) {
+        differ += p[i] != pa[i] || m[i] != ma[i] || v[i] != va[i] ||
+                  r1[i] != r1a[i] || r2[i] != r2a[i] ||
+                  (i >= OFF && g[i] != 0.0f);
+        changed += r1[i] != 1.0f;
+    }
+    CHECK(differ == 0);
+    /* Not all touched, not none: the test saw both kinds of block. */
+    CHECK(changed > 16 && changed < N - 32);
+    CHECK(r1[OFF + 2 * 16 + 5] == 1.0f && r1[OFF + 4 * 16 + 7] < 1.0f);
+}
+
 /* A hash-grid model keeps corrections for its table's parameters, not
  * for its layers'. */
 TEST(model_corrections)
@@ -279,9 +361,11 @@ int main(void)
 {
     RUN(three_steps_by_hand);
     RUN(weight_decay);
+    RUN(moments_rounded_as_written);
     RUN(sparse_skips_untouched);
     RUN(model_regions);
     RUN(corrected_update);
+    RUN(corrected_update_in_blocks);
     RUN(model_corrections);
     RUN(schedule);
     RUN(schedule_with_a_start);
