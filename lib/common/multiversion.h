@@ -11,8 +11,8 @@
  *
  * The clones compute exactly the same values: the build contracts no
  * multiply-add into a fused one (-ffp-contract=off, meson.build), and
- * vectorisation never reorders a sum.  Elsewhere (compilers without target_clones, other
- * processors) NERF__MULTIVERSION is empty.
+ * vectorisation never reorders a sum.  Elsewhere (compilers without
+ * target_clones, other processors) NERF__MULTIVERSION is empty.
  */
 #ifndef NERF_COMMON_MULTIVERSION_H
 #define NERF_COMMON_MULTIVERSION_H
