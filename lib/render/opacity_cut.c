@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "composite_packed.h"
+#include "headroom.h"
 #include "parallel.h"
 
 /*
@@ -33,18 +34,12 @@ void nerf__opacity_cut_release(nerf__opacity_cut *c)
     nerf__opacity_cut_init(c, &env);
 }
 
-/* Growing by an eighth makes reallocations rare once the counts settle. */
-static size_t with_headroom(size_t n)
-{
-    return n + n / 8 + 64;
-}
-
 static int reserve_rays(nerf__opacity_cut *c, size_t n)
 {
     if (c->ray_block && n <= c->cap_rays) {
         return NERF_OK;
     }
-    n = with_headroom(n);
+    n = nerf__with_headroom(n);
     const size_t bytes[] = {n * sizeof(float), n * sizeof(uint32_t),
                             (n + 1) * sizeof(size_t)};
     unsigned char *p = nerf__alloc(&c->env, nerf__carve_size(bytes, 3));
@@ -64,7 +59,7 @@ static int reserve_samples(nerf__opacity_cut *c, const nerf_model *m,
                            size_t n)
 {
     if (c->sample_block == NULL || n > c->cap_samples) {
-        const size_t cap = with_headroom(n);
+        const size_t cap = nerf__with_headroom(n);
         const size_t bytes[] = {3 * cap * sizeof(float), cap * sizeof(float)};
         unsigned char *p = nerf__alloc(&c->env, nerf__carve_size(bytes, 2));
         if (p == NULL) {
@@ -80,7 +75,7 @@ static int reserve_samples(nerf__opacity_cut *c, const nerf_model *m,
      * nerf__model_density() would otherwise size to each round. */
     if (n > c->ws.cap) {
         return nerf__workspace_reserve_density(&c->env, &c->ws, &m->nets[0],
-                                               with_headroom(n));
+                                               nerf__with_headroom(n));
     }
     return NERF_OK;
 }
@@ -146,8 +141,8 @@ int nerf__opacity_cut_run(nerf__opacity_cut *c, const nerf_model *m,
     if (rc != NERF_OK) {
         return rc;
     }
-    round_job j = {.c = c, .ms = ms, .points = points, .eps = eps, .count = count, .enc = enc,
-                   .width = m->nets[0].pos_width};
+    round_job j = {.c = c, .ms = ms, .points = points, .eps = eps,
+                   .count = count, .enc = enc, .width = m->nets[0].pos_width};
     size_t going = 0;
     for (size_t k = 0; k < n_rays; k++) {
         count[k] = 0;

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "headroom.h"
 #include "ndc.h"
 #include "occupancy.h"
 #include "opacity_cut.h"
@@ -31,14 +32,6 @@
 #define PIECE_MIN 4u
 #define PIECE_MAX 8u
 
-/* Headroom when a sample buffer grows: the next batch's count is rarely
- * the same, and growing by an eighth makes reallocations rare once the
- * counts settle. */
-static size_t with_headroom(size_t n)
-{
-    return n + n / 8 + 64;
-}
-
 void nerf__render_march_release(nerf__batch *b)
 {
     nerf__march_samples_release(&b->march);
@@ -57,7 +50,7 @@ static int reserve_packed(nerf__batch *b, size_t n, bool keep)
         (b->cap_packed_keep || !keep)) {
         return NERF_OK;
     }
-    size_t cap = with_headroom(n);
+    size_t cap = nerf__with_headroom(n);
     if (cap > ((size_t)1 << 26)) {
         return nerf__error(NERF_EINVAL, "render batch of %zu marched samples "
                            "is too large", n);
@@ -185,7 +178,7 @@ static int reserve_workspace(nerf__batch *b, const nerf_model *m, size_t n,
 {
     nerf__workspace *ws = &b->ws[0];
     if (n > ws->cap || (keep && !ws->keep)) {
-        return nerf__model_reserve(m, 0, ws, with_headroom(n), keep);
+        return nerf__model_reserve(m, 0, ws, nerf__with_headroom(n), keep);
     }
     return NERF_OK;
 }
