@@ -48,24 +48,48 @@ static void forward(const nerf__encoding *e, const float *table, size_t n,
     nerf__parallel_for(n, 50 * e->u.hash.levels, forward_rows, &j);
 }
 
-/* Coarse levels are dense and cheap, fine ones hashed and slow: blocks
- * pair them (0, L-1, 1, L-2, ...) so that contiguous ranges of blocks cost
- * about the same. */
+typedef struct backward_job {
+    table_job t;
+    uint32_t order[NERF__HASHGRID_MAX_LEVELS]; /* block -> level */
+} backward_job;
+
 static void backward_level(void *ctx, size_t block)
 {
-    const table_job *j = ctx;
-    const uint32_t L = j->hg->levels;
-    uint32_t level = block % 2 ? L - 1 - (uint32_t)(block / 2)
-                               : (uint32_t)(block / 2);
-    nerf__hashgrid_backward_level(j->hg, level, j->n, j->in, 3, j->d_out,
-                                  j->stride, j->grad);
+    const backward_job *j = ctx;
+    nerf__hashgrid_backward_level(j->t.hg, j->order[block], j->t.n, j->t.in,
+                                  3, j->t.d_out, j->t.stride, j->t.grad);
+}
+
+/*
+ * A level's cost grows with its resolution, and the pool gives each
+ * thread a contiguous range of blocks: so the levels are dealt to the
+ * threads back and forth (for two: 0, 3, 4, 7, ... to the first, 1, 2,
+ * 5, 6, ... to the second), each thread's in a row.  Pairing the
+ * coarsest with the finest instead left one of two threads waiting a
+ * quarter of the backward on lego.  Levels write disjoint parts of the
+ * gradient, so the order changes no value.
+ */
+static void deal_levels(uint32_t L, uint32_t *order)
+{
+    uint32_t T = nerf__parallel_threads();
+    T = T < L ? T : L;
+    uint32_t k = 0;
+    for (uint32_t t = 0; t < T; t++) {
+        for (uint32_t l = 0; l < L; l++) {
+            const uint32_t lane = l % T;
+            if ((l / T % 2 ? T - 1 - lane : lane) == t) {
+                order[k++] = l;
+            }
+        }
+    }
 }
 
 static void backward(const nerf__encoding *e, size_t n, const float *in,
                      const float *d_out, size_t d_stride, float *grad)
 {
-    table_job j = {.hg = &e->u.hash, .in = in, .d_out = d_out, .grad = grad,
-                   .n = n, .stride = d_stride};
+    backward_job j = {.t = {.hg = &e->u.hash, .in = in, .d_out = d_out,
+                            .grad = grad, .n = n, .stride = d_stride}};
+    deal_levels(e->u.hash.levels, j.order);
     nerf__parallel_blocks(e->u.hash.levels, 200 * n, backward_level, &j);
 }
 

@@ -1,6 +1,7 @@
 /* The random rays of one training step. */
 #include "camera.h"
 #include "dataset.h"
+#include "parallel.h"
 #include "rng.h"
 #include "sampler.h"
 #include "trainer.h"
@@ -33,6 +34,57 @@ static void background_target(nerf_trainer *t, uint64_t step, uint32_t r,
     }
 }
 
+/* How many rays ahead a range fetches the pixels of: the draws scatter
+ * the rays over all the images, so each reads two lines no cache holds. */
+#define AHEAD 8
+
+#if defined(__GNUC__)
+#  define PREFETCH(p) __builtin_prefetch((p), 0, 0)
+#else
+#  define PREFETCH(p) ((void)(p))
+#endif
+
+typedef struct fill_job {
+    nerf_trainer *t;
+    uint64_t step;
+} fill_job;
+
+/* Rays [begin, end) of the step from their drawn pixels: each its own
+ * ray, target and background, apart from the others. */
+static void fill_rays(void *ctx, size_t begin, size_t end)
+{
+    const fill_job *j = ctx;
+    nerf_trainer *t = j->t;
+    const nerf_dataset *ds = t->dataset;
+    const size_t plane = (size_t)t->width * t->height;
+    for (size_t r = begin; r < end; r++) {
+        if (r + AHEAD < end) {
+            const size_t ahead = t->picked[r + AHEAD];
+            PREFETCH(ds->pixels + 3 * ahead);
+            if (t->random_bg) {
+                PREFETCH(ds->alpha + ahead);
+            }
+        }
+        const size_t at = t->picked[r];
+        const size_t img = at / plane;
+        nerf__camera_rays(&t->cameras[img], at - img * plane, 1,
+                          t->origins + 3 * r, t->directions + 3 * r);
+        const float *src = ds->pixels + 3 * at;
+        for (int c = 0; c < 3; c++) {
+            t->targets[3 * r + c] = src[c];
+        }
+        if (t->random_bg) {
+            background_target(t, j->step, (uint32_t)r, at);
+        }
+    }
+}
+
+/*
+ * The draws come from one stream and are cheap; the rest of a ray (its
+ * camera ray, and its pixel and coverage, which are cache misses in the
+ * images' hundreds of megabytes) is spread over the cores, so that no
+ * step spends milliseconds on one while the others wait.
+ */
 void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step)
 {
     const uint32_t W = t->width, H = t->height;
@@ -53,15 +105,8 @@ void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step)
         uint32_t img = (uint32_t)(nerf__rng_uniform_d(&rng) * t->n_images);
         uint32_t x = x0 + (uint32_t)(nerf__rng_uniform_d(&rng) * cw);
         uint32_t y = y0 + (uint32_t)(nerf__rng_uniform_d(&rng) * ch);
-        size_t pixel = (size_t)y * W + x;
-        nerf__camera_rays(&t->cameras[img], pixel, 1, t->origins + 3 * r,
-                          t->directions + 3 * r);
-        const float *src = t->dataset->pixels + ((size_t)img * H * W + pixel) * 3;
-        for (int c = 0; c < 3; c++) {
-            t->targets[3 * r + c] = src[c];
-        }
-        if (t->random_bg) {
-            background_target(t, step, r, (size_t)img * H * W + pixel);
-        }
+        t->picked[r] = ((size_t)img * H + y) * W + x;
     }
+    fill_job j = {t, step};
+    nerf__parallel_for(t->opts.batch_rays, 256, fill_rays, &j);
 }

@@ -106,6 +106,10 @@ static int alloc_buffers(nerf_trainer *t)
             return NERF_ENOMEM;
         }
     }
+    t->picked = nerf__calloc(&t->env, t->opts.batch_rays, sizeof(size_t));
+    if (t->picked == NULL) {
+        return NERF_ENOMEM;
+    }
     if (t->random_bg) {
         t->backgrounds = nerf__calloc(&t->env, n, sizeof(float));
         if (t->backgrounds == NULL) {
@@ -299,6 +303,7 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *t)
         nerf__free(&env, bufs[i]);
     }
     nerf__free(&env, t->backgrounds);
+    nerf__free(&env, t->picked);
     nerf__free(&env, t->march_offsets);
     nerf__free(&env, t->cameras);
     nerf__free(&env, t->checkpoint_path);

@@ -28,6 +28,9 @@ struct nerf_trainer {
     /* [batch_rays, 3] each: the rays and target colours of the step, and
      * the loss gradient of each pass's colours. */
     float *origins, *directions, *targets;
+    /* [batch_rays]: the pixel each ray of the step was drawn at, counted
+     * across all the images (pick_rays.c). */
+    size_t *picked;
     float *rgb[NERF__PASSES], *d_rgb[NERF__PASSES];
     /* random_background on a dataset with alpha: [batch_rays, 3], the
      * colour each ray's target and render are finished on (else NULL). */

@@ -9,6 +9,7 @@
 #include "camera.h"
 #include "dataset.h"
 #include "model.h"
+#include "parallel.h"
 #include "sampler.h"
 #include "train_fixture.h"
 #include "trainer.h"
@@ -222,6 +223,57 @@ TEST(target_and_render_share_the_background)
     }
 }
 
+/* The rays of a step are drawn in order and filled in on the pool's
+ * threads: the same rays, targets and backgrounds whichever thread fills
+ * which ray, as the calling thread alone fills them. */
+TEST(rays_whatever_the_split)
+{
+    enum { MANY = 4096 };
+    nerf_model *m = fast_model(3);
+    nerf_sampler *s = fast_sampler(4);
+    nerf_trainer_options o;
+    NERF_TRAINER_OPTIONS_INIT(&o);
+    o.batch_rays = MANY;
+    o.random_background = 1;
+    nerf_trainer *t = NULL;
+    if (m && s) {
+        CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    }
+    if (t != NULL) {
+        const size_t bytes = sizeof(float) * 3 * MANY;
+        float *pooled = malloc(4 * bytes);
+        nerf__trainer_pick_rays(t, 9);
+        memcpy(pooled, t->origins, bytes);
+        memcpy(pooled + 3 * MANY, t->directions, bytes);
+        memcpy(pooled + 6 * MANY, t->targets, bytes);
+        memcpy(pooled + 9 * MANY, t->backgrounds, bytes);
+        nerf__parallel_set_inline(1);
+        nerf__trainer_pick_rays(t, 9);
+        nerf__parallel_set_inline(0);
+        CHECK(memcmp(pooled, t->origins, bytes) == 0);
+        CHECK(memcmp(pooled + 3 * MANY, t->directions, bytes) == 0);
+        CHECK(memcmp(pooled + 6 * MANY, t->targets, bytes) == 0);
+        CHECK(memcmp(pooled + 9 * MANY, t->backgrounds, bytes) == 0);
+        /* Drawn across the images, within them. */
+        const size_t plane = (size_t)SIDE * SIDE;
+        int images[IMAGES] = {0}, outside = 0;
+        for (size_t r = 0; r < MANY; r++) {
+            outside += t->picked[r] >= IMAGES * plane;
+            if (t->picked[r] < IMAGES * plane) {
+                images[t->picked[r] / plane]++;
+            }
+        }
+        CHECK_EQ_INT(outside, 0);
+        for (int i = 0; i < IMAGES; i++) {
+            CHECK(images[i] > MANY / IMAGES / 2);
+        }
+        free(pooled);
+    }
+    nerf_trainer_destroy(t);
+    nerf_sampler_destroy(s);
+    nerf_model_destroy(m);
+}
+
 /* Weights after `steps` steps of a fresh model. */
 static float *train(const nerf_dataset *ds, int fast, int32_t random_bg,
                     int steps, size_t *n)
@@ -361,6 +413,7 @@ int main(void)
     }
     RUN(bad_values_refused);
     RUN(target_and_render_share_the_background);
+    RUN(rays_whatever_the_split);
     RUN(opaque_images_ignore_it);
     RUN(allocation_failures);
     fixture_close(&fx);
