@@ -6,6 +6,7 @@
 
 #include "error.h"
 #include "multiversion.h"
+#include "prefetch.h"
 #include "rng.h"
 
 /*
@@ -37,11 +38,6 @@
 #endif
 #define AHEAD 16
 
-#if defined(__GNUC__)
-#  define PREFETCH(p, write) __builtin_prefetch((p), (write), 3)
-#else
-#  define PREFETCH(p, write) ((void)(p))
-#endif
 /* Below this many samples (or levels) per thread, threads cost more than
  * they save. */
 #define MIN_SAMPLES_PER_THREAD 4096
@@ -288,7 +284,7 @@ static ALWAYS_INLINE void gather(const tile *restrict t, size_t m,
 {
     for (size_t s = 0; s < m; s++) {
         for (int c = 0; c < 8 && s + AHEAD < m; c++) {
-            PREFETCH(table + (size_t)t->idx[c][s + AHEAD] * F, 0);
+            NERF__PREFETCH(table + (size_t)t->idx[c][s + AHEAD] * F, 0, 3);
         }
         float acc[NERF__HASHGRID_MAX_FEATURES];
         for (uint32_t f = 0; f < F; f++) {
@@ -314,7 +310,7 @@ static ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
 {
     for (size_t s = 0; s < m; s++) {
         for (int c = 0; c < 8 && s + AHEAD < m; c++) {
-            PREFETCH(grad + (size_t)t->idx[c][s + AHEAD] * F, 1);
+            NERF__PREFETCH(grad + (size_t)t->idx[c][s + AHEAD] * F, 1, 3);
         }
         float g[NERF__HASHGRID_MAX_FEATURES];
         const float *ds = d + s * d_stride;

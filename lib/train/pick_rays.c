@@ -2,6 +2,7 @@
 #include "camera.h"
 #include "dataset.h"
 #include "parallel.h"
+#include "prefetch.h"
 #include "rng.h"
 #include "sampler.h"
 #include "trainer.h"
@@ -38,12 +39,6 @@ static void background_target(nerf_trainer *t, uint64_t step, uint32_t r,
  * the rays over all the images, so each reads two lines no cache holds. */
 #define AHEAD 8
 
-#if defined(__GNUC__)
-#  define PREFETCH(p) __builtin_prefetch((p), 0, 0)
-#else
-#  define PREFETCH(p) ((void)(p))
-#endif
-
 typedef struct fill_job {
     nerf_trainer *t;
     uint64_t step;
@@ -60,9 +55,9 @@ static void fill_rays(void *ctx, size_t begin, size_t end)
     for (size_t r = begin; r < end; r++) {
         if (r + AHEAD < end) {
             const size_t ahead = t->picked[r + AHEAD];
-            PREFETCH(ds->pixels + 3 * ahead);
+            NERF__PREFETCH(ds->pixels + 3 * ahead, 0, 0);
             if (t->random_bg) {
-                PREFETCH(ds->alpha + ahead);
+                NERF__PREFETCH(ds->alpha + ahead, 0, 0);
             }
         }
         const size_t at = t->picked[r];
