@@ -367,9 +367,10 @@ typedef struct nerf_model_options {
                                    default 19. */
     uint32_t hash_min_resolution; /**< Coarsest cells across the bound;
                                    default 16. */
-    uint32_t hash_max_resolution; /**< Finest cells across the bound
-                                   (>= min); default 2048 (per unit of
-                                   bound: the fast preset scales it). */
+    uint32_t hash_max_resolution; /**< Finest cells across the grid's
+                                   whole domain (>= min; the domain
+                                   follows bound and space); default
+                                   2048, whatever the bound. */
     float bound;              /**< The hash grid covers [-bound, bound]^3;
                                    default 1.5 (Blender scenes). */
     uint32_t geo_features;    /**< 0 (default): the reference head, a
