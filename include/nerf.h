@@ -365,12 +365,12 @@ typedef struct nerf_model_options {
     uint32_t hash_features;   /**< Features per level, 1..8; default 2. */
     uint32_t hash_log2_size;  /**< log2 of entries per level, 10..24;
                                    default 19. */
-    uint32_t hash_min_resolution; /**< Coarsest cells across the bound;
-                                   default 16. */
-    uint32_t hash_max_resolution; /**< Finest cells across the grid's
-                                   whole domain (>= min; the domain
-                                   follows bound and space); default
-                                   2048, whatever the bound. */
+    uint32_t hash_min_resolution; /**< Coarsest cells across the grid's
+                                   whole domain (which follows bound
+                                   and space); default 16. */
+    uint32_t hash_max_resolution; /**< Finest cells across the same
+                                   domain (>= min); default 2048,
+                                   whatever the bound. */
     float bound;              /**< The hash grid covers [-bound, bound]^3;
                                    default 1.5 (Blender scenes). */
     uint32_t geo_features;    /**< 0 (default): the reference head, a
