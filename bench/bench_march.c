@@ -2,13 +2,15 @@
  * bench_march: rays/s and samples per ray of the occupancy-grid ray
  * marcher (count and fill passes) on a 128^3 grid of a ball, for camera
  * rays as a Blender scene has them (bound [-1.5, 1.5]^3, cameras at radius
- * 4); marching without skipping for comparison; the grid update and the
- * packed compositing as well.  Uses the thread pool (every core).  Prints
+ * 4); marching without skipping for comparison; the same rays in batches
+ * of a training step's rays, counted and filled or walked once
+ * (nerf__march_run); the grid update and the packed compositing as well.  Uses the thread pool (every core).  Prints
  * figures; asserts nothing.
  *
  *   bench_march [--rays N] [--res R] [--radius r] [--seconds S]
  */
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,7 +54,42 @@ typedef struct bench {
     float *t, *dt, *rgb, *sigma, *out_rgb, *d_out, *d_rgb, *d_sigma;
     uint32_t *used;
     size_t total;
+    nerf__march_samples walk;
 } bench;
+
+/* Rays a batch of run_batches() takes: a fast training step's. */
+#define BATCH_RAYS 2048
+
+/* The rays in batches of BATCH_RAYS, each numbered on from the last;
+ * walk: by nerf__march_run(), else count and fill. */
+static void run_batches(bench *b, bool walk)
+{
+    nerf__march_rays part = b->rays;
+    for (size_t at = 0; at < b->rays.n; at += part.n) {
+        const size_t left = b->rays.n - at;
+        part.n = left < BATCH_RAYS ? left : BATCH_RAYS;
+        part.origins = b->rays.origins + 3 * at;
+        part.dirs = b->rays.dirs + 3 * at;
+        part.first_ray = at;
+        if (walk) {
+            nerf__march_run(b->g, &b->o, &part, &b->walk);
+        } else {
+            nerf__march_count(b->g, &b->o, &part, b->offsets);
+            nerf__march_fill(b->g, &b->o, &part, b->offsets, b->t, b->dt,
+                             NULL);
+        }
+    }
+}
+
+static void run_batches_walked(bench *b)
+{
+    run_batches(b, true);
+}
+
+static void run_batches_counted(bench *b)
+{
+    run_batches(b, false);
+}
 
 static void run_count(bench *b)
 {
@@ -210,6 +247,7 @@ int main(int argc, char **argv)
         }
     }
     bench b = {.g = g};
+    nerf__march_samples_init(&b.walk, &env);
     nerf__march_defaults(&b.o, g);
     b.o.jitter = true;
     b.rays = (nerf__march_rays){.n = n, .origins = o, .dirs = d,
@@ -245,6 +283,12 @@ int main(int argc, char **argv)
                (double)b.total / tm.wall * 1e-6, tm.wall * 1e3,
                tc.wall * 1e3, tf.wall * 1e3, tm.cpu / n * 1e9,
                tc.cpu / n * 1e9, tf.cpu / n * 1e9);
+        timing tb = best_time(run_batches_counted, &b, seconds / 2);
+        timing tw = best_time(run_batches_walked, &b, seconds / 2);
+        printf("  in batches of %d rays: count and fill %.1f ms, one walk "
+               "%.1f ms (CPU %.0f and %.0f ns/ray)\n", BATCH_RAYS,
+               tb.wall * 1e3, tw.wall * 1e3, tb.cpu / n * 1e9,
+               tw.cpu / n * 1e9);
     }
     /* Compositing the skipping march's samples, the ball opaque. */
     b.o.skip_empty = true;
@@ -280,6 +324,7 @@ int main(int argc, char **argv)
     free(b.out_rgb);
     free(b.d_out);
     free(b.used);
+    nerf__march_samples_release(&b.walk);
     nerf__occupancy_destroy(g);
     return 0;
 }

@@ -285,6 +285,7 @@ typedef struct march_job {
     const nerf__march_rays *r;
     const size_t *offsets;
     size_t *counts;
+    uint32_t *slot_count;
     const float *t;
     float *t_out, *dt_out, *xyz;
     uint32_t *next_step;
@@ -391,33 +392,62 @@ void nerf__march_samples_init(nerf__march_samples *s, const nerf__env *env)
 
 void nerf__march_samples_release(nerf__march_samples *s)
 {
+    /* offsets heads the block of the per-ray arrays (reserve_rays). */
     nerf__free(&s->env, s->offsets);
-    nerf__free(&s->env, s->next_step);
     nerf__free(&s->env, s->t);
+    nerf__free(&s->env, s->slot_t);
     nerf__env env = s->env;
     nerf__march_samples_init(s, &env);
 }
 
-/* t and dt room for at least `total` samples; s's samples are lost. */
-static int reserve_samples(nerf__march_samples *s, size_t total)
+/* Room for at least `total` samples in the pair (*t, *dt), one block;
+ * what they held is lost. */
+static int reserve_pair(const nerf__env *env, float **t, float **dt,
+                        size_t *cap, size_t total)
 {
-    if (s->t != NULL && total <= s->cap_samples) {
+    if (*t != NULL && total <= *cap) {
         return NERF_OK;
     }
     /* Some headroom: the next batch's count is rarely the same. */
-    size_t cap = total + total / 8 + 64, bytes;
-    size_t half = (cap + 15) & ~(size_t)15; /* dt stays 64-byte aligned */
+    size_t want = total + total / 8 + 64, bytes;
+    size_t half = (want + 15) & ~(size_t)15; /* dt stays 64-byte aligned */
     if (nerf__mul_size(2 * half, sizeof(float), &bytes) != 0) {
         return nerf__error(NERF_ENOMEM, "march: %zu samples overflow", total);
     }
-    float *t = nerf__alloc(&s->env, bytes);
-    if (t == NULL) {
+    float *block = nerf__alloc(env, bytes);
+    if (block == NULL) {
         return NERF_ENOMEM;
     }
-    nerf__free(&s->env, s->t);
-    s->t = t;
-    s->dt = t + half;
-    s->cap_samples = half;
+    nerf__free(env, *t);
+    *t = block;
+    *dt = block + half;
+    *cap = half;
+    return NERF_OK;
+}
+
+/* The per-ray arrays for n rays, one block headed by offsets. */
+static int reserve_rays(nerf__march_samples *s, size_t n)
+{
+    if (s->offsets != NULL && n <= s->cap_rays) {
+        return NERF_OK;
+    }
+    size_t sizes, words, bytes;
+    if (nerf__mul_size(n + 1, 2 * sizeof(size_t), &sizes) != 0 ||
+        nerf__mul_size(n + 1, 2 * sizeof(uint32_t), &words) != 0 ||
+        sizes > SIZE_MAX - words) {
+        return nerf__error(NERF_ENOMEM, "march: %zu rays overflow", n);
+    }
+    bytes = sizes + words;
+    size_t *block = nerf__alloc(&s->env, bytes);
+    if (block == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__free(&s->env, s->offsets);
+    s->offsets = block;
+    s->more = block + (n + 1);
+    s->next_step = (uint32_t *)(block + 2 * (n + 1));
+    s->slot_count = s->next_step + (n + 1);
+    s->cap_rays = n;
     return NERF_OK;
 }
 
@@ -426,32 +456,68 @@ static void slot_range(void *ctx, size_t begin, size_t end)
     const march_job *j = ctx;
     const size_t room = j->o->max_samples;
     for (size_t k = begin; k < end; k++) {
-        j->counts[k + 1] = march_one(j, k, j->t_out + k * room,
+        j->slot_count[k] = march_one(j, k, j->t_out + k * room,
                                      j->dt_out + k * room, j->next_step + k);
     }
 }
 
-/* The one-pass march: every ray into its slot, then the slots packed in
- * ray order, which moves samples only towards the front. */
-static void march_slots(const nerf__occupancy *g, const nerf__march_options *o,
-                        const nerf__march_rays *rays, nerf__march_samples *s)
+/*
+ * The one-walk march (march.h): every ray into its slot of `room`; the
+ * rays a slot cut short of o->max_samples counted from where it stopped;
+ * the layout; the slots copied into it and the rest filled behind them.
+ */
+static int march_slots(const nerf__occupancy *g, const nerf__march_options *o,
+                       const nerf__march_rays *rays, nerf__march_samples *s,
+                       uint32_t room)
 {
-    const size_t room = o->max_samples;
-    march_job j = {.g = g, .o = o, .r = rays, .counts = s->offsets,
-                   .t_out = s->t, .dt_out = s->dt,
-                   .next_step = s->next_step};
-    s->offsets[0] = 0;
-    size_t cost = 200 + 64 * room;
-    nerf__parallel_for(rays->n, cost < COST_PER_RAY ? cost : COST_PER_RAY,
-                       slot_range, &j);
-    for (size_t k = 0; k < rays->n; k++) {
-        const size_t n = s->offsets[k + 1], at = s->offsets[k];
-        if (at != k * room) {
-            memmove(s->t + at, s->t + k * room, n * sizeof(float));
-            memmove(s->dt + at, s->dt + k * room, n * sizeof(float));
-        }
-        s->offsets[k + 1] = at + n;
+    const size_t n = rays->n;
+    int rc = reserve_pair(&s->env, &s->slot_t, &s->slot_dt, &s->cap_slots,
+                          n * room);
+    if (rc != NERF_OK) {
+        return rc;
     }
+    nerf__march_options in_slot = *o;
+    in_slot.max_samples = room;
+    march_job j = {.g = g, .o = &in_slot, .r = rays,
+                   .slot_count = s->slot_count, .t_out = s->slot_t,
+                   .dt_out = s->slot_dt, .next_step = s->next_step};
+    size_t cost = 200 + 64 * (size_t)room;
+    nerf__parallel_for(n, cost < COST_PER_RAY ? cost : COST_PER_RAY,
+                       slot_range, &j);
+    /* A ray cut by its slot, not by max_samples, goes on from its
+     * next_step; the others' next_step is already final, and with a slot
+     * of max_samples no ray goes on. */
+    const bool go_on = o->max_samples == 0 || room < o->max_samples;
+    nerf__march_options rest = *o;
+    rest.max_samples = o->max_samples ? o->max_samples - room : 0;
+    nerf__march_rays from_slot = *rays;
+    from_slot.first_step = s->next_step;
+    size_t more = 0;
+    if (go_on) {
+        more = nerf__march_count(g, &rest, &from_slot, s->more);
+    }
+    s->offsets[0] = 0;
+    for (size_t k = 0; k < n; k++) {
+        const size_t after = more ? s->more[k + 1] - s->more[k] : 0;
+        s->offsets[k + 1] = s->offsets[k] + s->slot_count[k] + after;
+    }
+    rc = reserve_pair(&s->env, &s->t, &s->dt, &s->cap_samples, s->offsets[n]);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    for (size_t k = 0; k < n; k++) {
+        const size_t at = s->offsets[k], c = s->slot_count[k];
+        memcpy(s->t + at, s->slot_t + k * room, c * sizeof(float));
+        memcpy(s->dt + at, s->slot_dt + k * room, c * sizeof(float));
+        s->more[k] = at + c;
+    }
+    if (more) {
+        /* Each ray reads its first_step before writing its next_step, the
+         * same entry. */
+        nerf__march_fill(g, &rest, &from_slot, s->more, s->t, s->dt,
+                         s->next_step);
+    }
+    return NERF_OK;
 }
 
 int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
@@ -459,40 +525,28 @@ int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
 {
     s->n_rays = 0;
     s->total = 0;
-    if (s->offsets == NULL || rays->n > s->cap_rays) {
-        size_t bytes, steps;
-        if (nerf__mul_size(rays->n + 1, sizeof(size_t), &bytes) != 0 ||
-            nerf__mul_size(rays->n + 1, sizeof(uint32_t), &steps) != 0) {
-            return nerf__error(NERF_ENOMEM, "march: %zu rays overflow",
-                               rays->n);
-        }
-        size_t *offsets = nerf__alloc(&s->env, bytes);
-        uint32_t *next_step = offsets ? nerf__alloc(&s->env, steps) : NULL;
-        if (next_step == NULL) {
-            nerf__free(&s->env, offsets);
-            return NERF_ENOMEM;
-        }
-        nerf__free(&s->env, s->offsets);
-        nerf__free(&s->env, s->next_step);
-        s->offsets = offsets;
-        s->next_step = next_step;
-        s->cap_rays = rays->n;
+    int rc = reserve_rays(s, rays->n);
+    if (rc != NERF_OK) {
+        return rc;
     }
-    int rc;
-    const uint32_t room = o->max_samples;
-    if (room > 0 && rays->n <= NERF__MARCH_ONE_PASS_ROOM / room) {
-        rc = reserve_samples(s, rays->n * room);
-        if (rc != NERF_OK) {
-            return rc;
-        }
-        march_slots(g, o, rays, s);
+    const uint32_t limit = o->max_samples;
+    uint32_t room = NERF__MARCH_SLOT_ROOM;
+    if (limit > 0 && (limit < room ||
+                      rays->n <= NERF__MARCH_ONE_PASS_ROOM / limit)) {
+        room = limit;
+    }
+    if (rays->n <= NERF__MARCH_SLOT_CAP / room) {
+        rc = march_slots(g, o, rays, s, room);
     } else {
         const size_t total = nerf__march_count(g, o, rays, s->offsets);
-        rc = reserve_samples(s, total);
-        if (rc != NERF_OK) {
-            return rc;
+        rc = reserve_pair(&s->env, &s->t, &s->dt, &s->cap_samples, total);
+        if (rc == NERF_OK) {
+            nerf__march_fill(g, o, rays, s->offsets, s->t, s->dt,
+                             s->next_step);
         }
-        nerf__march_fill(g, o, rays, s->offsets, s->t, s->dt, s->next_step);
+    }
+    if (rc != NERF_OK) {
+        return rc;
     }
     s->n_rays = rays->n;
     s->total = s->offsets[rays->n];

@@ -31,10 +31,10 @@
  * compositing takes as delta).  Marching is two passes over the same
  * per-ray loop, count then fill, so the layout is fixed before any sample
  * is written and does not depend on threads; both passes run over the
- * thread pool by rays.  (nerf__march_run() marches small capped batches
- * in one pass into per-ray slots instead, with the same result.)  No
- * memory is allocated except by nerf__march_run(), which grows a reusable
- * buffer.
+ * thread pool by rays.  (nerf__march_run() marches each ray once into a
+ * slot of its own instead and continues the few that fill it, with the
+ * same result.)  No memory is allocated except by nerf__march_run(),
+ * which grows reusable buffers.
  *
  * Contracted spaces (options.contract = inner > 0; space.h's CONTRACT):
  * the grid lies over contracted space, [-2 inner, 2 inner]^3, and a
@@ -138,22 +138,33 @@ typedef struct nerf__march_samples {
     size_t *offsets;        /* [n_rays + 1] */
     float *t, *dt;          /* [total] */
     uint32_t *next_step;    /* [n_rays] (see nerf__march_fill) */
-    /* private */
+    /* private: the one-walk march's slots and its per-ray counts */
     nerf__env env;
-    size_t cap_rays, cap_samples;
+    size_t cap_rays, cap_samples, cap_slots;
+    float *slot_t, *slot_dt;
+    uint32_t *slot_count;   /* [n_rays] */
+    size_t *more;           /* [n_rays + 1] */
 } nerf__march_samples;
 
 void nerf__march_samples_init(nerf__march_samples *s, const nerf__env *env);
 void nerf__march_samples_release(nerf__march_samples *s);
 
 /*
- * Count, size s, fill.  Or, when rays times max_samples is at most
- * NERF__MARCH_ONE_PASS_ROOM, march each ray once into a slot of
- * max_samples and pack the slots: the same samples in half the marching,
- * for a renderer's rounds of a few samples a ray, whose slots take a few
- * kilobytes.  NERF_OK or NERF_ENOMEM (s then holds no batch).
+ * The samples of rays into s: the packed layout of count and fill, bit for
+ * bit, in about half their marching.  Each ray is marched once into a slot
+ * of its own, of max_samples when rays times max_samples is at most
+ * NERF__MARCH_ONE_PASS_ROOM (a renderer's rounds of a few samples a ray),
+ * else of NERF__MARCH_SLOT_ROOM; the rays that fill a slot short of
+ * max_samples are then counted and filled from where their slot stopped,
+ * and the slots packed around them.  A batch whose slots would exceed
+ * NERF__MARCH_SLOT_CAP samples is counted, then filled.  NERF_OK or
+ * NERF_ENOMEM (s then holds no batch).
  */
 #define NERF__MARCH_ONE_PASS_ROOM 65536u
+/* Most rays of a training batch have fewer samples than this (lego, late
+ * in a run: about 35 on average), so few are walked twice. */
+#define NERF__MARCH_SLOT_ROOM 64u
+#define NERF__MARCH_SLOT_CAP (1u << 21)
 int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
                     const nerf__march_rays *rays, nerf__march_samples *s);
 

@@ -90,4 +90,52 @@ static size_t march_in_pieces(const nerf__occupancy *g,
     return bad;
 }
 
+/*
+ * nerf__march_run() of rays (first_step: from[k], or 0 when from is NULL)
+ * against count and fill of the same: returns the offsets, samples (t and
+ * dt, bit for bit) and next steps that differ, 0 when they all agree;
+ * *long_rays counts the rays with more than NERF__MARCH_SLOT_ROOM samples,
+ * which the one walk continues.
+ */
+static size_t one_walk_differences(const nerf__occupancy *g,
+                                   const nerf__march_options *o,
+                                   nerf__march_rays rays,
+                                   const uint32_t *from, size_t *long_rays)
+{
+    static size_t offsets[N_RAYS + 1];
+    static uint32_t next[N_RAYS];
+    *long_rays = 0;
+    rays.first_step = from;
+    const size_t total = nerf__march_count(g, o, &rays, offsets);
+    float *t = malloc((total + 1) * sizeof(float));
+    float *dt = malloc((total + 1) * sizeof(float));
+    if (t == NULL || dt == NULL) {
+        free(t);
+        free(dt);
+        return 1;
+    }
+    nerf__march_fill(g, o, &rays, offsets, t, dt, next);
+    nerf__env env;
+    nerf__env_default(&env);
+    nerf__march_samples ms;
+    nerf__march_samples_init(&ms, &env);
+    size_t bad = nerf__march_run(g, o, &rays, &ms) != NERF_OK;
+    if (!bad) {
+        bad += ms.n_rays != rays.n || ms.total != total;
+        bad += memcmp(ms.offsets, offsets, sizeof offsets) != 0;
+        bad += memcmp(ms.next_step, next, sizeof next) != 0;
+    }
+    if (!bad) {
+        bad += memcmp(ms.t, t, total * sizeof(float)) != 0;
+        bad += memcmp(ms.dt, dt, total * sizeof(float)) != 0;
+    }
+    for (size_t k = 0; k < rays.n; k++) {
+        *long_rays += offsets[k + 1] - offsets[k] > NERF__MARCH_SLOT_ROOM;
+    }
+    nerf__march_samples_release(&ms);
+    free(t);
+    free(dt);
+    return bad;
+}
+
 #endif

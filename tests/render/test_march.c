@@ -516,13 +516,53 @@ TEST(resumed_marches_continue_exactly)
     size_t pieces = 0;
     CHECK_EQ_INT(march_in_pieces(g, o, s.rays, &all, 5, &pieces), 0);
     printf("  %zu pieces of at most 5 samples\n", pieces);
-    /* Pieces of 5 fit the one-pass slots; pieces of 40 for every ray do
-     * not, and take the count and fill passes. */
+    /* Pieces of 5 for every ray fit NERF__MARCH_ONE_PASS_ROOM; pieces of
+     * 40 do not, and are marched in slots of 40 all the same. */
     CHECK(N_RAYS * 5 <= NERF__MARCH_ONE_PASS_ROOM &&
           N_RAYS * 40 > NERF__MARCH_ONE_PASS_ROOM);
     CHECK_EQ_INT(march_in_pieces(g, o, s.rays, &all, 40, &pieces), 0);
     printf("  %zu pieces of at most 40 samples\n", pieces);
     unmarch(&all);
+    nerf__occupancy_destroy(g);
+}
+
+TEST(one_walk_is_count_and_fill)
+{
+    /* nerf__march_run() marches each ray once into a slot and continues
+     * the rays that fill it: the same samples as count and fill, with and
+     * without skipping, limits below, at and above the slot's room, and
+     * marches that resume where a caller's earlier one stopped. */
+    nerf__occupancy *g = scene_grid(64);
+    static ray_set s;
+    make_rays(&s);
+    static uint32_t from[N_RAYS];
+    for (size_t k = 0; k < N_RAYS; k++) {
+        from[k] = k % 5 == 0 ? NERF__MARCH_DONE : (uint32_t)(k % 7) * 13;
+    }
+    const uint32_t limits[] = {0, 10, NERF__MARCH_SLOT_ROOM,
+                               NERF__MARCH_SLOT_ROOM + 1, 100, 100000};
+    size_t longest = 0;
+    for (int skip = 0; skip < 2; skip++) {
+        for (size_t i = 0; i < sizeof limits / sizeof limits[0]; i++) {
+            nerf__march_options o;
+            nerf__march_defaults(&o, g);
+            o.skip_empty = skip;
+            o.jitter = true;
+            o.seed = 21;
+            o.max_samples = limits[i];
+            s.rays.first_ray = 1000;
+            size_t long_rays;
+            CHECK_EQ_INT(one_walk_differences(g, &o, s.rays, NULL,
+                                              &long_rays), 0);
+            longest = long_rays > longest ? long_rays : longest;
+            CHECK_EQ_INT(one_walk_differences(g, &o, s.rays, from,
+                                              &long_rays), 0);
+        }
+    }
+    s.rays.first_ray = 0;
+    /* The continuation must have had rays to continue. */
+    CHECK(longest > N_RAYS / 4);
+    printf("  %zu of %d rays longer than a slot\n", longest, N_RAYS);
     nerf__occupancy_destroy(g);
 }
 
@@ -577,6 +617,7 @@ int main(void)
     RUN(jitter_offsets);
     RUN(rays_are_independent_and_limited);
     RUN(resumed_marches_continue_exactly);
+    RUN(one_walk_is_count_and_fill);
     RUN(fresh_grid_and_reusable_buffers);
     HARNESS_EXIT();
 }

@@ -205,6 +205,30 @@ TEST(resumed_marches_continue_exactly)
     nerf__occupancy_destroy(g);
 }
 
+TEST(one_walk_is_count_and_fill)
+{
+    /* Contracted marches through nerf__march_run()'s slots, continued
+     * past them, are count and fill's. */
+    nerf__occupancy *g = contract_grid(64);
+    static ray_set s;
+    make_rays(&s);
+    nerf__march_options o;
+    options(g, &o);
+    const uint32_t limits[] = {0, NERF__MARCH_SLOT_ROOM + 1, 300};
+    for (size_t i = 0; i < sizeof limits / sizeof limits[0]; i++) {
+        o.max_samples = limits[i];
+        size_t long_rays;
+        CHECK_EQ_INT(one_walk_differences(g, &o, s.rays, NULL, &long_rays),
+                     0);
+        if (i == 0) {
+            CHECK(long_rays > 0);
+            printf("  %zu of %d rays longer than a slot\n", long_rays,
+                   N_RAYS);
+        }
+    }
+    nerf__occupancy_destroy(g);
+}
+
 TEST(few_lattice_points_reach_infinity)
 {
     /* From the centre along x: the cube is left at u = 1, and beyond it
@@ -314,6 +338,7 @@ int main(void)
     RUN(samples_lie_in_occupied_contracted_cells);
     RUN(skipping_keeps_exactly_the_occupied_lattice_points);
     RUN(resumed_marches_continue_exactly);
+    RUN(one_walk_is_count_and_fill);
     RUN(few_lattice_points_reach_infinity);
     RUN(far_wall_is_opaque_at_its_depth);
     HARNESS_EXIT();
