@@ -369,8 +369,9 @@ typedef struct nerf_model_options {
                                    whole domain (which follows bound
                                    and space); default 16. */
     uint32_t hash_max_resolution; /**< Finest cells across the same
-                                   domain (>= min); default 2048,
-                                   whatever the bound. */
+                                   domain (>= min); default 2048
+                                   (the fast preset: 1024), whatever
+                                   the bound. */
     float bound;              /**< The hash grid covers [-bound, bound]^3;
                                    default 1.5 (Blender scenes). */
     uint32_t geo_features;    /**< 0 (default): the reference head, a
