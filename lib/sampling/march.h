@@ -143,7 +143,8 @@ typedef struct nerf__march_samples {
     size_t cap_rays, cap_samples, cap_slots;
     float *slot_t, *slot_dt;
     uint32_t *slot_count;   /* [n_rays] */
-    size_t *more;           /* [n_rays + 1] */
+    size_t *more;           /* [n_rays + 1]: the counts past the slots,
+                             * then where those samples go */
 } nerf__march_samples;
 
 void nerf__march_samples_init(nerf__march_samples *s, const nerf__env *env);
@@ -161,8 +162,9 @@ void nerf__march_samples_release(nerf__march_samples *s);
  * NERF_ENOMEM (s then holds no batch).
  */
 #define NERF__MARCH_ONE_PASS_ROOM 65536u
-/* Most rays of a training batch have fewer samples than this (lego, late
- * in a run: about 35 on average), so few are walked twice. */
+/* Most rays of a training batch have fewer samples than this (lego in
+ * nerf-bench's fast steps: 35 a ray on average), so few are walked
+ * twice. */
 #define NERF__MARCH_SLOT_ROOM 64u
 #define NERF__MARCH_SLOT_CAP (1u << 21)
 int nerf__march_run(const nerf__occupancy *g, const nerf__march_options *o,
