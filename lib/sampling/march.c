@@ -298,6 +298,11 @@ static uint32_t march_one(const march_job *j, size_t k, float *t_out,
     float near = r->near ? r->near[k] : r->near_all;
     float far = r->far ? r->far[k] : r->far_all;
     uint32_t k0 = r->first_step ? r->first_step[k] : 0;
+    if (k0 == NERF__MARCH_DONE) {
+        /* Most rays of a continuation pass: no jitter to draw for them. */
+        *resume = NERF__MARCH_DONE;
+        return 0;
+    }
     const float u = ray_offset(j->o, r->first_ray + k);
     if (j->o->contract > 0.0f) {
         return nerf__march_ray_contract(j->g, j->o, r->origins + 3 * k,

@@ -13,6 +13,7 @@
 
 typedef struct marched {
     size_t offsets[N_RAYS + 1];
+    uint32_t next_step[N_RAYS];
     size_t total;
     float *t, *dt, *xyz;
 } marched;
@@ -24,7 +25,7 @@ static void march(const nerf__occupancy *g, const nerf__march_options *o,
     m->t = malloc((m->total + 1) * sizeof(float));
     m->dt = malloc((m->total + 1) * sizeof(float));
     m->xyz = malloc((3 * m->total + 1) * sizeof(float));
-    nerf__march_fill(g, o, rays, m->offsets, m->t, m->dt, NULL);
+    nerf__march_fill(g, o, rays, m->offsets, m->t, m->dt, m->next_step);
     nerf__march_points(o, rays, m->offsets, m->t, m->xyz);
 }
 
@@ -102,39 +103,30 @@ static size_t one_walk_differences(const nerf__occupancy *g,
                                    nerf__march_rays rays,
                                    const uint32_t *from, size_t *long_rays)
 {
-    static size_t offsets[N_RAYS + 1];
-    static uint32_t next[N_RAYS];
+    static marched m;
     *long_rays = 0;
     rays.first_step = from;
-    const size_t total = nerf__march_count(g, o, &rays, offsets);
-    float *t = malloc((total + 1) * sizeof(float));
-    float *dt = malloc((total + 1) * sizeof(float));
-    if (t == NULL || dt == NULL) {
-        free(t);
-        free(dt);
-        return 1;
-    }
-    nerf__march_fill(g, o, &rays, offsets, t, dt, next);
+    march(g, o, &rays, &m);
     nerf__env env;
     nerf__env_default(&env);
     nerf__march_samples ms;
     nerf__march_samples_init(&ms, &env);
     size_t bad = nerf__march_run(g, o, &rays, &ms) != NERF_OK;
     if (!bad) {
-        bad += ms.n_rays != rays.n || ms.total != total;
-        bad += memcmp(ms.offsets, offsets, sizeof offsets) != 0;
-        bad += memcmp(ms.next_step, next, sizeof next) != 0;
+        bad += ms.n_rays != rays.n || ms.total != m.total;
+        bad += memcmp(ms.offsets, m.offsets, sizeof m.offsets) != 0;
+        bad += memcmp(ms.next_step, m.next_step, sizeof m.next_step) != 0;
     }
     if (!bad) {
-        bad += memcmp(ms.t, t, total * sizeof(float)) != 0;
-        bad += memcmp(ms.dt, dt, total * sizeof(float)) != 0;
+        bad += memcmp(ms.t, m.t, m.total * sizeof(float)) != 0;
+        bad += memcmp(ms.dt, m.dt, m.total * sizeof(float)) != 0;
     }
     for (size_t k = 0; k < rays.n; k++) {
-        *long_rays += offsets[k + 1] - offsets[k] > NERF__MARCH_SLOT_ROOM;
+        const size_t n = m.offsets[k + 1] - m.offsets[k];
+        *long_rays += n > NERF__MARCH_SLOT_ROOM;
     }
     nerf__march_samples_release(&ms);
-    free(t);
-    free(dt);
+    unmarch(&m);
     return bad;
 }
 
