@@ -592,7 +592,7 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "nerf_renderer_render_rays on every pixel of the 800x800 "
                 "view's camera at %ux%u, model as trained, after a "
                 "warm-up call.\n",
-                NERF__GRID_EVERY, NERF__GRID_EVERY, NERF__GRID_WARMUP,
+                NERF__GRID_EVERY, NERF__GRID_EVERY_WARMUP, NERF__GRID_WARMUP,
                 NERF__RENDER_BLOCK, FAST_RENDER_SIDE, FAST_RENDER_SIDE);
         fprintf(out,
                 "fast, training step: the library's building blocks timed "

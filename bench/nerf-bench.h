@@ -21,7 +21,7 @@
 #define SQUARE_SIDE 256
 #define MIN_TRAIN_STEPS 2
 /* The fast preset's trainer refreshes every cell of the occupancy grid
- * every NERF__GRID_EVERY steps up to step NERF__GRID_WARMUP and a
+ * every NERF__GRID_EVERY_WARMUP steps up to step NERF__GRID_WARMUP and a
  * fraction of the empty ones after (trainer.h): warming up past that, the
  * grid has carved the empty space and the timed steps are in the regime
  * a long run spends its time in. */

@@ -1979,11 +1979,12 @@ typedef struct nerf_train_stats {
  * continues bit for bit as the uninterrupted run would.
  *
  * With a marching sampler (march_steps > 0) the trainer also keeps the
- * model's occupancy grid current: every 16 steps, from step 0, it samples
- * the model's density in every cell (for the first 256 steps), then in
- * the occupied cells and a random sixteenth of the others (each drawn
- * with probability 1/16), keyed by the model's seed and the grid's update
- * count, both saved in checkpoints.
+ * model's occupancy grid current: every 16 steps from step 0 it samples
+ * the model's density in every cell (for the first 256 steps), then
+ * every 32 steps in the occupied cells and a random sixteenth of the
+ * others (each drawn with probability 1/16), keyed by the model's seed
+ * and the grid's update count, both saved in checkpoints.  (Before
+ * 0.10.6 the later updates also came every 16 steps.)
  *
  * A checkpoint_path is tried at once: a temporary file is created beside
  * it and removed, so that a path that cannot be written fails here, not

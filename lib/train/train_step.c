@@ -56,7 +56,7 @@ int nerf__trainer_update_grid(nerf_trainer *t)
 {
     nerf_model *m = t->model;
     nerf__occupancy *g = m->grid;
-    if (g == NULL || m->step % NERF__GRID_EVERY != 0) {
+    if (g == NULL || !nerf__grid_due(m->step)) {
         return NERF_OK;
     }
     /* The update's random draws are keyed by the model's seed (the grid's)

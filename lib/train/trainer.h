@@ -39,8 +39,8 @@ struct nerf_trainer {
     nerf_progress_cb progress;
     void *progress_user;
     atomic_int cancel;
-    /* A marching sampler: the model's occupancy grid is refreshed every
-     * NERF__GRID_EVERY steps, its density queried through density_ws
+    /* A marching sampler: the model's occupancy grid is refreshed when
+     * nerf__grid_due() says, its density queried through density_ws
      * (from the model's allocator). */
     bool march;
     nerf__workspace density_ws;
@@ -66,10 +66,22 @@ struct nerf_trainer {
  * 29.5 dB test PSNR (10 views) against 8,100 steps and 29.3 dB with a
  * quarter: cells that leave the grid are found again more slowly, but
  * the empty ones, no longer refreshed as often, fall out of it sooner.
+ * For the same reason the updates after the first 256 steps come every
+ * 32 steps: a refresh was still an eighth of a late step, and lego's
+ * test PSNR after 10,000 steps did not drop (docs/performance.md,
+ * "0.10.6").
  */
-#define NERF__GRID_EVERY 16u
+#define NERF__GRID_EVERY_WARMUP 16u
+#define NERF__GRID_EVERY 32u
 #define NERF__GRID_WARMUP 256u
 #define NERF__GRID_RANDOM_DIV 16u
+
+/* Whether the trainer updates the grid before step `step`. */
+static inline bool nerf__grid_due(uint64_t step)
+{
+    return step % (step < NERF__GRID_WARMUP ? NERF__GRID_EVERY_WARMUP
+                                            : NERF__GRID_EVERY) == 0;
+}
 
 /* Cells of `cells` an update at `step` evaluates at random besides the
  * occupied ones: the rule above, for the trainer and its benchmark. */

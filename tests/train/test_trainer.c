@@ -177,6 +177,19 @@ TEST(fast_resume_is_bit_identical)
     nerf_sampler_destroy(s);
 }
 
+/* Grid updates every 16 steps through the warm-up, every 32 after. */
+TEST(grid_schedule)
+{
+    int due = 0;
+    for (uint64_t k = 0; k < 1024; k++) {
+        due += nerf__grid_due(k);
+    }
+    CHECK_EQ_INT(due, 256 / 16 + (1024 - 256) / 32);
+    CHECK(nerf__grid_due(0) && nerf__grid_due(240) && nerf__grid_due(256));
+    CHECK(!nerf__grid_due(272) && nerf__grid_due(288));
+    CHECK(!nerf__grid_due(1u << 20 | 16) && nerf__grid_due(1u << 20));
+}
+
 TEST(marching_needs_a_grid)
 {
     nerf_sampler *s = fast_sampler(1);
@@ -608,6 +621,7 @@ int main(void)
     RUN(same_seed_same_weights);
     RUN(resume_is_bit_identical);
     RUN(fast_resume_is_bit_identical);
+    RUN(grid_schedule);
     RUN(marching_needs_a_grid);
     RUN(run_progress_cancel_and_checkpoints);
     RUN(timed_checkpoints);
