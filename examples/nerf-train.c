@@ -524,9 +524,9 @@ static void report_budget(const nerf_model *m, int rc)
  * (docs/performance.md).  Those 2048 rays take at most FAST_SAMPLES
  * samples: while the occupancy grid is still uncarved a ray marches
  * hundreds, and the cap keeps the first steps as cheap as the later ones,
- * so that the grid, refreshed every 16 steps, is carved sooner.  A
- * checkpoint of nerf-train before 0.8 records no batch, and was trained at
- * its default of 1024 unless told otherwise.
+ * so that the grid, refreshed every 16 steps at first, is carved
+ * sooner.  A checkpoint of nerf-train before 0.8 records no batch, and
+ * was trained at its default of 1024 unless told otherwise.
  */
 static void choose_batch(const args *a, const nerf_model *m, int resumed,
                          nerf_trainer_options *to)

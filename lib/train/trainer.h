@@ -67,7 +67,7 @@ struct nerf_trainer {
  * quarter: cells that leave the grid are found again more slowly, but
  * the empty ones, no longer refreshed as often, fall out of it sooner.
  * For the same reason the updates after the first 256 steps come every
- * 32 steps: a refresh was still an eighth of a late step, and lego's
+ * 32 steps: a refresh was still a tenth of a late step, and lego's
  * test PSNR after 10,000 steps did not drop (docs/performance.md,
  * "0.10.6").
  */
