@@ -49,9 +49,9 @@ cmp -s "$work/spiral-wh/r_000.png" "$work/spiral-down/r_000.png" ||
 render spiral-w --path spiral --frames 1 --width 6
 [ "$(size "$work/spiral-w/r_000.png")" = 6x4 ] ||
   fail "spiral --width 6 gave $(size "$work/spiral-w/r_000.png")"
-render spiral-h --path spiral --frames 1 --height 32
-[ "$(size "$work/spiral-h/r_000.png")" = 48x32 ] ||
-  fail "spiral --height 32 gave $(size "$work/spiral-h/r_000.png")"
+render spiral-h --path spiral --frames 1 --height 20
+[ "$(size "$work/spiral-h/r_000.png")" = 30x20 ] ||
+  fail "spiral --height 20 gave $(size "$work/spiral-h/r_000.png")"
 render views --width 12 --height 8 --depth
 [ "$(size "$work/views/r_000.png")" = 12x8 ] ||
   fail "--data views at 12x8 gave $(size "$work/views/r_000.png")"

@@ -23,11 +23,14 @@
 #include "renderer.h"
 #include "smm.h"
 
-/* Few pixels: in CI's aarch64 stage, under qemu, a tiny-model render of
- * 24x16 took about 20 s, and these tests render dozens. */
+/* Few pixels, and a quarter of the tiny preset's samples a ray: in CI's
+ * aarch64 stage, under qemu, a tiny-model render of 24x16 took about 20 s,
+ * and these tests render dozens.  What they test holds for any count. */
 #define W 16
 #define H 12
 #define NPIX (W * H)
+#define N_COARSE 8
+#define N_FINE 16
 
 static nerf_model *tiny_model(void)
 {
@@ -40,11 +43,18 @@ static nerf_model *tiny_model(void)
     return m;
 }
 
+static void tiny_sampler_options(nerf_sampler_options *so)
+{
+    NERF_SAMPLER_OPTIONS_INIT(so);
+    nerf_sampler_options_preset(so, NERF_PRESET_TINY);
+    so->n_coarse = N_COARSE;
+    so->n_fine = N_FINE;
+}
+
 static nerf_sampler *tiny_sampler(uint32_t ndc)
 {
     nerf_sampler_options so;
-    NERF_SAMPLER_OPTIONS_INIT(&so);
-    nerf_sampler_options_preset(&so, NERF_PRESET_TINY);
+    tiny_sampler_options(&so);
     if (ndc) {
         so.ndc = 1;
         so.t_near = 0.0f;
@@ -407,7 +417,7 @@ TEST(matches_building_blocks)
     nerf_renderer *r = renderer(m, s, 64, 1, 0);
     nerf_camera cam;
     test_camera(&cam);
-    enum { R = 5, NC = 32, NF = 64, NS = NC + NF };
+    enum { R = 5, NC = N_COARSE, NF = N_FINE, NS = NC + NF };
     const size_t pix[R] = {0, 3 + 2 * W, 14 + 5 * W, 5 + 6 * W, NPIX - 1};
     float o[3 * R], d[3 * R], rgb[3 * R], depth[R], opac[R];
     for (int k = 0; k < R; k++) {
@@ -477,8 +487,7 @@ TEST(ndc_render)
     nerf_renderer_destroy(r);
     nerf_sampler_destroy(s);
     nerf_sampler_options so;
-    NERF_SAMPLER_OPTIONS_INIT(&so);
-    nerf_sampler_options_preset(&so, NERF_PRESET_TINY);
+    tiny_sampler_options(&so);
     so.ndc = 1;
     so.t_near = 0.0f;
     so.t_far = 1.0f;
