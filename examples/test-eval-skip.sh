@@ -16,7 +16,7 @@ fail() {
 }
 
 # 12x12, a little more than SSIM's 11x11 window (under qemu each
-# pixel's render costs about a twentieth of a second).
+# pixel's render costs tens of milliseconds).
 $wrap "$scene" --out "$work/scene" --width 12 --height 12 --train 4 --val 0 \
   --test 7 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
 $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \

@@ -53,7 +53,7 @@ $wrap "$render" --model "$work/model.nerf" --out "$work/ok" --path orbit \
 # line as soon as the first chunk of rays is done.  24x24 is two chunks of
 # the renderer's 512 rays, one of them short, so a report comes before the
 # last pixel whether one thread renders them or two (few pixels, since
-# under qemu each costs about a twentieth of a second).
+# under qemu each costs tens of milliseconds).
 $wrap "$render" --model "$work/model.nerf" --out "$work/progress" --path orbit \
   --frames 1 --width 24 --height 24 2>"$work/progress.log" ||
   { cat "$work/progress.log"; fail "24x24 render"; }
