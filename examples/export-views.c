@@ -278,7 +278,7 @@ static int open_views(const args *a, views *v)
         return REPORTED;
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&v->sampler, v->model, v->ds, 0, 0, 0.0f, 0.0f, 0);
+        rc = setup_sampler(&v->sampler, v->model, v->ds, -1, -1, 0.0f, 0.0f, 0);
     }
     if (rc == NERF_OK) {
         nerf_renderer_options ro;

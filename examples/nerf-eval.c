@@ -191,7 +191,7 @@ int main(int argc, char **argv)
         rc = nerf_dataset_load(&ds, a.data, &dopt);
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&s, m, ds, 0, 0, 0.0f, 0.0f, 0);
+        rc = setup_sampler(&s, m, ds, -1, -1, 0.0f, 0.0f, 0);
     }
     if (rc == NERF_OK) {
         nerf_renderer_options ro;

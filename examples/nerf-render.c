@@ -713,7 +713,7 @@ static int run(int argc, char **argv)
         rc = nerf_dataset_load(&ds, a.data, &dopt);
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&s, m, ds, 0, 0, (float)a.near, (float)a.far, 0);
+        rc = setup_sampler(&s, m, ds, -1, -1, (float)a.near, (float)a.far, 0);
     }
     float near = 2.0f, far = 6.0f;
     if (rc == NERF_OK && ds) {

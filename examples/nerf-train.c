@@ -30,6 +30,7 @@ static const char usage[] =
     "                  [--batch-samples N] [--random-background 0|1]\n"
     "                  [--matmul " MATMUL_CHOICES "]\n"
     "                  [--space auto|box|ndc|unbounded]\n"
+    "                  [--coarse-samples N] [--fine-samples N]\n"
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, one\n"
     "instant-ngp transforms.json split every 8th frame, LLFF\n"
     "poses_bounds.npy, or a COLMAP model in sparse/0/ beside images/,\n"
@@ -91,6 +92,16 @@ static const char usage[] =
     "                COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
     "                on a COLMAP folder places it as LLFF places a\n"
     "                forward-facing capture (any preset)\n"
+    "  --coarse-samples N  stratified samples a ray, 2..4096 (default:\n"
+    "                the preset's, 64 for reference, 32 for tiny)\n"
+    "  --fine-samples N  hierarchical samples a ray added to them for the\n"
+    "                fine network, 0..4096 (0: none, the coarse network's\n"
+    "                samples only; default: the preset's, 128 for\n"
+    "                reference, 64 for tiny).  Fewer samples train and\n"
+    "                render faster, at some cost in quality; both are\n"
+    "                saved in MODEL, and the programs that render it use\n"
+    "                them.  Not for fast, which places its samples by\n"
+    "                marching\n"
     "  --help        print this help and exit\n"
     "Ctrl-C (SIGINT) stops after the current step, saves MODEL and exits\n"
     "with status 130 (SIGTERM: 143).\n"
@@ -178,6 +189,7 @@ typedef struct args {
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
     int space;     /* nerf_space; -1: the dataset's */
+    int64_t coarse, fine; /* samples a ray; -1: the preset's */
 } args;
 
 /* The options parse() knows, to suggest for a mistyped one. */
@@ -185,7 +197,8 @@ static const char *const options[] = {
     "--help", "-h", "--resume", "--overwrite", "--data", "--out",
     "--preset", "--steps", "--seconds", "--downscale", "--batch", "--seed",
     "--checkpoint-every", "--lr", "--lr-final", "--batch-samples",
-    "--matmul", "--space", "--random-background", NULL
+    "--matmul", "--space", "--random-background", "--coarse-samples",
+    "--fine-samples", NULL
 };
 
 static int parse(int argc, char **argv, args *a)
@@ -198,6 +211,7 @@ static int parse(int argc, char **argv, args *a)
     a->random_bg = -1;
     a->matmul = -1;
     a->space = -1;
+    a->coarse = a->fine = -1;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i];
         if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
@@ -268,6 +282,15 @@ static int parse(int argc, char **argv, args *a)
             uint64_t on = 0;
             bad = cli_uint(v, 0, 1, &on);
             a->random_bg = (int)on;
+        } else if (strcmp(k, "--coarse-samples") == 0) {
+            /* The ranges nerf_sampler_options takes. */
+            uint64_t n = 0;
+            bad = cli_uint(v, 2, 4096, &n);
+            a->coarse = (int64_t)n;
+        } else if (strcmp(k, "--fine-samples") == 0) {
+            uint64_t n = 0;
+            bad = cli_uint(v, 0, 4096, &n);
+            a->fine = (int64_t)n;
         } else {
             cli_unknown(PROG, k, options);
             return -1;
@@ -286,6 +309,20 @@ static int parse(int argc, char **argv, args *a)
     if (a->resume && a->overwrite) {
         cli_usage_error(PROG, "--resume continues MODEL, "
                         "--overwrite replaces it: give one");
+        return -1;
+    }
+    if (a->preset == NERF_PRESET_FAST && (a->coarse >= 0 || a->fine >= 0)) {
+        cli_usage_error(PROG, "--coarse-samples and --fine-samples set the "
+                        "reference and tiny presets' samples; the fast "
+                        "preset places its own by marching");
+        return -1;
+    }
+    if (a->coarse == 2 && a->fine != 0) {
+        /* The fine samples are drawn from the coarse pass's weights
+         * between its samples, which two do not give. */
+        cli_usage_error(PROG, "--coarse-samples 2 leaves the fine samples "
+                        "nothing to draw from: give at least 3, or "
+                        "--fine-samples 0");
         return -1;
     }
     if (a->lr == 0.0) {
@@ -372,6 +409,11 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
             if (a->space >= 0 && (uint32_t)a->space != mo.space) {
                 fprintf(stderr, PROG ": --space ignored: the model "
                         "keeps the space it was created with\n");
+            }
+            if (a->coarse >= 0 || a->fine >= 0) {
+                fprintf(stderr, PROG ": --coarse-samples and "
+                        "--fine-samples ignored: the model keeps the "
+                        "samples it was trained with\n");
             }
         }
         return rc;
@@ -583,7 +625,10 @@ static int run(int argc, char **argv)
         rc = create_model(&a, &hooks, ds, &m);
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&s, m, ds, 0, 0, 0.0f, 0.0f, a.seed);
+        /* A resumed model keeps its own samples, as a fresh one gets
+         * the preset's unless given. */
+        rc = setup_sampler(&s, m, ds, resumed ? -1 : a.coarse,
+                           resumed ? -1 : a.fine, 0.0f, 0.0f, a.seed);
     }
     if (rc == NERF_OK) {
         nerf_trainer_options to;

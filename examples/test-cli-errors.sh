@@ -46,6 +46,14 @@ one "$train" "--seed needs a value" --data d --out m --seed
 one "$train" "unknown option '--frobnicate';" --frobnicate
 one "$train" "unexpected argument 'scene'" scene
 one "$train" "--data and --out are required"
+one "$train" "bad value '1' for --coarse-samples" --data d --out m \
+  --coarse-samples 1
+one "$train" "bad value '4097' for --fine-samples" --data d --out m \
+  --fine-samples 4097
+one "$train" "the fast preset places its own by marching" --data d --out m \
+  --preset fast --fine-samples 0
+one "$train" "--coarse-samples 2 leaves the fine samples nothing" \
+  --data d --out m --coarse-samples 2
 one "$render" "did you mean --width?" --widht 8
 one "$render" "did you mean --frames?" --frame 8
 one "$render" "did you mean --downscale?" --downsacle 2
@@ -69,16 +77,21 @@ one "$scene" "--val: an LLFF layout has no validation views" \
 [ ! -e "$work/llff" ] || fail "nerf-scene wrote a scene it refused"
 
 # An option that cannot apply is said to be ignored, not dropped silently:
-# a resumed model keeps the learning-rate schedule it was saved with.
+# a resumed model keeps the learning-rate schedule and the samples it was
+# saved with.
 $wrap "$scene" --out "$work/scene" --width 16 --height 16 --train 4 --val 0 \
   --test 1 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
 $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 2 \
-  --batch 64 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
+  --batch 64 --coarse-samples 8 --fine-samples 16 2>"$work/train.log" ||
+  { cat "$work/train.log"; exit 1; }
 $wrap "$train" --data "$work/scene" --out "$work/model.nerf" --steps 3 \
-  --batch 64 --resume --lr 0.1 2>"$work/resume.log" ||
+  --batch 64 --resume --lr 0.1 --coarse-samples 4 2>"$work/resume.log" ||
   { cat "$work/resume.log"; exit 1; }
 grep -qF "nerf-train: --lr and --lr-final ignored" "$work/resume.log" ||
   { cat "$work/resume.log"; fail "--lr on --resume dropped silently"; }
+grep -qF "nerf-train: --coarse-samples and --fine-samples ignored" \
+  "$work/resume.log" ||
+  { cat "$work/resume.log"; fail "--coarse-samples on --resume dropped"; }
 
 # failed PROGRAM WORDS ARGS...: PROGRAM exits 1 with WORDS in its message,
 # which must not call a missing or foreign file an input/output error.

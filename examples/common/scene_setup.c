@@ -77,8 +77,8 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
  * a contracted scene is marched as far as the model's settings reach.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, uint32_t n_coarse,
-                  uint32_t n_fine, float near, float far, uint64_t seed)
+                  const nerf_dataset *dataset, int64_t n_coarse,
+                  int64_t n_fine, float near, float far, uint64_t seed)
 {
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
@@ -86,8 +86,9 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
     if (rc != NERF_OK) {
         return rc;
     }
-    so.n_coarse = n_coarse ? n_coarse : so.n_coarse;
-    so.n_fine = n_fine ? n_fine : so.n_fine;
+    /* Out-of-range counts are the sampler's to refuse, by name. */
+    so.n_coarse = n_coarse >= 0 ? (uint32_t)n_coarse : so.n_coarse;
+    so.n_fine = n_fine >= 0 ? (uint32_t)n_fine : so.n_fine;
     so.seed = seed;
     if (dataset) {
         float t_far = so.t_far;

@@ -34,14 +34,14 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
  * NULL).  Sampling follows the settings the model records, from its
  * training or, for a new model or a file from before libnerf 0.4, guessed
  * from its shape (nerf_model_render_settings(): the preset's counts, or
- * marching for a hash-grid model); n_coarse/n_fine override the counts
- * when non-zero.  Bounds and NDC follow the dataset when there is one
- * (an unbounded model keeps its far reach), else the model's settings;
- * near/far override the bounds when far > near.
+ * marching for a hash-grid model); n_coarse and n_fine each override
+ * its count when not negative.  Bounds and NDC follow the dataset when
+ * there is one (an unbounded model keeps its far reach), else the
+ * model's settings; near/far override the bounds when far > near.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, uint32_t n_coarse,
-                  uint32_t n_fine, float near, float far, uint64_t seed);
+                  const nerf_dataset *dataset, int64_t n_coarse,
+                  int64_t n_fine, float near, float far, uint64_t seed);
 
 /* Renders of a dataset's scene are composited as its images were: on white
  * for Blender scenes (and when there is no dataset), on black for LLFF. */
