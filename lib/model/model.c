@@ -60,6 +60,14 @@ static void fast_options(nerf_model_options *o)
      * thousands of steps a CPU trains, 1024 scored higher on lego (ten
      * and thirty minutes) and on fern (docs/performance.md, 0.10.5). */
     o->hash_max_resolution = 1024;
+    /* Eight levels of four features where Mueller et al. take sixteen of
+     * two: the same 32 inputs to the network and about as many table
+     * parameters, but half the corners a sample reads and writes (an
+     * entry's four features share a cache line), which is what a CPU
+     * step waits on.  A step learns a little less, and a run takes half
+     * as many steps again (docs/performance.md, 0.10.8). */
+    o->hash_levels = 8;
+    o->hash_features = 4;
 }
 
 NERF_API int nerf_model_options_init(nerf_model_options *opts,
