@@ -64,8 +64,9 @@ static void fast_options(nerf_model_options *o)
      * two: the same 32 inputs to the network and about as many table
      * parameters, but half the corners a sample reads and writes (an
      * entry's four features share a cache line), which is what a CPU
-     * step waits on.  A step learns a little less, and a run takes half
-     * as many steps again (docs/performance.md, 0.10.8). */
+     * step waits on.  A step learns a little less, and a timed run
+     * takes more of them: on lego, ten minutes scored higher on all
+     * three seeds (docs/performance.md, 0.10.8). */
     o->hash_levels = 8;
     o->hash_features = 4;
 }
