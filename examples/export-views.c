@@ -278,7 +278,8 @@ static int open_views(const args *a, views *v)
         return REPORTED;
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&v->sampler, v->model, v->ds, -1, -1, 0.0f, 0.0f, 0);
+        const sampler_choice c = SAMPLER_AS_RECORDED;
+        rc = setup_sampler(&v->sampler, v->model, v->ds, &c);
     }
     if (rc == NERF_OK) {
         nerf_renderer_options ro;

@@ -627,8 +627,11 @@ static int run(int argc, char **argv)
     if (rc == NERF_OK) {
         /* A resumed model keeps its own samples, as a fresh one gets
          * the preset's unless given. */
-        rc = setup_sampler(&s, m, ds, resumed ? -1 : a.coarse,
-                           resumed ? -1 : a.fine, 0.0f, 0.0f, a.seed);
+        sampler_choice c = SAMPLER_AS_RECORDED;
+        c.n_coarse = resumed ? -1 : a.coarse;
+        c.n_fine = resumed ? -1 : a.fine;
+        c.seed = a.seed;
+        rc = setup_sampler(&s, m, ds, &c);
     }
     if (rc == NERF_OK) {
         nerf_trainer_options to;

@@ -56,13 +56,13 @@ help "$train" --preset --steps --seconds --downscale --batch --seed --lr \
 grep -q "^  --data DIR" "$work/help" || fail "nerf-train: --data unexplained"
 grep -q "^  --out MODEL" "$work/help" || fail "nerf-train: --out unexplained"
 help "$render" --split --downscale --frames --focal --fov --width --height \
-  --depth --near --video --fps
+  --depth --near --video --fps --march-steps
 for opt in --model --out --data "--path orbit" "--path spiral" --poses; do
   [ -n "$(entry "$opt")" ] || fail "nerf-render: $opt unexplained"
 done
 # How a grey level of depth_NNN.png becomes a depth.
 entry --depth | grep -q "255" || fail "nerf-render --depth: no encoding"
-help "$eval" --split --downscale --skip --json
+help "$eval" --split --downscale --skip --json --march-steps
 entry --skip | grep -q "0, K" || fail "nerf-eval --skip: numbering unsaid"
 help "$scene" --width --height --train --val --test --threads \
   "--capture object" "--layout blender" --format --jpeg --distortion

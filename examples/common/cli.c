@@ -51,6 +51,16 @@ int cli_split(const char *text)
     return -1;
 }
 
+int cli_march_steps(const char *text, int64_t *out)
+{
+    uint64_t n = 0;
+    if (cli_uint(text, 1, 65536, &n) != 0) {
+        return -1;
+    }
+    *out = (int64_t)n;
+    return 0;
+}
+
 const char *cli_value(int argc, char **argv, int *i)
 {
     if (*i + 1 >= argc) {

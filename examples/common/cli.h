@@ -13,6 +13,10 @@ int cli_double(const char *text, double *out);
 /* A nerf_split from "train", "val" or "test"; -1 for anything else. */
 int cli_split(const char *text);
 
+/* --march-steps: a march's steps in the sampler's range, 1..65536; 0 on
+ * success, -1 if not. */
+int cli_march_steps(const char *text, int64_t *out);
+
 /* The value after option argv[*i], advancing *i; NULL if missing. */
 const char *cli_value(int argc, char **argv, int *i);
 

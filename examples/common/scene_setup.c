@@ -70,6 +70,21 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
     return NERF_OK;
 }
 
+/* A finer march than the recorded one must reach as far along a ray, so
+ * the cap on a ray's samples grows with it.  Steps out of range are the
+ * sampler's to refuse, by name. */
+static void march_with(nerf_sampler_options *so, int64_t steps)
+{
+    if (so->march_steps > 0 && steps > 0) {
+        const double cap = (double)so->max_samples * (double)steps /
+                           (double)so->march_steps;
+        so->max_samples = cap < 1.0       ? 1u
+                          : cap > 65536.0 ? 65536u
+                                          : (uint32_t)cap;
+    }
+    so->march_steps = steps > UINT32_MAX ? UINT32_MAX : (uint32_t)steps;
+}
+
 /*
  * The model says how it is sampled: the settings it was trained with
  * (guessed from its shape for files from before libnerf 0.4).  A scene,
@@ -77,8 +92,7 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
  * a contracted scene is marched as far as the model's settings reach.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, int64_t n_coarse,
-                  int64_t n_fine, float near, float far, uint64_t seed)
+                  const nerf_dataset *dataset, const sampler_choice *choice)
 {
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
@@ -87,9 +101,13 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
         return rc;
     }
     /* Out-of-range counts are the sampler's to refuse, by name. */
-    so.n_coarse = n_coarse >= 0 ? (uint32_t)n_coarse : so.n_coarse;
-    so.n_fine = n_fine >= 0 ? (uint32_t)n_fine : so.n_fine;
-    so.seed = seed;
+    const sampler_choice *c = choice;
+    so.n_coarse = c->n_coarse >= 0 ? (uint32_t)c->n_coarse : so.n_coarse;
+    so.n_fine = c->n_fine >= 0 ? (uint32_t)c->n_fine : so.n_fine;
+    if (c->march_steps >= 0) {
+        march_with(&so, c->march_steps);
+    }
+    so.seed = c->seed;
     if (dataset) {
         float t_far = so.t_far;
         rc = nerf_dataset_bounds(dataset, &so.t_near, &so.t_far);
@@ -115,9 +133,9 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
             so.ndc_height = cam.height;
         }
     }
-    if (far > near) {
-        so.t_near = near;
-        so.t_far = far;
+    if (c->far > c->near) {
+        so.t_near = c->near;
+        so.t_far = c->far;
     }
     return nerf_sampler_create(out, &so);
 }

@@ -29,19 +29,30 @@ uint32_t setup_forward_facing(const nerf_model *model, int space);
 int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program);
 
+/* What a program's flags change of a model's sampling: each count when
+ * not negative, the bounds when far > near; and the seed. */
+typedef struct sampler_choice {
+    int64_t n_coarse, n_fine, march_steps;
+    float near, far;
+    uint64_t seed;
+} sampler_choice;
+
+/* Nothing changed: the model's own sampling, seed 0. */
+#define SAMPLER_AS_RECORDED {-1, -1, -1, 0.0f, 0.0f, 0}
+
 /*
  * A sampler for rendering or training model on dataset (which may be
  * NULL).  Sampling follows the settings the model records, from its
  * training or, for a new model or a file from before libnerf 0.4, guessed
  * from its shape (nerf_model_render_settings(): the preset's counts, or
- * marching for a hash-grid model); n_coarse and n_fine each override
- * its count when not negative.  Bounds and NDC follow the dataset when
- * there is one (an unbounded model keeps its far reach), else the
- * model's settings; near/far override the bounds when far > near.
+ * marching for a hash-grid model), changed as choice says.  A march of
+ * other steps than the recorded one scales the cap on a ray's samples
+ * with it; a march asked of a model that cannot march is the renderer's
+ * to refuse.  Bounds and NDC follow the dataset when there is one (an
+ * unbounded model keeps its far reach), else the model's settings.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, int64_t n_coarse,
-                  int64_t n_fine, float near, float far, uint64_t seed);
+                  const nerf_dataset *dataset, const sampler_choice *choice);
 
 /* Renders of a dataset's scene are composited as its images were: on white
  * for Blender scenes (and when there is no dataset), on black for LLFF. */

@@ -152,8 +152,8 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         rc = nerf_dataset_load(&v->dataset, a->data, &dopt);
     }
     if (rc == NERF_OK) {
-        rc = setup_sampler(&v->sampler, v->model, v->dataset, -1, -1, 0.0f,
-                           0.0f, 0);
+        const sampler_choice c = SAMPLER_AS_RECORDED;
+        rc = setup_sampler(&v->sampler, v->model, v->dataset, &c);
     }
     if (rc == NERF_OK) {
         nerf_renderer_options ro;
