@@ -100,8 +100,8 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
     if (rc != NERF_OK) {
         return rc;
     }
-    /* Out-of-range counts are the sampler's to refuse, by name. */
     const sampler_choice *c = choice;
+    /* Out-of-range counts are the sampler's to refuse, by name. */
     so.n_coarse = c->n_coarse >= 0 ? (uint32_t)c->n_coarse : so.n_coarse;
     so.n_fine = c->n_fine >= 0 ? (uint32_t)c->n_fine : so.n_fine;
     if (c->march_steps >= 0) {
