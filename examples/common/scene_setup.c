@@ -71,8 +71,8 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
 }
 
 /* A finer march than the recorded one must reach as far along a ray, so
- * the cap on a ray's samples grows with it.  Steps out of range are the
- * sampler's to refuse, by name. */
+ * the cap on a ray's samples grows with it.  steps is the programs'
+ * --march-steps, 1..65536 (cli_march_steps()). */
 static void march_with(nerf_sampler_options *so, int64_t steps)
 {
     if (so->march_steps > 0 && steps > 0) {
@@ -82,7 +82,7 @@ static void march_with(nerf_sampler_options *so, int64_t steps)
                           : cap > 65536.0 ? 65536u
                                           : (uint32_t)cap;
     }
-    so->march_steps = steps > UINT32_MAX ? UINT32_MAX : (uint32_t)steps;
+    so->march_steps = (uint32_t)steps;
 }
 
 /*
