@@ -52,7 +52,7 @@ help() {
 
 help "$train" --preset --steps --seconds --downscale --batch --seed --lr \
   --lr-final --checkpoint-every --resume --batch-samples --random-background \
-  --matmul --space --coarse-samples --fine-samples
+  --matmul --space --coarse-samples --fine-samples --render-march-steps
 grep -q "^  --data DIR" "$work/help" || fail "nerf-train: --data unexplained"
 grep -q "^  --out MODEL" "$work/help" || fail "nerf-train: --out unexplained"
 help "$render" --split --downscale --frames --focal --fov --width --height \

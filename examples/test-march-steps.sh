@@ -1,8 +1,11 @@
 #!/bin/sh
 # nerf-eval and nerf-render --march-steps N: a marching model rendered in
-# N steps of its grid's diagonal instead of its recorded 1024.  The
+# N steps of its grid's diagonal instead of its recorded ones.  The
 # recorded N given again changes nothing; another N changes the images;
 # out-of-range values and a model that does not march are refused.
+# nerf-train --render-march-steps N: what a model records (1280 unless
+# given) changes how it renders, not how it trains, and a resumed run
+# trains in the same 1024 steps as an unbroken one.
 #
 #   test-march-steps.sh NERF-SCENE NERF-TRAIN NERF-EVAL NERF-RENDER
 set -eu
@@ -35,13 +38,40 @@ scores() { # NAME [FLAGS]: the per-view lines of nerf-eval
   grep "^view" "$work/$name.txt" >"$work/$name.views"
 }
 scores recorded
-scores same --march-steps 1024
+scores same --march-steps 1280
 scores finer --march-steps 4096
 cmp -s "$work/recorded.views" "$work/same.views" ||
-  { cat "$work/recorded.views" "$work/same.views"; fail "1024 changed them"; }
+  { cat "$work/recorded.views" "$work/same.views"; fail "1280 changed them"; }
 cmp -s "$work/recorded.views" "$work/finer.views" &&
-  { cat "$work/finer.views"; fail "4096 scored as 1024"; }
+  { cat "$work/finer.views"; fail "4096 scored as 1280"; }
 echo "ok   nerf-eval --march-steps"
+
+# The same training, another record: fast.nerf in 1024 steps is it.
+$wrap "$train" --data "$work/scene" --out "$work/r1024.nerf" --preset fast \
+  --steps 2 --batch 64 --checkpoint-every 0 --render-march-steps 1024 \
+  2>"$work/r1024.log" || { cat "$work/r1024.log"; exit 1; }
+scores trained --march-steps 1024
+mv "$work/fast.nerf" "$work/fast.keep"
+cp "$work/r1024.nerf" "$work/fast.nerf"
+scores r1024
+mv "$work/fast.keep" "$work/fast.nerf"
+cmp -s "$work/trained.views" "$work/r1024.views" ||
+  { cat "$work/trained.views" "$work/r1024.views"; fail "--render-march-steps 1024: not fast.nerf in 1024 steps"; }
+cmp -s "$work/recorded.views" "$work/r1024.views" &&
+  fail "--render-march-steps 1024 recorded 1280"
+# One step recording 1280, one recording 1024, each resumed for one
+# more: both train the second in 1024 steps, as the first.
+for r in 1280 1024; do
+  $wrap "$train" --data "$work/scene" --out "$work/resumed$r.nerf" \
+    --preset fast --steps 1 --batch 64 --checkpoint-every 0 \
+    --render-march-steps $r 2>"$work/resume$r.log" &&
+  $wrap "$train" --data "$work/scene" --out "$work/resumed$r.nerf" \
+    --preset fast --steps 2 --batch 64 --checkpoint-every 0 --resume \
+    2>>"$work/resume$r.log" || { cat "$work/resume$r.log"; exit 1; }
+done
+cmp -s "$work/resumed1280.nerf" "$work/resumed1024.nerf" ||
+  fail "a resumed run trained in the steps its model records"
+echo "ok   nerf-train --render-march-steps"
 
 $wrap "$render" --model "$work/fast.nerf" --out "$work/r1" --path orbit \
   --frames 1 --width 12 --height 12 >/dev/null 2>"$work/r1.log" ||
@@ -64,6 +94,9 @@ refused() { # STATUS PATTERN PROGRAM FLAGS...: exits STATUS, says PATTERN
     { cat "$work/refused.log"; fail "$*: no '$pattern'"; }
 }
 for n in 0 65537 x; do
+  refused 2 "bad value '$n' for --render-march-steps" "$train" \
+    --data "$work/scene" --out "$work/bad.nerf" --preset fast \
+    --render-march-steps "$n"
   refused 2 "bad value '$n' for --march-steps" "$eval" \
     --model "$work/fast.nerf" --data "$work/scene" --march-steps "$n"
   refused 2 "bad value '$n' for --march-steps" "$render" \
@@ -75,4 +108,7 @@ $wrap "$train" --data "$work/scene" --out "$work/tiny.nerf" --steps 1 \
   { cat "$work/tiny.log"; exit 1; }
 refused 1 "occupancy grid" "$eval" --model "$work/tiny.nerf" \
   --data "$work/scene" --march-steps 2048
+refused 2 "without marching" "$train" --data "$work/scene" \
+  --out "$work/tiny2.nerf" --steps 1 --render-march-steps 2048
+[ -e "$work/tiny2.nerf" ] && fail "a refused --render-march-steps trained"
 echo "ok   refused values and models"

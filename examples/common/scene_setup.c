@@ -72,7 +72,8 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
 
 /* A finer march than the recorded one must reach as far along a ray, so
  * the cap on a ray's samples grows with it.  steps is the programs'
- * --march-steps, 1..65536 (cli_march_steps()). */
+ * --march-steps or --render-march-steps, 1..65536 (cli_march_steps()),
+ * or the fast preset's. */
 static void march_with(nerf_sampler_options *so, int64_t steps)
 {
     if (so->march_steps > 0 && steps > 0) {
@@ -83,6 +84,33 @@ static void march_with(nerf_sampler_options *so, int64_t steps)
                                           : (uint32_t)cap;
     }
     so->march_steps = (uint32_t)steps;
+}
+
+int64_t setup_train_march(const nerf_model *model)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    if (nerf_model_render_settings(model, &so, NULL) != NERF_OK ||
+        so.march_steps == 0) {
+        /* A forged recording is setup_sampler()'s to report. */
+        return -1;
+    }
+    nerf_sampler_options_preset(&so, NERF_PRESET_FAST);
+    return so.march_steps;
+}
+
+int setup_render_march(nerf_model *model, int64_t steps)
+{
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    nerf_renderer_options ro;
+    NERF_RENDERER_OPTIONS_INIT(&ro);
+    int rc = nerf_model_render_settings(model, &so, &ro);
+    if (rc != NERF_OK || so.march_steps == 0) {
+        return rc;
+    }
+    march_with(&so, steps);
+    return nerf_model_set_render_settings(model, &so, ro.white_background);
 }
 
 /*

@@ -54,6 +54,22 @@ typedef struct sampler_choice {
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
                   const nerf_dataset *dataset, const sampler_choice *choice);
 
+/*
+ * The march nerf-train trains a marching model in, fresh or resumed: the
+ * fast preset's, whatever march the model records for rendering
+ * (setup_render_march()), so that a resumed run goes on as it began.  -1
+ * for a model that does not march (sampler_choice's "as recorded").
+ */
+int64_t setup_train_march(const nerf_model *model);
+
+/*
+ * Record that a marching model renders in `steps` (1..65536) of its
+ * grid's diagonal, its cap on a ray's samples scaled with them, as
+ * nerf-eval --march-steps renders.  A model that does not march is left
+ * as it is.
+ */
+int setup_render_march(nerf_model *model, int64_t steps);
+
 /* Renders of a dataset's scene are composited as its images were: on white
  * for Blender scenes (and when there is no dataset), on black for LLFF. */
 int setup_white_background(const nerf_dataset *dataset);
