@@ -29,17 +29,17 @@ $wrap "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
   --steps 2 --batch 64 --checkpoint-every 0 2>"$work/train.log" ||
   { cat "$work/train.log"; exit 1; }
 
-scores() { # NAME [FLAGS]: the per-view lines of nerf-eval
-  name=$1
-  shift
-  $wrap "$eval" --model "$work/fast.nerf" --data "$work/scene" "$@" \
+scores() { # NAME MODEL [FLAGS]: the per-view lines of nerf-eval
+  name=$1 model=$2
+  shift 2
+  $wrap "$eval" --model "$work/$model" --data "$work/scene" "$@" \
     >"$work/$name.txt" 2>"$work/$name.log" ||
     { cat "$work/$name.log"; fail "nerf-eval $*"; }
   grep "^view" "$work/$name.txt" >"$work/$name.views"
 }
-scores recorded
-scores same --march-steps 1280
-scores finer --march-steps 4096
+scores recorded fast.nerf
+scores same fast.nerf --march-steps 1280
+scores finer fast.nerf --march-steps 4096
 cmp -s "$work/recorded.views" "$work/same.views" ||
   { cat "$work/recorded.views" "$work/same.views"; fail "1280 changed them"; }
 cmp -s "$work/recorded.views" "$work/finer.views" &&
@@ -50,13 +50,11 @@ echo "ok   nerf-eval --march-steps"
 $wrap "$train" --data "$work/scene" --out "$work/r1024.nerf" --preset fast \
   --steps 2 --batch 64 --checkpoint-every 0 --render-march-steps 1024 \
   2>"$work/r1024.log" || { cat "$work/r1024.log"; exit 1; }
-scores trained --march-steps 1024
-mv "$work/fast.nerf" "$work/fast.keep"
-cp "$work/r1024.nerf" "$work/fast.nerf"
-scores r1024
-mv "$work/fast.keep" "$work/fast.nerf"
+scores trained fast.nerf --march-steps 1024
+scores r1024 r1024.nerf
 cmp -s "$work/trained.views" "$work/r1024.views" ||
-  { cat "$work/trained.views" "$work/r1024.views"; fail "--render-march-steps 1024: not fast.nerf in 1024 steps"; }
+  { cat "$work/trained.views" "$work/r1024.views"
+    fail "--render-march-steps 1024: not fast.nerf in 1024 steps"; }
 cmp -s "$work/recorded.views" "$work/r1024.views" &&
   fail "--render-march-steps 1024 recorded 1280"
 # One step recording 1280, one recording 1024, each resumed for one
