@@ -120,7 +120,7 @@ int setup_render_march(nerf_model *model, int64_t steps)
  * a contracted scene is marched as far as the model's settings reach.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, const sampler_choice *choice)
+                  const nerf_dataset *dataset, const sampler_choice *c)
 {
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
@@ -128,7 +128,6 @@ int setup_sampler(nerf_sampler **out, const nerf_model *model,
     if (rc != NERF_OK) {
         return rc;
     }
-    const sampler_choice *c = choice;
     /* Out-of-range counts are the sampler's to refuse, by name. */
     so.n_coarse = c->n_coarse >= 0 ? (uint32_t)c->n_coarse : so.n_coarse;
     so.n_fine = c->n_fine >= 0 ? (uint32_t)c->n_fine : so.n_fine;

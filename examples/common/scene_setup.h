@@ -45,14 +45,14 @@ typedef struct sampler_choice {
  * NULL).  Sampling follows the settings the model records, from its
  * training or, for a new model or a file from before libnerf 0.4, guessed
  * from its shape (nerf_model_render_settings(): the preset's counts, or
- * marching for a hash-grid model), changed as choice says.  A march of
+ * marching for a hash-grid model), changed as the choice c says.  A march of
  * other steps than the recorded one scales the cap on a ray's samples
  * with it; a march asked of a model that cannot march is the renderer's
  * to refuse.  Bounds and NDC follow the dataset when there is one (an
  * unbounded model keeps its far reach), else the model's settings.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
-                  const nerf_dataset *dataset, const sampler_choice *choice);
+                  const nerf_dataset *dataset, const sampler_choice *c);
 
 /*
  * The march nerf-train trains a marching model in, fresh or resumed: the
