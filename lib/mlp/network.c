@@ -310,13 +310,12 @@ static bool outside(const nerf__network *net, const float *pos, size_t i)
     return !nerf__space_contains(&net->space, pos + 3 * i);
 }
 
-/* The sigmoid on rgb, and the outputs copied out of the workspace. */
-static void output_rows(void *ctx, size_t begin, size_t end)
+/* The sigmoid on rgb, and the colours copied out of the workspace. */
+static void colour_rows(void *ctx, size_t begin, size_t end)
 {
     const rows_job *j = ctx;
     const nerf__network *net = j->net;
     nerf__workspace *ws = j->ws;
-    const uint32_t HW = nerf__network_head_width(net);
     if (net->use_viewdirs) {
         const float *b = j->params + net->rgb.b;
         for (size_t i = begin; i < end; i++) {
@@ -335,13 +334,28 @@ static void output_rows(void *ctx, size_t begin, size_t end)
         memcpy(j->rgb_out + 3 * begin, ws->rgb + 3 * begin,
                (end - begin) * 3 * sizeof(float));
     }
+}
+
+/* The densities, from the head's rows. */
+static void sigma_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    const nerf__network *net = j->net;
+    const uint32_t HW = nerf__network_head_width(net);
+    const float *s = j->ws->head + nerf__network_sigma_col(net);
+    for (size_t i = begin; i < end; i++) {
+        float x = s[i * HW];
+        float sigma = net->exp_density ? exp_density(x) : x;
+        j->sigma_out[i] = outside(net, j->pos, i) ? 0.0f : sigma;
+    }
+}
+
+static void output_rows(void *ctx, size_t begin, size_t end)
+{
+    const rows_job *j = ctx;
+    colour_rows(ctx, begin, end);
     if (j->sigma_out) {
-        const float *s = ws->head + nerf__network_sigma_col(net);
-        for (size_t i = begin; i < end; i++) {
-            float x = s[i * HW];
-            float sigma = net->exp_density ? exp_density(x) : x;
-            j->sigma_out[i] = outside(net, j->pos, i) ? 0.0f : sigma;
-        }
+        sigma_rows(ctx, begin, end);
     }
 }
 
@@ -388,63 +402,77 @@ static int trunk_forward(const nerf__network *net, const float *params,
     return NERF_OK;
 }
 
+/* The trunk and the head, from ws->enc_pos to ws->head. */
+static int head_forward(const nerf__network *net, const float *params,
+                        nerf__workspace *ws, size_t n)
+{
+    const float *x;
+    int rc = trunk_forward(net, params, ws, n, &x);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const nerf__layer_ctx c = layer_ctx(net, ws);
+    const uint32_t W = net->width, HW = nerf__network_head_width(net);
+    const nerf__layer_part top = {x, W, W};
+    return nerf__layer_forward(&c, n, HW, &top, 1, params + net->head.w, W,
+                               params + net->head.b, false, ws->head, HW,
+                               kept_input(net, ws, net->depth));
+}
+
+/* The colour branch, from ws->head and ws->enc_dir to ws->rgb (before the
+ * rgb bias, which the sigmoid pass adds). */
+static int colour_forward(const nerf__network *net, const float *params,
+                          nerf__workspace *ws, size_t n)
+{
+    if (!net->use_viewdirs) {
+        return NERF_OK;
+    }
+    const nerf__layer_ctx c = layer_ctx(net, ws);
+    const nerf__linear *v0 = &net->view[0], *r = &net->rgb;
+    const uint32_t Ed = net->dir_width, V = net->view_width;
+    const uint32_t HW = nerf__network_head_width(net);
+    const uint32_t F = nerf__network_feature_width(net);
+    float *h = view_buffer(net, ws, 0);
+    const nerf__layer_part in0[2] = {{ws->head, HW, F},
+                                     {ws->enc_dir, Ed, Ed}};
+    const uint32_t first = net->depth + 1; /* view[0]'s index */
+    int rc = nerf__layer_forward(&c, n, V, in0, 2, params + v0->w, v0->in,
+                                 params + v0->b, true, h, V,
+                                 kept_input(net, ws, first));
+    for (uint32_t k = 1; k < net->view_depth && rc == NERF_OK; k++) {
+        float *hk = view_buffer(net, ws, k);
+        const nerf__layer_part in = {h, V, V};
+        rc = nerf__layer_forward(&c, n, V, &in, 1, params + net->view[k].w,
+                                 V, params + net->view[k].b, true, hk, V,
+                                 kept_input(net, ws, first + k));
+        h = hk;
+    }
+    const nerf__layer_part in = {h, V, V};
+    if (rc == NERF_OK) {
+        rc = nerf__layer_forward(&c, n, 3, &in, 1, params + r->w, V, NULL,
+                                 false, ws->rgb, 3,
+                                 kept_input(net, ws, first + net->view_depth));
+    }
+    return rc;
+}
+
 int nerf__network_forward(const nerf__network *net, const float *params,
                           nerf__workspace *ws, size_t n,
                           const float *positions, const float *directions,
                           float *rgb_out, float *sigma_out)
 {
-    const nerf__layer_ctx c = layer_ctx(net, ws);
-    const uint32_t W = net->width;
     ws->n = n;
     encode_positions(net, params, ws, n, positions);
-    if (use_fused(net, ws)) {
-        if (net->use_viewdirs) {
-            encode_directions(net, ws, n, directions);
-        }
-        nerf__fused_forward(net, params, ws, n, false);
-        rows_job j = {.net = net, .params = params, .ws = ws,
-                      .rgb_out = rgb_out, .sigma_out = sigma_out,
-                      .pos = positions};
-        nerf__parallel_for(n, 60, output_rows, &j);
-        return NERF_OK;
-    }
-    const float *x;
-    int rc = trunk_forward(net, params, ws, n, &x);
-
-    const uint32_t HW = nerf__network_head_width(net);
-    const nerf__layer_part top = {x, W, W};
-    if (rc == NERF_OK) {
-        rc = nerf__layer_forward(&c, n, HW, &top, 1, params + net->head.w, W,
-                                 params + net->head.b, false, ws->head, HW,
-                                 kept_input(net, ws, net->depth));
-    }
-    if (rc == NERF_OK && net->use_viewdirs) {
-        const nerf__linear *v0 = &net->view[0], *r = &net->rgb;
-        const uint32_t Ed = net->dir_width, V = net->view_width;
-        const uint32_t F = nerf__network_feature_width(net);
+    if (net->use_viewdirs) {
         encode_directions(net, ws, n, directions);
-        float *h = view_buffer(net, ws, 0);
-        const nerf__layer_part in0[2] = {{ws->head, HW, F},
-                                         {ws->enc_dir, Ed, Ed}};
-        const uint32_t first = net->depth + 1; /* view[0]'s index */
-        rc = nerf__layer_forward(&c, n, V, in0, 2, params + v0->w, v0->in,
-                                 params + v0->b, true, h, V,
-                                 kept_input(net, ws, first));
-        for (uint32_t k = 1; k < net->view_depth && rc == NERF_OK; k++) {
-            float *hk = view_buffer(net, ws, k);
-            const nerf__layer_part in = {h, V, V};
-            rc = nerf__layer_forward(&c, n, V, &in, 1, params + net->view[k].w,
-                                     V, params + net->view[k].b, true, hk, V,
-                                     kept_input(net, ws, first + k));
-            h = hk;
-        }
-        /* The rgb bias is added by the sigmoid pass (output_rows). */
-        const nerf__layer_part in = {h, V, V};
+    }
+    int rc = NERF_OK;
+    if (use_fused(net, ws)) {
+        nerf__fused_forward(net, params, ws, n, NERF__FUSED_ALL);
+    } else {
+        rc = head_forward(net, params, ws, n);
         if (rc == NERF_OK) {
-            rc = nerf__layer_forward(&c, n, 3, &in, 1, params + r->w, V, NULL,
-                                     false, ws->rgb, 3,
-                                     kept_input(net, ws,
-                                                first + net->view_depth));
+            rc = colour_forward(net, params, ws, n);
         }
     }
     if (rc != NERF_OK) {
@@ -453,6 +481,50 @@ int nerf__network_forward(const nerf__network *net, const float *params,
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out,
                   .sigma_out = sigma_out, .pos = positions};
     nerf__parallel_for(n, 60, output_rows, &j);
+    return NERF_OK;
+}
+
+int nerf__network_head(const nerf__network *net, const float *params,
+                       nerf__workspace *ws, size_t n, const float *positions,
+                       float *sigma_out)
+{
+    ws->n = n;
+    encode_positions(net, params, ws, n, positions);
+    int rc = NERF_OK;
+    if (use_fused(net, ws)) {
+        nerf__fused_forward(net, params, ws, n, NERF__FUSED_HEAD);
+    } else {
+        rc = head_forward(net, params, ws, n);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    rows_job j = {.net = net, .params = params, .ws = ws,
+                  .sigma_out = sigma_out, .pos = positions};
+    nerf__parallel_for(n, 30, sigma_rows, &j);
+    return NERF_OK;
+}
+
+int nerf__network_colour(const nerf__network *net, const float *params,
+                         nerf__workspace *ws, size_t n_colour,
+                         const float *directions, float *rgb_out)
+{
+    const size_t n = n_colour;
+    ws->n = n;
+    if (net->use_viewdirs) {
+        encode_directions(net, ws, n, directions);
+    }
+    int rc = NERF_OK;
+    if (use_fused(net, ws)) {
+        nerf__fused_forward(net, params, ws, n, NERF__FUSED_COLOUR);
+    } else {
+        rc = colour_forward(net, params, ws, n);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out};
+    nerf__parallel_for(n, 60, colour_rows, &j);
     return NERF_OK;
 }
 
@@ -480,7 +552,7 @@ int nerf__network_density(const nerf__network *net, const float *params,
     rows_job j = {.net = net, .params = params, .ws = ws,
                   .sigma_out = sigma_out, .pos = positions};
     if (use_fused(net, ws)) {
-        nerf__fused_forward(net, params, ws, n, true);
+        nerf__fused_forward(net, params, ws, n, NERF__FUSED_DENSITY);
         nerf__parallel_for(n, 30, density_rows, &j);
         return NERF_OK;
     }

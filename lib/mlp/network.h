@@ -221,6 +221,24 @@ int nerf__network_density(const nerf__network *net, const float *params,
                            const float *positions, float *sigma_out);
 
 /*
+ * A forward in two halves, for a renderer that needs the colour of only
+ * some samples: nerf__network_head() gives the density of n samples as
+ * nerf__network_forward() would and leaves in ws->head [n, head_width]
+ * the rows the colour branch reads; the caller may then move some of
+ * those rows to the front (each row alone, in order) and
+ * nerf__network_colour() gives the colours of the first n_colour rows as
+ * nerf__network_forward() would for their samples (bit for bit on the
+ * fused path, whose rows are computed alone).  ws must be a full
+ * workspace (not a density one) reserved for n samples; n_colour <= n.
+ */
+int nerf__network_head(const nerf__network *net, const float *params,
+                       nerf__workspace *ws, size_t n, const float *positions,
+                       float *sigma_out);
+int nerf__network_colour(const nerf__network *net, const float *params,
+                         nerf__workspace *ws, size_t n_colour,
+                         const float *directions, float *rgb_out);
+
+/*
  * Backward the last forward (which must have kept its activations), given
  * the loss gradient with respect to rgb [n, 3] (after the sigmoid) and raw
  * sigma [n]; either may be NULL for zero.  Gradients are added to grads

@@ -91,7 +91,7 @@ typedef struct fjob {
     const float *params;
     nerf__workspace *ws;
     const float *wt[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
-    bool density_only;
+    nerf__fused_part part;
     /* backward */
     const float *d_rgb, *d_sigma;
     float *partials;
@@ -159,8 +159,9 @@ static float *view_out(const fjob *j, float *local, uint32_t k, size_t r0)
                        r0 * j->net->view_width;
 }
 
-static void forward_block(const fjob *j, size_t r0, size_t rows,
-                          float *local)
+/* The trunk and the head of a block (only the head's density column for
+ * a DENSITY pass). */
+static void block_head(const fjob *j, size_t r0, size_t rows, float *local)
 {
     const nerf__network *net = j->net;
     const float *params = j->params;
@@ -185,7 +186,7 @@ static void forward_block(const fjob *j, size_t r0, size_t rows,
         ldx = W;
     }
     const nerf__smm_seg top = rows_of(x, W, W);
-    if (j->density_only) {
+    if (j->part == NERF__FUSED_DENSITY) {
         /* One column, read straight from the head's density row. */
         const float *row =
             params + net->head.w + (size_t)nerf__network_sigma_col(net) * W;
@@ -195,9 +196,15 @@ static void forward_block(const fjob *j, size_t r0, size_t rows,
     const uint32_t HW = nerf__network_head_width(net);
     nerf__smm(rows, HW, &top, 1, j->wt[net->depth], padded(HW),
               params + net->head.b, 0, ws->head + r0 * HW, HW);
-    if (!net->use_viewdirs) {
-        return;
-    }
+}
+
+/* The colour branch of a block, from its head rows. */
+static void block_colour(const fjob *j, size_t r0, size_t rows, float *local)
+{
+    const nerf__network *net = j->net;
+    const float *params = j->params;
+    nerf__workspace *ws = j->ws;
+    const uint32_t HW = nerf__network_head_width(net);
     const uint32_t V = net->view_width, Ed = net->dir_width;
     const uint32_t F = nerf__network_feature_width(net);
     const uint32_t first = net->depth + 1;
@@ -219,6 +226,19 @@ static void forward_block(const fjob *j, size_t r0, size_t rows,
               NULL, 0, ws->rgb + r0 * 3, 3);
 }
 
+static void forward_block(const fjob *j, size_t r0, size_t rows,
+                          float *local)
+{
+    if (j->part != NERF__FUSED_COLOUR) {
+        block_head(j, r0, rows, local);
+    }
+    const bool colour =
+        j->part == NERF__FUSED_ALL || j->part == NERF__FUSED_COLOUR;
+    if (colour && j->net->use_viewdirs) {
+        block_colour(j, r0, rows, local);
+    }
+}
+
 static void forward_range(void *ctx, size_t begin, size_t end)
 {
     const fjob *j = ctx;
@@ -232,11 +252,13 @@ static void forward_range(void *ctx, size_t begin, size_t end)
 }
 
 void nerf__fused_forward(const nerf__network *net, const float *params,
-                         nerf__workspace *ws, size_t n, bool density_only)
+                         nerf__workspace *ws, size_t n, nerf__fused_part part)
 {
-    fjob j = {.net = net, .params = params, .ws = ws,
-              .density_only = density_only};
-    pack(&j, density_only ? net->depth : n_layers(net));
+    fjob j = {.net = net, .params = params, .ws = ws, .part = part};
+    const uint32_t layers = part == NERF__FUSED_DENSITY ? net->depth
+                            : part == NERF__FUSED_HEAD  ? net->depth + 1
+                                                        : n_layers(net);
+    pack(&j, layers);
     nerf__parallel_for(n, (size_t)nerf__network_flops_per_sample(net) /
                               NERF__FLOPS_PER_OP, forward_range, &j);
 }

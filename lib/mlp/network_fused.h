@@ -34,15 +34,30 @@ bool nerf__fused_active(const nerf__network *net);
  * weights; with keep, the chunks' gradient partials); 0 if it does not fit. */
 size_t nerf__fused_scratch(const nerf__network *net, size_t n, bool keep);
 
+/* How much of a forward nerf__fused_forward() runs. */
+typedef enum nerf__fused_part {
+    /* Every layer. */
+    NERF__FUSED_ALL,
+    /* The trunk and the head's density column alone, into ws->head [n, 1]
+     * without its bias. */
+    NERF__FUSED_DENSITY,
+    /* The trunk and the whole head, into ws->head [n, head width]. */
+    NERF__FUSED_HEAD,
+    /* The colour branch and rgb alone, from the rows a HEAD pass left in
+     * ws->head (and from ws->enc_dir). */
+    NERF__FUSED_COLOUR,
+} nerf__fused_part;
+
 /*
  * The layers of a forward, from ws->enc_pos and ws->enc_dir (already
  * encoded) to ws->trunk, ws->head, ws->view and ws->rgb (before the rgb
- * bias and sigmoid), as network.c's per-layer products leave them.  With
- * density_only, the trunk and the head's density column alone, into
- * ws->head [n, 1] without its bias.
+ * bias and sigmoid), as network.c's per-layer products leave them; or the
+ * part of them that `part` names.  Every row is computed alone (smm.h),
+ * so a HEAD pass followed by a COLOUR pass over some of its rows, moved
+ * to the front, gives those rows' ALL results bit for bit.
  */
 void nerf__fused_forward(const nerf__network *net, const float *params,
-                         nerf__workspace *ws, size_t n, bool density_only);
+                         nerf__workspace *ws, size_t n, nerf__fused_part part);
 
 /*
  * The layers' backward from d_rgb and d_sigma (either NULL for zero), with

@@ -636,6 +636,25 @@ int nerf__model_evaluate(const nerf_model *m, int network,
                                  rgb_out, sigma_out);
 }
 
+int nerf__model_head(const nerf_model *m, int network, nerf__workspace *ws,
+                     size_t n, const float *positions, float *sigma_out)
+{
+    const nerf__network *net = &m->nets[network];
+    int rc = nerf__workspace_reserve(&m->env, ws, net, n, false);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    return nerf__network_head(net, m->params, ws, n, positions, sigma_out);
+}
+
+int nerf__model_colour(const nerf_model *m, int network, nerf__workspace *ws,
+                       size_t n_colour, const float *directions,
+                       float *rgb_out)
+{
+    return nerf__network_colour(&m->nets[network], m->params, ws, n_colour,
+                                directions, rgb_out);
+}
+
 int nerf__model_reserve(const nerf_model *m, int network, nerf__workspace *ws,
                         size_t n, bool keep)
 {

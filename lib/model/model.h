@@ -146,6 +146,21 @@ int nerf__model_evaluate(const nerf_model *m, int network,
                          float *rgb_out, float *sigma_out);
 
 /*
+ * nerf__model_evaluate() in two halves (network.h's nerf__network_head()
+ * and nerf__network_colour()), for a renderer that colours only the
+ * samples its compositing will use: the densities of n samples, then the
+ * colours of the first n_colour rows of ws->head after the caller has
+ * moved the rows it wants there.  nerf__model_head() sizes ws as
+ * nerf__model_evaluate() does; nerf__model_colour() takes ws as the head
+ * left it (n_colour at most its n) and never allocates.
+ */
+int nerf__model_head(const nerf_model *m, int network, nerf__workspace *ws,
+                     size_t n, const float *positions, float *sigma_out);
+int nerf__model_colour(const nerf_model *m, int network, nerf__workspace *ws,
+                       size_t n_colour, const float *directions,
+                       float *rgb_out);
+
+/*
  * Grow ws to hold at least n samples of network `network` (with keep, the
  * activations that nerf__model_backward() needs), for callers whose batch
  * sizes vary and that reserve with headroom.

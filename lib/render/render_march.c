@@ -21,12 +21,14 @@
  * is opaque after a few samples in occupied cells, and many rays have
  * none at all, so with 64-ray blocks the first rounds of 4 samples a ray
  * end most of them.  The samples of a piece past the point where its ray
- * turned opaque are evaluated for nothing, and each round costs a march
- * and a network call.  On 4 orbit views of a trained lego model
- * (composited: 16.4 M samples), pieces of 16 to 256 (a budget of 1024)
- * evaluated 24.5 M samples, pieces of 8 to 16 19.4 M, these 18.2 M; with
- * bench_render_model, pieces of 4 to 8 rendered 5% faster than 4 to 16,
- * and pieces from 2 to 6 alike.
+ * turned opaque cost a density for nothing (not a colour: see
+ * evaluate_used()), and each round costs a march and a network call.  On
+ * 4 orbit views of a trained lego model (composited: 16.4 M samples),
+ * pieces of 16 to 256 (a budget of 1024) evaluated 24.5 M samples, pieces
+ * of 8 to 16 19.4 M, these 18.2 M; with bench_render_model, pieces of 4 to
+ * 8 rendered 5% faster than 4 to 16, and pieces from 2 to 6 alike.  With
+ * the colours of those samples spared, pieces of 8 to 16 (a budget of
+ * 512) and of 6 to 12 were still no faster.
  */
 #define PIECE_BUDGET 256u
 #define PIECE_MIN 4u
@@ -183,39 +185,47 @@ static int reserve_workspace(nerf__batch *b, const nerf_model *m, size_t n,
     return NERF_OK;
 }
 
-/* Points, directions and the network over the batch's packed samples.
- * same_params: the model is unchanged since the last call on b, so the
- * network may reuse what it prepared from the weights then. */
-static int evaluate(nerf__batch *b, const nerf__render_setup *s,
-                    const march_job *j, bool keep, bool same_params)
+/* The packed samples' points, and the room for the network on them. */
+static int place_samples(nerf__batch *b, const nerf__render_setup *s,
+                         const march_job *j, bool keep)
 {
-    const nerf_model *m = s->model;
-    const size_t total = b->march.total, n = j->rays->n;
+    const size_t total = b->march.total;
     int rc = reserve_packed(b, total, keep);
     if (rc != NERF_OK || total == 0) {
         return rc;
     }
     nerf__march_points(j->mo, j->rays, b->march.offsets, b->march.t,
                        b->march_points);
-    const float *dirs = NULL;
-    if (nerf__model_uses_viewdirs(m)) {
-        nerf__parallel_for(n, 6 * (total / n + 1), sample_dirs, (void *)j);
-        dirs = b->m_dirs;
+    return reserve_workspace(b, s->model, total, keep);
+}
+
+/* The packed samples' view directions, or NULL if the model takes none. */
+static const float *sample_directions(nerf__batch *b,
+                                      const nerf__render_setup *s,
+                                      const march_job *j)
+{
+    if (!nerf__model_uses_viewdirs(s->model)) {
+        return NULL;
     }
-    nerf__workspace *ws = &b->ws[0];
-    rc = reserve_workspace(b, m, total, keep);
-    if (rc != NERF_OK) {
+    const size_t n = j->rays->n;
+    nerf__parallel_for(n, 6 * (b->march.total / n + 1), sample_dirs,
+                       (void *)j);
+    return b->m_dirs;
+}
+
+/* Training's forward over the batch's packed samples, activations kept. */
+static int forward(nerf__batch *b, const nerf__render_setup *s,
+                   const march_job *j)
+{
+    const nerf_model *m = s->model;
+    const size_t total = b->march.total;
+    int rc = place_samples(b, s, j, true);
+    if (rc != NERF_OK || total == 0) {
         return rc;
     }
-    ws->params_unchanged = same_params;
-    if (keep) {
-        rc = nerf__model_forward(m, 0, ws, total, b->march_points, dirs,
-                                 b->m_rgb, b->m_sigma);
-    } else {
-        rc = nerf__model_evaluate(m, 0, ws, total, b->march_points, dirs,
-                                  b->m_rgb, b->m_sigma);
-    }
-    ws->params_unchanged = false;
+    rc = nerf__model_forward(m, 0, &b->ws[0], total, b->march_points,
+                             sample_directions(b, s, j), b->m_rgb,
+                             b->m_sigma);
     if (rc == NERF_OK && s->march_zero_empty) {
         nerf__occupancy_zero_empty(nerf__model_grid(m), total,
                                    b->march_points, b->m_sigma);
@@ -338,7 +348,7 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
         rc = cut_where_opaque(b, s, &j);
     }
     if (rc == NERF_OK) {
-        rc = evaluate(b, s, &j, true, false);
+        rc = forward(b, s, &j);
     }
     if (rc != NERF_OK) {
         return rc;
@@ -371,6 +381,79 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
         }
     }
     return NERF_OK;
+}
+
+/*
+ * Each ray's samples of a round cut to those its compositing will use:
+ * within its max_samples, and up to where it turns opaque, counted from
+ * the densities in the composite's own arithmetic.  The kept samples move
+ * down in ray order with their t, dt, density and head row; each ray's
+ * kept samples are a prefix of its own, so no row is overwritten before
+ * it has moved.
+ */
+static void keep_used(nerf__batch *b, const march_job *j, uint32_t head_width)
+{
+    nerf__march_samples *ms = &b->march;
+    float *head = b->ws[0].head;
+    const size_t n_rays = j->rays->n;
+    size_t w = 0;
+    for (size_t i = 0; i < n_rays; i++) {
+        const uint32_t k = b->m_active[i];
+        const size_t at = ms->offsets[i];
+        uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
+        const uint32_t room = j->max_samples - b->m_count[k];
+        n = n < room ? n : room;
+        float trans = b->m_state[k].trans;
+        const uint32_t used = nerf__composite_packed_ray_used(
+            n, ms->dt + at, b->m_sigma + at, NERF__COMPOSITE_EPS_DEFAULT,
+            &trans);
+        if (at != w) {
+            move_rows(ms->t, 1, w, at, used);
+            move_rows(ms->dt, 1, w, at, used);
+            move_rows(b->m_sigma, 1, w, at, used);
+            move_rows(head, head_width, w, at, used);
+        }
+        ms->offsets[i] = w;
+        w += used;
+    }
+    ms->offsets[n_rays] = w;
+    ms->total = w;
+}
+
+/*
+ * A round's network pass: the densities of every marched sample, then the
+ * colour branch on the samples keep_used() keeps.  Behind the point where
+ * a ray turns opaque a round's last samples are marched for nothing; they
+ * cost a density here, not a colour too.  The colours are those of one
+ * forward over every sample (network.h), so the image is too.
+ * same_params: the model is unchanged since the last call on b.
+ */
+static int evaluate_used(nerf__batch *b, const nerf__render_setup *s,
+                         const march_job *j, bool same_params)
+{
+    const nerf_model *m = s->model;
+    const size_t total = b->march.total;
+    int rc = place_samples(b, s, j, false);
+    if (rc != NERF_OK || total == 0) {
+        return rc;
+    }
+    b->n_evaluated += total;
+    nerf__workspace *ws = &b->ws[0];
+    ws->params_unchanged = same_params;
+    rc = nerf__model_head(m, 0, ws, total, b->march_points, b->m_sigma);
+    if (rc == NERF_OK) {
+        if (s->march_zero_empty) {
+            nerf__occupancy_zero_empty(nerf__model_grid(m), total,
+                                       b->march_points, b->m_sigma);
+        }
+        keep_used(b, j, nerf__network_head_width(&m->nets[0]));
+        /* The weights the head's pass packed still hold. */
+        ws->params_unchanged = true;
+        rc = nerf__model_colour(m, 0, ws, b->march.total,
+                                sample_directions(b, s, j), b->m_rgb);
+    }
+    ws->params_unchanged = false;
+    return rc;
 }
 
 /* One round's compositing: the new samples of each ray going, its count
@@ -444,8 +527,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         j.rays = &rays;
         rc = nerf__march_run(g, &mo, &rays, &b->march);
         if (rc == NERF_OK) {
-            rc = evaluate(b, s, &j, false, !first_round);
-            b->n_evaluated += b->march.total;
+            rc = evaluate_used(b, s, &j, !first_round);
             first_round = false;
         }
         if (rc != NERF_OK) {

@@ -4,8 +4,8 @@
  * processor runs, on sizes that are not multiples of the tiles; the
  * AVX-512 and AVX2 variants bit for bit against each other; and whole
  * networks (the fast preset's shape, a skip trunk, a reference head, no
- * view directions) against the per-layer sgemm path, forward, density
- * and backward, on sample counts that leave partial blocks and chunks,
+ * view directions) against the per-layer sgemm path, forward, density,
+ * the forward in two halves and backward, on sample counts that leave partial blocks and chunks,
  * with two runs giving the same bits.
  */
 #include <math.h>
@@ -214,6 +214,55 @@ typedef struct outputs {
     float *rgb, *sigma, *density, *grads;
 } outputs;
 
+/*
+ * The forward in two halves, as a renderer runs it: nerf__model_head()
+ * over every sample, a third of the head's rows dropped and the rest
+ * moved to the front, nerf__model_colour() on those.  The densities are
+ * the forward's (o) bit for bit, and so are the kept rows' colours on the
+ * fused path, whose rows are computed alone; through the BLAS, within
+ * rounding (another row count may sum in another order).
+ */
+static void check_halves(nerf_model *m, int k, size_t n, const float *pos,
+                         const float *dir, const outputs *o)
+{
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    float *sigma = malloc(n * sizeof(float));
+    float *rgb = malloc(3 * n * sizeof(float));
+    float *dirs = malloc(3 * n * sizeof(float));
+    size_t *rows = malloc(n * sizeof(size_t));
+    CHECK_OK(nerf__model_head(m, k, &ws, n, pos, sigma));
+    CHECK(memcmp(sigma, o->sigma, n * sizeof(float)) == 0);
+    const uint32_t HW = nerf__network_head_width(&m->nets[k]);
+    size_t kept = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (i % 3 == 1) {
+            continue;
+        }
+        memmove(ws.head + kept * HW, ws.head + i * HW, HW * sizeof(float));
+        memcpy(dirs + 3 * kept, dir + 3 * i, 3 * sizeof(float));
+        rows[kept++] = i;
+    }
+    CHECK_OK(nerf__model_colour(m, k, &ws, kept, dirs, rgb));
+    double worst = 0.0;
+    for (size_t r = 0; r < kept; r++) {
+        for (int c = 0; c < 3; c++) {
+            double d = fabs(rgb[3 * r + c] - o->rgb[3 * rows[r] + c]);
+            worst = fmax(worst, d);
+        }
+    }
+    if (nerf__fused_active(&m->nets[k])) {
+        CHECK(worst == 0.0);
+    } else {
+        CHECK(worst < 1e-6);
+    }
+    nerf__workspace_release(&m->env, &ws);
+    free(sigma);
+    free(rgb);
+    free(dirs);
+    free(rows);
+}
+
 static void run_network(nerf_model *m, int k, size_t n, const float *pos,
                         const float *dir, const float *a_rgb,
                         const float *a_sigma, outputs *o)
@@ -239,6 +288,7 @@ static void run_network(nerf_model *m, int k, size_t n, const float *pos,
     CHECK(memcmp(sigma, o->sigma, n * sizeof(float)) == 0);
     free(rgb);
     free(sigma);
+    check_halves(m, k, n, pos, dir, o);
     nerf__workspace_release(&m->env, &ws);
     memset(&ws, 0, sizeof ws);
     CHECK_OK(nerf__model_density(m, k, &ws, n, pos, o->density));
