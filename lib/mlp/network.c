@@ -456,6 +456,24 @@ static int colour_forward(const nerf__network *net, const float *params,
     return rc;
 }
 
+/* The layers of `part` (ALL, HEAD or COLOUR) on the network's path. */
+static int run_layers(const nerf__network *net, const float *params,
+                      nerf__workspace *ws, size_t n, nerf__fused_part part)
+{
+    if (use_fused(net, ws)) {
+        nerf__fused_forward(net, params, ws, n, part);
+        return NERF_OK;
+    }
+    int rc = NERF_OK;
+    if (part != NERF__FUSED_COLOUR) {
+        rc = head_forward(net, params, ws, n);
+    }
+    if (rc == NERF_OK && part != NERF__FUSED_HEAD) {
+        rc = colour_forward(net, params, ws, n);
+    }
+    return rc;
+}
+
 int nerf__network_forward(const nerf__network *net, const float *params,
                           nerf__workspace *ws, size_t n,
                           const float *positions, const float *directions,
@@ -466,15 +484,7 @@ int nerf__network_forward(const nerf__network *net, const float *params,
     if (net->use_viewdirs) {
         encode_directions(net, ws, n, directions);
     }
-    int rc = NERF_OK;
-    if (use_fused(net, ws)) {
-        nerf__fused_forward(net, params, ws, n, NERF__FUSED_ALL);
-    } else {
-        rc = head_forward(net, params, ws, n);
-        if (rc == NERF_OK) {
-            rc = colour_forward(net, params, ws, n);
-        }
-    }
+    int rc = run_layers(net, params, ws, n, NERF__FUSED_ALL);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -490,12 +500,7 @@ int nerf__network_head(const nerf__network *net, const float *params,
 {
     ws->n = n;
     encode_positions(net, params, ws, n, positions);
-    int rc = NERF_OK;
-    if (use_fused(net, ws)) {
-        nerf__fused_forward(net, params, ws, n, NERF__FUSED_HEAD);
-    } else {
-        rc = head_forward(net, params, ws, n);
-    }
+    int rc = run_layers(net, params, ws, n, NERF__FUSED_HEAD);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -509,22 +514,16 @@ int nerf__network_colour(const nerf__network *net, const float *params,
                          nerf__workspace *ws, size_t n_colour,
                          const float *directions, float *rgb_out)
 {
-    const size_t n = n_colour;
-    ws->n = n;
+    ws->n = n_colour;
     if (net->use_viewdirs) {
-        encode_directions(net, ws, n, directions);
+        encode_directions(net, ws, n_colour, directions);
     }
-    int rc = NERF_OK;
-    if (use_fused(net, ws)) {
-        nerf__fused_forward(net, params, ws, n, NERF__FUSED_COLOUR);
-    } else {
-        rc = colour_forward(net, params, ws, n);
-    }
+    int rc = run_layers(net, params, ws, n_colour, NERF__FUSED_COLOUR);
     if (rc != NERF_OK) {
         return rc;
     }
     rows_job j = {.net = net, .params = params, .ws = ws, .rgb_out = rgb_out};
-    nerf__parallel_for(n, 60, colour_rows, &j);
+    nerf__parallel_for(n_colour, 60, colour_rows, &j);
     return NERF_OK;
 }
 
