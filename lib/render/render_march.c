@@ -466,9 +466,8 @@ static void composite_round(void *ctx, size_t begin, size_t end)
     for (size_t i = begin; i < end; i++) {
         const uint32_t k = b->m_active[i];
         const size_t at = ms->offsets[i];
-        uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
-        const uint32_t room = j->max_samples - b->m_count[k];
-        n = n < room ? n : room;
+        /* keep_used() has cut them to the ray's room. */
+        const uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
         nerf__composite_state *st = &b->m_state[k];
         nerf__composite_packed_ray(st, n, ms->t + at, ms->dt + at,
                                    b->m_rgb + 3 * at, b->m_sigma + at,

@@ -5,8 +5,8 @@
  * AVX-512 and AVX2 variants bit for bit against each other; and whole
  * networks (the fast preset's shape, a skip trunk, a reference head, no
  * view directions) against the per-layer sgemm path, forward, density,
- * the forward in two halves and backward, on sample counts that leave partial blocks and chunks,
- * with two runs giving the same bits.
+ * the forward in two halves and backward, on sample counts that leave
+ * partial blocks and chunks, with two runs giving the same bits.
  */
 #include <math.h>
 #include <string.h>

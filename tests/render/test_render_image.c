@@ -344,14 +344,17 @@ static double ray_against_blocks(nerf_model *m, const nerf__march_samples *ms,
     const size_t at = ms->offsets[k];
     const uint32_t n = (uint32_t)(ms->offsets[k + 1] - at);
     CHECK(n <= MAX);
+    if (n > MAX) {
+        return INFINITY;
+    }
     float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (uint32_t i = 0; i < n && n <= MAX; i++) {
+    for (uint32_t i = 0; i < n; i++) {
         for (int a = 0; a < 3; a++) {
             pts[3 * i + a] = o[a] + ms->t[at + i] * d[a];
             dirs[3 * i + a] = d[a] / len;
         }
     }
-    if (n > 0 && n <= MAX) {
+    if (n > 0) {
         CHECK_OK(nerf_model_query(m, NERF_NETWORK_COARSE, n, pts, dirs, c,
                                   sig));
     }
@@ -359,10 +362,9 @@ static double ray_against_blocks(nerf_model *m, const nerf__march_samples *ms,
     *cut += use < n;
     nerf__composite_state st;
     nerf__composite_state_init(&st);
-    uint32_t used = n > MAX ? 0
-                            : nerf__composite_packed_ray(
-                                  &st, use, ms->t + at, ms->dt + at, c, sig,
-                                  NERF__COMPOSITE_EPS_DEFAULT, NULL);
+    uint32_t used = nerf__composite_packed_ray(
+        &st, use, ms->t + at, ms->dt + at, c, sig,
+        NERF__COMPOSITE_EPS_DEFAULT, NULL);
     *opaque += used < use;
     double worst = 0.0;
     for (int a = 0; a < 3; a++) {
