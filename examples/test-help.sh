@@ -68,7 +68,7 @@ help "$scene" --width --height --train --val --test --threads \
   "--capture object" "--layout blender" --format --jpeg --distortion
 help "$info"
 if [ -n "$viewer" ]; then
-  help "$viewer" --data --downscale "--width W," --view --screenshot \
-    --quit-after
+  help "$viewer" --data --downscale "--width W," --view --march-steps \
+    --screenshot --quit-after
 fi
 echo "ok"

@@ -38,6 +38,15 @@ check() {
     fail "nerf-train --matmul $kind"
   fi
 
+  # Taken on the fast preset too, but with a word that it is slower there.
+  $wrap "$train" --data "$work/scene" --out "$work/fast.nerf" --overwrite \
+    --preset fast --steps 2 --batch 64 --matmul "$kind" \
+    2>"$work/fast.log" ||
+    { cat "$work/fast.log"; fail "nerf-train --preset fast --matmul $kind"; }
+  grep -q "$kind products through oneDNN: the fast preset trains faster" \
+    "$work/fast.log" ||
+    { cat "$work/fast.log"; fail "--preset fast --matmul $kind: no word"; }
+
   $wrap "$train" --data "$work/scene" --out "$m" --steps 4 --batch 64 \
     --matmul fp32 --resume 2>"$work/resume.log" ||
     { cat "$work/resume.log"; fail "nerf-train --resume ($kind)"; }

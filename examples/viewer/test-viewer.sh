@@ -5,7 +5,8 @@
 #
 # screenshot: render views headless (no display, SDL never started) and
 #             check each PNG has the right size and more than one colour
-#             (colour and depth: this young model's opacity is 1 all over).
+#             (colour and depth: this young model's opacity is 1 all over),
+#             and --march-steps on a fast model.
 # window:     run the interactive viewer for a second under Xvfb and check
 #             it exits 0 having drawn something; skipped (77) without
 #             xvfb-run.
@@ -38,6 +39,42 @@ screenshot)
   env -u DISPLAY "$viewer" --model "$work/model.nerf" --data "$work/scene" \
     --width 36 --view depth --screenshot "$work/depth.png"
   "$check" "$work/depth.png" 36 36
+  # --march-steps: a fast model drawn in its recorded 1280 steps again is
+  # the same picture, in 4096 another (a new model has density all over,
+  # so the spacing shows); a bad value and a model that cannot march are
+  # refused.
+  "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
+    --steps 2 --batch 64 --checkpoint-every 0 2>"$work/fast.log" ||
+    { cat "$work/fast.log"; exit 1; }
+  for n in as-recorded 1280 4096; do
+    steps=
+    [ "$n" = as-recorded ] || steps="--march-steps $n"
+    # shellcheck disable=SC2086 # $steps is empty or two words
+    env -u DISPLAY "$viewer" --model "$work/fast.nerf" --width 24 \
+      --height 24 $steps --screenshot "$work/march-$n.png"
+  done
+  if ! cmp -s "$work/march-as-recorded.png" "$work/march-1280.png"; then
+    echo "--march-steps 1280 changed the recorded march's picture"
+    exit 1
+  fi
+  if cmp -s "$work/march-as-recorded.png" "$work/march-4096.png"; then
+    echo "--march-steps 4096 drew the recorded march's picture"
+    exit 1
+  fi
+  for bad in "fast.nerf --march-steps 0" "model.nerf --march-steps 2048"; do
+    # shellcheck disable=SC2086 # the model and two words
+    if env -u DISPLAY "$viewer" --model "$work/"$bad \
+         --screenshot "$work/bad.png" 2>"$work/bad.log"; then
+      echo "nerf-viewer --model $bad accepted"
+      exit 1
+    fi
+    if ! grep -Eq "bad value '0' for --march-steps|occupancy grid" \
+         "$work/bad.log"; then
+      cat "$work/bad.log"
+      echo "nerf-viewer --model $bad: no reason given"
+      exit 1
+    fi
+  done
   ;;
 window)
   status=0
