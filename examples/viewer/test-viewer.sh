@@ -46,13 +46,16 @@ screenshot)
   "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
     --steps 2 --batch 64 --checkpoint-every 0 2>"$work/fast.log" ||
     { cat "$work/fast.log"; exit 1; }
-  for n in as-recorded 1280 4096; do
-    steps=
-    [ "$n" = as-recorded ] || steps="--march-steps $n"
-    # shellcheck disable=SC2086 # $steps is empty or two words
-    env -u DISPLAY "$viewer" --model "$work/fast.nerf" --width 24 \
-      --height 24 $steps --screenshot "$work/march-$n.png"
-  done
+  # shot NAME MODEL [FLAGS...]: MODEL's start view into NAME.png
+  shot() {
+    name=$1 model=$2
+    shift 2
+    env -u DISPLAY "$viewer" --model "$work/$model" --width 24 \
+      --height 24 "$@" --screenshot "$work/$name.png"
+  }
+  shot march-as-recorded fast.nerf
+  shot march-1280 fast.nerf --march-steps 1280
+  shot march-4096 fast.nerf --march-steps 4096
   if ! cmp -s "$work/march-as-recorded.png" "$work/march-1280.png"; then
     echo "--march-steps 1280 changed the recorded march's picture"
     exit 1
@@ -61,20 +64,21 @@ screenshot)
     echo "--march-steps 4096 drew the recorded march's picture"
     exit 1
   fi
-  for bad in "fast.nerf --march-steps 0" "model.nerf --march-steps 2048"; do
-    # shellcheck disable=SC2086 # the model and two words
-    if env -u DISPLAY "$viewer" --model "$work/"$bad \
-         --screenshot "$work/bad.png" 2>"$work/bad.log"; then
-      echo "nerf-viewer --model $bad accepted"
+  # refused MODEL FLAGS...: the viewer fails and says why
+  refused() {
+    if shot bad "$@" 2>"$work/bad.log"; then
+      echo "nerf-viewer --model $*: accepted"
       exit 1
     fi
     if ! grep -Eq "bad value '0' for --march-steps|occupancy grid" \
          "$work/bad.log"; then
       cat "$work/bad.log"
-      echo "nerf-viewer --model $bad: no reason given"
+      echo "nerf-viewer --model $*: no reason given"
       exit 1
     fi
-  done
+  }
+  refused fast.nerf --march-steps 0
+  refused model.nerf --march-steps 2048
   ;;
 window)
   status=0
