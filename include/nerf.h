@@ -120,7 +120,8 @@ NERF_API const char *nerf_version_string(void);
 /**
  * A one-line description of how the library was built: version, BLAS
  * provider, library versions of libpng, libjpeg, zlib and cJSON, and
- * build type.
+ * build type; then the instruction set of the kernels this process runs
+ * and the environment variables that chose them (docs/dispatch.md).
  * Static, never NULL.  Thread-safe.
  */
 NERF_API const char *nerf_build_info(void);

@@ -12,7 +12,7 @@
 # Extra arguments go to `meson test`.
 #
 # It proves that the x86-only parts fall back cleanly: the multiversioned
-# loops (target_clones for AVX2 and AVX-512) and the AVX2 bf16 rounding
+# loops (clones for AVX2 and AVX-512) and the AVX2 bf16 rounding
 # are chosen by the build only on x86-64, and oneDNN (bf16) is x86-only,
 # so it is disabled here.  The viewer (SDL2) and the API reference are not
 # needed by these suites.

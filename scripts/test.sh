@@ -176,7 +176,7 @@ else
 fi
 
 # The fast suites cross-built for aarch64 and run under qemu-user: they
-# prove that the x86-only code (target_clones, AVX2 rounding, oneDNN) falls
+# prove that the x86-only code (AVX2/AVX-512 clones, AVX2 rounding, oneDNN) falls
 # back cleanly.  On x86-64 hosts only; NERF_TEST_CROSS=0 leaves it out.
 if [ "${NERF_TEST_CROSS:-1}" != 0 ] && [ "$(uname -m)" = x86_64 ]; then
   echo "== aarch64: scripts/cross-aarch64.sh"

@@ -353,15 +353,11 @@ static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad,
     }
 }
 
-/*
- * The multiversioned loops are static, behind plain entry points: clang
- * (14 at least) emits a target_clones function's resolver only in its own
- * file, so a call from another file would not link.
- */
-NERF__MULTIVERSION
-static void forward_range(const nerf__hashgrid *hg, const float *table,
-                          size_t begin, size_t end, const float *in,
-                          size_t in_stride, float *out, size_t out_stride)
+NERF__CLONED(forward_range,
+             (const nerf__hashgrid *hg, const float *table, size_t begin,
+              size_t end, const float *in, size_t in_stride, float *out,
+              size_t out_stride),
+             (hg, table, begin, end, in, in_stride, out, out_stride))
 {
     tile t;
     const uint32_t F = hg->features;
@@ -386,10 +382,11 @@ static void forward_range(const nerf__hashgrid *hg, const float *table,
  * fast as blocking by BLOCK at 2^18 samples), and the order of the adds
  * into each entry is fixed by the samples alone.
  */
-NERF__MULTIVERSION
-static void backward_level(const nerf__hashgrid *hg, uint32_t level, size_t n,
-                           const float *in, size_t in_stride,
-                           const float *d_out, size_t d_stride, float *grad)
+NERF__CLONED(backward_level,
+             (const nerf__hashgrid *hg, uint32_t level, size_t n,
+              const float *in, size_t in_stride, const float *d_out,
+              size_t d_stride, float *grad),
+             (hg, level, n, in, in_stride, d_out, d_stride, grad))
 {
     tile t;
     const uint32_t F = hg->features;

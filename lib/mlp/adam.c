@@ -45,7 +45,8 @@ typedef struct adam_job {
         params[i] -= step * m_ / (sqrtf(v_) * inv_sqrt_c2 + eps);             \
     } while (0)
 
-NERF__MULTIVERSION static void adam_dense(void *ctx, size_t begin, size_t end)
+NERF__CLONED(adam_dense, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     ADAM_LOCALS((const adam_job *)ctx);
     for (size_t i = begin; i < end; i++) {
@@ -56,8 +57,8 @@ NERF__MULTIVERSION static void adam_dense(void *ctx, size_t begin, size_t end)
 
 /* With masked stores (AVX2, AVX-512) this loop vectorises: untouched
  * entries are read once and never written. */
-NERF__MULTIVERSION static void adam_sparse(void *ctx, size_t begin,
-                                           size_t end)
+NERF__CLONED(adam_sparse, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     ADAM_LOCALS((const adam_job *)ctx);
     for (size_t i = begin; i < end; i++) {
@@ -83,10 +84,11 @@ NERF__MULTIVERSION static void adam_sparse(void *ctx, size_t begin,
 /* Vectorises as adam_sparse does (masked stores): the corrections are
  * each parameter's own, but come from its own stored powers, with no
  * lookup. */
-NERF__MULTIVERSION static void corrected_range(
-    const adam_job *j, size_t begin, size_t end, float *restrict params,
-    float *restrict grads, float *restrict m, float *restrict v,
-    float *restrict r1, float *restrict r2)
+NERF__CLONED(corrected_range,
+             (const adam_job *j, size_t begin, size_t end,
+              float *restrict params, float *restrict grads, float *restrict m,
+              float *restrict v, float *restrict r1, float *restrict r2),
+             (j, begin, end, params, grads, m, v, r1, r2))
 {
     const float b1 = j->b1, b2 = j->b2, one_b1 = j->one_b1;
     const float one_b2 = j->one_b2, step = j->step, eps = j->eps;

@@ -28,8 +28,8 @@ typedef struct fused_job {
     uint16_t *dyb;
 } fused_job;
 
-NERF__MULTIVERSION static void bias_relu_rows(void *ctx, size_t begin,
-                                              size_t end)
+NERF__CLONED(bias_relu_rows, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     const fused_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
@@ -48,8 +48,8 @@ void nerf__bias_relu(size_t n, size_t cols, float *y, size_t ld,
     nerf__parallel_for(n, 2 * cols, bias_relu_rows, &j);
 }
 
-NERF__MULTIVERSION static void bias_add_rows(void *ctx, size_t begin,
-                                             size_t end)
+NERF__CLONED(bias_add_rows, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     const fused_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
@@ -89,7 +89,7 @@ static void block_span(const fused_job *j, size_t block, size_t *r0,
     *r1 = *r0 + NERF__RELU_ROWS < j->n ? *r0 + NERF__RELU_ROWS : j->n;
 }
 
-NERF__MULTIVERSION static void relu_backward_rows(void *ctx, size_t block)
+NERF__CLONED(relu_backward_rows, (void *ctx, size_t block), (ctx, block))
 {
     const fused_job *j = ctx;
     size_t r0, r1;
@@ -141,8 +141,8 @@ static NERF__BF16_WIDE void relu_backward_bf16_rows(void *ctx, size_t block)
     }
 }
 
-NERF__MULTIVERSION static void sum_partials_cols(void *ctx, size_t begin,
-                                                 size_t end)
+NERF__CLONED(sum_partials_cols, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     const fused_job *j = ctx;
     size_t c0, c1;
@@ -185,8 +185,8 @@ void nerf__relu_backward_bias_bf16(size_t n, size_t cols, const float *y,
     relu_backward_blocks(&j, relu_backward_bf16_rows);
 }
 
-NERF__MULTIVERSION static void bias_backward_cols(void *ctx, size_t begin,
-                                                  size_t end)
+NERF__CLONED(bias_backward_cols, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     const fused_job *j = ctx;
     size_t c0, c1;

@@ -267,10 +267,10 @@ void nerf__fused_forward(const nerf__network *net, const float *params,
 
 /* ReLU backward in place (y the ReLU's output) and the bias gradient,
  * summed row after row: the same order in every clone. */
-NERF__MULTIVERSION static void relu_mask_sum(size_t rows, uint32_t cols,
-                                             const float *restrict y,
-                                             size_t ldy, float *restrict d,
-                                             size_t ldd, float *restrict db)
+NERF__CLONED(relu_mask_sum,
+             (size_t rows, uint32_t cols, const float *restrict y, size_t ldy,
+              float *restrict d, size_t ldd, float *restrict db),
+             (rows, cols, y, ldy, d, ldd, db))
 {
     for (size_t r = 0; r < rows; r++) {
         for (uint32_t c = 0; c < cols; c++) {
@@ -281,9 +281,10 @@ NERF__MULTIVERSION static void relu_mask_sum(size_t rows, uint32_t cols,
     }
 }
 
-NERF__MULTIVERSION static void col_sum(size_t rows, uint32_t cols,
-                                       const float *restrict d, size_t ldd,
-                                       float *restrict db)
+NERF__CLONED(col_sum,
+             (size_t rows, uint32_t cols, const float *restrict d, size_t ldd,
+              float *restrict db),
+             (rows, cols, d, ldd, db))
 {
     for (size_t r = 0; r < rows; r++) {
         for (uint32_t c = 0; c < cols; c++) {
@@ -480,8 +481,8 @@ static void backward_chunk(void *ctx, size_t c)
 #define SPAN 256
 
 /* grads += the chunks' partials, summed in chunk order. */
-NERF__MULTIVERSION static void reduce_range(void *ctx, size_t begin,
-                                            size_t end)
+NERF__CLONED(reduce_range, (void *ctx, size_t begin, size_t end),
+             (ctx, begin, end))
 {
     const fjob *j = ctx;
     const size_t chunks = n_chunks(j->n);

@@ -1,5 +1,7 @@
 #include "smm.h"
 
+#include "dispatch.h"
+
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <string.h>
@@ -393,12 +395,9 @@ int nerf__smm_supported(int variant)
         return 1;
 #if defined(SMM_X86)
     case NERF__SMM_AVX2:
-        __builtin_cpu_init();
-        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+        return nerf__isa() >= NERF__ISA_AVX2;
     case NERF__SMM_AVX512:
-        __builtin_cpu_init();
-        return __builtin_cpu_supports("avx512f") &&
-               __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+        return nerf__isa() >= NERF__ISA_AVX512;
 #endif
     default:
         return 0;
@@ -418,12 +417,19 @@ int nerf__smm_best(void)
 /*
  * The portable kernels are no faster than the BLAS's own (about equal to
  * OpenBLAS's SSE kernels on x86, docs/performance.md), so without AVX2
- * the layers keep going through the BLAS.
+ * the layers keep going through the BLAS, unless NERF_FUSED says which.
  */
 int nerf__smm_default(void)
 {
     const int v = nerf__smm_best();
-    return v >= NERF__SMM_AVX2 ? v : NERF__SMM_OFF;
+    switch (nerf__fused_override()) {
+    case 0:
+        return NERF__SMM_OFF;
+    case 1:
+        return v;
+    default:
+        return v >= NERF__SMM_AVX2 ? v : NERF__SMM_OFF;
+    }
 }
 
 /* Chosen once when the library is loaded; nerf__smm_use() overrides. */

@@ -15,7 +15,8 @@
  * columns, B = X).  init_i is C's own row (SMM_ADD), the bias, or zero.
  *
  * Variants: AVX-512, AVX2 with FMA, and portable C (generic vectors);
- * which one runs is chosen when the library is loaded (nerf__smm_default).
+ * which one runs is chosen when the library is loaded (nerf__smm_default:
+ * the widest nerf__isa() allows, and NERF_FUSED may choose another).
  * Every element is one chain of multiply-adds in k order from its initial
  * value, whatever the tiling, so the AVX-512 and AVX2 variants give
  * identical bits (both fuse each multiply-add); the portable one does
@@ -54,9 +55,11 @@ enum {
 /* The fastest kernels this processor runs (never NERF__SMM_OFF). */
 int nerf__smm_best(void);
 /* What the library uses unless told otherwise, chosen when it is loaded:
- * nerf__smm_best() where that has AVX2, else NERF__SMM_OFF. */
+ * nerf__smm_best() where that has AVX2, else NERF__SMM_OFF; NERF_FUSED=0
+ * gives NERF__SMM_OFF, NERF_FUSED=1 nerf__smm_best() (common/dispatch.h). */
 int nerf__smm_default(void);
-/* Whether `variant` runs here (NERF__SMM_OFF always does). */
+/* Whether `variant` runs here and nerf__isa() allows it (NERF__SMM_OFF
+ * always does). */
 int nerf__smm_supported(int variant);
 /* The variant in use (NERF__SMM_OFF: the fused path is off). */
 int nerf__smm_variant(void);

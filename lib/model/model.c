@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "average.h"
+#include "dispatch.h"
 #include "gemm_onednn.h"
 #include "network_fused.h"
 #include "occupancy.h"
@@ -311,10 +312,10 @@ size_t nerf__model_options_param_count(const nerf_model_options *o)
     return net.count * (o->use_fine ? 2u : 1u);
 }
 
-/* The oneDNN backend over the networks' layers.  Each network's layers
- * follow its hash table (if any), which products never read, so the table
- * is not rounded. */
-static int onednn_setup(nerf_model *m)
+/* The oneDNN backend of kind `matmul` over the networks' layers.  Each
+ * network's layers follow its hash table (if any), which products never
+ * read, so the table is not rounded. */
+static int onednn_setup(nerf_model *m, uint32_t matmul)
 {
     nerf__onednn_region regions[NERF__ONEDNN_MAX_REGIONS];
     for (uint32_t i = 0; i < m->n_nets; i++) {
@@ -322,7 +323,7 @@ static int onednn_setup(nerf_model *m)
         regions[i].offset = net->trunk[0].w;
         regions[i].count = net->offset + net->count - net->trunk[0].w;
     }
-    int rc = nerf__onednn_create(&m->env, m->opts.matmul, m->params, regions,
+    int rc = nerf__onednn_create(&m->env, matmul, m->params, regions,
                                  (int)m->n_nets, &m->onednn);
     if (rc != NERF_OK) {
         return rc;
@@ -331,6 +332,27 @@ static int onednn_setup(nerf_model *m)
         m->nets[i].onednn = m->onednn;
     }
     return NERF_OK;
+}
+
+/*
+ * What computes the products of a model of kind `matmul`: the kind itself,
+ * except that NERF_FP32_PRODUCTS=onednn moves fp32 models to oneDNN's fp32
+ * products where this build and processor have them (common/dispatch.h),
+ * so that the test suites can run through them.  The model's options keep
+ * NERF_MATMUL_FP32: the choice is the process's, not the model's.
+ */
+static uint32_t products_of(uint32_t matmul, const nerf__env *env)
+{
+    if (matmul != NERF_MATMUL_FP32 || !nerf__fp32_onednn_override()) {
+        return matmul;
+    }
+    const char *why = NULL;
+    if (nerf__onednn_supported(NERF_MATMUL_FP32_ONEDNN, &why)) {
+        return NERF_MATMUL_FP32_ONEDNN;
+    }
+    nerf__log(env, NERF_LOG_WARN, "NERF_FP32_PRODUCTS=onednn: %s; the "
+              "products go through the CBLAS", why);
+    return NERF_MATMUL_FP32;
 }
 
 void nerf__model_weights_changed(nerf_model *m)
@@ -386,8 +408,9 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         }
         m->corrected = true;
     }
-    if (opts->matmul != NERF_MATMUL_FP32) {
-        int rc = onednn_setup(m);
+    const uint32_t matmul = products_of(opts->matmul, env);
+    if (matmul != NERF_MATMUL_FP32) {
+        int rc = onednn_setup(m, matmul);
         if (rc != NERF_OK) {
             nerf_model_destroy(m);
             return rc;
