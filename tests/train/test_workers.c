@@ -219,19 +219,69 @@ static void tiny_options(nerf_trainer_options *o)
 /*
  * The workers' sums run in another order than the lone trainer's (each
  * network product sums over the samples a worker holds, then the hook
- * adds the workers' parts), so a few gradient elements differ in their
- * last bits.  Most weights then agree within TOLERANCE after STEPS steps.
- * Not all: Adam divides by the root of the gradient's second moment, so
- * an element whose true gradient is about zero, all rounding, takes a
- * step of about the learning rate in the direction of its rounding (a
- * few hundred of the tiny model's 55752 weights, by up to 6e-4 after two
- * steps).  At most MAX_APART of the weights may differ by more, and the
- * models must render the same image within RENDER_PSNR.
+ * adds the workers' parts), so gradient elements differ in their last
+ * bits, and by how much depends on the processor's products.  Adam then
+ * turns an element whose true gradient is about zero, all rounding, into
+ * a step of about the learning rate in the direction of its rounding, so
+ * no count of weights that agree within a tolerance holds on every
+ * processor (issue 53: 1.9% here, 2.1% on another).  What does hold:
+ *
+ * - Whatever the gradients, one Adam step moves a weight by at most
+ *   lr * adam_bound(t) (below), so two runs of STEPS steps from the same
+ *   weights end at most twice the sum of those apart, weight by weight.
+ *   A weak bound: it catches runaway steps and NaNs, not a wrong sum.
+ * - A wrong sum shows in what a user sees: the two models must render
+ *   the same picture within RENDER_PSNR, an RMS difference of 1e-3, a
+ *   quarter of an 8-bit level, while the steps themselves change the
+ *   picture by far more (checked: the untrained model's render is at
+ *   least 10 dB further off).  Rounding-level differences in the sums
+ *   move the picture by orders of magnitude less (about 1e-5 RMS on the
+ *   machines measured), since the weights they flip have no first-order
+ *   effect on the loss.
+ * - Each worker's part of the sum is exactly the gradient of its own rays:
+ *   hooks_see_their_rays below checks that to the bit.
  */
 static int STEPS = 5;
 #define TOLERANCE 1e-5
-#define MAX_APART 0.02
 #define RENDER_PSNR 60.0
+
+/*
+ * The largest step Adam can take at its t-th update, in units of the
+ * learning rate, whatever the gradients: the step is
+ * lr / (1 - b1^t) * sqrt(1 - b2^t) * |m| / sqrt(v) (eps only shrinks it),
+ * and by Cauchy-Schwarz over the sums that make m and v,
+ * |m| / sqrt(v) <= (1 - b1) / sqrt(1 - b2) * sqrt(sum_j<t g^j), with
+ * g = b1^2 / b2 < 1 for every pair of betas the library accepts with
+ * b1 < sqrt(b2) (asserted).  Increasing in t for such betas, so it bounds
+ * the hash table's entries too, whose own update counts are at most t.
+ */
+static double adam_bound(double b1, double b2, int t)
+{
+    const double g = b1 * b1 / b2;
+    CHECK(g < 1.0);
+    return (1.0 - b1) / (1.0 - pow(b1, t)) *
+           sqrt((1.0 - pow(b2, t)) / (1.0 - b2)) *
+           sqrt((1.0 - pow(g, t)) / (1.0 - g));
+}
+
+/* How far apart two models trained `steps` steps from the same weights
+ * can be in any one weight: each moved at most the sum of its steps.
+ * The learning rate only moves between its initial and final values; the
+ * factor (1 + 2^-10) covers the update's own float rounding. */
+static double adam_apart(const nerf_model *m, int steps)
+{
+    double lr = 0.0, lr_final = 0.0, b1 = 0.0, b2 = 0.0;
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_LEARNING_RATE, &lr));
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_LEARNING_RATE_FINAL,
+                                  &lr_final));
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_ADAM_BETA1, &b1));
+    CHECK_OK(nerf_model_get_param(m, NERF_PARAM_ADAM_BETA2, &b2));
+    double sum = 0.0;
+    for (int t = 1; t <= steps; t++) {
+        sum += fmax(lr, lr_final) * adam_bound(b1, b2, t);
+    }
+    return 2.0 * (1.0 + 0x1p-10) * sum;
+}
 
 /* A render of the first training view (white background). */
 static float *render_view(nerf_model *m, nerf_sampler *s, size_t *px)
@@ -292,14 +342,15 @@ static void compare_with_lone(uint32_t w, nerf_model *(*make)(uint64_t),
     for (size_t i = 0; i < lone->n_params; i++) {
         apart += fabs((double)models[0]->params[i] - lone->params[i]) > TOLERANCE;
     }
+    const double bound = adam_apart(lone, STEPS);
     size_t px = 0;
     float *img_w = render_view(models[0], s, &px);
     float *img_1 = render_view(lone, s, &px);
     double same = 0.0;
     CHECK_OK(nerf_psnr(img_w, img_1, px * 3, &same));
-    printf("    %zu weights differ by more than %g; renders %.1f dB apart\n",
-           apart, TOLERANCE, same);
-    CHECK((double)apart <= MAX_APART * (double)lone->n_params);
+    printf("    %zu weights differ by more than %g (Adam's bound %.3g); "
+           "renders %.1f dB apart\n", apart, TOLERANCE, bound, same);
+    CHECK(diff <= bound);
     CHECK(same >= RENDER_PSNR);
     /* The workers trained: a model that never moved would also agree. */
     nerf_model *fresh = make(7);
@@ -308,6 +359,8 @@ static void compare_with_lone(uint32_t w, nerf_model *(*make)(uint64_t),
     float *img_0 = render_view(fresh, s, &px);
     double before = 0.0;
     CHECK_OK(nerf_psnr(img_0, img_1, px * 3, &before));
+    printf("    the untrained model renders %.1f dB from the lone one\n",
+           before);
     CHECK(before < same - 10.0);
     free(img_0);
     free(img_w);
@@ -373,51 +426,109 @@ TEST(fast_workers_match_one)
     nerf_sampler_destroy(s);
 }
 
-/* The gradients the hooks receive, before they sum them, add up to the
- * lone trainer's on the whole batch; the sparse ranges are the model's
- * hash table. */
-TEST(hooks_see_parts_of_the_sum)
+/* The gradient a hook receives at step 0, and what the exchange said. */
+typedef struct part_rec {
+    float *seen;
+    uint64_t rays, batch_rays;
+} part_rec;
+
+static int part_hook(void *user, float *grads, size_t n, nerf_exchange *x)
+{
+    part_rec *rec = user;
+    if (x->step == 0) {
+        memcpy(rec->seen, grads, n * sizeof(float));
+        rec->rays = x->rays;
+        rec->batch_rays = x->batch_rays;
+    }
+    return 0;
+}
+
+/* One step of a trainer of batch `batch` (worker 0 of `workers`, or alone
+ * when 0) on a new model from make(5), its step-0 gradient in rec. */
+static void first_gradient(nerf_model *(*make)(uint64_t), nerf_sampler *s,
+                           const nerf_trainer_options *base, uint32_t batch,
+                           uint32_t workers, part_rec *rec)
+{
+    nerf_model *m = make(5);
+    nerf_trainer_options o = *base;
+    o.batch_rays = batch;
+    o.worker_count = workers;
+    o.worker_rank = 0;
+    o.grad_hook = part_hook;
+    o.hook_user = rec;
+    rec->seen = calloc(nerf_model_param_count(m), sizeof(float));
+    nerf_trainer *t = NULL;
+    CHECK_OK(nerf_trainer_create(&t, m, fx.train, s, &o));
+    if (t) {
+        CHECK_OK(nerf_trainer_step(t, NULL));
+    }
+    nerf_trainer_destroy(t);
+    nerf_model_destroy(m);
+}
+
+/*
+ * The part of the gradient a worker hands its hook is exactly the
+ * gradient of its own rays: worker 0 of 2 on a batch of 2B rays holds
+ * the first B, which are the rays a lone trainer of batch B picks at the
+ * same step (one stream of picks, read from its start), numbered alike
+ * (so with the same jitter and backgrounds), evaluated in products of
+ * the same shapes.  Only the loss's scale differs, 1/(2B) against 1/B of
+ * the mean, and twice a float is exact, as is every product and sum of
+ * the backward pass scaled by two, down to the weights' gradients: so
+ * 2 * part == lone, bit for bit, on every processor and kernel.  The one
+ * exception is a value that the smaller scale pushes below the normal
+ * range, where doubling no longer commutes with rounding; the slack of
+ * 2^-100 covers such roundings (2^-149 each) passed on through any
+ * factors below 2^49, and is far below a gradient of a wrong ray.
+ */
+static void check_part(const char *what, nerf_model *(*make)(uint64_t),
+                       nerf_sampler *s, const nerf_trainer_options *o,
+                       uint32_t half)
+{
+    part_rec part = {0}, lone = {0};
+    first_gradient(make, s, o, 2 * half, 2, &part);
+    first_gradient(make, s, o, half, 0, &lone);
+    CHECK_EQ_INT(part.rays, half);
+    CHECK_EQ_INT(part.batch_rays, 2 * half);
+    CHECK_EQ_INT(lone.rays, half);
+    nerf_model *m = make(5);
+    const size_t n = nerf_model_param_count(m);
+    nerf_model_destroy(m);
+    size_t exact = 0, nonzero = 0, off = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const float twice = 2.0f * part.seen[i];
+        const double d = fabs((double)twice - (double)lone.seen[i]);
+        exact += twice == lone.seen[i];
+        nonzero += lone.seen[i] != 0.0f;
+        off += d > 0x1p-100;
+        worst = fmax(worst, d);
+    }
+    printf("  %s: twice worker 0's part against a lone trainer of its %u "
+           "rays: %zu of %zu elements bit-identical (%zu non-zero), worst "
+           "%.3g\n", what, half, exact, n, nonzero, worst);
+    CHECK(nonzero > n / 100);
+    CHECK_EQ_INT(off, 0);
+    free(part.seen);
+    free(lone.seen);
+}
+
+TEST(hooks_see_their_rays)
 {
     nerf_sampler *s = tiny_sampler(4);
     nerf_trainer_options o;
     tiny_options(&o);
-    nerf_model *models[2] = {tiny_model(5), tiny_model(5)};
-    nerf_model *lone = tiny_model(5);
-    const size_t n = nerf_model_param_count(lone);
-    group g;
-    memset(&g, 0, sizeof g);
-    g.seen[0] = calloc(n, sizeof(float));
-    g.seen[1] = calloc(n, sizeof(float));
-    g.record_step = 2;
-    worker wk[2];
-    run_group(&g, wk, 2, models, s, &o, 3, 0);
-    CHECK_OK(wk[0].rc);
-    CHECK_OK(wk[1].rc);
-    CHECK(wk[0].stats.rays == 32 && wk[1].stats.rays == 32);
-    lone_rec rec = {calloc(n, sizeof(float)), 2};
-    run_lone(lone, s, &o, 3, &rec);
-    double worst = 0.0, largest = 0.0, part = 0.0;
-    size_t exact = 0;
-    for (size_t i = 0; i < n; i++) {
-        float sum = g.seen[0][i] + g.seen[1][i];
-        worst = fmax(worst, fabs((double)sum - rec.seen[i]));
-        largest = fmax(largest, fabs((double)rec.seen[i]));
-        part = fmax(part, fabs((double)g.seen[0][i] - rec.seen[i]));
-        exact += sum == rec.seen[i];
-    }
-    printf("  the two parts add up to the lone gradient within %.3g (largest "
-           "element %.3g); %zu of %zu elements exactly\n", worst, largest,
-           exact, n);
-    CHECK(largest > 0.0);
-    CHECK(worst <= 1e-5 * largest);
-    /* Each part alone is far from the whole. */
-    CHECK(part > 1e-2 * largest);
-    free(g.seen[0]);
-    free(g.seen[1]);
-    free(rec.seen);
-    nerf_model_destroy(models[0]);
-    nerf_model_destroy(models[1]);
-    nerf_model_destroy(lone);
+    o.precrop_steps = 1; /* step 0 crops */
+    check_part("tiny, cropped", tiny_model, s, &o, 32);
+    o.precrop_steps = 0;
+    check_part("tiny", tiny_model, s, &o, 32);
+    nerf_sampler_destroy(s);
+    nerf_sampler_options so;
+    NERF_SAMPLER_OPTIONS_INIT(&so);
+    CHECK_OK(nerf_sampler_options_preset(&so, NERF_PRESET_FAST));
+    s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &so));
+    check_part("fast", small_fast_model, s, &o, 48);
     nerf_sampler_destroy(s);
 }
 
@@ -598,7 +709,7 @@ int main(void)
     }
     RUN(two_workers_match_one);
     RUN(fast_workers_match_one);
-    RUN(hooks_see_parts_of_the_sum);
+    RUN(hooks_see_their_rays);
     RUN(exchange_names_the_hash_table);
     RUN(divergence_is_stopped);
     RUN(hook_failure_fails_the_step);
