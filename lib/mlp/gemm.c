@@ -19,10 +19,32 @@ int nerf__blas_threads(void)
 }
 
 /* Split only over a one-thread BLAS: on a threaded one, our workers'
- * calls would each wake the BLAS's threads and oversubscribe the cores. */
+ * calls would each wake the BLAS's threads and oversubscribe the cores.
+ * Split even where the pool has one thread, so that the calls, and with
+ * them the results, are the same for every thread count. */
 static int split_over_pool(void)
 {
-    return nerf__blas_threads() == 1 && nerf__parallel_threads() > 1;
+    return nerf__blas_threads() == 1;
+}
+
+/*
+ * The BLAS's result for a row of a product can depend on how many rows
+ * its call holds and on where the row sits in it: OpenBLAS 0.3.21 sends
+ * small products (rows x out x in up to 10^6, or fewer than 1200 rows x
+ * out) to other kernels on SkylakeX and later cores, and its Haswell and
+ * Zen kernels round a row by its place in the tile.  So a split over the
+ * pool cuts the rows at fixed places, ROWS_PER_CALL apart from the first,
+ * never a share per thread: the calls are then the same for any thread
+ * count and however busy the pool is.  Large enough that each call runs
+ * at the BLAS's full rate; the weight gradient, whose calls each sum over
+ * all the samples, is cut into UNITS_PER_CALL rows (or columns) of dW.
+ */
+#define ROWS_PER_CALL 1024
+#define UNITS_PER_CALL 32
+
+static size_t calls(size_t n, size_t per_call)
+{
+    return (n + per_call - 1) / per_call;
 }
 
 typedef struct product {
@@ -50,13 +72,31 @@ static size_t item_cost(size_t a, size_t b)
     return 2 * a * b / NERF__FLOPS_PER_OP;
 }
 
+/* Block b of a split product's rows, or of its units (weight gradient). */
+static void block_range(size_t b, size_t per_call, size_t n, size_t *begin,
+                        size_t *end)
+{
+    *begin = b * per_call;
+    *end = n - *begin < per_call ? n : *begin + per_call;
+}
+
+static void forward_block(void *ctx, size_t b)
+{
+    const product *p = ctx;
+    size_t begin, end;
+    block_range(b, ROWS_PER_CALL, p->n, &begin, &end);
+    forward_rows(ctx, begin, end);
+}
+
 void nerf__gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
                         size_t ldx, const float *w, size_t ldw, float beta,
                         float *y, size_t ldy)
 {
     product p = {out, in, n, x, w, ldx, ldw, beta, y, ldy};
     if (split_over_pool()) {
-        nerf__parallel_for(n, item_cost(out, in), forward_rows, &p);
+        nerf__parallel_blocks(calls(n, ROWS_PER_CALL),
+                              ROWS_PER_CALL * item_cost(out, in),
+                              forward_block, &p);
     } else {
         forward_rows(&p, 0, n);
     }
@@ -71,13 +111,23 @@ static void input_grad_rows(void *ctx, size_t begin, size_t end)
                 (int)p->ldc);
 }
 
+static void input_grad_block(void *ctx, size_t b)
+{
+    const product *p = ctx;
+    size_t begin, end;
+    block_range(b, ROWS_PER_CALL, p->n, &begin, &end);
+    input_grad_rows(ctx, begin, end);
+}
+
 void nerf__gemm_input_grad(size_t n, uint32_t out, uint32_t in, const float *dy,
                            size_t lddy, const float *w, size_t ldw, float *dx,
                            size_t lddx)
 {
     product p = {out, in, n, dy, w, lddy, ldw, 0.0f, dx, lddx};
     if (split_over_pool()) {
-        nerf__parallel_for(n, item_cost(out, in), input_grad_rows, &p);
+        nerf__parallel_blocks(calls(n, ROWS_PER_CALL),
+                              ROWS_PER_CALL * item_cost(out, in),
+                              input_grad_block, &p);
     } else {
         input_grad_rows(&p, 0, n);
     }
@@ -102,6 +152,22 @@ static void weight_grad_cols(void *ctx, size_t begin, size_t end)
                 p->b + begin, (int)p->ldb, 1.0f, p->c + begin, (int)p->ldc);
 }
 
+static void weight_grad_row_block(void *ctx, size_t b)
+{
+    const product *p = ctx;
+    size_t begin, end;
+    block_range(b, UNITS_PER_CALL, p->out, &begin, &end);
+    weight_grad_rows(ctx, begin, end);
+}
+
+static void weight_grad_col_block(void *ctx, size_t b)
+{
+    const product *p = ctx;
+    size_t begin, end;
+    block_range(b, UNITS_PER_CALL, p->in, &begin, &end);
+    weight_grad_cols(ctx, begin, end);
+}
+
 void nerf__gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
                             const float *dy, size_t lddy, const float *x,
                             size_t ldx, float *dw, size_t lddw)
@@ -110,8 +176,12 @@ void nerf__gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
     if (!split_over_pool()) {
         weight_grad_rows(&p, 0, out);
     } else if (out >= in) {
-        nerf__parallel_for(out, item_cost(n, in), weight_grad_rows, &p);
+        nerf__parallel_blocks(calls(out, UNITS_PER_CALL),
+                              UNITS_PER_CALL * item_cost(n, in),
+                              weight_grad_row_block, &p);
     } else {
-        nerf__parallel_for(in, item_cost(n, out), weight_grad_cols, &p);
+        nerf__parallel_blocks(calls(in, UNITS_PER_CALL),
+                              UNITS_PER_CALL * item_cost(n, out),
+                              weight_grad_col_block, &p);
     }
 }

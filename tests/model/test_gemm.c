@@ -152,9 +152,85 @@ TEST(products_over_own_workers)
     set_blas_threads(2);
 }
 
+/* The three products of one shape, into y, dx, dw from the same inputs. */
+typedef struct triple {
+    const shape *s;
+    const float *x, *w, *dy;
+    float *y, *dx, *dw;
+} triple;
+
+static void run_triple(void *ctx, size_t begin, size_t end)
+{
+    const triple *t = ctx;
+    const size_t in = t->s->in, out = t->s->out;
+    if (begin != 0) {
+        return;
+    }
+    (void)end;
+    nerf__gemm_forward(t->s->n, t->s->out, t->s->in, t->x, in, t->w, in, 0.0f,
+                       t->y, out);
+    nerf__gemm_input_grad(t->s->n, t->s->out, t->s->in, t->dy, out, t->w, in,
+                          t->dx, in);
+    memset(t->dw, 0, out * in * sizeof(float));
+    nerf__gemm_weight_grad(t->s->n, t->s->out, t->s->in, t->dy, out, t->x, in,
+                           t->dw, in);
+}
+
+/*
+ * Over a one-thread BLAS the products give the same bits whether the pool
+ * spreads them or the caller runs them alone (as it does when the pool is
+ * busy with another call): the rows are cut at fixed places, because the
+ * BLAS may round a row by its call's size and its place in the call
+ * (OpenBLAS's small-matrix kernels, its Haswell and Zen tiles).  Shapes
+ * whose halves would fall on tile boundaries that differ from the fixed
+ * cuts', and one of few rows per call.
+ */
+TEST(products_same_whatever_the_split)
+{
+    if (!set_blas_threads(1)) {
+        printf("SKIP: the BLAS's thread count cannot be set\n");
+        return;
+    }
+    static const shape split[] = {{3001, 16, 64}, {2500, 3, 64},
+                                  {1030, 64, 64}, {4099, 64, 32}};
+    for (size_t i = 0; i < sizeof split / sizeof split[0]; i++) {
+        const shape *s = &split[i];
+        float *x = random_matrix(s->n, s->in);
+        float *w = random_matrix(s->out, s->in);
+        float *dy = random_matrix(s->n, s->out);
+        float *a[3], *b[3];
+        const size_t sizes[3] = {s->n * s->out, s->n * s->in,
+                                 (size_t)s->out * s->in};
+        for (int k = 0; k < 3; k++) {
+            a[k] = calloc(sizes[k], sizeof(float));
+            b[k] = calloc(sizes[k], sizeof(float));
+        }
+        triple spread = {s, x, w, dy, a[0], a[1], a[2]};
+        triple alone = {s, x, w, dy, b[0], b[1], b[2]};
+        run_triple(&spread, 0, 1);
+        /* Inside the first of two ranges of the pool's (the other does
+         * nothing), the pool is busy: every call the products make then
+         * runs on this thread. */
+        nerf__parallel_for(2, 1u << 30, run_triple, &alone);
+        for (int k = 0; k < 3; k++) {
+            if (memcmp(a[k], b[k], sizes[k] * sizeof(float)) != 0) {
+                FAILF("%zu x %u x %u: product %d differs with the split",
+                      s->n, (unsigned)s->out, (unsigned)s->in, k);
+            }
+            free(a[k]);
+            free(b[k]);
+        }
+        free(x);
+        free(w);
+        free(dy);
+    }
+    set_blas_threads(2);
+}
+
 int main(void)
 {
     RUN(products_with_blas_threads);
     RUN(products_over_own_workers);
+    RUN(products_same_whatever_the_split);
     HARNESS_EXIT();
 }
