@@ -397,6 +397,7 @@ struct nerf__onednn {
     pthread_mutex_t cache_mu;
     prim_entry *buckets[BUCKETS];
     size_t n_prims;
+    size_t n_not_brgemm; /* of n_prims: see nerf__onednn_rows_alone() */
 };
 
 int nerf__onednn_create(const nerf__env *env, uint32_t matmul,
@@ -483,6 +484,14 @@ size_t nerf__onednn_primitives(nerf__onednn *b)
     size_t n = b->n_prims;
     pthread_mutex_unlock(&b->cache_mu);
     return n;
+}
+
+int nerf__onednn_rows_alone(nerf__onednn *b)
+{
+    pthread_mutex_lock(&b->cache_mu);
+    int alone = b->n_not_brgemm == 0;
+    pthread_mutex_unlock(&b->cache_mu);
+    return alone;
 }
 
 /* Round the weights again if they changed since the last time.  Threads
@@ -574,11 +583,17 @@ static int get_prim(nerf__onednn *b, const prim_key *key, prim_entry **out)
         st = dnnl_primitive_create(&e->prim, pd);
     }
     threads_leave(&ts);
+    const char *impl = NULL;
     if (st == dnnl_success) {
         const dnnl_memory_desc_t *smd =
             dnnl_primitive_desc_query_md(pd, dnnl_query_scratchpad_md, 0);
         e->scratch_md = *smd;
         e->scratch_size = dnnl_memory_desc_get_size(smd);
+        if (dnnl_primitive_desc_query(pd, dnnl_query_impl_info_str, 0,
+                                      &impl) != dnnl_success) {
+            impl = NULL;
+        }
+        b->n_not_brgemm += impl == NULL || strncmp(impl, "brg", 3) != 0;
     }
     dnnl_primitive_desc_destroy(pd);
     if (st != dnnl_success) {
@@ -595,10 +610,10 @@ static int get_prim(nerf__onednn *b, const prim_key *key, prim_entry **out)
     b->n_prims++;
     pthread_mutex_unlock(&b->cache_mu);
     nerf__log(&b->env, NERF_LOG_DEBUG, "%s: primitive %zu: [%lld x %lld] x "
-              "[%lld x %lld], flags %lld", b->name, b->n_prims,
+              "[%lld x %lld], flags %lld, %s", b->name, b->n_prims,
               (long long)key->m,
               (long long)key->k, (long long)key->k, (long long)key->n,
-              (long long)key->flags);
+              (long long)key->flags, impl ? impl : "(implementation unknown)");
     *out = e;
     return NERF_OK;
 }

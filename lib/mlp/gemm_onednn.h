@@ -83,6 +83,15 @@ void nerf__onednn_weights_changed(nerf__onednn *b);
 /* oneDNN primitives created so far (for benchmarks). */
 size_t nerf__onednn_primitives(nerf__onednn *b);
 
+/*
+ * 1 while every primitive b has created is one of oneDNN's brgemm
+ * kernels, which compute a row the same way whatever rows share its
+ * product (the pieces' promise above rests on it); 0 once one is not.
+ * Primitives are made as shapes first come, so this speaks of the products
+ * run so far: ask after the work whose results it vouches for.
+ */
+int nerf__onednn_rows_alone(nerf__onednn *b);
+
 /* The layer products (layer.h) for a context whose backend is set. */
 int nerf__onednn_forward(const nerf__layer_ctx *c, size_t n, uint32_t out,
                          const nerf__layer_part *parts, int n_parts,
@@ -145,6 +154,12 @@ static inline size_t nerf__onednn_primitives(nerf__onednn *b)
 {
     (void)b;
     return 0;
+}
+
+static inline int nerf__onednn_rows_alone(nerf__onednn *b)
+{
+    (void)b;
+    return 1;
 }
 
 /* Unreachable: no context can name a backend that cannot be created. */

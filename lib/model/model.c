@@ -704,6 +704,14 @@ bool nerf__model_uses_blas(const nerf_model *m)
     return false;
 }
 
+bool nerf__model_rows_alone(nerf_model *m)
+{
+    if (m->onednn) {
+        return nerf__onednn_rows_alone(m->onednn);
+    }
+    return !nerf__model_uses_blas(m);
+}
+
 const nerf__space *nerf__model_space(const nerf_model *m)
 {
     return &m->nets[0].space;

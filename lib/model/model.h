@@ -179,6 +179,16 @@ bool nerf__model_uses_viewdirs(const nerf_model *m);
  * kernels alone (mlp/network_fused.h). */
 bool nerf__model_uses_blas(const nerf_model *m);
 
+/*
+ * Whether a sample's outputs so far were computed from that sample alone,
+ * the same bits whatever other samples shared its products: true on the
+ * fused path, and through oneDNN while all its primitives were brgemm
+ * (mlp/gemm_onednn.h); false through the CBLAS, whose kernels may round a
+ * row by its product's size and its place in it (mlp/gemm.h).  Ask after
+ * the evaluations it is to vouch for.
+ */
+bool nerf__model_rows_alone(nerf_model *m);
+
 /* The space the model's networks and grid work in (space.h): a world
  * point reaches them through nerf__space_to_domain(). */
 const nerf__space *nerf__model_space(const nerf_model *m);
