@@ -51,16 +51,17 @@ static run settings(void)
     return r;
 }
 
-/* Train a tiny model with these products from seed 0, filling r's
- * PSNRs. */
+/* Train a tiny model with these products from the test's seed, filling
+ * r's PSNRs. */
 static void train(fixture *fx, int matmul, run *r)
 {
     nerf_model_options mo;
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, NERF_PRESET_TINY);
     mo.matmul = (uint32_t)matmul;
+    mo.seed = fixture_seed();
     nerf_model *m = NULL;
-    nerf_sampler *s = tiny_sampler(0);
+    nerf_sampler *s = tiny_sampler(fixture_seed());
     nerf_trainer *t = NULL;
     CHECK_OK(nerf_model_create(&m, &mo));
     if (m == NULL || s == NULL) {

@@ -43,11 +43,6 @@
 #define PRECROP 50
 #define LEARNING_RATE 1e-2
 #define MIN_PSNR 25.0
-/* Largest and mean difference of a colour channel between renders that
- * skip empty cells and renders that sample them with density 0: the
- * early termination's 1e-4 and rounding. */
-#define MAX_SKIP_DIFF 1e-4
-#define MEAN_SKIP_DIFF 1e-6
 
 static int env_int(const char *name, int fallback)
 {
@@ -110,8 +105,8 @@ TEST(fast_preset_learns_the_builtin_scene)
     const int curve = env_int("NERF_TEST_CURVE", 0);
     const char *env_lr = getenv("NERF_TEST_LR");
     const double lr = env_lr ? atof(env_lr) : LEARNING_RATE;
-    sampler = fast_sampler(0);
-    trained = fast_model(0);
+    sampler = fast_sampler(fixture_seed());
+    trained = fast_model(fixture_seed());
     nerf_renderer *r = make_renderer(trained, sampler);
     double before = fixture_renderer_psnr(r, fx.test, NULL);
     CHECK_OK(nerf_model_set_param(trained, NERF_PARAM_LEARNING_RATE, lr));
@@ -162,9 +157,16 @@ TEST(fast_preset_learns_the_builtin_scene)
 
 /*
  * The grid of a trained model marks most of the bound empty.  Skipping
- * those cells is exactly rendering with no density in them: renders that
- * skip agree, to rounding and the early termination's 1e-4, with renders
- * that sample every cell and zero the density of the empty ones.
+ * those cells is exactly rendering with no density in them: a zero
+ * density gives alpha 0 exactly, so the transmittance, the weights and the
+ * early termination run through the same values, and renders that skip
+ * equal, bit for bit, renders that sample every cell and zero the density
+ * of the empty ones, as long as each sample's outputs come from it alone
+ * (the fused path).  Where the products hold other rows in the two
+ * renders (the CBLAS, oneDNN without brgemm) the occupied samples' values
+ * differ by rounding, which can move a ray's cut by a sample, whose
+ * weight is below the termination's threshold: then they agree within
+ * that threshold and half an 8-bit level, far above such rounding.
  *
  * Without zeroing, a model with an exponential density still has some in
  * the empty cells (its floor, about 0.05 per unit here: training stops
@@ -213,8 +215,12 @@ TEST(skipping_is_rendering_empty_cells_as_empty)
            "%.2g; not zeroed: %.2g and %.2g, test PSNR %.2f dB (%.2f "
            "skipping)\n", 100.0 * (double)g->occupied / (double)g->cells,
            worst_zero, mean_zero, worst_all, mean_all, p_all, p_skip);
-    CHECK(worst_zero < MAX_SKIP_DIFF);
-    CHECK(mean_zero < MEAN_SKIP_DIFF);
+    if (nerf__model_rows_alone(trained)) {
+        CHECK(worst_zero == 0.0);
+    } else {
+        printf("  (rows not computed alone: within the threshold)\n");
+        CHECK(worst_zero <= NERF__COMPOSITE_EPS_DEFAULT + 0.5 / 255);
+    }
     CHECK(p_skip > p_all - 0.05);
     nerf_renderer_destroy(r);
     free(skip);

@@ -78,6 +78,7 @@ static nerf_model *space_model(uint32_t space, float bound)
     o.hash_max_resolution = 256;
     o.space = space;
     o.bound = bound;
+    o.seed = fixture_seed();
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
     return m;
@@ -91,6 +92,7 @@ static nerf_sampler *space_sampler(const nerf_dataset *ds, bool ndc,
     nerf_sampler_options o;
     NERF_SAMPLER_OPTIONS_INIT(&o);
     CHECK_OK(nerf_sampler_options_preset(&o, NERF_PRESET_FAST));
+    o.seed = fixture_seed();
     o.march_steps = MARCH_STEPS;
     o.t_near = near;
     o.t_far = far;
