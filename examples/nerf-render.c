@@ -11,6 +11,7 @@
 #include "common/cli.h"
 #include "common/dist.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/options.h"
 #include "common/orbit.h"
 #include "common/progress.h"
@@ -28,7 +29,7 @@ static const char usage[] =
     "                    | --path orbit|spiral [--frames N] [--data DIR]\n"
     "                    | --poses FILE [--focal F | --fov DEG] [--data DIR])\n"
     "                   [--width W] [--height H] [--depth] [--near T --far T]\n"
-    "                   [--march-steps N] [--skip-existing]\n"
+    "                   [--march-steps N] [--skip-existing] [--overwrite]\n"
     "                   [--video FILE.mp4 [--fps N]]\n"
     "Render views of MODEL and write them to DIR (created if missing) as\n"
     "r_NNN.png, NNN counting from 000 in the order of the views.\n"
@@ -91,6 +92,10 @@ static const char usage[] =
     "  --skip-existing  render only the views whose files are not in DIR\n"
     "                 yet: the same command again finishes a render that\n"
     "                 was stopped (default off: render every view)\n"
+    "  --overwrite    replace the files of views DIR holds already, and an\n"
+    "                 existing --video FILE (default off: any file this run\n"
+    "                 would write over is refused before rendering; an\n"
+    "                 input never is replaced)\n"
     "  --help         print this help and exit\n"
     "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
     "written), says which views are written and exits with status 130\n"
@@ -109,7 +114,7 @@ typedef struct args {
     const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
-    int depth, size_given, skip_existing;
+    int depth, size_given, skip_existing, overwrite;
     int bounds_given; /* 1: --near, 2: --far */
     int split_given, downscale_given, frames_given;
     const char *video; /* NULL: PNG frames only */
@@ -118,13 +123,84 @@ typedef struct args {
     int64_t march; /* -1: the model's */
 } args;
 
+/* The most views of a --path (nerf_camera_path_load()'s most poses), and
+ * of frames a second of a video. */
+#define FRAMES_MAX 100000
+#define FPS_MAX 1000
+
 /* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
     "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
     "--width", "--height", "--near", "--far", "--video", "--fps",
-    "--skip-existing", "--march-steps", NULL
+    "--skip-existing", "--overwrite", "--march-steps", NULL
 };
+
+/* Option k with its value v into a; 0, or -1 after saying what is wrong
+ * (v NULL: the value is missing). */
+static int parse_value(args *a, const char *k, const char *v)
+{
+    int rc = 0;
+    if (strcmp(k, "--model") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->model);
+    } else if (strcmp(k, "--out") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->out);
+    } else if (strcmp(k, "--data") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->data);
+    } else if (strcmp(k, "--path") == 0) {
+        a->path = v;
+        if (v == NULL ||
+            (strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0)) {
+            cli_bad_value(PROG, k, v, "orbit or spiral");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--poses") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->poses);
+    } else if (strcmp(k, "--focal") == 0) {
+        rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
+                             &a->focal);
+    } else if (strcmp(k, "--fov") == 0) {
+        rc = cli_real_option(PROG, k, v, 0.0, 180.0,
+                             CLI_ABOVE_MIN | CLI_BELOW_MAX, &a->fov);
+    } else if (strcmp(k, "--split") == 0) {
+        int split = v != NULL ? cli_split(v) : -1;
+        a->split = (uint64_t)split;
+        a->split_given = 1;
+        if (split < 0) {
+            cli_bad_value(PROG, k, v, "train, val or test");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--downscale") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX, &a->downscale);
+        a->downscale_given = 1;
+    } else if (strcmp(k, "--frames") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, FRAMES_MAX, &a->frames);
+        a->frames_given = 1;
+    } else if (strcmp(k, "--width") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->width);
+        a->size_given |= 1;
+    } else if (strcmp(k, "--height") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->height);
+        a->size_given |= 2;
+    } else if (strcmp(k, "--video") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->video);
+    } else if (strcmp(k, "--march-steps") == 0) {
+        rc = cli_march_steps(PROG, k, v, &a->march);
+    } else if (strcmp(k, "--fps") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, FPS_MAX, &a->fps);
+        a->fps_given = 1;
+    } else if (strcmp(k, "--near") == 0) {
+        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->near);
+        a->bounds_given |= 1;
+    } else if (strcmp(k, "--far") == 0) {
+        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->far);
+        a->bounds_given |= 2;
+    } else {
+        cli_unknown(PROG, k, options);
+        rc = -1;
+    }
+    return rc;
+}
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -149,66 +225,16 @@ static int parse(int argc, char **argv, args *a)
             a->skip_existing = 1;
             continue;
         }
+        if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
+            continue;
+        }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        if (bad) {
-            /* A flag parse() does not know reaches here too. */
-            if (cli_check_option(PROG, k, options) == 0) {
-                cli_bad_value(PROG, k, NULL, NULL);
-            }
-        } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
-        } else if (strcmp(k, "--out") == 0) {
-            a->out = v;
-        } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
-        } else if (strcmp(k, "--path") == 0) {
-            a->path = v;
-            bad = strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0;
-        } else if (strcmp(k, "--poses") == 0) {
-            a->poses = v;
-        } else if (strcmp(k, "--focal") == 0) {
-            bad = cli_double(v, &a->focal) || !(a->focal > 0.0);
-        } else if (strcmp(k, "--fov") == 0) {
-            bad = cli_double(v, &a->fov) || !(a->fov > 0.0 && a->fov < 180.0);
-        } else if (strcmp(k, "--split") == 0) {
-            int split = cli_split(v);
-            a->split = (uint64_t)split;
-            bad = split < 0;
-            a->split_given = 1;
-        } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
-            a->downscale_given = 1;
-        } else if (strcmp(k, "--frames") == 0) {
-            bad = cli_uint(v, 1, 100000, &a->frames);
-            a->frames_given = 1;
-        } else if (strcmp(k, "--width") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->width);
-            a->size_given |= 1;
-        } else if (strcmp(k, "--height") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->height);
-            a->size_given |= 2;
-        } else if (strcmp(k, "--video") == 0) {
-            a->video = v;
-        } else if (strcmp(k, "--march-steps") == 0) {
-            bad = cli_march_steps(v, &a->march);
-        } else if (strcmp(k, "--fps") == 0) {
-            bad = cli_uint(v, 1, 1000, &a->fps);
-            a->fps_given = 1;
-        } else if (strcmp(k, "--near") == 0) {
-            bad = cli_double(v, &a->near);
-            a->bounds_given |= 1;
-        } else if (strcmp(k, "--far") == 0) {
-            bad = cli_double(v, &a->far);
-            a->bounds_given |= 2;
-        } else {
-            cli_unknown(PROG, k, options);
+        /* A flag parse() does not know has no value either. */
+        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
             return -1;
         }
-        if (bad) {
-            if (v) {
-                cli_bad_value(PROG, k, v, NULL);
-            }
+        if (parse_value(a, k, v) != 0) {
             return -1;
         }
     }
@@ -388,6 +414,9 @@ static int mine(uint32_t i)
 #define REPORTED 1
 /* Stopped by a signal, and said so. */
 #define INTERRUPTED 2
+/* An output refused before anything was rendered (it exists, or is an
+ * input), and said so. */
+#define REFUSED 3
 
 /* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
 static volatile sig_atomic_t interrupted;
@@ -455,19 +484,34 @@ static void free_outputs(outputs *o)
     free(o->opacity);
 }
 
+/* The files of a view in the output folder: the image, and with --depth
+ * the opacity and the depth. */
+static const char *const view_kinds[3] = {"r", "opacity", "depth"};
+
+static int view_files(const args *a)
+{
+    return a->depth ? 3 : 1;
+}
+
+static void view_path(char *path, size_t size, const args *a, int kind,
+                      uint32_t i)
+{
+    snprintf(path, size, "%s/%s_%03u.png", a->out, view_kinds[kind], i);
+}
+
 static int write_view(const args *a, const nerf_camera *cam, uint32_t i,
                       const outputs *o, float near, float far)
 {
     char path[4200];
-    snprintf(path, sizeof path, "%s/r_%03u.png", a->out, i);
+    view_path(path, sizeof path, a, 0, i);
     int rc = nerf_image_write_png(path, cam->width, cam->height, 3, o->rgb);
     if (rc == NERF_OK && a->depth) {
-        snprintf(path, sizeof path, "%s/opacity_%03u.png", a->out, i);
+        view_path(path, sizeof path, a, 1, i);
         rc = nerf_image_write_png(path, cam->width, cam->height, 1,
                                   o->opacity);
         depth_to_grey(o->depth, o->opacity,
                       (size_t)cam->width * cam->height, near, far);
-        snprintf(path, sizeof path, "%s/depth_%03u.png", a->out, i);
+        view_path(path, sizeof path, a, 2, i);
         if (rc == NERF_OK) {
             rc = nerf_image_write_png(path, cam->width, cam->height, 1,
                                       o->depth);
@@ -508,15 +552,42 @@ static int video_mismatch(const args *a, const nerf_camera *cam, uint32_t i,
  * writes each through a temporary file, so one that is there is whole. */
 static int view_written(const args *a, uint32_t i)
 {
-    static const char *const kinds[3] = {"r", "opacity", "depth"};
-    for (int k = 0; k < (a->depth ? 3 : 1); k++) {
+    for (int k = 0; k < view_files(a); k++) {
         char path[4200];
-        snprintf(path, sizeof path, "%s/%s_%03u.png", a->out, kinds[k], i);
+        view_path(path, sizeof path, a, k, i);
         if (access(path, F_OK) != 0) {
             return 0;
         }
     }
     return 1;
+}
+
+/* The inputs of the run, which no output may be. */
+static int check_target(const args *a, const char *path, const char *how)
+{
+    const out_input inputs[3] = {
+        {"--model", a->model}, {"--data", a->data}, {"--poses", a->poses}};
+    return out_file_check(PROG, path, a->overwrite, how, inputs, 3);
+}
+
+/* View i's files, which this run is about to write: new, or replaced as
+ * told. */
+static int check_view_targets(const args *a, uint32_t i)
+{
+    for (int k = 0; k < view_files(a); k++) {
+        char path[4200];
+        view_path(path, sizeof path, a, k, i);
+        const char *how = a->skip_existing
+                              ? "the view lacks some of its files, so it is "
+                                "rendered again: --overwrite replaces them"
+                              : "--overwrite replaces the views there, "
+                                "--skip-existing renders only the missing "
+                                "ones";
+        if (check_target(a, path, how) != 0) {
+            return -1;
+        }
+    }
+    return 0;
 }
 
 /* What a run has written, for the line that ends an interrupted one. */
@@ -573,6 +644,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (a->skip_existing && view_written(a, i)) {
             w.before++;
             continue;
+        }
+        if (check_view_targets(a, i) != 0) {
+            return REFUSED;
         }
         if (!mine(i)) {
             continue;
@@ -686,6 +760,10 @@ static int run(int argc, char **argv)
     if (parse(argc, argv, &a) != 0) {
         return 2;
     }
+    if (a.video != NULL &&
+        check_target(&a, a.video, OUT_OVERWRITE_HOW) != 0) {
+        return 2;
+    }
     if (a.video != NULL && D.size > 1) {
         cli_usage_error(PROG, "--video needs the views in order in one "
                         "process: render the frames with several, then "
@@ -767,7 +845,8 @@ static int run(int argc, char **argv)
         }
         rc = render_all(&a, r, ds, cp, near, far);
     }
-    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED) {
+    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED &&
+        rc != REFUSED) {
         cli_report(PROG, rc);
     }
     nerf_renderer_destroy(r);
@@ -777,7 +856,10 @@ static int run(int argc, char **argv)
     nerf_model_destroy(m);
     /* As a shell reports a program killed by the signal: 130 for
      * SIGINT. */
-    return rc == INTERRUPTED ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
+    return rc == INTERRUPTED ? 128 + interrupted
+           : rc == REFUSED   ? 2
+           : rc == NERF_OK   ? 0
+                             : 1;
 }
 
 int main(int argc, char **argv)
