@@ -42,10 +42,15 @@ static const char usage[] =
     "                 it, those MODEL recorded in training (nerf-info shows\n"
     "                 them; guessed from its shape for older files).\n"
     "  --split S      with --data alone: train, val or test (default test)\n"
-    "  --downscale K  with --data alone or --path spiral: load the scene's\n"
-    "                 images and cameras K times smaller (default 1)\n"
-    "  --path orbit   a circle of --frames views at 30 degrees elevation,\n"
-    "                 radius 4, around the origin, as for Blender scenes\n"
+    "  --downscale K  with --data: read the scene's images and cameras K\n"
+    "                 times smaller (an LLFF or COLMAP scene's images_K/;\n"
+    "                 default 1), which sets the size of the views of\n"
+    "                 --data and of --path unless --width/--height do\n"
+    "  --path orbit   a circle of --frames views around the origin at 30\n"
+    "                 degrees elevation, as for Blender scenes, framed to\n"
+    "                 keep the sphere of radius 1.5 (the box Blender scenes\n"
+    "                 lie in) whole at any aspect ratio: 39.6 degrees\n"
+    "                 across the frame's smaller side, from distance 4.43\n"
     "  --path spiral  the reference's spiral path of a forward-facing (LLFF)\n"
     "                 scene, two turns around its average pose (needs --data)\n"
     "  --frames N     views along --path (default 40)\n"
@@ -58,12 +63,14 @@ static const char usage[] =
     "                 file's, else --fov 39.6)\n"
     "  --fov DEG      with --poses: horizontal field of view in degrees\n"
     "                 (default: the file's, else 39.6, as --path orbit)\n"
-    "  --width W      image width in pixels.  Default: 100 for --path orbit;\n"
-    "                 the scene's for --data and --path spiral (whose focal\n"
-    "                 length and centre scale with the size: the same view,\n"
-    "                 sharper or coarser); for --poses the file's w, else\n"
-    "                 100.  Given alone, the height keeps the aspect ratio\n"
-    "                 (except with --poses, which needs both).\n"
+    "  --width W      image width in pixels.  Default: with --data, the\n"
+    "                 size of its images (after --downscale) for its views\n"
+    "                 and either --path (the scene's views and the spiral\n"
+    "                 scale their focal length and centre with the size:\n"
+    "                 the same view, sharper or coarser); 100 for --path\n"
+    "                 orbit without --data; for --poses the file's w,\n"
+    "                 else 100.  Given alone, the height keeps the aspect\n"
+    "                 ratio (except with --poses, which needs both).\n"
     "  --height H     image height in pixels; defaults as --width\n"
     "  --depth        also write depth_NNN.png and opacity_NNN.png (default\n"
     "                 off).  depth_NNN.png is 8-bit grey: the expected depth\n"
@@ -127,6 +134,11 @@ typedef struct args {
  * of frames a second of a video. */
 #define FRAMES_MAX 100000
 #define FPS_MAX 1000
+
+/* --path orbit's frames without --width or --height are the size of the
+ * scene's images with --data (after --downscale), else this square; so
+ * are the frames of a --poses file that gives no size. */
+#define ORBIT_SIDE 100
 
 /* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
@@ -208,7 +220,7 @@ static int parse(int argc, char **argv, args *a)
     a->split = NERF_SPLIT_TEST;
     a->downscale = 1;
     a->frames = 40;
-    a->width = a->height = 100;
+    a->width = a->height = ORBIT_SIDE;
     a->fps = 30;
     a->march = -1;
     for (int i = 1; i < argc; i++) {
@@ -308,17 +320,14 @@ static int parse(int argc, char **argv, args *a)
                         a->path ? "path" : "poses");
         return -1;
     }
-    int data_size = views_of_data ||
-                    (a->path && strcmp(a->path, "spiral") == 0);
-    if (a->downscale_given && !data_size) {
-        cli_usage_error(PROG, "--downscale shrinks the views of "
-                        "--data and --path spiral; with --%s give --width "
-                        "and --height", a->path ? "path orbit" : "poses");
-        return -1;
-    }
-    if (a->downscale_given && a->size_given) {
-        cli_usage_error(PROG, "give --downscale or --width/--height, "
-                        "not both");
+    /* --downscale chooses which of the scene's photos are read (LLFF and
+     * COLMAP scenes may ship only images_K/); a path or a file of poses
+     * reads the scene's cameras and bounds through them too, and takes
+     * its frame size from --width/--height when given. */
+    if (a->downscale_given && a->data == NULL) {
+        cli_usage_error(PROG, "--downscale chooses which photos of --data "
+                        "are read; without --data it would change nothing "
+                        "(give --width and --height for the frames' size)");
         return -1;
     }
     return 0;
@@ -350,25 +359,51 @@ static int load_poses(const args *a, const nerf_hooks *hooks,
 }
 
 /*
+ * The frame size asked for, from a base size (the scene's images, or
+ * --path orbit's default): --width and --height as given, one side alone
+ * keeping the base's aspect ratio, neither the base itself.
+ */
+static void frame_size(const args *a, double w, double h, double *nw,
+                       double *nh)
+{
+    *nw = (a->size_given & 1) ? (double)a->width
+          : (a->size_given & 2) ? floor(a->height * w / h + 0.5)
+                                : w;
+    *nh = (a->size_given & 2) ? (double)a->height
+          : (a->size_given & 1) ? floor(a->width * h / w + 0.5)
+                                : h;
+    *nw = *nw < 1.0 ? 1.0 : *nw > NERF_IMAGE_MAX_SIDE ? NERF_IMAGE_MAX_SIDE
+                                                      : *nw;
+    *nh = *nh < 1.0 ? 1.0 : *nh > NERF_IMAGE_MAX_SIDE ? NERF_IMAGE_MAX_SIDE
+                                                      : *nh;
+}
+
+/*
  * A camera of the scene at the size asked for: the intrinsics scale with
- * the image, so that the view is the same, only sharper or coarser.  With
- * one side given, the other keeps the camera's aspect ratio.
+ * the image, so that the view is the same, only sharper or coarser.
  */
 static void resize_camera(const args *a, nerf_camera *cam)
 {
-    double w = (double)cam->width, h = (double)cam->height;
-    double nw = (a->size_given & 1) ? (double)a->width
-                                    : floor(a->height * w / h + 0.5);
-    double nh = (a->size_given & 2) ? (double)a->height
-                                    : floor(a->width * h / w + 0.5);
-    nw = nw < 1.0 ? 1.0 : nw > 16384.0 ? 16384.0 : nw;
-    nh = nh < 1.0 ? 1.0 : nh > 16384.0 ? 16384.0 : nh;
+    double w = (double)cam->width, h = (double)cam->height, nw, nh;
+    frame_size(a, w, h, &nw, &nh);
     cam->fx = (float)(cam->fx * nw / w);
     cam->cx = (float)(cam->cx * nw / w);
     cam->fy = (float)(cam->fy * nh / h);
     cam->cy = (float)(cam->cy * nh / h);
     cam->width = (uint32_t)nw;
     cam->height = (uint32_t)nh;
+}
+
+static int orbit_view(const args *a, const nerf_dataset *ds, uint32_t i,
+                      uint32_t n, nerf_camera *cam)
+{
+    uint32_t bw = ORBIT_SIDE, bh = ORBIT_SIDE;
+    if (ds != NULL) {
+        nerf_dataset_image_size(ds, &bw, &bh);
+    }
+    double w, h;
+    frame_size(a, bw, bh, &w, &h);
+    return orbit_camera(i, n, (uint32_t)w, (uint32_t)h, cam);
 }
 
 /* Camera `i` of the requested views. */
@@ -388,7 +423,7 @@ static int view_camera(const args *a, const nerf_dataset *ds,
         }
         return rc;
     }
-    return orbit_camera(i, n, (uint32_t)a->width, (uint32_t)a->height, cam);
+    return orbit_view(a, ds, i, n, cam);
 }
 
 /* Depth as a grey image: near white, far black, scaled to [near, far]. */

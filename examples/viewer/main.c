@@ -199,6 +199,8 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         rc = nerf_renderer_create(&v->renderer, v->model, v->sampler, &ro);
     }
     if (rc == NERF_OK) {
+        /* The home view's framing depends on the image's shape. */
+        choose_size(a, v);
         rc = viewer_home(v);
     }
     return rc;
@@ -246,7 +248,6 @@ int main(int argc, char **argv)
     int status = 0;
     int rc = open_scene(&a, &hooks, &v);
     if (rc == NERF_OK) {
-        choose_size(&a, &v);
         if (a.screenshot) {
             rc = screenshot(&v, a.screenshot);
         } else {
