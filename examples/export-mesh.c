@@ -1,6 +1,7 @@
 /* nerf-export mesh and nerf-export grid: the model's density out. */
 #include <nerf.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,6 +10,7 @@
 #include "common/cli.h"
 #include "common/options.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/progress.h"
 #include "export.h"
 
@@ -16,7 +18,7 @@ static const char mesh_usage[] =
     "usage: nerf-export mesh --model MODEL --out FILE [--resolution N]\n"
     "                        [--threshold T] [--box X0,Y0,Z0,X1,Y1,Z1]\n"
     "                        [--ascii] [--largest] [--min-faces N]\n"
-    "                        [--no-colour] [--threads N]\n"
+    "                        [--no-colour] [--threads N] [--overwrite]\n"
     "Extract the surface where MODEL's density crosses T with marching\n"
     "cubes, coloured by the model as seen looking at the surface head on,\n"
     "and write it as PLY (binary, or --ascii) or OBJ, by FILE's extension.\n"
@@ -33,6 +35,8 @@ static const char mesh_usage[] =
     "  --min-faces N   drop pieces of fewer than N triangles (default 0)\n"
     "  --no-colour     no vertex colours\n"
     "  --threads N     threads sampling the density (default 0: all cores)\n"
+    "  --overwrite     replace FILE if it exists (default off: an existing\n"
+    "                  FILE is refused; MODEL never is)\n"
     "  --help          print this help and exit\n"
     "Examples:\n"
     "  nerf-export mesh --model lego.nerf --out lego.ply\n"
@@ -42,7 +46,7 @@ static const char mesh_usage[] =
 static const char grid_usage[] =
     "usage: nerf-export grid --model MODEL --out FILE.npy [--resolution N]\n"
     "                        [--box X0,Y0,Z0,X1,Y1,Z1] [--colour]\n"
-    "                        [--threads N]\n"
+    "                        [--threads N] [--overwrite]\n"
     "Sample MODEL's density at the centres of a grid of cells over a box\n"
     "and write it as a float32 .npy of shape (nz, ny, nx) (C order: element\n"
     "[k][j][i] is the cell at x index i), with FILE.json beside it recording\n"
@@ -57,25 +61,33 @@ static const char grid_usage[] =
     "  --colour        also FILE_rgb.npy, (nz, ny, nx, 3) colours in [0, 1]\n"
     "                  seen looking down the density's gradient\n"
     "  --threads N     threads sampling the density (default 0: all cores)\n"
+    "  --overwrite     replace FILE.npy and its sidecars if they exist\n"
+    "                  (default off: an existing one is refused; MODEL\n"
+    "                  never is)\n"
     "  --help          print this help and exit\n"
     "Examples:\n"
     "  nerf-export grid --model lego.nerf --out lego.npy --resolution 128\n"
     "  python3 -c \"import numpy; print(numpy.load('lego.npy').shape)\"\n";
 
+/* nerf_mesh_options' largest resolution, and the most threads taken. */
+#define RESOLUTION_MAX 16384
+#define THREADS_MAX 1024
+
 typedef struct args {
     const char *model, *out;
     nerf_mesh_options o;
-    int ascii;
+    int ascii, overwrite;
 } args;
 
 static const char *const mesh_options[] = {
     "--help", "-h", "--model", "--out", "--resolution", "--threshold", "--box",
-    "--ascii", "--largest", "--min-faces", "--no-colour", "--threads", NULL
+    "--ascii", "--largest", "--min-faces", "--no-colour", "--threads",
+    "--overwrite", NULL
 };
 
 static const char *const grid_options[] = {
     "--help", "-h", "--model", "--out", "--resolution", "--box", "--colour",
-    "--threads", NULL
+    "--threads", "--overwrite", NULL
 };
 
 /* "x0,y0,z0,x1,y1,z1", each max above its min. */
@@ -110,6 +122,9 @@ static int parse_box(const char *text, float box[6])
 
 static int is_flag(const char *k, int mesh)
 {
+    if (strcmp(k, "--overwrite") == 0) {
+        return 1;
+    }
     return strcmp(k, "--largest") == 0 || strcmp(k, "--no-colour") == 0 ||
            strcmp(k, "--ascii") == 0 || strcmp(k, "--colour") == 0 ?
            (mesh ? strcmp(k, "--colour") != 0
@@ -132,7 +147,9 @@ static int parse(int argc, char **argv, args *a, int mesh)
             exit(0);
         }
         if (is_flag(k, mesh)) {
-            if (strcmp(k, "--largest") == 0) {
+            if (strcmp(k, "--overwrite") == 0) {
+                a->overwrite = 1;
+            } else if (strcmp(k, "--largest") == 0) {
                 a->o.keep_largest = 1;
             } else if (strcmp(k, "--no-colour") == 0) {
                 a->o.colour = NERF_MESH_COLOUR_NONE;
@@ -144,43 +161,35 @@ static int parse(int argc, char **argv, args *a, int mesh)
             continue;
         }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
         uint64_t u = 0;
         double d = 0.0;
-        const char *expected = NULL;
-        if (bad) {
-            if (cli_check_option(program, k, names) == 0) {
-                cli_bad_value(program, k, NULL, NULL);
-            }
-            return -1;
-        } else if (cli_check_option(program, k, names) != 0) {
+        int rc = 0;
+        if (cli_check_option(program, k, names) != 0) {
             return -1;
         } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
+            rc = cli_text_option(program, k, v, &a->model);
         } else if (strcmp(k, "--out") == 0) {
-            a->out = v;
+            rc = cli_text_option(program, k, v, &a->out);
         } else if (strcmp(k, "--resolution") == 0) {
-            expected = "1..16384";
-            bad = cli_uint(v, 1, 16384, &u);
+            rc = cli_int_option(program, k, v, 1, RESOLUTION_MAX, &u);
             a->o.resolution = (uint32_t)u;
         } else if (strcmp(k, "--threshold") == 0) {
-            expected = "a finite density";
-            bad = cli_double(v, &d);
+            rc = cli_real_option(program, k, v, -HUGE_VAL, HUGE_VAL, 0, &d);
             a->o.threshold = (float)d;
         } else if (strcmp(k, "--box") == 0) {
-            expected = "x0,y0,z0,x1,y1,z1 with each max above its min";
-            bad = parse_box(v, a->o.box);
+            rc = v != NULL ? parse_box(v, a->o.box) : -1;
+            if (rc != 0) {
+                cli_bad_value(program, k, v, "x0,y0,z0,x1,y1,z1 with each "
+                              "max above its min");
+            }
         } else if (strcmp(k, "--min-faces") == 0) {
-            expected = "0..4294967295";
-            bad = cli_uint(v, 0, UINT32_MAX, &u);
+            rc = cli_int_option(program, k, v, 0, UINT32_MAX, &u);
             a->o.min_component_faces = (uint32_t)u;
         } else if (strcmp(k, "--threads") == 0) {
-            expected = "0..1024";
-            bad = cli_uint(v, 0, 1024, &u);
+            rc = cli_int_option(program, k, v, 0, THREADS_MAX, &u);
             a->o.threads = (uint32_t)u;
         }
-        if (bad) {
-            cli_bad_value(program, k, v, expected);
+        if (rc != 0) {
             return -1;
         }
     }
@@ -223,6 +232,36 @@ static int check_writable(const char *program, const char *path)
     return 0;
 }
 
+/*
+ * The files the export will write, each new or replaced as told, none
+ * the model: the mesh, or the grid with the sidecars
+ * nerf_density_grid_write() names after it ("F.npy": "F.json" and, with
+ * colours, "F_rgb.npy"; another name gets the suffixes appended).
+ */
+static int check_targets(const char *program, const args *a, int mesh)
+{
+    const out_input model = {"MODEL", a->model};
+    if (out_file_check(program, a->out, a->overwrite, NULL, &model, 1) != 0) {
+        return -1;
+    }
+    if (mesh) {
+        return 0;
+    }
+    size_t n = strlen(a->out);
+    if (n > 4 && strcmp(a->out + n - 4, ".npy") == 0) {
+        n -= 4;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%.*s.json", (int)n, a->out);
+    if (out_file_check(program, path, a->overwrite, NULL, &model, 1) != 0) {
+        return -1;
+    }
+    snprintf(path, sizeof path, "%.*s_rgb.npy", (int)n, a->out);
+    return a->o.colour == NERF_MESH_COLOUR_NONE
+               ? 0
+               : out_file_check(program, path, a->overwrite, NULL, &model, 1);
+}
+
 typedef struct bar_state {
     progress bar;
     int started;
@@ -245,6 +284,9 @@ static int run(int argc, char **argv, int mesh)
     const char *program = mesh ? "nerf-export mesh" : "nerf-export grid";
     args a;
     if (parse(argc, argv, &a, mesh) != 0) {
+        return 2;
+    }
+    if (check_targets(program, &a, mesh) != 0) {
         return 2;
     }
     if (check_writable(program, a.out) != 0) {

@@ -12,6 +12,7 @@
 #include "common/cli.h"
 #include "common/options.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
 #include "export.h"
@@ -20,7 +21,7 @@ static const char depth_usage[] =
     "usage: nerf-export depth --model MODEL --out DIR\n"
     "                         (--data DIR [--split S] [--skip K]\n"
     "                          [--downscale K] | --poses FILE [--data DIR])\n"
-    "                         [--png | --no-png]\n"
+    "                         [--png | --no-png] [--overwrite]\n"
     "Render the views of a split of the scene MODEL was trained on (or the\n"
     "cameras of a file) and write\n"
     "for each, into DIR (created if missing), float32 NumPy arrays of shape\n"
@@ -53,6 +54,9 @@ static const char depth_usage[] =
     "                 opacity is below 0.001) and NNN_opacity.png (the\n"
     "                 default)\n"
     "  --no-png       write the .npy arrays only\n"
+    "  --overwrite    replace the views' files if DIR holds them already\n"
+    "                 (default off: any one there is refused before\n"
+    "                 rendering; an input never is replaced)\n"
     "  --help         print this help and exit\n"
     "Examples:\n"
     "  nerf-export depth --model lego.nerf --data lego --downscale 4 \\\n"
@@ -64,7 +68,7 @@ static const char points_usage[] =
     "                          (--data DIR [--split S] [--skip K]\n"
     "                           [--downscale K] | --poses FILE [--data DIR])\n"
     "                          [--max-points N] [--stride K] [--opacity T]\n"
-    "                          [--ascii]\n"
+    "                          [--ascii] [--overwrite]\n"
     "Render the views of a split of the scene MODEL was trained on (or the\n"
     "cameras of a file) and write\n"
     "one point per ray whose opacity reaches T, at the ray's expected\n"
@@ -89,6 +93,8 @@ static const char points_usage[] =
     "  --opacity T     the least opacity of a ray that gives a point, in\n"
     "                  [0, 1] (default 0.9)\n"
     "  --ascii         an ASCII PLY (default binary little-endian)\n"
+    "  --overwrite     replace FILE if it exists (default off: an existing\n"
+    "                  FILE is refused; an input never is replaced)\n"
     "  --help          print this help and exit\n"
     "Ctrl-C stops at once; nothing is written.\n"
     "Examples:\n"
@@ -109,11 +115,15 @@ static void on_signal(int sig)
     interrupted = sig;
 }
 
+/* The largest --stride: every K-th pixel's ray in each direction. */
+#define STRIDE_MAX 1024
+
 typedef struct args {
     const char *program;
     const char *model, *data, *out, *poses;
     uint64_t split, skip, downscale;
     int data_options; /* --split, --skip or --downscale given */
+    int overwrite;
     /* depth */
     int png;
     /* points */
@@ -124,13 +134,13 @@ typedef struct args {
 
 static const char *const depth_options[] = {
     "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
-    "--downscale", "--png", "--no-png", "--poses", NULL
+    "--downscale", "--png", "--no-png", "--poses", "--overwrite", NULL
 };
 
 static const char *const points_options[] = {
     "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
     "--downscale", "--max-points", "--stride", "--opacity", "--ascii",
-    "--poses", NULL
+    "--poses", "--overwrite", NULL
 };
 
 /* 0, 1 after --help, -1 after a usage error (printed). */
@@ -153,52 +163,49 @@ static int parse(int argc, char **argv, args *a, int points)
             a->ascii = 1;
             continue;
         }
+        if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
+            continue;
+        }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        const char *expected = NULL;
-        if (bad) {
-            if (cli_check_option(prog, k, names) == 0) {
-                cli_bad_value(prog, k, NULL, NULL);
-            }
+        int rc = 0;
+        if (v == NULL && cli_check_option(prog, k, names) != 0) {
+            /* A flag parse() does not know has no value either. */
             return -1;
         } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
+            rc = cli_text_option(prog, k, v, &a->model);
         } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
+            rc = cli_text_option(prog, k, v, &a->data);
         } else if (strcmp(k, "--out") == 0) {
-            a->out = v;
+            rc = cli_text_option(prog, k, v, &a->out);
         } else if (strcmp(k, "--poses") == 0) {
-            a->poses = v;
+            rc = cli_text_option(prog, k, v, &a->poses);
         } else if (strcmp(k, "--split") == 0) {
-            int split = cli_split(v);
+            int split = v != NULL ? cli_split(v) : -1;
             a->split = (uint64_t)split;
-            bad = split < 0;
-            expected = "train, val or test";
             a->data_options = 1;
+            if (split < 0) {
+                cli_bad_value(prog, k, v, "train, val or test");
+                rc = -1;
+            }
         } else if (strcmp(k, "--skip") == 0) {
-            bad = cli_uint(v, 1, 100000, &a->skip);
-            expected = "1..100000";
+            rc = cli_int_option(prog, k, v, 1, CLI_SKIP_MAX, &a->skip);
             a->data_options = 1;
         } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
-            expected = "1..256";
+            rc = cli_int_option(prog, k, v, 1, CLI_DOWNSCALE_MAX,
+                                &a->downscale);
             a->data_options = 1;
         } else if (points && strcmp(k, "--max-points") == 0) {
-            bad = cli_uint(v, 1, UINT64_MAX / 2, &a->max_points);
-            expected = "a whole number >= 1";
+            rc = cli_int_option(prog, k, v, 1, UINT64_MAX / 2, &a->max_points);
         } else if (points && strcmp(k, "--stride") == 0) {
-            bad = cli_uint(v, 1, 1024, &a->stride);
-            expected = "1..1024";
+            rc = cli_int_option(prog, k, v, 1, STRIDE_MAX, &a->stride);
         } else if (points && strcmp(k, "--opacity") == 0) {
-            bad = cli_double(v, &a->opacity) ||
-                  !(a->opacity >= 0.0 && a->opacity <= 1.0);
-            expected = "a number in [0, 1]";
+            rc = cli_real_option(prog, k, v, 0.0, 1.0, 0, &a->opacity);
         } else {
             cli_unknown(prog, k, names);
             return -1;
         }
-        if (bad) {
-            cli_bad_value(prog, k, v, expected);
+        if (rc != 0) {
             return -1;
         }
     }
@@ -331,14 +338,48 @@ static int on_points_progress(const nerf_progress *p, void *user)
     return interrupted ? 1 : 0;
 }
 
-static int write_npy(const char *dir, uint64_t view, const char *kind,
+/* The file of view in dir holding name ("zdepth.npy", "depth.png"). */
+static void view_path(char *path, size_t size, const char *dir, uint64_t view,
+                      const char *name)
+{
+    snprintf(path, size, "%s/%03llu_%s", dir, (unsigned long long)view, name);
+}
+
+static int write_npy(const char *dir, uint64_t view, const char *name,
                      const float *data, uint32_t w, uint32_t h)
 {
     char path[4200];
-    snprintf(path, sizeof path, "%s/%03llu_%s.npy", dir,
-             (unsigned long long)view, kind);
+    view_path(path, sizeof path, dir, view, name);
     const size_t shape[2] = {h, w};
     return nerf_npy_write_float(path, data, shape, 2);
+}
+
+/* What depth writes for each view: the arrays, then the previews. */
+static const char *const depth_files[] = {"distance.npy", "zdepth.npy",
+                                          "opacity.npy", "opacity.png",
+                                          "depth.png"};
+#define DEPTH_ARRAYS 3
+
+/* Every file the views will be written to, new or replaced as told, and
+ * none an input: found before anything is rendered. */
+static int check_depth_targets(const args *a, const views *v)
+{
+    const out_input inputs[3] = {
+        {"--model", a->model}, {"--data", a->data}, {"--poses", a->poses}};
+    size_t kinds = a->png ? sizeof depth_files / sizeof depth_files[0]
+                          : DEPTH_ARRAYS;
+    for (uint32_t i = 0; i < view_count(v); i++) {
+        for (size_t k = 0; k < kinds; k++) {
+            char path[4200];
+            view_path(path, sizeof path, a->out, view_number(a, i),
+                      depth_files[k]);
+            if (out_file_check(a->program, path, a->overwrite, NULL, inputs,
+                               3) != 0) {
+                return -1;
+            }
+        }
+    }
+    return 0;
 }
 
 /* The previews of nerf-render --depth, from the z depth. */
@@ -347,8 +388,7 @@ static int write_previews(const args *a, uint64_t view, float *z,
                           float near, float far, int ndc)
 {
     char path[4200];
-    snprintf(path, sizeof path, "%s/%03llu_opacity.png", a->out,
-             (unsigned long long)view);
+    view_path(path, sizeof path, a->out, view, depth_files[DEPTH_ARRAYS]);
     int rc = nerf_image_write_png(path, w, h, 1, opacity);
     for (size_t k = 0; k < (size_t)w * h; k++) {
         /* An NDC scene's bounds are NDC depths: 1 - 1 / z for a camera
@@ -357,8 +397,7 @@ static int write_previews(const args *a, uint64_t view, float *z,
                                      : far;
         z[k] = 1.0f - (d - near) / (far - near);
     }
-    snprintf(path, sizeof path, "%s/%03llu_depth.png", a->out,
-             (unsigned long long)view);
+    view_path(path, sizeof path, a->out, view, depth_files[DEPTH_ARRAYS + 1]);
     return rc == NERF_OK ? nerf_image_write_png(path, w, h, 1, z) : rc;
 }
 
@@ -410,13 +449,13 @@ static int depth_views(const args *a, views *v)
         }
         uint64_t view = view_number(a, i);
         if (rc == NERF_OK) {
-            rc = write_npy(a->out, view, "distance", dist, w, h);
+            rc = write_npy(a->out, view, "distance.npy", dist, w, h);
         }
         if (rc == NERF_OK) {
-            rc = write_npy(a->out, view, "zdepth", z, w, h);
+            rc = write_npy(a->out, view, "zdepth.npy", z, w, h);
         }
         if (rc == NERF_OK) {
-            rc = write_npy(a->out, view, "opacity", op, w, h);
+            rc = write_npy(a->out, view, "opacity.npy", op, w, h);
         }
         if (rc == NERF_OK && a->png) {
             rc = write_previews(a, view, z, op, w, h, near, far, ndc);
@@ -451,6 +490,10 @@ int export_depth(int argc, char **argv)
     }
     views v;
     int rc = open_views(&a, &v);
+    if (rc == NERF_OK && check_depth_targets(&a, &v) != 0) {
+        close_views(&v);
+        return 2;
+    }
     if (rc == NERF_OK) {
         signal(SIGINT, on_signal);
         signal(SIGTERM, on_signal);
@@ -490,6 +533,11 @@ int export_points(int argc, char **argv)
     int p = parse(argc, argv, &a, 1);
     if (p != 0) {
         return p > 0 ? 0 : 2;
+    }
+    const out_input inputs[3] = {
+        {"--model", a.model}, {"--data", a.data}, {"--poses", a.poses}};
+    if (out_file_check(a.program, a.out, a.overwrite, NULL, inputs, 3) != 0) {
+        return 2;
     }
     if (ready_parent(&a) != 0) {
         return 1;

@@ -11,6 +11,8 @@
 #include "common/progress.h"
 #include "common/scene_setup.h"
 
+#define PROG "nerf-eval"
+
 static const char usage[] =
     "usage: nerf-eval --model MODEL --data DIR [--split S] [--downscale K]\n"
     "                 [--skip K] [--march-steps N] [--json]\n"
@@ -38,6 +40,7 @@ static const char usage[] =
     "                 {\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
     "                 [{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)\n"
     "  --help         print this help and exit\n"
+    "It writes no file: the table (or --json) goes to stdout.\n"
     "Examples:\n"
     "  nerf-eval --model lego.nerf --data lego --downscale 8 --skip 8\n"
     "  nerf-eval --model fern.nerf --data fern --downscale 8 --json \\\n"
@@ -74,39 +77,38 @@ static int parse(int argc, char **argv, args *a)
             continue;
         }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        if (bad) {
-            /* A flag parse() does not know reaches here too. */
-            if (cli_check_option("nerf-eval", k, options) == 0) {
-                cli_bad_value("nerf-eval", k, NULL, NULL);
-            }
+        int rc = 0;
+        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
+            /* A flag parse() does not know has no value either. */
+            rc = -1;
         } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
+            rc = cli_text_option(PROG, k, v, &a->model);
         } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
+            rc = cli_text_option(PROG, k, v, &a->data);
         } else if (strcmp(k, "--split") == 0) {
-            int split = cli_split(v);
+            int split = v != NULL ? cli_split(v) : -1;
             a->split = (uint64_t)split;
-            bad = split < 0;
-        } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
-        } else if (strcmp(k, "--skip") == 0) {
-            bad = cli_uint(v, 1, 100000, &a->skip);
-        } else if (strcmp(k, "--march-steps") == 0) {
-            bad = cli_march_steps(v, &a->march);
-        } else {
-            cli_unknown("nerf-eval", k, options);
-            return -1;
-        }
-        if (bad) {
-            if (v) {
-                cli_bad_value("nerf-eval", k, v, NULL);
+            if (split < 0) {
+                cli_bad_value(PROG, k, v, "train, val or test");
+                rc = -1;
             }
+        } else if (strcmp(k, "--downscale") == 0) {
+            rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX,
+                                &a->downscale);
+        } else if (strcmp(k, "--skip") == 0) {
+            rc = cli_int_option(PROG, k, v, 1, CLI_SKIP_MAX, &a->skip);
+        } else if (strcmp(k, "--march-steps") == 0) {
+            rc = cli_march_steps(PROG, k, v, &a->march);
+        } else {
+            cli_unknown(PROG, k, options);
+            rc = -1;
+        }
+        if (rc != 0) {
             return -1;
         }
     }
     if (a->model == NULL || a->data == NULL) {
-        cli_usage_error("nerf-eval", "--model and --data are required");
+        cli_usage_error(PROG, "--model and --data are required");
         return -1;
     }
     return 0;

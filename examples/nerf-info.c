@@ -12,12 +12,13 @@
 #include "common/cli.h"
 #include "common/model_info.h"
 #include "common/options.h"
+#include "common/out_file.h"
 
 /* Fixed, not argv[0]: an installed program's path says nothing. */
 #define PROGRAM "nerf-info"
 
 static const char usage[] =
-    "usage: nerf-info [MODEL [--json] [--export FILE]]\n"
+    "usage: nerf-info [MODEL [--json] [--export FILE [--overwrite]]]\n"
     "Without arguments, print libnerf's version and build information.\n"
     "With MODEL (a file nerf-train wrote), describe it: its preset, encodings\n"
     "and networks, parameter count, training step, scene space and bound,\n"
@@ -28,7 +29,10 @@ static const char usage[] =
     "  --export FILE  write MODEL without its optimiser state to FILE (under half\n"
     "                 a checkpoint's size), for sharing, rendering\n"
     "                 and evaluating; nerf-train cannot resume from it.  The\n"
-    "                 description is then FILE's.\n"
+    "                 description is then FILE's.  FILE is never MODEL\n"
+    "                 itself (by any path or link)\n"
+    "  --overwrite    replace FILE if it exists (default off: an existing\n"
+    "                 FILE is refused)\n"
     "  --help         print this help and exit\n"
     "Status 1 if the library found at run time is not the version the\n"
     "program was built against.\n"
@@ -38,11 +42,11 @@ static const char usage[] =
     "  nerf-info lego.nerf --export lego-weights.nerf\n";
 
 static const char *const options[] = {"--help", "-h", "--json", "--export",
-                                      NULL};
+                                      "--overwrite", NULL};
 
 typedef struct args {
     const char *model, *export_to;
-    int json;
+    int json, overwrite;
 } args;
 
 /* 0: parsed; 1: --help printed; 2: a usage error, reported. */
@@ -57,6 +61,8 @@ static int parse(int argc, char **argv, args *a)
         }
         if (strcmp(k, "--json") == 0) {
             a->json = 1;
+        } else if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
         } else if (strcmp(k, "--export") == 0) {
             a->export_to = cli_value(argc, argv, &i);
             if (a->export_to == NULL) {
@@ -77,6 +83,16 @@ static int parse(int argc, char **argv, args *a)
     if (a->model == NULL && (a->json || a->export_to)) {
         fprintf(stderr, PROGRAM ": --json and --export describe a MODEL; see "
                 PROGRAM " --help\n");
+        return 2;
+    }
+    if (a->overwrite && a->export_to == NULL) {
+        cli_usage_error(PROGRAM, "--overwrite goes with --export");
+        return 2;
+    }
+    const out_input model = {"MODEL", a->model};
+    if (a->export_to != NULL &&
+        out_file_check(PROGRAM, a->export_to, a->overwrite, NULL, &model, 1) !=
+            0) {
         return 2;
     }
     return 0;

@@ -11,6 +11,7 @@
 #include "common/cli.h"
 #include "common/dist.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/options.h"
 #include "common/orbit.h"
 #include "common/progress.h"
@@ -28,7 +29,7 @@ static const char usage[] =
     "                    | --path orbit|spiral [--frames N] [--data DIR]\n"
     "                    | --poses FILE [--focal F | --fov DEG] [--data DIR])\n"
     "                   [--width W] [--height H] [--depth] [--near T --far T]\n"
-    "                   [--march-steps N] [--skip-existing]\n"
+    "                   [--march-steps N] [--skip-existing] [--overwrite]\n"
     "                   [--video FILE.mp4 [--fps N]]\n"
     "Render views of MODEL and write them to DIR (created if missing) as\n"
     "r_NNN.png, NNN counting from 000 in the order of the views.\n"
@@ -41,10 +42,15 @@ static const char usage[] =
     "                 it, those MODEL recorded in training (nerf-info shows\n"
     "                 them; guessed from its shape for older files).\n"
     "  --split S      with --data alone: train, val or test (default test)\n"
-    "  --downscale K  with --data alone or --path spiral: load the scene's\n"
-    "                 images and cameras K times smaller (default 1)\n"
-    "  --path orbit   a circle of --frames views at 30 degrees elevation,\n"
-    "                 radius 4, around the origin, as for Blender scenes\n"
+    "  --downscale K  with --data: read the scene's images and cameras K\n"
+    "                 times smaller (an LLFF or COLMAP scene's images_K/;\n"
+    "                 default 1), which sets the size of the views of\n"
+    "                 --data and of --path unless --width/--height do\n"
+    "  --path orbit   a circle of --frames views around the origin at 30\n"
+    "                 degrees elevation, as for Blender scenes, framed to\n"
+    "                 keep the sphere of radius 1.5 (the box Blender scenes\n"
+    "                 lie in) whole at any aspect ratio: 39.6 degrees\n"
+    "                 across the frame's smaller side, from distance 4.43\n"
     "  --path spiral  the reference's spiral path of a forward-facing (LLFF)\n"
     "                 scene, two turns around its average pose (needs --data)\n"
     "  --frames N     views along --path (default 40)\n"
@@ -57,12 +63,14 @@ static const char usage[] =
     "                 file's, else --fov 39.6)\n"
     "  --fov DEG      with --poses: horizontal field of view in degrees\n"
     "                 (default: the file's, else 39.6, as --path orbit)\n"
-    "  --width W      image width in pixels.  Default: 100 for --path orbit;\n"
-    "                 the scene's for --data and --path spiral (whose focal\n"
-    "                 length and centre scale with the size: the same view,\n"
-    "                 sharper or coarser); for --poses the file's w, else\n"
-    "                 100.  Given alone, the height keeps the aspect ratio\n"
-    "                 (except with --poses, which needs both).\n"
+    "  --width W      image width in pixels.  Default: with --data, the\n"
+    "                 size of its images (after --downscale) for its views\n"
+    "                 and either --path (the scene's views and the spiral\n"
+    "                 scale their focal length and centre with the size:\n"
+    "                 the same view, sharper or coarser); 100 for --path\n"
+    "                 orbit without --data; for --poses the file's w,\n"
+    "                 else 100.  Given alone, the height keeps the aspect\n"
+    "                 ratio (except with --poses, which needs both).\n"
     "  --height H     image height in pixels; defaults as --width\n"
     "  --depth        also write depth_NNN.png and opacity_NNN.png (default\n"
     "                 off).  depth_NNN.png is 8-bit grey: the expected depth\n"
@@ -91,6 +99,10 @@ static const char usage[] =
     "  --skip-existing  render only the views whose files are not in DIR\n"
     "                 yet: the same command again finishes a render that\n"
     "                 was stopped (default off: render every view)\n"
+    "  --overwrite    replace the files of views DIR holds already, and an\n"
+    "                 existing --video FILE (default off: any file this run\n"
+    "                 would write over is refused before rendering; an\n"
+    "                 input never is replaced)\n"
     "  --help         print this help and exit\n"
     "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
     "written), says which views are written and exits with status 130\n"
@@ -109,7 +121,7 @@ typedef struct args {
     const char *model, *out, *data, *path, *poses;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
-    int depth, size_given, skip_existing;
+    int depth, size_given, skip_existing, overwrite;
     int bounds_given; /* 1: --near, 2: --far */
     int split_given, downscale_given, frames_given;
     const char *video; /* NULL: PNG frames only */
@@ -118,13 +130,89 @@ typedef struct args {
     int64_t march; /* -1: the model's */
 } args;
 
+/* The most views of a --path (nerf_camera_path_load()'s most poses), and
+ * of frames a second of a video. */
+#define FRAMES_MAX 100000
+#define FPS_MAX 1000
+
+/* --path orbit's frames without --width or --height are the size of the
+ * scene's images with --data (after --downscale), else this square; so
+ * are the frames of a --poses file that gives no size. */
+#define ORBIT_SIDE 100
+
 /* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
     "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
     "--width", "--height", "--near", "--far", "--video", "--fps",
-    "--skip-existing", "--march-steps", NULL
+    "--skip-existing", "--overwrite", "--march-steps", NULL
 };
+
+/* Option k with its value v into a; 0, or -1 after saying what is wrong
+ * (v NULL: the value is missing). */
+static int parse_value(args *a, const char *k, const char *v)
+{
+    int rc = 0;
+    if (strcmp(k, "--model") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->model);
+    } else if (strcmp(k, "--out") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->out);
+    } else if (strcmp(k, "--data") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->data);
+    } else if (strcmp(k, "--path") == 0) {
+        a->path = v;
+        if (v == NULL ||
+            (strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0)) {
+            cli_bad_value(PROG, k, v, "orbit or spiral");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--poses") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->poses);
+    } else if (strcmp(k, "--focal") == 0) {
+        rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
+                             &a->focal);
+    } else if (strcmp(k, "--fov") == 0) {
+        rc = cli_real_option(PROG, k, v, 0.0, 180.0,
+                             CLI_ABOVE_MIN | CLI_BELOW_MAX, &a->fov);
+    } else if (strcmp(k, "--split") == 0) {
+        int split = v != NULL ? cli_split(v) : -1;
+        a->split = (uint64_t)split;
+        a->split_given = 1;
+        if (split < 0) {
+            cli_bad_value(PROG, k, v, "train, val or test");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--downscale") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX, &a->downscale);
+        a->downscale_given = 1;
+    } else if (strcmp(k, "--frames") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, FRAMES_MAX, &a->frames);
+        a->frames_given = 1;
+    } else if (strcmp(k, "--width") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->width);
+        a->size_given |= 1;
+    } else if (strcmp(k, "--height") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->height);
+        a->size_given |= 2;
+    } else if (strcmp(k, "--video") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->video);
+    } else if (strcmp(k, "--march-steps") == 0) {
+        rc = cli_march_steps(PROG, k, v, &a->march);
+    } else if (strcmp(k, "--fps") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, FPS_MAX, &a->fps);
+        a->fps_given = 1;
+    } else if (strcmp(k, "--near") == 0) {
+        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->near);
+        a->bounds_given |= 1;
+    } else if (strcmp(k, "--far") == 0) {
+        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->far);
+        a->bounds_given |= 2;
+    } else {
+        cli_unknown(PROG, k, options);
+        rc = -1;
+    }
+    return rc;
+}
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -132,7 +220,7 @@ static int parse(int argc, char **argv, args *a)
     a->split = NERF_SPLIT_TEST;
     a->downscale = 1;
     a->frames = 40;
-    a->width = a->height = 100;
+    a->width = a->height = ORBIT_SIDE;
     a->fps = 30;
     a->march = -1;
     for (int i = 1; i < argc; i++) {
@@ -149,66 +237,16 @@ static int parse(int argc, char **argv, args *a)
             a->skip_existing = 1;
             continue;
         }
+        if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
+            continue;
+        }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        if (bad) {
-            /* A flag parse() does not know reaches here too. */
-            if (cli_check_option(PROG, k, options) == 0) {
-                cli_bad_value(PROG, k, NULL, NULL);
-            }
-        } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
-        } else if (strcmp(k, "--out") == 0) {
-            a->out = v;
-        } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
-        } else if (strcmp(k, "--path") == 0) {
-            a->path = v;
-            bad = strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0;
-        } else if (strcmp(k, "--poses") == 0) {
-            a->poses = v;
-        } else if (strcmp(k, "--focal") == 0) {
-            bad = cli_double(v, &a->focal) || !(a->focal > 0.0);
-        } else if (strcmp(k, "--fov") == 0) {
-            bad = cli_double(v, &a->fov) || !(a->fov > 0.0 && a->fov < 180.0);
-        } else if (strcmp(k, "--split") == 0) {
-            int split = cli_split(v);
-            a->split = (uint64_t)split;
-            bad = split < 0;
-            a->split_given = 1;
-        } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
-            a->downscale_given = 1;
-        } else if (strcmp(k, "--frames") == 0) {
-            bad = cli_uint(v, 1, 100000, &a->frames);
-            a->frames_given = 1;
-        } else if (strcmp(k, "--width") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->width);
-            a->size_given |= 1;
-        } else if (strcmp(k, "--height") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->height);
-            a->size_given |= 2;
-        } else if (strcmp(k, "--video") == 0) {
-            a->video = v;
-        } else if (strcmp(k, "--march-steps") == 0) {
-            bad = cli_march_steps(v, &a->march);
-        } else if (strcmp(k, "--fps") == 0) {
-            bad = cli_uint(v, 1, 1000, &a->fps);
-            a->fps_given = 1;
-        } else if (strcmp(k, "--near") == 0) {
-            bad = cli_double(v, &a->near);
-            a->bounds_given |= 1;
-        } else if (strcmp(k, "--far") == 0) {
-            bad = cli_double(v, &a->far);
-            a->bounds_given |= 2;
-        } else {
-            cli_unknown(PROG, k, options);
+        /* A flag parse() does not know has no value either. */
+        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
             return -1;
         }
-        if (bad) {
-            if (v) {
-                cli_bad_value(PROG, k, v, NULL);
-            }
+        if (parse_value(a, k, v) != 0) {
             return -1;
         }
     }
@@ -282,17 +320,14 @@ static int parse(int argc, char **argv, args *a)
                         a->path ? "path" : "poses");
         return -1;
     }
-    int data_size = views_of_data ||
-                    (a->path && strcmp(a->path, "spiral") == 0);
-    if (a->downscale_given && !data_size) {
-        cli_usage_error(PROG, "--downscale shrinks the views of "
-                        "--data and --path spiral; with --%s give --width "
-                        "and --height", a->path ? "path orbit" : "poses");
-        return -1;
-    }
-    if (a->downscale_given && a->size_given) {
-        cli_usage_error(PROG, "give --downscale or --width/--height, "
-                        "not both");
+    /* --downscale chooses which of the scene's photos are read (LLFF and
+     * COLMAP scenes may ship only images_K/); a path or a file of poses
+     * reads the scene's cameras and bounds through them too, and takes
+     * its frame size from --width/--height when given. */
+    if (a->downscale_given && a->data == NULL) {
+        cli_usage_error(PROG, "--downscale chooses which photos of --data "
+                        "are read; without --data it would change nothing "
+                        "(give --width and --height for the frames' size)");
         return -1;
     }
     return 0;
@@ -324,25 +359,51 @@ static int load_poses(const args *a, const nerf_hooks *hooks,
 }
 
 /*
+ * The frame size asked for, from a base size (the scene's images, or
+ * --path orbit's default): --width and --height as given, one side alone
+ * keeping the base's aspect ratio, neither the base itself.
+ */
+static void frame_size(const args *a, double w, double h, double *nw,
+                       double *nh)
+{
+    *nw = (a->size_given & 1) ? (double)a->width
+          : (a->size_given & 2) ? floor(a->height * w / h + 0.5)
+                                : w;
+    *nh = (a->size_given & 2) ? (double)a->height
+          : (a->size_given & 1) ? floor(a->width * h / w + 0.5)
+                                : h;
+    *nw = *nw < 1.0 ? 1.0 : *nw > NERF_IMAGE_MAX_SIDE ? NERF_IMAGE_MAX_SIDE
+                                                      : *nw;
+    *nh = *nh < 1.0 ? 1.0 : *nh > NERF_IMAGE_MAX_SIDE ? NERF_IMAGE_MAX_SIDE
+                                                      : *nh;
+}
+
+/*
  * A camera of the scene at the size asked for: the intrinsics scale with
- * the image, so that the view is the same, only sharper or coarser.  With
- * one side given, the other keeps the camera's aspect ratio.
+ * the image, so that the view is the same, only sharper or coarser.
  */
 static void resize_camera(const args *a, nerf_camera *cam)
 {
-    double w = (double)cam->width, h = (double)cam->height;
-    double nw = (a->size_given & 1) ? (double)a->width
-                                    : floor(a->height * w / h + 0.5);
-    double nh = (a->size_given & 2) ? (double)a->height
-                                    : floor(a->width * h / w + 0.5);
-    nw = nw < 1.0 ? 1.0 : nw > 16384.0 ? 16384.0 : nw;
-    nh = nh < 1.0 ? 1.0 : nh > 16384.0 ? 16384.0 : nh;
+    double w = (double)cam->width, h = (double)cam->height, nw, nh;
+    frame_size(a, w, h, &nw, &nh);
     cam->fx = (float)(cam->fx * nw / w);
     cam->cx = (float)(cam->cx * nw / w);
     cam->fy = (float)(cam->fy * nh / h);
     cam->cy = (float)(cam->cy * nh / h);
     cam->width = (uint32_t)nw;
     cam->height = (uint32_t)nh;
+}
+
+static int orbit_view(const args *a, const nerf_dataset *ds, uint32_t i,
+                      uint32_t n, nerf_camera *cam)
+{
+    uint32_t bw = ORBIT_SIDE, bh = ORBIT_SIDE;
+    if (ds != NULL) {
+        nerf_dataset_image_size(ds, &bw, &bh);
+    }
+    double w, h;
+    frame_size(a, bw, bh, &w, &h);
+    return orbit_camera(i, n, (uint32_t)w, (uint32_t)h, cam);
 }
 
 /* Camera `i` of the requested views. */
@@ -362,7 +423,7 @@ static int view_camera(const args *a, const nerf_dataset *ds,
         }
         return rc;
     }
-    return orbit_camera(i, n, (uint32_t)a->width, (uint32_t)a->height, cam);
+    return orbit_view(a, ds, i, n, cam);
 }
 
 /* Depth as a grey image: near white, far black, scaled to [near, far]. */
@@ -388,6 +449,9 @@ static int mine(uint32_t i)
 #define REPORTED 1
 /* Stopped by a signal, and said so. */
 #define INTERRUPTED 2
+/* An output refused before anything was rendered (it exists, or is an
+ * input), and said so. */
+#define REFUSED 3
 
 /* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
 static volatile sig_atomic_t interrupted;
@@ -455,19 +519,34 @@ static void free_outputs(outputs *o)
     free(o->opacity);
 }
 
+/* The files of a view in the output folder: the image, and with --depth
+ * the opacity and the depth. */
+static const char *const view_kinds[3] = {"r", "opacity", "depth"};
+
+static int view_files(const args *a)
+{
+    return a->depth ? 3 : 1;
+}
+
+static void view_path(char *path, size_t size, const args *a, int kind,
+                      uint32_t i)
+{
+    snprintf(path, size, "%s/%s_%03u.png", a->out, view_kinds[kind], i);
+}
+
 static int write_view(const args *a, const nerf_camera *cam, uint32_t i,
                       const outputs *o, float near, float far)
 {
     char path[4200];
-    snprintf(path, sizeof path, "%s/r_%03u.png", a->out, i);
+    view_path(path, sizeof path, a, 0, i);
     int rc = nerf_image_write_png(path, cam->width, cam->height, 3, o->rgb);
     if (rc == NERF_OK && a->depth) {
-        snprintf(path, sizeof path, "%s/opacity_%03u.png", a->out, i);
+        view_path(path, sizeof path, a, 1, i);
         rc = nerf_image_write_png(path, cam->width, cam->height, 1,
                                   o->opacity);
         depth_to_grey(o->depth, o->opacity,
                       (size_t)cam->width * cam->height, near, far);
-        snprintf(path, sizeof path, "%s/depth_%03u.png", a->out, i);
+        view_path(path, sizeof path, a, 2, i);
         if (rc == NERF_OK) {
             rc = nerf_image_write_png(path, cam->width, cam->height, 1,
                                       o->depth);
@@ -508,15 +587,42 @@ static int video_mismatch(const args *a, const nerf_camera *cam, uint32_t i,
  * writes each through a temporary file, so one that is there is whole. */
 static int view_written(const args *a, uint32_t i)
 {
-    static const char *const kinds[3] = {"r", "opacity", "depth"};
-    for (int k = 0; k < (a->depth ? 3 : 1); k++) {
+    for (int k = 0; k < view_files(a); k++) {
         char path[4200];
-        snprintf(path, sizeof path, "%s/%s_%03u.png", a->out, kinds[k], i);
+        view_path(path, sizeof path, a, k, i);
         if (access(path, F_OK) != 0) {
             return 0;
         }
     }
     return 1;
+}
+
+/* The inputs of the run, which no output may be. */
+static int check_target(const args *a, const char *path, const char *how)
+{
+    const out_input inputs[3] = {
+        {"--model", a->model}, {"--data", a->data}, {"--poses", a->poses}};
+    return out_file_check(PROG, path, a->overwrite, how, inputs, 3);
+}
+
+/* View i's files, which this run is about to write: new, or replaced as
+ * told. */
+static int check_view_targets(const args *a, uint32_t i)
+{
+    for (int k = 0; k < view_files(a); k++) {
+        char path[4200];
+        view_path(path, sizeof path, a, k, i);
+        const char *how = a->skip_existing
+                              ? "the view lacks some of its files, so it is "
+                                "rendered again: --overwrite replaces them"
+                              : "--overwrite replaces the views there, "
+                                "--skip-existing renders only the missing "
+                                "ones";
+        if (check_target(a, path, how) != 0) {
+            return -1;
+        }
+    }
+    return 0;
 }
 
 /* What a run has written, for the line that ends an interrupted one. */
@@ -573,6 +679,9 @@ static int render_all(const args *a, nerf_renderer *r, const nerf_dataset *ds,
         if (a->skip_existing && view_written(a, i)) {
             w.before++;
             continue;
+        }
+        if (check_view_targets(a, i) != 0) {
+            return REFUSED;
         }
         if (!mine(i)) {
             continue;
@@ -686,6 +795,10 @@ static int run(int argc, char **argv)
     if (parse(argc, argv, &a) != 0) {
         return 2;
     }
+    if (a.video != NULL &&
+        check_target(&a, a.video, OUT_OVERWRITE_HOW) != 0) {
+        return 2;
+    }
     if (a.video != NULL && D.size > 1) {
         cli_usage_error(PROG, "--video needs the views in order in one "
                         "process: render the frames with several, then "
@@ -767,7 +880,8 @@ static int run(int argc, char **argv)
         }
         rc = render_all(&a, r, ds, cp, near, far);
     }
-    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED) {
+    if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED &&
+        rc != REFUSED) {
         cli_report(PROG, rc);
     }
     nerf_renderer_destroy(r);
@@ -777,7 +891,10 @@ static int run(int argc, char **argv)
     nerf_model_destroy(m);
     /* As a shell reports a program killed by the signal: 130 for
      * SIGINT. */
-    return rc == INTERRUPTED ? 128 + interrupted : rc == NERF_OK ? 0 : 1;
+    return rc == INTERRUPTED ? 128 + interrupted
+           : rc == REFUSED   ? 2
+           : rc == NERF_OK   ? 0
+                             : 1;
 }
 
 int main(int argc, char **argv)

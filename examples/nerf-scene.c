@@ -2,12 +2,18 @@
 #include <nerf.h>
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "common/cli.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/options.h"
+
+/* The library's limits, quoted by the help. */
+#define SIDES CLI_STR(NERF_SCENE_MIN_SIDE) ".." CLI_STR(NERF_SCENE_MAX_SIDE)
+#define MAX_VIEWS CLI_STR(NERF_SCENE_MAX_VIEWS)
 
 static const char usage[] =
     "usage: nerf-scene --out DIR [--width W] [--height H] [--train N]\n"
@@ -16,18 +22,18 @@ static const char usage[] =
     "                  [--layout blender|transforms|llff|colmap-text|\n"
     "                            colmap-binary]\n"
     "                  [--format png|jpeg] [--jpeg [QUALITY]]\n"
-    "                  [--distortion K1,K2,P1,P2,K3]\n"
+    "                  [--distortion K1,K2,P1,P2,K3] [--overwrite]\n"
     "Write libnerf's built-in scene (a few coloured solids) to DIR, rendered\n"
     "exactly, as a dataset the other programs read: a scene to try them on\n"
     "without downloading one.\n"
     "  --out DIR            the folder to write (required)\n"
-    "  --width W            image width in pixels, 8..4096 (default 100)\n"
-    "  --height H           image height in pixels, 8..4096 (default 100)\n"
-    "  --train N            training views (default 100)\n"
-    "  --val N              validation views (default 8; none in --layout\n"
-    "                       llff)\n"
-    "  --test N             test views, on a circle at 30 degrees\n"
-    "                       (default 16)\n"
+    "  --width W            image width in pixels, " SIDES " (default 100)\n"
+    "  --height H           image height in pixels, " SIDES " (default 100)\n"
+    "  --train N            training views, 1.." MAX_VIEWS " (default 100)\n"
+    "  --val N              validation views, 0.." MAX_VIEWS " (default 8;\n"
+    "                       none in --layout llff, which takes only 0)\n"
+    "  --test N             test views, on a circle at 30 degrees,\n"
+    "                       0.." MAX_VIEWS " (default 16)\n"
     "  --threads N          worker threads (default 0: all cores)\n"
     "  --capture object     the solids alone on a transparent background,\n"
     "                       from a hemisphere of views (the default)\n"
@@ -52,6 +58,9 @@ static const char usage[] =
     "  --distortion K1,...  photograph through that lens (OpenCV's model, as\n"
     "                       nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
     "                       may be left out; default none: a pinhole camera)\n"
+    "  --overwrite          write into DIR even if it holds files, replacing\n"
+    "                       those of the scene's names (default off: a DIR\n"
+    "                       that holds anything is refused)\n"
     "  --help               print this help and exit\n"
     "Examples:\n"
     "  nerf-scene --out scene\n"
@@ -63,8 +72,44 @@ static const char usage[] =
 static const char *const options[] = {
     "--help", "-h", "--out", "--capture", "--layout", "--jpeg", "--format",
     "--distortion", "--width", "--height", "--train", "--val", "--test",
-    "--threads", NULL
+    "--threads", "--overwrite", NULL
 };
+
+/*
+ * The numeric options: each a field of nerf_scene_options, in the range
+ * nerf_scene_write() takes (the help quotes the same constants).
+ */
+typedef struct count {
+    const char *option;
+    size_t offset;
+    uint32_t min, max;
+} count;
+
+/* The most worker threads asked for; nerf_scene_write() runs at most its
+ * own number. */
+#define THREADS_MAX 100000
+
+static const count counts[] = {
+    {"--width", offsetof(nerf_scene_options, width), NERF_SCENE_MIN_SIDE,
+     NERF_SCENE_MAX_SIDE},
+    {"--height", offsetof(nerf_scene_options, height), NERF_SCENE_MIN_SIDE,
+     NERF_SCENE_MAX_SIDE},
+    {"--train", offsetof(nerf_scene_options, n_train), 1,
+     NERF_SCENE_MAX_VIEWS},
+    {"--val", offsetof(nerf_scene_options, n_val), 0, NERF_SCENE_MAX_VIEWS},
+    {"--test", offsetof(nerf_scene_options, n_test), 0, NERF_SCENE_MAX_VIEWS},
+    {"--threads", offsetof(nerf_scene_options, threads), 0, THREADS_MAX},
+};
+
+static const count *find_count(const char *option)
+{
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        if (strcmp(option, counts[k].option) == 0) {
+            return &counts[k];
+        }
+    }
+    return NULL;
+}
 
 /* A name of the list, by its index; -1 when it is not there. */
 static int pick(const char *name, const char *const *names, int n)
@@ -131,14 +176,15 @@ int main(int argc, char **argv)
     static const char *const layouts[] = {"blender", "transforms", "llff",
                                           "colmap-text", "colmap-binary"};
     int layout = -1;
-    bool val_given = false;
+    bool val_given = false, overwrite = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        uint64_t v = 0;
-        uint32_t *field = NULL;
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             fputs(usage, stdout);
             return 0;
+        } else if (strcmp(a, "--overwrite") == 0) {
+            overwrite = true;
+            continue;
         } else if (strcmp(a, "--out") == 0) {
             out = cli_value(argc, argv, &i);
             if (out == NULL) {
@@ -191,29 +237,21 @@ int main(int argc, char **argv)
                 goto bad;
             }
             continue;
-        } else if (strcmp(a, "--width") == 0) {
-            field = &o.width;
-        } else if (strcmp(a, "--height") == 0) {
-            field = &o.height;
-        } else if (strcmp(a, "--train") == 0) {
-            field = &o.n_train;
-        } else if (strcmp(a, "--val") == 0) {
-            field = &o.n_val;
-            val_given = true;
-        } else if (strcmp(a, "--test") == 0) {
-            field = &o.n_test;
-        } else if (strcmp(a, "--threads") == 0) {
-            field = &o.threads;
-        } else {
+        }
+        const count *c = find_count(a);
+        if (c == NULL) {
             cli_unknown("nerf-scene", a, options);
             goto bad;
         }
         const char *text = cli_value(argc, argv, &i);
-        if (cli_uint(text, 0, 100000, &v) != 0) {
-            cli_bad_value("nerf-scene", a, text, "a whole number 0..100000");
+        uint64_t v = 0;
+        if (cli_int_option("nerf-scene", a, text, c->min, c->max, &v) != 0) {
             goto bad;
         }
-        *field = (uint32_t)v;
+        *(uint32_t *)((char *)&o + c->offset) = (uint32_t)v;
+        if (strcmp(a, "--val") == 0) {
+            val_given = v > 0;
+        }
     }
     if (out == NULL) {
         cli_usage_error("nerf-scene", "--out is required");
@@ -224,10 +262,12 @@ int main(int argc, char **argv)
                : o.capture == NERF_SCENE_CAPTURE_FORWARD
                    ? NERF_SCENE_LAYOUT_LLFF
                    : NERF_SCENE_LAYOUT_BLENDER;
+    /* --val 0 asks for what the layout gives: none. */
     if (val_given && o.layout == NERF_SCENE_LAYOUT_LLFF) {
         cli_usage_error("nerf-scene", "--val: an LLFF layout has no "
                         "validation views (its loader holds out every 8th "
-                        "view as the test split); give --train and --test");
+                        "view as the test split); give --train and --test "
+                        "(or --val 0)");
         return 2;
     }
     nerf_hooks hooks;
@@ -235,6 +275,11 @@ int main(int argc, char **argv)
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-scene";
     o.hooks = &hooks;
+    if (out_folder_check("nerf-scene", out, overwrite, "--overwrite writes "
+                         "the scene into it, replacing files of the same "
+                         "names") != 0) {
+        return 2;
+    }
     /* Before the views are rendered, which a file in the way would
      * waste. */
     if (out_ready_folder(out, "nerf-scene") != 0) {

@@ -1,17 +1,18 @@
 /* nerf-train: train a NeRF on a Blender, LLFF or COLMAP scene. */
 #include <nerf.h>
 
+#include <math.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "common/cli.h"
 #include "common/dist.h"
 #include "common/matmul_name.h"
 #include "common/out_folder.h"
+#include "common/out_file.h"
 #include "common/options.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
@@ -59,8 +60,8 @@ static const char usage[] =
     "  --lr RATE     initial learning rate, decaying exponentially over the\n"
     "                run (default 5e-4 for reference, 5e-3 for tiny, 1e-2\n"
     "                for fast)\n"
-    "  --lr-final RATE  the learning rate at the run's last step (default\n"
-    "                a tenth of --lr, the paper's)\n"
+    "  --lr-final RATE  the learning rate at the run's last step, at most\n"
+    "                --lr (default a tenth of --lr, the paper's)\n"
     "  --checkpoint-every N  save MODEL every N steps (0: only at the\n"
     "                end; default: every 2 minutes of training, since a\n"
     "                save of the fast preset's 140 MB takes seconds)\n"
@@ -159,6 +160,13 @@ static void on_signal(int sig)
  */
 #define RENDER_MARCH 1280
 
+/* The ranges of the options that have no library bound to take. */
+#define STEPS_MAX (UINT64_C(1) << 40)
+#define BATCH_MAX (1u << 20)
+#define BATCH_SAMPLES_MAX (1u << 26)
+/* nerf_sampler_options' most samples a ray, coarse or fine. */
+#define SAMPLES_MAX 4096
+
 typedef struct run_state {
     progress bar;
     uint64_t first_step;
@@ -203,7 +211,7 @@ typedef struct args {
     int resume, overwrite;
     int preset_given;
     int steps_given;
-    int lr_given;
+    int lr_given; /* 1: --lr, 2: --lr-final */
     int batch_given, batch_samples_given;
     int random_bg; /* -1: as the preset's model */
     int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
@@ -220,6 +228,108 @@ static const char *const options[] = {
     "--matmul", "--space", "--random-background", "--coarse-samples",
     "--fine-samples", "--render-march-steps", NULL
 };
+
+/* A learning rate's range: the library's for the parameter. */
+static int parse_rate(const char *option, const char *v, int param,
+                      double *out)
+{
+    double lo = 0.0, hi = 0.0;
+    nerf_param_bounds(param, &lo, &hi);
+    return cli_real_option(PROG, option, v, lo, hi, 0, out);
+}
+
+/* The value of the name v among names; -2 when it is none of them (or
+ * NULL). */
+static int pick_name(const char *v, const char *const *names,
+                     const int *values)
+{
+    for (int i = 0; v != NULL && names[i] != NULL; i++) {
+        if (strcmp(v, names[i]) == 0) {
+            return values[i];
+        }
+    }
+    return -2;
+}
+
+/* Option k with its value v into a; 0, or -1 after saying what is wrong
+ * (v NULL: the value is missing). */
+static int parse_value(args *a, const char *k, const char *v)
+{
+    static const char *const presets[] = {"tiny", "reference", "fast", NULL};
+    static const int preset_ids[] = {NERF_PRESET_TINY, NERF_PRESET_REFERENCE,
+                                     NERF_PRESET_FAST};
+    static const char *const spaces[] = {"auto", "box", "ndc", "unbounded",
+                                         NULL};
+    static const int space_ids[] = {-1, NERF_SPACE_BOX, NERF_SPACE_NDC,
+                                    NERF_SPACE_UNBOUNDED};
+    uint64_t n = 0;
+    int rc = 0;
+    if (strcmp(k, "--data") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->data);
+    } else if (strcmp(k, "--out") == 0) {
+        rc = cli_text_option(PROG, k, v, &a->out);
+    } else if (strcmp(k, "--preset") == 0) {
+        a->preset = pick_name(v, presets, preset_ids);
+        a->preset_given = 1;
+        if (a->preset < 0) {
+            cli_bad_value(PROG, k, v, "tiny, reference or fast");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--steps") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, STEPS_MAX, &a->steps);
+        a->steps_given = 1;
+    } else if (strcmp(k, "--seconds") == 0) {
+        rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
+                             &a->seconds);
+    } else if (strcmp(k, "--downscale") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX, &a->downscale);
+    } else if (strcmp(k, "--batch") == 0) {
+        rc = cli_int_option(PROG, k, v, 1, BATCH_MAX, &a->batch);
+        a->batch_given = 1;
+    } else if (strcmp(k, "--seed") == 0) {
+        rc = cli_int_option(PROG, k, v, 0, UINT64_MAX, &a->seed);
+    } else if (strcmp(k, "--checkpoint-every") == 0) {
+        rc = cli_int_option(PROG, k, v, 0, UINT32_MAX, &a->every);
+    } else if (strcmp(k, "--lr") == 0) {
+        rc = parse_rate(k, v, NERF_PARAM_LEARNING_RATE, &a->lr);
+        a->lr_given |= 1;
+    } else if (strcmp(k, "--lr-final") == 0) {
+        rc = parse_rate(k, v, NERF_PARAM_LEARNING_RATE_FINAL, &a->lr_final);
+        a->lr_given |= 2;
+    } else if (strcmp(k, "--batch-samples") == 0) {
+        rc = cli_int_option(PROG, k, v, 0, BATCH_SAMPLES_MAX,
+                            &a->batch_samples);
+        a->batch_samples_given = 1;
+    } else if (strcmp(k, "--matmul") == 0) {
+        a->matmul = v != NULL ? matmul_parse(v) : -1;
+        if (a->matmul < 0) {
+            cli_bad_value(PROG, k, v, "one of " MATMUL_CHOICES);
+            rc = -1;
+        }
+    } else if (strcmp(k, "--space") == 0) {
+        a->space = pick_name(v, spaces, space_ids);
+        if (a->space == -2) {
+            cli_bad_value(PROG, k, v, "auto, box, ndc or unbounded");
+            rc = -1;
+        }
+    } else if (strcmp(k, "--random-background") == 0) {
+        rc = cli_int_option(PROG, k, v, 0, 1, &n);
+        a->random_bg = (int)n;
+    } else if (strcmp(k, "--coarse-samples") == 0) {
+        /* The ranges nerf_sampler_options takes. */
+        rc = cli_int_option(PROG, k, v, 2, SAMPLES_MAX, &n);
+        a->coarse = (int64_t)n;
+    } else if (strcmp(k, "--fine-samples") == 0) {
+        rc = cli_int_option(PROG, k, v, 0, SAMPLES_MAX, &n);
+        a->fine = (int64_t)n;
+    } else if (strcmp(k, "--render-march-steps") == 0) {
+        rc = cli_march_steps(PROG, k, v, &a->render_march);
+    } else {
+        cli_unknown(PROG, k, options);
+        rc = -1;
+    }
+    return rc;
+}
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -247,80 +357,11 @@ static int parse(int argc, char **argv, args *a)
             continue;
         }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        if (bad) {
-            /* A flag parse() does not know reaches here too. */
-            if (cli_check_option(PROG, k, options) == 0) {
-                cli_bad_value(PROG, k, NULL, NULL);
-            }
-        } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
-        } else if (strcmp(k, "--out") == 0) {
-            a->out = v;
-        } else if (strcmp(k, "--preset") == 0) {
-            a->preset = strcmp(v, "tiny") == 0        ? NERF_PRESET_TINY
-                        : strcmp(v, "reference") == 0 ? NERF_PRESET_REFERENCE
-                        : strcmp(v, "fast") == 0      ? NERF_PRESET_FAST
-                                                      : 0;
-            bad = a->preset == 0;
-            a->preset_given = 1;
-        } else if (strcmp(k, "--steps") == 0) {
-            bad = cli_uint(v, 1, UINT64_C(1) << 40, &a->steps);
-            a->steps_given = 1;
-        } else if (strcmp(k, "--seconds") == 0) {
-            bad = cli_double(v, &a->seconds) || !(a->seconds > 0.0);
-        } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
-        } else if (strcmp(k, "--batch") == 0) {
-            bad = cli_uint(v, 1, 1u << 20, &a->batch);
-            a->batch_given = 1;
-        } else if (strcmp(k, "--seed") == 0) {
-            bad = cli_uint(v, 0, UINT64_MAX, &a->seed);
-        } else if (strcmp(k, "--checkpoint-every") == 0) {
-            bad = cli_uint(v, 0, UINT32_MAX, &a->every);
-        } else if (strcmp(k, "--lr") == 0) {
-            bad = cli_double(v, &a->lr) || !(a->lr > 0.0 && a->lr <= 1.0);
-            a->lr_given = 1;
-        } else if (strcmp(k, "--lr-final") == 0) {
-            bad = cli_double(v, &a->lr_final) ||
-                  !(a->lr_final > 0.0 && a->lr_final <= 1.0);
-            a->lr_given = 1;
-        } else if (strcmp(k, "--batch-samples") == 0) {
-            bad = cli_uint(v, 0, 1u << 26, &a->batch_samples);
-            a->batch_samples_given = 1;
-        } else if (strcmp(k, "--matmul") == 0) {
-            a->matmul = matmul_parse(v);
-            bad = a->matmul < 0;
-        } else if (strcmp(k, "--space") == 0) {
-            a->space = strcmp(v, "auto") == 0        ? -1
-                       : strcmp(v, "box") == 0       ? NERF_SPACE_BOX
-                       : strcmp(v, "ndc") == 0       ? NERF_SPACE_NDC
-                       : strcmp(v, "unbounded") == 0 ? NERF_SPACE_UNBOUNDED
-                                                     : -2;
-            bad = a->space == -2;
-        } else if (strcmp(k, "--random-background") == 0) {
-            uint64_t on = 0;
-            bad = cli_uint(v, 0, 1, &on);
-            a->random_bg = (int)on;
-        } else if (strcmp(k, "--coarse-samples") == 0) {
-            /* The ranges nerf_sampler_options takes. */
-            uint64_t n = 0;
-            bad = cli_uint(v, 2, 4096, &n);
-            a->coarse = (int64_t)n;
-        } else if (strcmp(k, "--fine-samples") == 0) {
-            uint64_t n = 0;
-            bad = cli_uint(v, 0, 4096, &n);
-            a->fine = (int64_t)n;
-        } else if (strcmp(k, "--render-march-steps") == 0) {
-            bad = cli_march_steps(v, &a->render_march);
-        } else {
-            cli_unknown(PROG, k, options);
+        /* A flag parse() does not know has no value either. */
+        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
             return -1;
         }
-        if (bad) {
-            if (v) {
-                cli_bad_value(PROG, k, v, NULL);
-            }
+        if (parse_value(a, k, v) != 0) {
             return -1;
         }
     }
@@ -354,6 +395,15 @@ static int parse(int argc, char **argv, args *a)
     }
     if (a->lr_final == 0.0) {
         a->lr_final = a->lr / 10;
+    }
+    /* The schedule, lr (lr_final / lr)^(step / steps), decays: a final
+     * rate above the first would make it grow, steeper at every step. */
+    if (a->lr_final > a->lr) {
+        cli_usage_error(PROG, "--lr-final %g is above the learning rate "
+                        "%g%s: the rate decays from --lr to --lr-final "
+                        "(equal: it stays constant)", a->lr_final, a->lr,
+                        a->lr_given & 1 ? "" : " (the preset's --lr)");
+        return -1;
     }
     return 0;
 }
@@ -390,18 +440,14 @@ static int check_preset(const args *a, const nerf_model *m)
 
 /*
  * An existing MODEL is replaced only when asked: it may be hours of
- * training.  A folder is left to the trainer's check, which names it.
+ * training.  --resume writes over the MODEL it continues, as meant.
  */
 static int check_existing(const args *a)
 {
-    struct stat st;
-    if (a->resume || a->overwrite || stat(a->out, &st) != 0 ||
-        S_ISDIR(st.st_mode)) {
-        return 0;
-    }
-    fprintf(stderr, PROG ": %s exists: --resume continues it, "
-            "--overwrite replaces it\n", a->out);
-    return -1;
+    const out_input data = {"--data", a->data};
+    return out_file_check(PROG, a->out, a->resume || a->overwrite,
+                          "--resume continues it, --overwrite replaces it",
+                          &data, 1);
 }
 
 static int resume_model(const args *a, const nerf_hooks *hooks,

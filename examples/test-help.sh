@@ -56,7 +56,7 @@ help "$train" --preset --steps --seconds --downscale --batch --seed --lr \
 grep -q "^  --data DIR" "$work/help" || fail "nerf-train: --data unexplained"
 grep -q "^  --out MODEL" "$work/help" || fail "nerf-train: --out unexplained"
 help "$render" --split --downscale --frames --focal --fov --width --height \
-  --depth --near --video --fps --march-steps
+  --depth --near --video --fps --march-steps --skip-existing --overwrite
 for opt in --model --out --data "--path orbit" "--path spiral" --poses; do
   [ -n "$(entry "$opt")" ] || fail "nerf-render: $opt unexplained"
 done
@@ -65,10 +65,11 @@ entry --depth | grep -q "255" || fail "nerf-render --depth: no encoding"
 help "$eval" --split --downscale --skip --json --march-steps
 entry --skip | grep -q "0, K" || fail "nerf-eval --skip: numbering unsaid"
 help "$scene" --width --height --train --val --test --threads \
-  "--capture object" "--layout blender" --format --jpeg --distortion
-help "$info"
+  "--capture object" "--layout blender" --format --jpeg --distortion \
+  --overwrite
+help "$info" --overwrite
 if [ -n "$viewer" ]; then
   help "$viewer" --data --downscale "--width W," --view --march-steps \
-    --screenshot --quit-after
+    --screenshot --quit-after --overwrite
 fi
 echo "ok"

@@ -1,8 +1,11 @@
 #!/bin/sh
 # nerf-render honours --width/--height for every kind of view (the scene's
 # own views and --path spiral scale their intrinsics with the image; one
-# side alone keeps the aspect ratio), and refuses options that would
-# change nothing instead of ignoring them.
+# side alone keeps the aspect ratio), takes its frame size from the
+# scene's images (after --downscale) when a path renders with --data,
+# reads a scene that ships only images_K/ through --downscale K whatever
+# the frame size, and refuses options that would change nothing instead
+# of ignoring them.
 #
 #   test-render-size.sh NERF-SCENE NERF-TRAIN NERF-RENDER
 set -eu
@@ -55,6 +58,44 @@ render spiral-w --path spiral --frames 1 --width 6
 render spiral-h --path spiral --frames 1 --height 20
 [ "$(size "$work/spiral-h/r_000.png")" = 30x20 ] ||
   fail "spiral --height 20 gave $(size "$work/spiral-h/r_000.png")"
+# --downscale chooses the photos, --width/--height the frames: together.
+render spiral-both --path spiral --frames 1 --downscale 2 --width 6 --height 4
+[ "$(size "$work/spiral-both/r_000.png")" = 6x4 ] ||
+  fail "spiral --downscale 2 --width 6 --height 4 gave" \
+    "$(size "$work/spiral-both/r_000.png")"
+# An orbit with --data: the scene's size, after --downscale; one side
+# given keeps its aspect ratio.  Without --data: 100x100, and one side
+# keeps the square.
+render orbit-data --path orbit --frames 1
+[ "$(size "$work/orbit-data/r_000.png")" = 24x16 ] ||
+  fail "orbit with --data gave $(size "$work/orbit-data/r_000.png")"
+render orbit-down --path orbit --frames 1 --downscale 2
+[ "$(size "$work/orbit-down/r_000.png")" = 12x8 ] ||
+  fail "orbit --downscale 2 gave $(size "$work/orbit-down/r_000.png")"
+render orbit-w --path orbit --frames 1 --width 6
+[ "$(size "$work/orbit-w/r_000.png")" = 6x4 ] ||
+  fail "orbit --width 6 gave $(size "$work/orbit-w/r_000.png")"
+$wrap "$render" --model "$work/model.nerf" --out "$work/orbit-sq" \
+  --path orbit --frames 1 --width 6 2>"$work/orbit-sq.log" ||
+  { cat "$work/orbit-sq.log"; fail "orbit --width 6 without --data"; }
+[ "$(size "$work/orbit-sq/r_000.png")" = 6x6 ] ||
+  fail "orbit --width 6 without --data gave $(size "$work/orbit-sq/r_000.png")"
+
+# A scene that ships its photos at half size alone, as fern ships
+# images_8/: the poses of a 48x32 capture beside the 24x16 one's photos
+# in images_2/.  A path at any size reads it with --downscale 2.
+$wrap "$scene" --out "$work/big" --capture forward --width 48 --height 32 \
+  --train 4 --test 1 2>"$work/big.log" || { cat "$work/big.log"; exit 1; }
+mkdir "$work/half"
+cp "$work/big/poses_bounds.npy" "$work/half/"
+cp -R "$work/scene/images" "$work/half/images_2"
+$wrap "$render" --model "$work/model.nerf" --data "$work/half" \
+  --downscale 2 --path spiral --frames 1 --width 12 --height 8 \
+  --out "$work/half-spiral" 2>"$work/half.log" ||
+  { cat "$work/half.log"; fail "images_2/ alone: spiral --downscale 2 at 12x8"; }
+[ "$(size "$work/half-spiral/r_000.png")" = 12x8 ] ||
+  fail "images_2/ alone: spiral gave $(size "$work/half-spiral/r_000.png")"
+
 render views --width 12 --height 8 --depth
 [ "$(size "$work/views/r_000.png")" = 12x8 ] ||
   fail "--data views at 12x8 gave $(size "$work/views/r_000.png")"
@@ -77,9 +118,8 @@ refused "--frames goes with --path" --poses "$work/scene/none.npy" --frames 3
 refused "--split chooses the views of --data" --data "$work/scene" \
   --path spiral --split train
 refused "--split chooses the views of --data" --path orbit --split val
-refused "--downscale shrinks the views" --path orbit --downscale 2
-refused "--downscale shrinks the views" --data "$work/scene" \
+refused "--downscale chooses which photos of --data are read" \
+  --path orbit --downscale 2
+refused "--downscale chooses which photos of --data are read" \
   --poses "$work/scene/none.npy" --downscale 2
-refused "give --downscale or --width/--height, not both" \
-  --data "$work/scene" --downscale 2 --width 8
 echo "ok"

@@ -41,6 +41,40 @@ usage "--capture needs one of" --capture indoor
 usage "--distortion needs 1 to 5 numbers" --distortion 0.1,x
 usage "--distortion needs 1 to 5 numbers" --distortion 1,2,3,4,5,6
 usage "--distortion needs 1 to 5 numbers" --distortion ""
+# Counts and sizes: the range the library takes, said when refused, and
+# stated by --help from the same constants.
+usage "bad value '10001' for --train: expected an integer from 1 to 10000" \
+  --train 10001
+usage "bad value '0' for --train: expected an integer from 1 to 10000" \
+  --train 0
+usage "bad value '4097' for --width: expected an integer from 8 to 4096" \
+  --width 4097
+usage "bad value '7' for --height: expected an integer from 8 to 4096" \
+  --height 7
+usage "an LLFF layout has no validation views" --capture forward --val 2
+$wrap "$scene" --help >"$work/help.txt"
+for words in "--train N            training views, 1..10000" \
+  "image width in pixels, 8..4096" "validation views, 0..10000" \
+  "0..10000 (default 16)"; do
+  grep -qF -- "$words" "$work/help.txt" ||
+    { cat "$work/help.txt"; fail "--help lacks '$words'"; }
+done
+# --val 0 asks an LLFF layout for what it has: no validation views.
+$wrap "$scene" --out "$work/llff" --capture forward --width 8 --height 8 \
+  --train 2 --val 0 --test 1 2>"$work/llff.log" ||
+  { cat "$work/llff.log"; fail "--capture forward --val 0"; }
+[ -f "$work/llff/poses_bounds.npy" ] || fail "--val 0: no LLFF scene"
+# An existing scene is not written over unless told: --overwrite.
+status=0
+$wrap "$scene" --out "$work/llff" --capture forward --width 8 --height 8 \
+  --train 2 --test 1 2>"$work/again.log" || status=$?
+[ "$status" -eq 2 ] || { cat "$work/again.log"; fail "again: status $status"; }
+grep -q "llff holds files already: --overwrite writes" "$work/again.log" ||
+  { cat "$work/again.log"; fail "again: message"; }
+$wrap "$scene" --out "$work/llff" --capture forward --width 8 --height 8 \
+  --train 2 --test 1 --overwrite 2>"$work/again.log" ||
+  { cat "$work/again.log"; fail "again with --overwrite"; }
+
 # A lens no camera has: the library says why (status 1).
 status=0
 $wrap "$scene" --out "$work/bad" --distortion 0,5000 2>"$work/bad.log" ||

@@ -691,15 +691,25 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                        .jpg in file_path: what a camera
                                        gives, with no mask. */
 
+/** Since 0.10.12: the sizes and view counts nerf_scene_write() takes (a
+ * program's help can quote them: plain integers). */
+#define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
+#define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
+#define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
+
 /** What nerf_scene_write() produces. */
 typedef struct nerf_scene_options {
     uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
-    uint32_t width;       /**< Image width in pixels, 8..4096; default 100. */
-    uint32_t height;      /**< Image height in pixels, 8..4096; default 100. */
-    uint32_t n_train;     /**< Training views, 1..10000; default 100. */
-    uint32_t n_val;       /**< Validation views, 0..10000; default 8. */
+    uint32_t width;       /**< Image width in pixels, NERF_SCENE_MIN_SIDE..
+                               NERF_SCENE_MAX_SIDE (8..4096); default 100. */
+    uint32_t height;      /**< Image height in pixels, as width; default
+                               100. */
+    uint32_t n_train;     /**< Training views, 1..NERF_SCENE_MAX_VIEWS
+                               (10000); default 100. */
+    uint32_t n_val;       /**< Validation views, 0..NERF_SCENE_MAX_VIEWS;
+                               default 8. */
     uint32_t n_test;      /**< Test views (a circle at 30 degrees),
-                               0..10000; default 16. */
+                               0..NERF_SCENE_MAX_VIEWS; default 16. */
     uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
     uint32_t reserved0;   /**< Must be 0. */
     uint64_t seed;        /**< Placement of the validation views; default 0. */

@@ -31,7 +31,7 @@ mkdir -p "$out"
 "$bin/nerf-info"
 echo "== writing the built-in scene to $out/scene"
 "$bin/nerf-scene" --out "$out/scene" --width 64 --height 64 --train 100 \
-  --val 0 --test 8
+  --val 0 --test 8 --overwrite
 echo "== training the tiny preset ($out/model.nerf)"
 "$bin/nerf-train" --data "$out/scene" --out "$out/model.nerf" \
   --preset tiny --steps "${NERF_DEMO_STEPS:-1000}" --batch 256 --overwrite
@@ -39,7 +39,7 @@ echo "== evaluating on the 8 held-out test views"
 "$bin/nerf-eval" --model "$out/model.nerf" --data "$out/scene"
 echo "== rendering an orbit to $out/orbit"
 "$bin/nerf-render" --model "$out/model.nerf" --out "$out/orbit" \
-  --path orbit --frames 12 --width 64 --height 64 --depth
+  --path orbit --frames 12 --width 64 --height 64 --depth --overwrite
 # ===================================================================== #
 # END OF MAIN JOB                                                       #
 # ===================================================================== #

@@ -8,6 +8,8 @@
 
 #include <nerf.h>
 
+#include "options.h"
+
 int cli_uint(const char *text, uint64_t min, uint64_t max, uint64_t *out)
 {
     if (text == NULL || *text < '0' || *text > '9') {
@@ -51,10 +53,12 @@ int cli_split(const char *text)
     return -1;
 }
 
-int cli_march_steps(const char *text, int64_t *out)
+int cli_march_steps(const char *program, const char *option, const char *text,
+                    int64_t *out)
 {
     uint64_t n = 0;
-    if (cli_uint(text, 1, 65536, &n) != 0) {
+    if (cli_int_option(program, option, text, 1, CLI_MARCH_STEPS_MAX, &n) !=
+        0) {
         return -1;
     }
     *out = (int64_t)n;

@@ -1,8 +1,11 @@
 #include "options.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "cli.h"
 
 /* Longer options are not misspelt into each other; beyond this the
  * distance is not worth computing. */
@@ -123,7 +126,7 @@ void cli_bad_value(const char *program, const char *option, const char *value,
 {
     char why[256] = "";
     if (expected != NULL) {
-        snprintf(why, sizeof why, " (%s)", expected);
+        snprintf(why, sizeof why, ": expected %s", expected);
     }
     if (value == NULL) {
         cli_usage_error(program, "%s needs a value%s", option, why);
@@ -131,4 +134,66 @@ void cli_bad_value(const char *program, const char *option, const char *value,
         cli_usage_error(program, "bad value '%s' for %s%s", value, option,
                         why);
     }
+}
+
+int cli_int_option(const char *program, const char *option, const char *value,
+                   uint64_t min, uint64_t max, uint64_t *out)
+{
+    if (value != NULL && cli_uint(value, min, max, out) == 0) {
+        return 0;
+    }
+    char expected[96];
+    snprintf(expected, sizeof expected, "an integer from %llu to %llu",
+             (unsigned long long)min, (unsigned long long)max);
+    cli_bad_value(program, option, value, expected);
+    return -1;
+}
+
+/* "a number from 0 to 1", "above 0 and at most 1", "of at least 2", ... */
+static void word_range(char *buf, size_t size, double min, double max,
+                       unsigned flags)
+{
+    const int low = isfinite(min), high = isfinite(max);
+    const char *from = flags & CLI_ABOVE_MIN ? "above" : "of at least";
+    const char *to = flags & CLI_BELOW_MAX ? "below" : "at most";
+    if (low && high && !(flags & (CLI_ABOVE_MIN | CLI_BELOW_MAX))) {
+        snprintf(buf, size, "a number from %g to %g", min, max);
+    } else if (low && high) {
+        snprintf(buf, size, "a number %s %g and %s %g",
+                 flags & CLI_ABOVE_MIN ? "above" : "at least", min, to, max);
+    } else if (low) {
+        snprintf(buf, size, "a number %s %g", from, min);
+    } else if (high) {
+        snprintf(buf, size, "a number %s %g", to, max);
+    } else {
+        snprintf(buf, size, "a finite number");
+    }
+}
+
+int cli_real_option(const char *program, const char *option,
+                    const char *value, double min, double max, unsigned flags,
+                    double *out)
+{
+    double v = 0.0;
+    if (value != NULL && cli_double(value, &v) == 0 &&
+        (flags & CLI_ABOVE_MIN ? v > min : v >= min) &&
+        (flags & CLI_BELOW_MAX ? v < max : v <= max)) {
+        *out = v;
+        return 0;
+    }
+    char expected[128];
+    word_range(expected, sizeof expected, min, max, flags);
+    cli_bad_value(program, option, value, expected);
+    return -1;
+}
+
+int cli_text_option(const char *program, const char *option,
+                    const char *value, const char **out)
+{
+    if (value == NULL) {
+        cli_bad_value(program, option, NULL, NULL);
+        return -1;
+    }
+    *out = value;
+    return 0;
 }

@@ -3,11 +3,8 @@
 
 #include <math.h>
 
-/* nerf-render's orbit: the lego scene's field of view, radius 4, 30
- * degrees up. */
-#define DEFAULT_FOV_X 0.6911112070083618
-#define DEFAULT_RADIUS 4.0
-#define DEFAULT_ELEVATION 0.5235987755982988
+#include "../common/orbit.h"
+
 /* Used when an LLFF scene's views do not meet at a point. */
 #define DEFAULT_FOCUS 4.0
 
@@ -102,10 +99,13 @@ int viewer_home(viewer *v)
     v->near = 2.0f;
     v->far = 6.0f;
     if (v->dataset == NULL) {
-        const float eye[3] = {(float)(DEFAULT_RADIUS * cos(DEFAULT_ELEVATION)),
-                              0.0f,
-                              (float)(DEFAULT_RADIUS * sin(DEFAULT_ELEVATION))};
-        v->focal_ratio = 0.5 / tan(0.5 * DEFAULT_FOV_X);
+        /* Where nerf-render's orbit starts, framed as it frames its
+         * views: its field of view across the smaller side. */
+        const double r = orbit_distance();
+        const float eye[3] = {(float)(r * cos(ORBIT_ELEVATION)), 0.0f,
+                              (float)(r * sin(ORBIT_ELEVATION))};
+        const uint32_t side = v->width < v->height ? v->width : v->height;
+        v->focal_ratio = 0.5 * side / v->width / tan(0.5 * ORBIT_FOV);
         orbit_init(&v->home, origin, up, ax, eye);
         v->view = v->home;
         return NERF_OK;

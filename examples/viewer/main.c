@@ -1,4 +1,5 @@
 /* nerf-viewer: look at a trained model interactively, or render one view. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -7,14 +8,17 @@
 
 #include "../common/cli.h"
 #include "../common/options.h"
+#include "../common/out_file.h"
 #include "../common/scene_setup.h"
 #include "viewer.h"
+
+#define PROG "nerf-viewer"
 
 static const char usage[] =
     "usage: nerf-viewer --model MODEL [--data DIR [--downscale K]]\n"
     "                   [--width W] [--height H] [--view rgb|depth|opacity]\n"
     "                   [--march-steps N] [--screenshot FILE]\n"
-    "                   [--quit-after SECONDS]\n"
+    "                   [--overwrite] [--quit-after SECONDS]\n"
     "Show MODEL in a window, rendered from a camera you move with the mouse.\n"
     "  --model MODEL   the checkpoint nerf-train saved (required)\n"
     "  --data DIR      the scene MODEL was trained on: its cameras choose\n"
@@ -34,6 +38,8 @@ static const char usage[] =
     "                  faster, as nerf-render --march-steps\n"
     "  --screenshot FILE  render the start view to FILE (PNG) and exit,\n"
     "                  without opening a window (default: open one)\n"
+    "  --overwrite     with --screenshot: replace FILE if it exists (default\n"
+    "                  off: an existing FILE is refused; MODEL never is)\n"
     "  --quit-after S  close the window after S seconds and print what was\n"
     "                  rendered (for tests; default: stay open)\n"
     "  --help          print this help and exit\n"
@@ -52,7 +58,7 @@ static const char usage[] =
 typedef struct args {
     const char *model, *data, *screenshot;
     uint64_t width, height, downscale;
-    int downscale_given;
+    int downscale_given, overwrite;
     int mode;
     int64_t march; /* -1: the model's */
     double quit_after;
@@ -61,7 +67,8 @@ typedef struct args {
 /* The options parse() knows, to suggest for a mistyped one. */
 static const char *const options[] = {
     "--help", "-h", "--model", "--data", "--screenshot", "--downscale",
-    "--width", "--height", "--view", "--march-steps", "--quit-after", NULL
+    "--width", "--height", "--view", "--march-steps", "--quit-after",
+    "--overwrite", NULL
 };
 
 static int parse(int argc, char **argv, args *a)
@@ -75,46 +82,61 @@ static int parse(int argc, char **argv, args *a)
             fputs(usage, stdout);
             exit(0);
         }
+        if (strcmp(k, "--overwrite") == 0) {
+            a->overwrite = 1;
+            continue;
+        }
         const char *v = cli_value(argc, argv, &i);
-        int bad = v == NULL;
-        if (bad) {
-            /* A flag parse() does not know reaches here too. */
-            if (cli_check_option("nerf-viewer", k, options) == 0) {
-                cli_bad_value("nerf-viewer", k, NULL, NULL);
-            }
+        int rc = 0;
+        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
+            /* A flag parse() does not know has no value either. */
+            rc = -1;
         } else if (strcmp(k, "--model") == 0) {
-            a->model = v;
+            rc = cli_text_option(PROG, k, v, &a->model);
         } else if (strcmp(k, "--data") == 0) {
-            a->data = v;
+            rc = cli_text_option(PROG, k, v, &a->data);
         } else if (strcmp(k, "--screenshot") == 0) {
-            a->screenshot = v;
+            rc = cli_text_option(PROG, k, v, &a->screenshot);
         } else if (strcmp(k, "--downscale") == 0) {
-            bad = cli_uint(v, 1, 256, &a->downscale);
+            rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX,
+                                &a->downscale);
             a->downscale_given = 1;
         } else if (strcmp(k, "--width") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->width);
+            rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->width);
         } else if (strcmp(k, "--height") == 0) {
-            bad = cli_uint(v, 1, 16384, &a->height);
+            rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE,
+                                &a->height);
         } else if (strcmp(k, "--view") == 0) {
-            a->mode = view_mode_parse(v);
-            bad = a->mode < 0;
-        } else if (strcmp(k, "--march-steps") == 0) {
-            bad = cli_march_steps(v, &a->march);
-        } else if (strcmp(k, "--quit-after") == 0) {
-            bad = cli_double(v, &a->quit_after) || !(a->quit_after > 0.0);
-        } else {
-            cli_unknown("nerf-viewer", k, options);
-            return -1;
-        }
-        if (bad) {
-            if (v) {
-                cli_bad_value("nerf-viewer", k, v, NULL);
+            a->mode = v != NULL ? view_mode_parse(v) : -1;
+            if (a->mode < 0) {
+                cli_bad_value(PROG, k, v, "rgb, depth or opacity");
+                rc = -1;
             }
+        } else if (strcmp(k, "--march-steps") == 0) {
+            rc = cli_march_steps(PROG, k, v, &a->march);
+        } else if (strcmp(k, "--quit-after") == 0) {
+            rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
+                                 &a->quit_after);
+        } else {
+            cli_unknown(PROG, k, options);
+            rc = -1;
+        }
+        if (rc != 0) {
             return -1;
         }
     }
     if (a->model == NULL) {
         cli_usage_error("nerf-viewer", "--model is required");
+        return -1;
+    }
+    if (a->overwrite && a->screenshot == NULL) {
+        cli_usage_error(PROG, "--overwrite goes with --screenshot");
+        return -1;
+    }
+    const out_input inputs[2] = {{"--model", a->model}, {"--data", a->data}};
+    if (a->screenshot != NULL &&
+        out_file_check(PROG, a->screenshot, a->overwrite, NULL, inputs, 2) !=
+            0) {
         return -1;
     }
     if (a->downscale_given && a->data == NULL) {
@@ -177,6 +199,8 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         rc = nerf_renderer_create(&v->renderer, v->model, v->sampler, &ro);
     }
     if (rc == NERF_OK) {
+        /* The home view's framing depends on the image's shape. */
+        choose_size(a, v);
         rc = viewer_home(v);
     }
     return rc;
@@ -224,7 +248,6 @@ int main(int argc, char **argv)
     int status = 0;
     int rc = open_scene(&a, &hooks, &v);
     if (rc == NERF_OK) {
-        choose_size(&a, &v);
         if (a.screenshot) {
             rc = screenshot(&v, a.screenshot);
         } else {

@@ -39,6 +39,28 @@ screenshot)
   env -u DISPLAY "$viewer" --model "$work/model.nerf" --data "$work/scene" \
     --width 36 --view depth --screenshot "$work/depth.png"
   "$check" "$work/depth.png" 36 36
+  # A screenshot replaces a file only with --overwrite, and the model
+  # never: both refused with status 2, the files untouched.
+  # refused WORDS FLAGS...: status 2 and WORDS on stderr.
+  refused() {
+    words=$1
+    shift
+    status=0
+    env -u DISPLAY "$viewer" --model "$work/model.nerf" --width 8 "$@" \
+      2>"$work/refused.log" || status=$?
+    [ "$status" -eq 2 ] || { cat "$work/refused.log"; echo "$*: $status"; exit 1; }
+    grep -qF -- "$words" "$work/refused.log" ||
+      { cat "$work/refused.log"; echo "$*: message"; exit 1; }
+  }
+  cp "$work/model.nerf" "$work/model.copy"
+  refused "rgb.png exists: --overwrite replaces it" --screenshot "$work/rgb.png"
+  refused "is the same file as --model" --screenshot "$work/model.nerf" \
+    --overwrite
+  cmp -s "$work/model.nerf" "$work/model.copy" || { echo "model changed"; exit 1; }
+  "$check" "$work/rgb.png" 48 40
+  env -u DISPLAY "$viewer" --model "$work/model.nerf" --width 8 \
+    --screenshot "$work/rgb.png" --overwrite
+  "$check" "$work/rgb.png" 8 8
   # --march-steps: a fast model drawn in its recorded 1280 steps again is
   # the same picture, in 4096 another (a new model has density all over,
   # so the spacing shows); a bad value and a model that cannot march are

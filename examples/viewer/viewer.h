@@ -31,6 +31,7 @@ typedef struct viewer {
  * origin starting at the dataset's first camera (or, without a dataset,
  * where nerf-render's orbit starts); for an LLFF scene, the first camera,
  * circling a point in front of it where the scene's views converge.
+ * Needs the image size (width, height) set.
  */
 int viewer_home(viewer *v);
 

@@ -382,13 +382,17 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     if (rc != NERF_OK) {
         return rc;
     }
-    if (o.width < 8 || o.height < 8 || o.width > 4096 || o.height > 4096) {
+    if (o.width < NERF_SCENE_MIN_SIDE || o.height < NERF_SCENE_MIN_SIDE ||
+        o.width > NERF_SCENE_MAX_SIDE || o.height > NERF_SCENE_MAX_SIDE) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: image size "
-                           "%ux%u is outside 8..4096", o.width, o.height);
+                           "%ux%u is outside %d..%d", o.width, o.height,
+                           NERF_SCENE_MIN_SIDE, NERF_SCENE_MAX_SIDE);
     }
-    if (o.n_train < 1 || o.n_train > 10000 || o.n_val > 10000 || o.n_test > 10000) {
+    if (o.n_train < 1 || o.n_train > NERF_SCENE_MAX_VIEWS ||
+        o.n_val > NERF_SCENE_MAX_VIEWS || o.n_test > NERF_SCENE_MAX_VIEWS) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: view counts must "
-                           "be 1..10000 (train) and 0..10000 (val, test)");
+                           "be 1..%d (train) and 0..%d (val, test)",
+                           NERF_SCENE_MAX_VIEWS, NERF_SCENE_MAX_VIEWS);
     }
     if (o.reserved0 != 0) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");

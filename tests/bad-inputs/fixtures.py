@@ -104,3 +104,63 @@ def _model(fx, path):
             "--steps", 2, "--batch", 64, "--coarse-samples", 8,
             "--fine-samples", 16)
     return path
+
+
+# ---- programs: what they write (issue 53, the example programs) ------------
+
+@fixture("model-link")
+def _model_link(fx, path):
+    """A hard link to {model}: the same file under another name."""
+    os.link(fx.get("model"), path)
+    return path
+
+
+@fixture("model-symlink")
+def _model_symlink(fx, path):
+    """A symbolic link to {model}."""
+    os.symlink(fx.get("model"), path)
+    return path
+
+
+@fixture("model-ply")
+def _model_ply(fx, path):
+    """{model} hard-linked under a name nerf-export mesh would write."""
+    path += ".ply"
+    os.link(fx.get("model"), path)
+    return path
+
+
+@fixture("taken")
+def _taken(fx, path):
+    """A file of someone's that a program must not replace unasked."""
+    return write(path, "not yours\n")
+
+
+@fixture("taken-ply")
+def _taken_ply(fx, path):
+    return write(path + ".ply", "ply\nnot yours\n")
+
+
+@fixture("grid-taken")
+def _grid_taken(fx, path):
+    """A folder holding g.json, the sidecar of a grid written as g.npy."""
+    os.mkdir(path)
+    write(os.path.join(path, "g.json"), "{}\n")
+    return path
+
+
+@fixture("depth-taken")
+def _depth_taken(fx, path):
+    """A folder holding view 0's distance array, as nerf-export depth
+    names it."""
+    os.mkdir(path)
+    write(os.path.join(path, "000_distance.npy"), b"not yours")
+    return path
+
+
+@fixture("frames-taken")
+def _frames_taken(fx, path):
+    """A folder holding r_001.png, as nerf-render names view 1."""
+    os.mkdir(path)
+    write(os.path.join(path, "r_001.png"), b"not yours")
+    return path
