@@ -375,6 +375,85 @@ TEST(camera_models_map_onto_opencv)
     free_model(&m);
 }
 
+/*
+ * A lens no call that takes a camera accepts (beyond +-1000) is refused by
+ * the parser, naming the file and the camera, in both forms; the bound
+ * itself is a lens the calls take.
+ */
+TEST(lens_beyond_what_cameras_take)
+{
+    nerf__colmap_model m;
+    CHECK_EQ_INT(parse_cameras("3 OPENCV 64 48 50 51 31 23 5000 0 0 0\n",
+                               &m), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "cameras.txt: camera 3: distortion k1 "
+                 "5000 is beyond +-1000"));
+    free_model(&m);
+    CHECK_OK(parse_cameras("3 RADIAL 64 48 50 31 23 -1000 1000\n", &m));
+    free_model(&m);
+    unsigned char bin[8 + 24 + 8 * 8];
+    memset(bin, 0, sizeof bin);
+    bin[0] = 1;        /* one camera */
+    bin[8] = 7;        /* id 7 */
+    bin[8 + 4] = 4;    /* OPENCV */
+    bin[8 + 8] = 64;   /* width */
+    bin[8 + 16] = 48;  /* height */
+    const double p[8] = {50, 51, 31, 23, 0, -2000, 0, 0};
+    memcpy(bin + 32, p, sizeof p); /* little-endian doubles, as COLMAP's */
+    nerf__env env;
+    nerf__env_from_hooks(&env, NULL);
+    memset(&m, 0, sizeof m);
+    CHECK_EQ_INT(nerf__colmap_parse_cameras(&env, "cameras.bin", bin,
+                                            sizeof bin, 1, &m),
+                 NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "cameras.bin: camera 7: distortion k2 "
+                 "-2000 is beyond +-1000"));
+    nerf__colmap_free(&env, &m);
+}
+
+/*
+ * A binary file cut inside a record names it by its id, as every other
+ * message does, once the id is read; before that, by how many records
+ * came whole.
+ */
+TEST(truncation_names_the_record_by_id)
+{
+    enum { REC = 24 + 4 * 8 }; /* a PINHOLE camera */
+    unsigned char bin[8 + 2 * REC];
+    memset(bin, 0, sizeof bin);
+    bin[0] = 2;
+    for (int k = 0; k < 2; k++) {
+        unsigned char *r = bin + 8 + k * REC;
+        r[0] = k ? 9 : 7;
+        r[4] = 1; /* PINHOLE */
+        r[8] = 64;
+        r[16] = 48;
+        const double p[4] = {50, 51, 31, 23};
+        memcpy(r + 24, p, sizeof p);
+    }
+    nerf__env env;
+    nerf__env_from_hooks(&env, NULL);
+    static const struct {
+        size_t size;
+        const char *says;
+    } cuts[] = {
+        {sizeof bin - 8, "cameras.bin: truncated in camera 9"},
+        {8 + REC + 6, "cameras.bin: truncated in camera 9"},
+        {8 + REC + 2, "cameras.bin: truncated after 1 of the 2 cameras"},
+    };
+    for (size_t i = 0; i < sizeof cuts / sizeof cuts[0]; i++) {
+        nerf__colmap_model m;
+        memset(&m, 0, sizeof m);
+        int rc = nerf__colmap_parse_cameras(&env, "cameras.bin", bin,
+                                            cuts[i].size, 1, &m);
+        CHECK_EQ_INT(rc, NERF_EFORMAT);
+        if (!fx_has(nerf_last_error(), cuts[i].says)) {
+            FAILF("cut at %zu: '%s' lacks '%s'", cuts[i].size,
+                  nerf_last_error(), cuts[i].says);
+        }
+        nerf__colmap_free(&env, &m);
+    }
+}
+
 TEST(quaternions_round_trip)
 {
     const double q[4] = {0.5, -0.3, 0.7, 0.1};
@@ -572,6 +651,8 @@ int main(void)
     RUN(counts_larger_than_the_file);
     RUN(unknown_camera_model);
     RUN(missing_photo);
+    RUN(lens_beyond_what_cameras_take);
+    RUN(truncation_names_the_record_by_id);
     RUN(zero_quaternion);
     RUN(unknown_folder_names_colmap);
     fx_remove_tree(tmp);
