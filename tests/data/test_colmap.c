@@ -6,6 +6,9 @@
  */
 #include <nerf.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "colmap.h"
 #include "colmap_poses.h"
 #include "data_fixtures.h"
@@ -600,7 +603,64 @@ TEST(missing_photo)
     char path[1024];
     fx_path(path, sizeof path, tmp, "photo/images/00003.png");
     CHECK(unlink(path) == 0);
-    expect_failure("photo", NERF_EIO, "00003.png", "missing", "images.txt");
+    expect_failure("photo", NERF_ENOENT, "00003.png", "missing", "images.txt");
+}
+
+/*
+ * The photos of every split are checked when any split loads: the test
+ * split's 00008.png (held out: every 8th) is found by the train split's
+ * load, and what is not a regular file is named for what it is.
+ */
+TEST(photos_of_every_split_are_checked)
+{
+    write_scene("held", NERF_SCENE_LAYOUT_COLMAP_TEXT);
+    char path[1024];
+    fx_path(path, sizeof path, tmp, "held/images/00008.png");
+    CHECK(unlink(path) == 0);
+    expect_failure("held", NERF_ENOENT, "00008.png: missing", "images.txt",
+                   "image 9");
+    CHECK(mkfifo(path, 0666) == 0);
+    expect_failure("held", NERF_EUNRECOGNISED,
+                   "00008.png: a FIFO (named pipe), not a regular file",
+                   "images.txt names it for image 9", "");
+    CHECK(unlink(path) == 0);
+    CHECK(mkdir(path, 0777) == 0);
+    expect_failure("held", NERF_EUNRECOGNISED,
+                   "00008.png: a folder, not a file", "", "");
+    CHECK(rmdir(path) == 0);
+    fx_write_bytes(path, "not an image", 12);
+    expect_failure("held", NERF_EFORMAT,
+                   "00008.png: not a PNG or JPEG file", "", "");
+}
+
+/*
+ * images_2/ must hold the photos at half the cameras' size: a copy of the
+ * full-size photos is refused, naming both sizes.
+ */
+TEST(images_k_of_full_size_photos)
+{
+    write_scene("k2", NERF_SCENE_LAYOUT_COLMAP_BINARY);
+    char from[1024], to[1024];
+    fx_mkdir(tmp, "k2/images_2");
+    for (int i = 0; i < N_ALL; i++) {
+        char name[64];
+        snprintf(name, sizeof name, "k2/images/%05d.png", i);
+        fx_path(from, sizeof from, tmp, name);
+        snprintf(name, sizeof name, "k2/images_2/%05d.png", i);
+        fx_path(to, sizeof to, tmp, name);
+        CHECK(link(from, to) == 0);
+    }
+    char dir[1024];
+    fx_path(dir, sizeof dir, tmp, "k2");
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.downscale = 2;
+    nerf_dataset *ds = NULL;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "images_2: the photos are 32x32"));
+    CHECK(fx_has(nerf_last_error(), "camera 1"));
+    CHECK(fx_has(nerf_last_error(), "divided by 2 is 16x16"));
+    CHECK(ds == NULL);
 }
 
 TEST(zero_quaternion)
@@ -653,6 +713,8 @@ int main(void)
     RUN(missing_photo);
     RUN(lens_beyond_what_cameras_take);
     RUN(truncation_names_the_record_by_id);
+    RUN(photos_of_every_split_are_checked);
+    RUN(images_k_of_full_size_photos);
     RUN(zero_quaternion);
     RUN(unknown_folder_names_colmap);
     fx_remove_tree(tmp);
