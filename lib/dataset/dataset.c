@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "camera.h"
+#include "file_io.h"
 #include "llff_poses.h"
 #include "options.h"
 
@@ -101,8 +102,8 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
         return nerf__error(status, "%s: cannot open: %s", dir, text);
     }
     if (!S_ISDIR(st.st_mode)) {
-        return nerf__error(NERF_EUNRECOGNISED, "%s: a file, not a dataset "
-                           "folder", dir);
+        return nerf__error(NERF_EUNRECOGNISED, "%s: %s, not a dataset "
+                           "folder", dir, nerf__file_kind(st.st_mode));
     }
     char name[64];
     snprintf(name, sizeof name, "transforms_%s.json", split_names[cfg->split]);

@@ -64,6 +64,17 @@ static int read_all(int fd, const char *path, unsigned char *buf, size_t size)
     return NERF_OK;
 }
 
+const char *nerf__file_kind(unsigned mode)
+{
+    return S_ISREG(mode)    ? "a file"
+           : S_ISDIR(mode)  ? "a folder"
+           : S_ISFIFO(mode) ? "a FIFO (named pipe)"
+           : S_ISCHR(mode)  ? "a character device"
+           : S_ISBLK(mode)  ? "a block device"
+           : S_ISSOCK(mode) ? "a socket"
+                            : "a special file";
+}
+
 /* The refusal of what st says is not a regular file, naming its kind. */
 static int not_regular(const char *path, const struct stat *st)
 {
@@ -71,13 +82,8 @@ static int not_regular(const char *path, const struct stat *st)
         return nerf__error(NERF_EUNRECOGNISED, "%s: a folder, not a file",
                            path);
     }
-    const char *kind = S_ISFIFO(st->st_mode)  ? "a FIFO (named pipe)"
-                       : S_ISCHR(st->st_mode) ? "a character device"
-                       : S_ISBLK(st->st_mode) ? "a block device"
-                       : S_ISSOCK(st->st_mode) ? "a socket"
-                                               : "a special file";
     return nerf__error(NERF_EUNRECOGNISED, "%s: %s, not a regular file",
-                       path, kind);
+                       path, nerf__file_kind(st->st_mode));
 }
 
 int nerf__file_check_regular(const char *path)

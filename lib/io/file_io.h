@@ -22,6 +22,10 @@
  */
 int nerf__file_check_regular(const char *path);
 
+/* What a file of this st_mode is, for messages: "a file", "a folder", "a
+ * FIFO (named pipe)", "a character device", "a block device", "a socket". */
+const char *nerf__file_kind(unsigned mode);
+
 /*
  * Open the regular file at path for reading, without ever blocking on
  * something else: path is checked as by nerf__file_check_regular(), then
