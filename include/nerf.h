@@ -583,7 +583,8 @@ NERF_API int nerf_model_save(const nerf_model *model, const char *path);
  * its weights are fp32 either way, and a warning goes to the log.
  * @param hooks allocation and logging for the new model; NULL = defaults.
  * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
- * checkpoint, or a folder); NERF_EIO (cannot open or read);
+ * checkpoint, or not a regular file: a folder, a FIFO, a device, refused
+ * without blocking); NERF_EIO (cannot open or read);
  * NERF_EFORMAT (truncated or corrupted checkpoint); NERF_EVERSION
  * (written by a newer libnerf); NERF_ENOMEM; NERF_EINVAL.
  */
@@ -674,8 +675,9 @@ NERF_API int nerf_model_training_batch(const nerf_model *model,
  * holding the state dict of the reference implementation, with names
  * prefixed by network: "coarse.pts_linears.0.weight" ... and "fine." ones
  * (see docs/formats.md).  Optimiser state starts at zero.
- * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (a
- * folder); NERF_EIO; NERF_EFORMAT (not an npz, bad member, missing
+ * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
+ * regular file: a folder, a FIFO, a device); NERF_EIO; NERF_EFORMAT (not
+ * an npz, bad member, missing
  * name, shape that does not match @p opts); NERF_EINVAL; NERF_ENOMEM.
  */
 NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
@@ -995,7 +997,8 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
  * for a file that gives none, no focal or fov_x for a .npy file);
  * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (a folder);
+ * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a regular file: a
+ * folder, a FIFO, a device, refused without blocking);
  * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
  * or malformed file, npy dtype, order or shape not listed above, no
  * frames or more than 100000, missing field, NaN or infinite values,
@@ -1441,10 +1444,12 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
  * transparent 16-bit pixel reads as 0.
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (not
- * a PNG, truncated, corrupted, or a
- * side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages start with
- * the path.  Reentrant.
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (not a PNG, truncated, corrupted, a side larger
+ * than NERF_IMAGE_MAX_SIDE, or a header claiming more pixels than the
+ * file can hold: refused before anything is allocated for them);
+ * NERF_ENOMEM.  Messages start with the path.  Reentrant.
  */
 NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
                                  uint32_t *height_out, float **rgba_out);
@@ -1459,12 +1464,14 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
  *
  * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
  * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EIO (the file cannot be opened or read); NERF_EFORMAT
- * (neither a PNG nor a JPEG, truncated or
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
  * corrupted data (JPEG decoder warnings about the data count as errors),
  * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
- * to 8, a side larger than NERF_IMAGE_MAX_SIDE); NERF_ENOMEM.  Messages
- * start with the path.  Reentrant.
+ * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
+ * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
+ * path.  Reentrant.
  */
 NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
                              uint32_t *height_out, float **rgba_out);
@@ -1660,7 +1667,17 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * Images are PNG or JPEG files, told apart by their first bytes and read
  * as nerf_image_read() reads them (JPEGs turned upright by their Exif
  * orientation; docs/formats.md, "Images"), and stored as float RGB in
- * [0, 1], composited as the options say.
+ * [0, 1], composited as the options say.  Every image the scene names
+ * is checked, whatever its split: those the load does not store (other
+ * splits, frames passed over by skip) by their headers, for what their
+ * own load would refuse before decoding them (not a regular file, not a
+ * PNG or JPEG, a header that does not decode), a size other than the
+ * stored images' and, for transforms files, their frame's fields.  A
+ * Blender frame of another split whose image is missing is only logged
+ * (WARN): a split may ship a subset of its frames, as lego's val split
+ * does, and its own load decides (skip_missing).  An images_K/ folder of
+ * LLFF or COLMAP photos must hold the photos of the poses' size divided
+ * by K.
  * The loader logs (level INFO, through the hooks) the format, image count
  * and size, focal length, bounds and scene scale.
  *
@@ -1670,7 +1687,9 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * llff_holdout, forward_facing on a Blender scene);
  * NERF_EVERSION (options from a newer header setting unknown fields);
  * NERF_ENOENT (no such folder, or a file or image of the scene missing);
- * NERF_EUNRECOGNISED (a file, or a folder in no known layout); NERF_EIO
+ * NERF_EUNRECOGNISED (a file, or a folder in no known layout, or
+ * something other than a regular file, a folder or a FIFO say, where a
+ * file or image of the scene belongs); NERF_EIO
  * (a file or image unreadable); NERF_EFORMAT
  * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
  * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
@@ -1682,7 +1701,9 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * dtype, order or shape, a corrupt image or one that is neither PNG nor
  * JPEG, a bad Exif orientation, images of different sizes, image
  * count not matching the poses, no frames left, a forward-facing COLMAP
- * model without sparse points in front of its cameras); NERF_ENOMEM.  Messages name the file and
+ * model without sparse points in front of its cameras, an images_K/
+ * folder whose photos are not K times smaller than the poses say, an
+ * image header claiming more pixels than its file holds); NERF_ENOMEM.  Messages name the file and
  * the problem.  On failure *out is NULL.
  * Reentrant: separate loads may run on separate threads.
  */

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "camera.h"
+#include "file_io.h"
 #include "llff_poses.h"
 #include "options.h"
 
@@ -65,19 +66,22 @@ static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
 }
 
 /*
- * Whether dir/name is a regular file, in *found.  Fails only when the path
- * cannot be allocated: reading that as "absent" would send the detection on
- * to another layout and report a missing file instead of NERF_ENOMEM.
+ * Whether dir/name is there, in *found: of any kind, so that a FIFO or a
+ * folder in a file's place picks the layout whose loader then says what
+ * is wrong with it, rather than no layout at all.  Fails only when the
+ * path cannot be allocated: reading that as "absent" would send the
+ * detection on to another layout and report a missing file instead of
+ * NERF_ENOMEM.
  */
-static int is_file(const nerf__env *env, const char *dir, const char *name,
-                   bool *found)
+static int is_present(const nerf__env *env, const char *dir, const char *name,
+                      bool *found)
 {
     char *path = nerf__path_join(env, dir, name);
     if (path == NULL) {
         return NERF_ENOMEM;
     }
     struct stat st;
-    *found = stat(path, &st) == 0 && S_ISREG(st.st_mode);
+    *found = stat(path, &st) == 0;
     nerf__free(env, path);
     return NERF_OK;
 }
@@ -98,18 +102,18 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
         return nerf__error(status, "%s: cannot open: %s", dir, text);
     }
     if (!S_ISDIR(st.st_mode)) {
-        return nerf__error(NERF_EUNRECOGNISED, "%s: a file, not a dataset "
-                           "folder", dir);
+        return nerf__error(NERF_EUNRECOGNISED, "%s: %s, not a dataset "
+                           "folder", dir, nerf__file_kind(st.st_mode));
     }
     char name[64];
     snprintf(name, sizeof name, "transforms_%s.json", split_names[cfg->split]);
     bool split_json = false, all_json = false, llff = false;
-    int rc = is_file(&ds->env, dir, name, &split_json);
+    int rc = is_present(&ds->env, dir, name, &split_json);
     if (rc == NERF_OK && !split_json) {
-        rc = is_file(&ds->env, dir, "transforms.json", &all_json);
+        rc = is_present(&ds->env, dir, "transforms.json", &all_json);
     }
     if (rc == NERF_OK && !split_json && !all_json) {
-        rc = is_file(&ds->env, dir, "poses_bounds.npy", &llff);
+        rc = is_present(&ds->env, dir, "poses_bounds.npy", &llff);
     }
     int colmap = 0;
     if (rc == NERF_OK && !split_json && !all_json && !llff) {
@@ -136,7 +140,7 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
         char other[64];
         bool found = false;
         snprintf(other, sizeof other, "transforms_%s.json", split_names[k]);
-        rc = is_file(&ds->env, dir, other, &found);
+        rc = is_present(&ds->env, dir, other, &found);
         if (rc != NERF_OK) {
             return rc;
         }

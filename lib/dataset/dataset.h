@@ -101,6 +101,16 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
                              const char *path, uint32_t factor,
                              uint32_t white_background);
 
+/*
+ * Check the image at path that the dataset names but does not load (a
+ * frame of another split, or one that skip passes over) as far as its
+ * header goes: what nerf__dataset_load_image would refuse before decoding
+ * it (not a regular file, neither PNG nor JPEG, a header that does not
+ * decode or claims more pixels than the file holds), and a size other than
+ * that of the images loaded (ds->src_width x src_height, so after them).
+ */
+int nerf__dataset_check_image(const nerf_dataset *ds, const char *path);
+
 /* "dir/name" in a buffer from ds->env (free with nerf__free). */
 char *nerf__path_join(const nerf__env *env, const char *dir,
                       const char *name);
@@ -114,6 +124,20 @@ char *nerf__path_join(const nerf__env *env, const char *dir,
 int nerf__find_image_dir(const nerf__env *env, const char *dir,
                          uint32_t factor, char **path_out,
                          uint32_t *factor_out);
+
+/*
+ * Whether the w x h photos of the folder image_dir, found for factor
+ * (nerf__find_image_dir), are what that folder's name says: the full-size
+ * photos' full_w x full_h (as source, the poses' file or camera, gives
+ * them) divided by factor, to a pixel either way, whichever way the tool
+ * that shrank them rounded.  A folder of full-size photos named images_8/
+ * would otherwise be read as it is, 64 times the pixels asked for.
+ * Factor 1 (images/) passes any size: the intrinsics follow the photos'.
+ * NERF_EFORMAT naming the folder, the sizes and source otherwise.
+ */
+int nerf__check_image_factor(const char *image_dir, uint32_t factor,
+                             uint32_t w, uint32_t h, double full_w,
+                             double full_h, const char *source);
 
 /*
  * Indices (into n images sorted by name) of the split: every

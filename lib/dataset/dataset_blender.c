@@ -21,8 +21,14 @@
 #define UNBOUNDED_NEAR 0.05
 #define UNBOUNDED_FAR 1e4
 
+/* The transforms files a load reads: the split's and the other two. */
+#define MAX_FILES 3
+
 typedef struct frame {
     uint32_t index;  /* position in the file's frames list */
+    uint32_t file;   /* which of blender_ctx.json_paths lists it */
+    bool load;       /* in the split, kept by skip; else only checked */
+    bool dropped;    /* loaded, but its image is missing (skip_missing) */
     char name[224];  /* for messages: index and file_path */
     char *path;
     double c2w[12];
@@ -33,9 +39,11 @@ typedef struct frame {
 typedef struct blender_ctx {
     nerf_dataset *ds;
     const char *dir;
-    const char *json_path;
-    frame *frames;
-    uint32_t n_frames;
+    const char *json_path;   /* the split's file: json_paths[0] */
+    char *json_paths[MAX_FILES];
+    uint32_t n_files;
+    frame *frames;           /* of every file, in file order */
+    uint32_t n_frames, cap;
     bool whole;        /* one transforms.json for every split */
 } blender_ctx;
 
@@ -66,13 +74,14 @@ static void add_extension(const char *dir, char *rel, size_t stem)
 
 /* The image path of a frame: relative to the json, an extension added
  * when bare (add_extension). */
-static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
+static int frame_path(const blender_ctx *b, const char *json_path,
+                      const cJSON *fr, const char *frame_name, uint32_t idx,
                       char **out)
 {
     const cJSON *fp = cJSON_GetObjectItemCaseSensitive(fr, "file_path");
     if (!cJSON_IsString(fp) || fp->valuestring[0] == '\0') {
         return nerf__error(NERF_EFORMAT, "%s: frame %u: %s 'file_path'",
-                           b->json_path, (unsigned)idx,
+                           json_path, (unsigned)idx,
                            fp == NULL ? "missing field" : "bad string in");
     }
     const char *name = fp->valuestring;
@@ -81,6 +90,13 @@ static int frame_path(const blender_ctx *b, const cJSON *fr, uint32_t idx,
     }
     const char *base = strrchr(name, '/');
     base = base ? base + 1 : name;
+    /* Not a name an extension could turn into a file's. */
+    if (base[0] == '\0' || strcmp(base, ".") == 0 ||
+        strcmp(base, "..") == 0) {
+        return nerf__error(NERF_EFORMAT, "%s: %s: file_path '%.256s' names "
+                           "a folder, not an image", json_path, frame_name,
+                           fp->valuestring);
+    }
     bool has_ext = strchr(base + (base[0] != '\0'), '.') != NULL;
     size_t stem = strlen(name);
     char *rel = nerf__alloc(&b->ds->env, stem + BARE_EXT_MAX + 1);
@@ -112,48 +128,79 @@ static bool in_split(const blender_ctx *b, uint32_t idx,
     return cfg->split == NERF_SPLIT_TRAIN ? !held : held;
 }
 
-/* Collect the frames of the split that the skip setting keeps, in file
- * order. */
-static int parse_frames(blender_ctx *b, const cJSON *root,
+/* Room for n more frames. */
+static int reserve_frames(blender_ctx *b, size_t n)
+{
+    if (b->n_frames + n <= b->cap) {
+        return NERF_OK;
+    }
+    if (n > UINT32_MAX - b->n_frames) {
+        return nerf__error(NERF_EFORMAT, "%s: too many frames", b->json_path);
+    }
+    uint32_t cap = b->n_frames + (uint32_t)n;
+    frame *grown = nerf__calloc(&b->ds->env, cap ? cap : 1, sizeof *grown);
+    if (grown == NULL) {
+        return NERF_ENOMEM;
+    }
+    if (b->n_frames > 0) {
+        memcpy(grown, b->frames, b->n_frames * sizeof *grown);
+    }
+    nerf__free(&b->ds->env, b->frames);
+    b->frames = grown;
+    b->cap = cap;
+    return NERF_OK;
+}
+
+/*
+ * Collect every frame of file b->json_paths[file], checked as a load
+ * checks it, marking those to load: when the file is the split's, the
+ * frames of the split that the skip setting keeps.  The others are only
+ * checked, so that a broken frame of any split is found now.
+ */
+static int parse_frames(blender_ctx *b, uint32_t file, const cJSON *root,
                         const nerf__dataset_config *cfg)
 {
+    const char *json_path = b->json_paths[file];
     nerf__intrinsics top;
     const cJSON *frames = NULL;
-    int rc = nerf__transforms_top(b->json_path, root, &top, &frames,
-                                  &b->ds->aabb_scale);
+    double aabb_scale;
+    int rc = nerf__transforms_top(json_path, root, &top, &frames,
+                                  &aabb_scale);
+    if (rc == NERF_OK) {
+        rc = reserve_frames(b, (size_t)cJSON_GetArraySize(frames));
+    }
     if (rc != NERF_OK) {
         return rc;
     }
-    int total = cJSON_GetArraySize(frames);
-    b->frames = nerf__calloc(&b->ds->env, (size_t)total / cfg->skip + 1,
-                             sizeof *b->frames);
-    if (b->frames == NULL) {
-        return NERF_ENOMEM;
+    if (file == 0) {
+        b->ds->aabb_scale = aabb_scale;
     }
     uint32_t idx = 0, seen = 0;
     for (const cJSON *fr = frames->child; fr; fr = fr->next, idx++) {
-        if (!in_split(b, idx, cfg) || seen++ % cfg->skip != 0) {
-            continue;
-        }
         frame *f = &b->frames[b->n_frames];
+        memset(f, 0, sizeof *f);
+        if (file == 0 && in_split(b, idx, cfg)) {
+            f->load = seen++ % cfg->skip == 0;
+        }
         nerf__transforms_frame_name(fr, idx, f->name, sizeof f->name);
         char where[256];
         snprintf(where, sizeof where, "%s: ", f->name);
         f->index = idx;
+        f->file = file;
         f->in = top;
         rc = cJSON_IsObject(fr) ? NERF_OK
              : nerf__error(NERF_EFORMAT, "%s: %snot a JSON object",
-                           b->json_path, where);
+                           json_path, where);
         if (rc == NERF_OK) {
-            rc = nerf__transforms_read_intrinsics(b->json_path, fr, where,
+            rc = nerf__transforms_read_intrinsics(json_path, fr, where,
                                                   &f->in);
         }
         if (rc == NERF_OK) {
-            rc = nerf__transforms_read_matrix(b->json_path, fr, f->name,
+            rc = nerf__transforms_read_matrix(json_path, fr, f->name,
                                               f->c2w);
         }
         if (rc == NERF_OK) {
-            rc = frame_path(b, fr, idx, &f->path);
+            rc = frame_path(b, json_path, fr, f->name, idx, &f->path);
         }
         if (rc != NERF_OK) {
             return rc;
@@ -170,11 +217,12 @@ static int resolve_intrinsics(const blender_ctx *b, const frame *f,
     const nerf__intrinsics *in = &f->in;
     if ((!isnan(in->w) && in->w != w) || (!isnan(in->h) && in->h != h)) {
         return nerf__error(NERF_EFORMAT, "%s: %s: w x h is %gx%g but "
-                           "%s is %ux%u", b->json_path, f->name,
+                           "%s is %ux%u", b->json_paths[f->file], f->name,
                            in->w, in->h, f->path, (unsigned)w, (unsigned)h);
     }
     double k[4];
-    int rc = nerf__transforms_focal(b->json_path, f->name, in, w, h, k);
+    int rc = nerf__transforms_focal(b->json_paths[f->file], f->name, in, w,
+                                    h, k);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -197,38 +245,53 @@ static bool file_missing(const char *path)
     return stat(path, &st) != 0 && errno == ENOENT;
 }
 
+/*
+ * The frames to load, without those whose image is missing when
+ * skip_missing says to drop them; returns how many are left.
+ */
+static uint32_t drop_missing(blender_ctx *b, const nerf__dataset_config *cfg)
+{
+    uint32_t kept = 0, missing = 0;
+    for (uint32_t i = 0; i < b->n_frames; i++) {
+        frame *f = &b->frames[i];
+        if (!f->load) {
+            continue;
+        }
+        if (cfg->skip_missing && file_missing(f->path)) {
+            f->load = false;
+            f->dropped = true;
+            missing++;
+        } else {
+            kept++;
+        }
+    }
+    if (missing > 0) {
+        nerf__log(&b->ds->env, NERF_LOG_WARN, "%s: skipped %u frame(s) whose "
+                  "image is missing", b->json_path, (unsigned)missing);
+    }
+    return kept;
+}
+
 /* Load the images of the kept frames and set up their cameras. */
 static int load_frames(blender_ctx *b, const nerf__dataset_config *cfg)
 {
     nerf_dataset *ds = b->ds;
-    uint32_t kept = 0, missing = 0;
-    for (uint32_t i = 0; i < b->n_frames; i++) {
-        frame f = b->frames[i];
-        b->frames[i].path = NULL;
-        if (cfg->skip_missing && file_missing(f.path)) {
-            nerf__free(&ds->env, f.path);
-            missing++;
-            continue;
-        }
-        b->frames[kept++] = f;
-    }
-    b->n_frames = kept;
-    if (missing > 0) {
-        nerf__log(&ds->env, NERF_LOG_WARN, "%s: skipped %u frame(s) whose "
-                  "image is missing", b->json_path, (unsigned)missing);
-    }
+    uint32_t kept = drop_missing(b, cfg);
     if (kept == 0) {
         return nerf__error(NERF_EFORMAT, "%s: no frames to load", b->json_path);
     }
     int rc = nerf__dataset_reserve(ds, kept);
     double k = cfg->downscale;
-    for (uint32_t i = 0; i < kept && rc == NERF_OK; i++) {
-        rc = nerf__dataset_load_image(ds, i, b->frames[i].path, cfg->downscale,
+    for (uint32_t i = 0, slot = 0; i < b->n_frames && rc == NERF_OK; i++) {
+        const frame *f = &b->frames[i];
+        if (!f->load) {
+            continue;
+        }
+        rc = nerf__dataset_load_image(ds, slot, f->path, cfg->downscale,
                                       cfg->white_background);
-        nerf__view *v = &ds->views[i];
+        nerf__view *v = &ds->views[slot++];
         if (rc == NERF_OK) {
-            rc = resolve_intrinsics(b, &b->frames[i], ds->src_width,
-                                    ds->src_height, v);
+            rc = resolve_intrinsics(b, f, ds->src_width, ds->src_height, v);
         }
         if (rc != NERF_OK) {
             break;
@@ -246,34 +309,121 @@ static int load_frames(blender_ctx *b, const nerf__dataset_config *cfg)
     return rc;
 }
 
-static int parse_file(blender_ctx *b, const nerf__dataset_config *cfg)
+/*
+ * The frames not loaded, by their images' headers: whatever the load of
+ * their split (or without skip) would refuse before decoding a pixel, or
+ * for the image's size.  An image that is not there is only a warning,
+ * once per file: whether its split can do without it is for that load to
+ * say (skip_missing), as lego's val split, which ships one image in 8,
+ * shows.
+ */
+static int check_frames(blender_ctx *b)
+{
+    uint32_t missing[MAX_FILES] = {0};
+    const char *first[MAX_FILES] = {NULL};
+    int rc = NERF_OK;
+    for (uint32_t i = 0; i < b->n_frames && rc == NERF_OK; i++) {
+        const frame *f = &b->frames[i];
+        if (f->load || f->dropped) {
+            continue;
+        }
+        if (file_missing(f->path)) {
+            first[f->file] = missing[f->file]++ ? first[f->file] : f->path;
+            continue;
+        }
+        nerf__view v;
+        rc = nerf__dataset_check_image(b->ds, f->path);
+        if (rc == NERF_OK) {
+            rc = resolve_intrinsics(b, f, b->ds->src_width,
+                                    b->ds->src_height, &v);
+        }
+    }
+    for (uint32_t k = 0; k < b->n_files && rc == NERF_OK; k++) {
+        if (missing[k] > 0) {
+            nerf__log(&b->ds->env, NERF_LOG_WARN, "%s: %u frame(s) have "
+                      "no image (the first: %s): not loaded now, and a load "
+                      "of their split will need skip_missing or a skip that "
+                      "passes them", b->json_paths[k], (unsigned)missing[k],
+                      first[k]);
+        }
+    }
+    return rc;
+}
+
+static int parse_file(blender_ctx *b, uint32_t file,
+                      const nerf__dataset_config *cfg)
 {
     cJSON *root = NULL;
-    int rc = nerf__transforms_parse(&b->ds->env, b->json_path, &root);
+    int rc = nerf__transforms_parse(&b->ds->env, b->json_paths[file], &root);
     if (rc == NERF_OK) {
-        rc = parse_frames(b, root, cfg);
+        rc = parse_frames(b, file, root, cfg);
     }
     cJSON_Delete(root);
+    return rc;
+}
+
+/*
+ * The split's file, then, in a folder of one file per split, the files of
+ * the other splits that are there (of any kind: a FIFO is refused by the
+ * reader, not passed over).
+ */
+static int parse_files(blender_ctx *b, const char *name,
+                       const nerf__dataset_config *cfg)
+{
+    static const char *const others[] = {"transforms_train.json",
+                                         "transforms_val.json",
+                                         "transforms_test.json"};
+    nerf__env *env = &b->ds->env;
+    b->json_paths[b->n_files++] = nerf__path_join(env, b->dir, name);
+    for (size_t k = 0; k < 3 && !b->whole; k++) {
+        if (strcmp(others[k], name) == 0) {
+            continue;
+        }
+        char *path = nerf__path_join(env, b->dir, others[k]);
+        struct stat st;
+        if (path != NULL && stat(path, &st) != 0) {
+            nerf__free(env, path);
+            continue;
+        }
+        b->json_paths[b->n_files++] = path;
+    }
+    for (uint32_t f = 0; f < b->n_files; f++) {
+        if (b->json_paths[f] == NULL) {
+            return NERF_ENOMEM;
+        }
+    }
+    b->json_path = b->json_paths[0];
+    int rc = NERF_OK;
+    for (uint32_t f = 0; f < b->n_files && rc == NERF_OK; f++) {
+        rc = parse_file(b, f, cfg);
+    }
     return rc;
 }
 
 int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
                        bool whole, const nerf__dataset_config *cfg)
 {
-    blender_ctx b = {ds, dir, NULL, NULL, 0, whole};
-    char *json_path = nerf__path_join(&ds->env, dir, name);
-    if (json_path == NULL) {
-        return NERF_ENOMEM;
+    blender_ctx b;
+    memset(&b, 0, sizeof b);
+    b.ds = ds;
+    b.dir = dir;
+    b.whole = whole;
+    int rc = parse_files(&b, name, cfg);
+    const char *json_path = b.json_path;
+    uint32_t n_load = 0;
+    for (uint32_t i = 0; i < b.n_frames; i++) {
+        n_load += b.frames[i].load;
     }
-    b.json_path = json_path;
-    int rc = parse_file(&b, cfg);
-    if (rc == NERF_OK && b.n_frames == 0 && whole) {
+    if (rc == NERF_OK && n_load == 0 && whole) {
         rc = nerf__error(NERF_EINVAL, "%s: the requested split has no "
                          "frames (holdout %u)", json_path,
                          (unsigned)cfg->llff_holdout);
     }
     if (rc == NERF_OK) {
         rc = load_frames(&b, cfg);
+    }
+    if (rc == NERF_OK) {
+        rc = check_frames(&b);
     }
     if (rc == NERF_OK) {
         ds->kind = NERF__DATASET_BLENDER;
@@ -317,6 +467,8 @@ int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
         nerf__free(&ds->env, b.frames[i].path);
     }
     nerf__free(&ds->env, b.frames);
-    nerf__free(&ds->env, json_path);
+    for (uint32_t f = 0; f < b.n_files; f++) {
+        nerf__free(&ds->env, b.json_paths[f]);
+    }
     return rc;
 }

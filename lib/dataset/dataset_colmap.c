@@ -14,6 +14,7 @@
 #include "colmap_poses.h"
 #include "dataset.h"
 #include "file_io.h"
+#include "image_read.h"
 #include "llff_poses.h"
 
 /* Margins around the sparse points' depth percentiles. */
@@ -53,10 +54,12 @@ typedef struct colmap_ctx {
     uint32_t image_factor;
 } colmap_ctx;
 
-static bool is_file(const char *path)
+/* Of any kind: a FIFO in a model file's place is for its reader to
+ * refuse, not a reason to look elsewhere. */
+static bool is_present(const char *path)
 {
     struct stat st;
-    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+    return stat(path, &st) == 0;
 }
 
 /*
@@ -76,7 +79,7 @@ static int locate(const nerf__env *env, const char *dir, char *paths[3],
                 paths[f] = nerf__path_join(env, dir, name);
                 if (paths[f] == NULL) {
                     ok = false;
-                } else if (f < 2 && !is_file(paths[f])) {
+                } else if (f < 2 && !is_present(paths[f])) {
                     ok = false;
                 }
             }
@@ -119,7 +122,7 @@ static int read_model(colmap_ctx *c)
                                         nerf__colmap_parse_images,
                                         nerf__colmap_parse_points};
     nerf__env *env = &c->ds->env;
-    c->has_points = is_file(c->paths[2]);
+    c->has_points = is_present(c->paths[2]);
     int rc = NERF_OK;
     for (int f = 0; f < 3 && rc == NERF_OK; f++) {
         if (f == 2 && !c->has_points) {
@@ -401,12 +404,65 @@ static int place_forward(colmap_ctx *c, const id_index *ids)
     return rc;
 }
 
-/* One photo into slot i: PNG or JPEG, whatever its name says. */
-static int load_photo(colmap_ctx *c, uint32_t slot, const char *path,
-                      uint32_t factor, const nerf__dataset_config *cfg)
+/*
+ * Whether the photo at path, which the model names for image im, is a
+ * regular file: "missing" when it is not there (COLMAP has no skip_missing:
+ * the model registered it), else what it is instead.
+ */
+static int check_photo_file(const colmap_ctx *c, const nerf__colmap_image *im,
+                            const char *path)
 {
-    return nerf__dataset_load_image(c->ds, slot, path, factor,
-                                    cfg->white_background);
+    int rc = nerf__file_check_regular(path);
+    if (rc == NERF_ENOENT) {
+        return nerf__error(NERF_ENOENT, "%s: missing: %s names image %u "
+                           "'%.256s', which is not in %s", path, c->paths[1],
+                           (unsigned)im->id, im->name, c->image_dir);
+    }
+    if (rc != NERF_OK) {
+        char why[512];
+        snprintf(why, sizeof why, "%s", nerf_last_error());
+        return nerf__error(rc, "%s (%s names it for image %u)", why,
+                           c->paths[1], (unsigned)im->id);
+    }
+    return NERF_OK;
+}
+
+/*
+ * Whether w x h photos in the image folder are the size its name says for
+ * the camera of sorted image i.
+ */
+static int check_folder_scale(const colmap_ctx *c, uint32_t i, uint32_t w,
+                              uint32_t h)
+{
+    const nerf__colmap_image *im = &c->m.images[c->order[i]];
+    const nerf__colmap_camera *cam = nerf__colmap_find_camera(&c->m,
+                                                              im->camera_id);
+    char source[1100];
+    snprintf(source, sizeof source, "camera %u in %s", (unsigned)cam->id,
+             c->paths[0]);
+    return nerf__check_image_factor(c->image_dir, c->image_factor, w, h,
+                                    cam->width, cam->height, source);
+}
+
+/*
+ * The same from the header of sorted image i's photo, before any photo is
+ * decoded: a folder of full-size photos would otherwise be read whole
+ * first.  A photo that cannot be read is left to the load to name.
+ */
+static int check_first_photo_scale(colmap_ctx *c, uint32_t i)
+{
+    const nerf__colmap_image *im = &c->m.images[c->order[i]];
+    char *path = nerf__path_join(&c->ds->env, c->image_dir, im->name);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    uint32_t w, h;
+    int rc = NERF_OK;
+    if (nerf__image_read_size(&c->ds->env, path, &w, &h) == NERF_OK) {
+        rc = check_folder_scale(c, i, w, h);
+    }
+    nerf__free(&c->ds->env, path);
+    return rc;
 }
 
 /* Intrinsics of the camera of sorted image i for the stored image size. */
@@ -427,6 +483,10 @@ static int view_intrinsics(colmap_ctx *c, uint32_t i, const char *path,
                            (unsigned)cam->height, (unsigned)cam->id,
                            c->paths[0], ratio);
     }
+    int rc = check_folder_scale(c, i, ds->src_width, ds->src_height);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     double s = ratio / extra;
     v->fx = cam->fx * s;
     v->fy = cam->fy * s;
@@ -440,35 +500,61 @@ static int view_intrinsics(colmap_ctx *c, uint32_t i, const char *path,
     return NERF_OK;
 }
 
+/* The photo of sorted image i, loaded into slot when load, else checked
+ * by its header; its camera into v. */
+static int take_photo(colmap_ctx *c, uint32_t i, bool load, uint32_t slot,
+                      const nerf__dataset_config *cfg, nerf__view *v)
+{
+    nerf_dataset *ds = c->ds;
+    uint32_t extra = cfg->downscale / c->image_factor;
+    const nerf__colmap_image *im = &c->m.images[c->order[i]];
+    char *path = nerf__path_join(&ds->env, c->image_dir, im->name);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    int rc = check_photo_file(c, im, path);
+    if (rc == NERF_OK && load) {
+        rc = nerf__dataset_load_image(ds, slot, path, extra,
+                                      cfg->white_background);
+    } else if (rc == NERF_OK) {
+        rc = nerf__dataset_check_image(ds, path);
+    }
+    if (rc == NERF_OK) {
+        rc = view_intrinsics(c, i, path, extra, v);
+    }
+    nerf__free(&ds->env, path);
+    return rc;
+}
+
+/*
+ * Load the photos of the split (sel, count of them, ascending), then check
+ * the others (other splits, or passed over by skip) by their headers.
+ */
 static int load_images(colmap_ctx *c, const nerf__dataset_config *cfg,
                        const uint32_t *sel, uint32_t count)
 {
     nerf_dataset *ds = c->ds;
-    uint32_t extra = cfg->downscale / c->image_factor;
-    int rc = nerf__dataset_reserve(ds, count);
+    int rc = check_first_photo_scale(c, sel[0]);
+    if (rc == NERF_OK) {
+        rc = nerf__dataset_reserve(ds, count);
+    }
     bool distorted = false;
-    for (uint32_t i = 0; i < count && rc == NERF_OK; i++) {
-        const nerf__colmap_image *im = &c->m.images[c->order[sel[i]]];
-        char *path = nerf__path_join(&ds->env, c->image_dir, im->name);
-        if (path == NULL) {
-            return NERF_ENOMEM;
-        }
-        if (!is_file(path)) {
-            rc = nerf__error(NERF_EIO, "%s: missing: %s names image %u "
-                             "'%.256s', which is not in %s", path,
-                             c->paths[1], (unsigned)im->id, im->name,
-                             c->image_dir);
-        } else {
-            rc = load_photo(c, i, path, extra, cfg);
-        }
-        nerf__view *v = &ds->views[i];
+    for (uint32_t k = 0; k < count && rc == NERF_OK; k++) {
+        nerf__view *v = &ds->views[k];
+        rc = take_photo(c, sel[k], true, k, cfg, v);
         if (rc == NERF_OK) {
-            rc = view_intrinsics(c, sel[i], path, extra, v);
-            memcpy(v->c2w, c->poses + 12 * (size_t)sel[i], sizeof v->c2w);
+            memcpy(v->c2w, c->poses + 12 * (size_t)sel[k], sizeof v->c2w);
             distorted = distorted || v->k1 != 0.0 || v->k2 != 0.0 ||
                         v->p1 != 0.0 || v->p2 != 0.0 || v->k3 != 0.0;
         }
-        nerf__free(&ds->env, path);
+    }
+    for (uint32_t i = 0, k = 0; i < c->m.n_images && rc == NERF_OK; i++) {
+        nerf__view scratch;
+        if (k < count && sel[k] == i) {
+            k++;
+        } else {
+            rc = take_photo(c, i, false, 0, cfg, &scratch);
+        }
     }
     if (rc == NERF_OK && distorted) {
         /* Applied to each pixel's ray (nerf_camera's model); said once,

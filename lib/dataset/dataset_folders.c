@@ -1,5 +1,6 @@
 /* What the loaders of photo folders (LLFF, COLMAP) share: the downscale
  * rule's image folder and the every-n-th hold-out split. */
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <sys/stat.h>
@@ -41,6 +42,24 @@ int nerf__find_image_dir(const nerf__env *env, const char *dir,
                        "(looked for images_%u/, images_M/ with M dividing "
                        "%u, and images/)", dir, (unsigned)factor,
                        (unsigned)factor, (unsigned)factor);
+}
+
+int nerf__check_image_factor(const char *image_dir, uint32_t factor,
+                             uint32_t w, uint32_t h, double full_w,
+                             double full_h, const char *source)
+{
+    double k = factor;
+    if (factor == 1 ||
+        (fabs(k * w - full_w) <= k && fabs(k * h - full_h) <= k)) {
+        return NERF_OK;
+    }
+    return nerf__error(NERF_EFORMAT, "%s: the photos are %ux%u, but %s says "
+                       "the full-size photos are %gx%g, which divided by %u "
+                       "is %.6gx%.6g: images_%u/ must hold the photos "
+                       "downscaled %u times", image_dir, (unsigned)w,
+                       (unsigned)h, source, full_w, full_h, (unsigned)factor,
+                       full_w / k, full_h / k, (unsigned)factor,
+                       (unsigned)factor);
 }
 
 uint32_t nerf__holdout_split(size_t n, const nerf__dataset_config *cfg,

@@ -155,6 +155,19 @@ static int first_image(nerf_dataset *ds, const char *path, uint32_t w,
     return ds->pixels ? NERF_OK : nerf__error_prefix(NERF_ENOMEM, path);
 }
 
+/* An image of w x h beside the first one's size. */
+static int check_size(const nerf_dataset *ds, const char *path, uint32_t w,
+                      uint32_t h)
+{
+    if (w != ds->src_width || h != ds->src_height) {
+        return nerf__error(NERF_EFORMAT, "%s: image is %ux%u but the images "
+                           "before it are %ux%u", path, (unsigned)w,
+                           (unsigned)h, (unsigned)ds->src_width,
+                           (unsigned)ds->src_height);
+    }
+    return NERF_OK;
+}
+
 int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
                              const char *path, uint32_t factor,
                              uint32_t white_background)
@@ -167,11 +180,8 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
     }
     if (ds->pixels == NULL) {
         rc = first_image(ds, path, w, h, factor);
-    } else if (w != ds->src_width || h != ds->src_height) {
-        rc = nerf__error(NERF_EFORMAT, "%s: image is %ux%u but the images "
-                         "before it are %ux%u", path, (unsigned)w,
-                         (unsigned)h, (unsigned)ds->src_width,
-                         (unsigned)ds->src_height);
+    } else {
+        rc = check_size(ds, path, w, h);
     }
     if (rc == NERF_OK) {
         size_t per_image = (size_t)ds->width * ds->height * 3;
@@ -183,4 +193,11 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
     }
     nerf__free(&ds->env, rgba);
     return rc;
+}
+
+int nerf__dataset_check_image(const nerf_dataset *ds, const char *path)
+{
+    uint32_t w, h;
+    int rc = nerf__image_read_size(&ds->env, path, &w, &h);
+    return rc == NERF_OK ? check_size(ds, path, w, h) : rc;
 }

@@ -9,6 +9,7 @@
 
 #include "dataset.h"
 #include "file_io.h"
+#include "image_read.h"
 #include "llff_poses.h"
 #include "npy.h"
 #include "transforms.h"
@@ -203,12 +204,36 @@ static int list_images(llff_ctx *c)
     return rc;
 }
 
+/*
+ * Whether the folder's photos are the size its name says, from the header
+ * of the first (the others must be of its size): found before any photo
+ * is decoded, or a folder of full-size photos would be read whole first.
+ */
+static int check_folder_scale(llff_ctx *c, const char *name)
+{
+    char *path = nerf__path_join(&c->ds->env, c->image_dir, name);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    uint32_t w, h;
+    int rc = nerf__image_read_size(&c->ds->env, path, &w, &h);
+    if (rc == NERF_OK) {
+        rc = nerf__check_image_factor(c->image_dir, c->image_factor, w, h,
+                                      c->rows[9], c->rows[4], c->npy_path);
+    }
+    nerf__free(&c->ds->env, path);
+    return rc;
+}
+
 static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
                        const uint32_t *sel, uint32_t count)
 {
     nerf_dataset *ds = c->ds;
     uint32_t extra = cfg->downscale / c->image_factor;
-    int rc = nerf__dataset_reserve(ds, count);
+    int rc = check_folder_scale(c, c->names[sel[0]]);
+    if (rc == NERF_OK) {
+        rc = nerf__dataset_reserve(ds, count);
+    }
     for (uint32_t i = 0; i < count && rc == NERF_OK; i++) {
         char *path = nerf__path_join(&ds->env, c->image_dir,
                                      c->names[sel[i]]);
@@ -244,6 +269,26 @@ static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
         v->cy = 0.5 * ds->height;
     }
     return NERF_OK;
+}
+
+/*
+ * The images of the folder not loaded (other splits, or passed over by
+ * skip), by their headers: sel holds the count loaded, in ascending order.
+ */
+static int check_others(llff_ctx *c, const uint32_t *sel, uint32_t count)
+{
+    int rc = NERF_OK;
+    for (size_t i = 0, k = 0; i < c->n_names && rc == NERF_OK; i++) {
+        if (k < count && sel[k] == i) {
+            k++;
+            continue;
+        }
+        char *path = nerf__path_join(&c->ds->env, c->image_dir,
+                                     c->names[i]);
+        rc = path ? nerf__dataset_check_image(c->ds, path) : NERF_ENOMEM;
+        nerf__free(&c->ds->env, path);
+    }
+    return rc;
 }
 
 static int prepare_poses(llff_ctx *c)
@@ -298,6 +343,9 @@ static int load(llff_ctx *c, const nerf__dataset_config *cfg)
                          (unsigned)cfg->llff_holdout);
     } else {
         rc = load_images(c, cfg, sel, count);
+    }
+    if (rc == NERF_OK) {
+        rc = check_others(c, sel, count);
     }
     nerf__free(&c->ds->env, sel);
     return rc;

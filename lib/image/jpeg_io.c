@@ -13,9 +13,6 @@
 #include "file_io.h"
 #include "png_io.h"
 
-/* Larger files are refused before they are read: no photo comes near. */
-#define MAX_FILE_SIZE ((uint64_t)1 << 30)
-
 /*
  * libjpeg reports errors by calling error_exit, which must not return:
  * we jump back to the function that started the work, after turning the
@@ -149,22 +146,36 @@ static void orient(const uint8_t *rgb, uint32_t sw, uint32_t sh,
     }
 }
 
-static int decode(const nerf__env *env, const char *path,
-                  const uint8_t *data, size_t size, decode_state *s)
+/*
+ * The least a JPEG with the blocks of c's components can take.  Huffman
+ * coding spends at least 1 bit on every 8x8 block of every component (its
+ * DC difference: no Huffman code is shorter), so blocks / 8 bytes.
+ * Arithmetic coding spends less on a decision it has learnt to expect,
+ * but not nothing: T.81's least probability estimate is Qe = 1 in an
+ * interval of at most 0x10000, so a decision costs at least
+ * -log2(1 - 2^-16) > 1 / 45426 bit, and a block takes at least one.
+ */
+static uint64_t jpeg_min_bytes(const struct jpeg_decompress_struct *c)
 {
-    if (setjmp(s->fail.jump)) {
-        return nerf__error(NERF_EFORMAT, s->fail.warning
-                           ? "%s: corrupted or truncated JPEG: %s"
-                           : "%s: not a valid JPEG file: %s",
-                           path, s->fail.message);
+    uint64_t blocks = 0;
+    for (int i = 0; i < c->num_components; i++) {
+        blocks += (uint64_t)c->comp_info[i].width_in_blocks *
+                  c->comp_info[i].height_in_blocks;
     }
-    s->cinfo.err = &s->fail.pub;
-    jpeg_create_decompress(&s->cinfo);
-    s->created = true;
-    jpeg_mem_src(&s->cinfo, data, (unsigned long)size);
-    jpeg_save_markers(&s->cinfo, JPEG_APP0 + 1, 0xFFFF);
-    jpeg_read_header(&s->cinfo, TRUE);
+    return c->arith_code ? blocks / (8u * 45426u) : blocks / 8u;
+}
+
+/*
+ * The header up to the first scan, judged before anything is allocated
+ * for the pixels: colour space, size, pixels the file can hold, and the
+ * Exif orientation.  Runs under the caller's setjmp.
+ */
+static int read_header(const char *path, uint64_t file_size,
+                       decode_state *s)
+{
     struct jpeg_decompress_struct *c = &s->cinfo;
+    jpeg_save_markers(c, JPEG_APP0 + 1, 0xFFFF);
+    jpeg_read_header(c, TRUE);
     if (c->jpeg_color_space == JCS_CMYK || c->jpeg_color_space == JCS_YCCK) {
         return nerf__error(NERF_EFORMAT, "%s: CMYK JPEGs are not supported "
                            "(convert the file to RGB)", path);
@@ -177,10 +188,43 @@ static int decode(const nerf__env *env, const char *path,
                            (unsigned)c->image_width,
                            (unsigned)c->image_height, NERF__PNG_MAX_SIDE);
     }
-    int rc = exif_orientation(path, s);
+    uint64_t least = jpeg_min_bytes(c);
+    if (file_size < least) {
+        return nerf__error(NERF_EFORMAT, "%s: the header claims %ux%u "
+                           "pixels, more than its %llu bytes can hold (a "
+                           "JPEG of that size takes at least %llu)", path,
+                           (unsigned)c->image_width,
+                           (unsigned)c->image_height,
+                           (unsigned long long)file_size,
+                           (unsigned long long)least);
+    }
+    return exif_orientation(path, s);
+}
+
+/* The message of a libjpeg failure that jumped back to setjmp. */
+static int jpeg_failure(const char *path, const decode_state *s)
+{
+    return nerf__error(NERF_EFORMAT, s->fail.warning
+                       ? "%s: corrupted or truncated JPEG: %s"
+                       : "%s: not a valid JPEG file: %s",
+                       path, s->fail.message);
+}
+
+static int decode(const nerf__env *env, const char *path,
+                  const uint8_t *data, size_t size, decode_state *s)
+{
+    if (setjmp(s->fail.jump)) {
+        return jpeg_failure(path, s);
+    }
+    s->cinfo.err = &s->fail.pub;
+    jpeg_create_decompress(&s->cinfo);
+    s->created = true;
+    jpeg_mem_src(&s->cinfo, data, (unsigned long)size);
+    int rc = read_header(path, size, s);
     if (rc != NERF_OK) {
         return rc;
     }
+    struct jpeg_decompress_struct *c = &s->cinfo;
     c->out_color_space = JCS_RGB;
     jpeg_start_decompress(c);
     if (c->output_components != 3) {
@@ -203,6 +247,15 @@ static int decode(const nerf__env *env, const char *path,
     return NERF_OK;
 }
 
+/* The upright size of the header read into s. */
+static void upright_size(const decode_state *s, uint32_t *width_out,
+                         uint32_t *height_out)
+{
+    bool swap = s->orientation >= 5;
+    *width_out = swap ? s->cinfo.image_height : s->cinfo.image_width;
+    *height_out = swap ? s->cinfo.image_width : s->cinfo.image_height;
+}
+
 int nerf__jpeg_decode_rgba(const nerf__env *env, const char *path,
                            const uint8_t *data, size_t size,
                            uint32_t *width_out, uint32_t *height_out,
@@ -218,9 +271,7 @@ int nerf__jpeg_decode_rgba(const nerf__env *env, const char *path,
     fail_init(&s->fail, env, path);
     int rc = decode(env, path, data, size, s);
     if (rc == NERF_OK) {
-        bool swap = s->orientation >= 5;
-        *width_out = swap ? s->cinfo.output_height : s->cinfo.output_width;
-        *height_out = swap ? s->cinfo.output_width : s->cinfo.output_height;
+        upright_size(s, width_out, height_out);
         *rgba_out = s->rgba;
         s->rgba = NULL;
     }
@@ -229,6 +280,41 @@ int nerf__jpeg_decode_rgba(const nerf__env *env, const char *path,
     }
     nerf__free(env, s->rgb);
     nerf__free(env, s->rgba);
+    nerf__free(env, s);
+    return rc;
+}
+
+static int header_only(const char *path, FILE *f, uint64_t file_size,
+                       decode_state *s)
+{
+    if (setjmp(s->fail.jump)) {
+        return jpeg_failure(path, s);
+    }
+    s->cinfo.err = &s->fail.pub;
+    jpeg_create_decompress(&s->cinfo);
+    s->created = true;
+    jpeg_stdio_src(&s->cinfo, f);
+    return read_header(path, file_size, s);
+}
+
+int nerf__jpeg_stream_size(const nerf__env *env, const char *path, FILE *f,
+                           uint64_t file_size, uint32_t *width_out,
+                           uint32_t *height_out)
+{
+    *width_out = 0;
+    *height_out = 0;
+    decode_state *s = nerf__calloc(env, 1, sizeof *s);
+    if (s == NULL) {
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    fail_init(&s->fail, env, path);
+    int rc = header_only(path, f, file_size, s);
+    if (rc == NERF_OK) {
+        upright_size(s, width_out, height_out);
+    }
+    if (s->created) {
+        jpeg_destroy_decompress(&s->cinfo);
+    }
     nerf__free(env, s);
     return rc;
 }
@@ -242,7 +328,8 @@ int nerf__jpeg_read_rgba(const nerf__env *env, const char *path,
     *height_out = 0;
     unsigned char *data = NULL;
     size_t size = 0;
-    int rc = nerf__file_read(env, path, MAX_FILE_SIZE, &data, &size);
+    int rc = nerf__file_read(env, path, NERF__JPEG_MAX_FILE_SIZE, &data,
+                             &size);
     if (rc == NERF_OK) {
         rc = nerf__jpeg_decode_rgba(env, path, data, size, width_out,
                                     height_out, rgba_out);

@@ -1,21 +1,12 @@
 #include "png_io.h"
 
-#include <errno.h>
 #include <png.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "deflate_bound.h"
 #include "file_io.h"
-
-/* strerror without its shared buffer. */
-static const char *describe_errno(int err, char *buf, size_t size)
-{
-    if (strerror_r(err, buf, size) != 0) {
-        snprintf(buf, size, "error %d", err);
-    }
-    return buf;
-}
 
 /*
  * libpng's message is the only detail we have; an empty one (which the
@@ -104,37 +95,74 @@ static int decode(const nerf__env *env, const char *path, FILE *f,
     return NERF_OK;
 }
 
-int nerf__png_read_rgba(const nerf__env *env, const char *path,
-                        uint32_t *width_out, uint32_t *height_out,
-                        float **rgba_out)
+/*
+ * The least a PNG of w x h pixels can take: a pixel is at least 1 bit
+ * (gray or palette at bit depth 1; the filter byte of each row left out),
+ * and deflate packs at most NERF__DEFLATE_MAX_RATIO bytes into one.
+ */
+static uint64_t png_min_bytes(uint32_t w, uint32_t h)
+{
+    return (uint64_t)w * h / 8 / NERF__DEFLATE_MAX_RATIO;
+}
+
+/*
+ * Read the header of the PNG open as f (file_size bytes) into img, and
+ * refuse a size above the limit or more pixels than the file can hold,
+ * before anything is allocated for them.  On failure img is freed.
+ */
+static int begin(const char *path, FILE *f, uint64_t file_size,
+                 png_image *img)
+{
+    memset(img, 0, sizeof *img);
+    img->version = PNG_IMAGE_VERSION;
+    int rc = NERF_OK;
+    if (!png_image_begin_read_from_stdio(img, f)) {
+        rc = read_failure(path, f, img);
+    } else if (img->width == 0 || img->height == 0 ||
+               img->width > NERF__PNG_MAX_SIDE ||
+               img->height > NERF__PNG_MAX_SIDE) {
+        rc = nerf__error(NERF_EFORMAT, "%s: image is %ux%u pixels; the "
+                         "limit is %u per side", path, (unsigned)img->width,
+                         (unsigned)img->height, NERF__PNG_MAX_SIDE);
+    } else if (file_size < png_min_bytes(img->width, img->height)) {
+        rc = nerf__error(NERF_EFORMAT, "%s: the header claims %ux%u pixels, "
+                         "more than its %llu bytes can hold (a PNG of that "
+                         "size takes at least %llu)", path,
+                         (unsigned)img->width, (unsigned)img->height,
+                         (unsigned long long)file_size,
+                         (unsigned long long)png_min_bytes(img->width,
+                                                           img->height));
+    }
+    if (rc != NERF_OK) {
+        png_image_free(img);
+    }
+    return rc;
+}
+
+int nerf__png_stream_size(const char *path, FILE *f, uint64_t file_size,
+                          uint32_t *width_out, uint32_t *height_out)
+{
+    png_image img;
+    int rc = begin(path, f, file_size, &img);
+    if (rc == NERF_OK) {
+        *width_out = img.width;
+        *height_out = img.height;
+        png_image_free(&img);
+    }
+    return rc;
+}
+
+int nerf__png_stream_read_rgba(const nerf__env *env, const char *path,
+                               FILE *f, uint64_t file_size,
+                               uint32_t *width_out, uint32_t *height_out,
+                               float **rgba_out)
 {
     *rgba_out = NULL;
     *width_out = 0;
     *height_out = 0;
-    /* Opening the file ourselves separates "missing" from "malformed". */
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        char text[128];
-        int status = errno == ENOENT || errno == ENOTDIR ? NERF_ENOENT
-                                                         : NERF_EIO;
-        return nerf__error(status, "%s: cannot open: %s", path,
-                           describe_errno(errno, text, sizeof text));
-    }
     png_image img;
-    memset(&img, 0, sizeof img);
-    img.version = PNG_IMAGE_VERSION;
-    int rc;
-    if (!png_image_begin_read_from_stdio(&img, f)) {
-        rc = read_failure(path, f, &img);
-        png_image_free(&img);
-    } else if (img.width == 0 || img.height == 0 ||
-               img.width > NERF__PNG_MAX_SIDE ||
-               img.height > NERF__PNG_MAX_SIDE) {
-        rc = nerf__error(NERF_EFORMAT, "%s: image is %ux%u pixels; the "
-                         "limit is %u per side", path, (unsigned)img.width,
-                         (unsigned)img.height, NERF__PNG_MAX_SIDE);
-        png_image_free(&img);
-    } else {
+    int rc = begin(path, f, file_size, &img);
+    if (rc == NERF_OK) {
         uint32_t w = img.width, h = img.height;
         rc = decode(env, path, f, &img, rgba_out);
         if (rc == NERF_OK) {
@@ -142,7 +170,24 @@ int nerf__png_read_rgba(const nerf__env *env, const char *path,
             *height_out = h;
         }
     }
-    fclose(f);
+    return rc;
+}
+
+int nerf__png_read_rgba(const nerf__env *env, const char *path,
+                        uint32_t *width_out, uint32_t *height_out,
+                        float **rgba_out)
+{
+    *rgba_out = NULL;
+    *width_out = 0;
+    *height_out = 0;
+    FILE *f;
+    uint64_t size;
+    int rc = nerf__file_fopen_read(path, &f, &size);
+    if (rc == NERF_OK) {
+        rc = nerf__png_stream_read_rgba(env, path, f, size, width_out,
+                                        height_out, rgba_out);
+        fclose(f);
+    }
     return rc;
 }
 

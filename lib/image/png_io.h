@@ -7,6 +7,7 @@
 #define NERF_IMAGE_PNG_IO_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #include "env.h"
 
@@ -23,13 +24,33 @@
  * through libpng's linear format: without a gAMA/sRGB chunk that is the
  * stored v / 65535; with one, libpng converts to linear light.
  *
- * Returns NERF_OK; NERF_EIO (cannot open or read); NERF_EFORMAT (not a
- * PNG, truncated, corrupted, or a side above NERF__PNG_MAX_SIDE);
- * NERF_ENOMEM.
+ * The header is judged before any pixel is allocated: a side above
+ * NERF__PNG_MAX_SIDE, or more pixels than the file's size can hold (a
+ * pixel takes at least 1 bit, deflated at most NERF__DEFLATE_MAX_RATIO
+ * times), is refused.
+ *
+ * Returns NERF_OK; NERF_ENOENT; NERF_EUNRECOGNISED (not a regular file:
+ * nerf__file_open_read); NERF_EIO (cannot open or read); NERF_EFORMAT
+ * (not a PNG, truncated, corrupted, too large, or a header claiming more
+ * than the file holds); NERF_ENOMEM.
  */
 int nerf__png_read_rgba(const nerf__env *env, const char *path,
                         uint32_t *width_out, uint32_t *height_out,
                         float **rgba_out);
+
+/* As nerf__png_read_rgba, from f, open on the file_size bytes of path. */
+int nerf__png_stream_read_rgba(const nerf__env *env, const char *path,
+                               FILE *f, uint64_t file_size,
+                               uint32_t *width_out, uint32_t *height_out,
+                               float **rgba_out);
+
+/*
+ * The width and height of the PNG open as f, from its header alone (read
+ * up to the image data, which is not decoded), judged as
+ * nerf__png_read_rgba judges them.  Returns as it does.
+ */
+int nerf__png_stream_size(const char *path, FILE *f, uint64_t file_size,
+                          uint32_t *width_out, uint32_t *height_out);
 
 /*
  * Encode width x height pixels of channels (1 gray, 3 RGB, 4 RGBA) 8-bit

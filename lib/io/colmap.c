@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "byteorder.h"
+#include "distortion.h"
 #include "transforms.h"
 
 /* Longer image names than this are refused (COLMAP stores relative paths). */
@@ -128,6 +129,14 @@ static int make_camera(const char *path, uint32_t id, int model,
         return nerf__error(NERF_EFORMAT, "%s: camera %u: focal %g, %g (must "
                            "be at least %g)", path, (unsigned)id, out->fx,
                            out->fy, NERF__FOCAL_MIN);
+    }
+    /* The lens every call that takes a camera accepts, judged by the same
+     * function, so that the model is refused here, naming the camera. */
+    const double lens[5] = {out->k1, out->k2, out->p1, out->p2, out->k3};
+    char why[96];
+    if (nerf__lens_problem(lens, why, sizeof why) != NULL) {
+        return nerf__error(NERF_EFORMAT, "%s: camera %u: %s", path,
+                           (unsigned)id, why);
     }
     return NERF_OK;
 }
@@ -271,10 +280,20 @@ static bool take(reader *r, size_t n, const unsigned char **out)
     return true;
 }
 
-static int truncated(const char *path, const char *what, uint64_t index)
+/* A file that ends inside the record of `what` whose id was read. */
+static int truncated(const char *path, const char *what, uint64_t id)
 {
     return nerf__error(NERF_EFORMAT, "%s: truncated in %s %llu", path, what,
-                       (unsigned long long)index);
+                       (unsigned long long)id);
+}
+
+/* A file that ends before the id of its record index (from 0) of n. */
+static int truncated_before(const char *path, const char *what,
+                            uint64_t index, uint64_t n)
+{
+    return nerf__error(NERF_EFORMAT, "%s: truncated after %llu of the %llu "
+                       "%s it claims", path, (unsigned long long)index,
+                       (unsigned long long)n, what);
 }
 
 /* The leading record count, checked against the bytes that follow. */
@@ -298,7 +317,7 @@ static int read_count(const char *path, reader *r, size_t min_record,
 static int cameras_bin(const nerf__env *env, const char *path, reader *r,
                        nerf__colmap_model *m)
 {
-    uint64_t n;
+    uint64_t n = 0;
     int rc = read_count(path, r, 24, "cameras", &n);
     if (rc != NERF_OK) {
         return rc;
@@ -310,7 +329,9 @@ static int cameras_bin(const nerf__env *env, const char *path, reader *r,
     for (uint64_t i = 0; i < n; i++) {
         const unsigned char *b = NULL;
         if (!take(r, 24, &b)) {
-            return truncated(path, "camera", i);
+            return r->left >= 4 ? truncated(path, "camera",
+                                            nerf__load_le32(r->p))
+                                : truncated_before(path, "cameras", i, n);
         }
         uint32_t id = nerf__load_le32(b);
         int32_t model = (int32_t)nerf__load_le32(b + 4);
@@ -326,7 +347,7 @@ static int cameras_bin(const nerf__env *env, const char *path, reader *r,
         }
         const unsigned char *pb = NULL;
         if (!take(r, 8 * (size_t)np, &pb)) {
-            return truncated(path, "camera", i);
+            return truncated(path, "camera", id);
         }
         for (int k = 0; k < np; k++) {
             p[k] = nerf__load_lef64(pb + 8 * k);
@@ -344,7 +365,7 @@ static int cameras_bin(const nerf__env *env, const char *path, reader *r,
 static int images_bin(const nerf__env *env, const char *path, reader *r,
                       nerf__colmap_model *m)
 {
-    uint64_t n;
+    uint64_t n = 0;
     /* id, q, t, camera id, the name's NUL, the 2D point count */
     int rc = read_count(path, r, 64 + 1 + 8, "images", &n);
     if (rc != NERF_OK) {
@@ -357,7 +378,9 @@ static int images_bin(const nerf__env *env, const char *path, reader *r,
     for (uint64_t i = 0; i < n; i++) {
         const unsigned char *b = NULL;
         if (!take(r, 64, &b)) {
-            return truncated(path, "image", i);
+            return r->left >= 4 ? truncated(path, "image",
+                                            nerf__load_le32(r->p))
+                                : truncated_before(path, "images", i, n);
         }
         nerf__colmap_image *im = &m->images[i];
         im->id = nerf__load_le32(b);
@@ -372,7 +395,7 @@ static int images_bin(const nerf__env *env, const char *path, reader *r,
         const unsigned char *end = memchr(r->p, '\0', limit);
         if (end == NULL) {
             return r->left < MAX_NAME
-                       ? truncated(path, "the name of image", i)
+                       ? truncated(path, "the name of image", im->id)
                        : nerf__error(NERF_EFORMAT, "%s: image %u: name "
                                      "longer than %d bytes", path,
                                      (unsigned)im->id, MAX_NAME);
@@ -386,7 +409,7 @@ static int images_bin(const nerf__env *env, const char *path, reader *r,
         r->p += len + 1;
         r->left -= len + 1;
         if (!take(r, 8, &b)) {
-            return truncated(path, "image", i);
+            return truncated(path, "image", im->id);
         }
         uint64_t n2d = nerf__load_le64(b);
         if (n2d > r->left / 24) {
@@ -408,7 +431,7 @@ static int points_bin(const nerf__env *env, const char *path, reader *r,
                       nerf__colmap_model *m)
 {
     enum { HEAD = 8 + 24 + 3 + 8 + 8 };
-    uint64_t n;
+    uint64_t n = 0;
     int rc = read_count(path, r, HEAD, "points", &n);
     if (rc != NERF_OK) {
         return rc;
@@ -419,7 +442,9 @@ static int points_bin(const nerf__env *env, const char *path, reader *r,
     for (uint64_t i = 0; i < n; i++) {
         const unsigned char *b = NULL;
         if (!take(&scan, HEAD, &b)) {
-            return truncated(path, "point", i);
+            return scan.left >= 8 ? truncated(path, "point",
+                                              nerf__load_le64(scan.p))
+                                  : truncated_before(path, "points", i, n);
         }
         uint64_t len = nerf__load_le64(b + HEAD - 8);
         if (len > scan.left / 8) {

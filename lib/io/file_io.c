@@ -36,7 +36,9 @@ static int io_error(const char *path, const char *what, int err)
 static int open_error(const char *path, int err)
 {
     if (err == ENOENT || err == ENOTDIR) {
-        return nerf__error(NERF_ENOENT, "%s: cannot open", path);
+        char text[128];
+        return nerf__error(NERF_ENOENT, "%s: cannot open: %s", path,
+                           describe(err, text, sizeof text));
     }
     return io_error(path, "cannot open", err);
 }
@@ -62,21 +64,116 @@ static int read_all(int fd, const char *path, unsigned char *buf, size_t size)
     return NERF_OK;
 }
 
-static int check_size(const char *path, const struct stat *st,
-                      uint64_t max_size, size_t *size_out)
+const char *nerf__file_kind(unsigned mode)
 {
-    if (!S_ISREG(st->st_mode)) {
-        return nerf__error(NERF_EUNRECOGNISED, "%s: %s", path,
-                           S_ISDIR(st->st_mode) ? "a folder, not a file"
-                                                : "not a regular file");
+    return S_ISREG(mode)    ? "a file"
+           : S_ISDIR(mode)  ? "a folder"
+           : S_ISFIFO(mode) ? "a FIFO (named pipe)"
+           : S_ISCHR(mode)  ? "a character device"
+           : S_ISBLK(mode)  ? "a block device"
+           : S_ISSOCK(mode) ? "a socket"
+                            : "a special file";
+}
+
+/* The refusal of what st says is not a regular file, naming its kind. */
+static int not_regular(const char *path, const struct stat *st)
+{
+    if (S_ISDIR(st->st_mode)) {
+        return nerf__error(NERF_EUNRECOGNISED, "%s: a folder, not a file",
+                           path);
     }
-    uint64_t size = (uint64_t)st->st_size;
+    return nerf__error(NERF_EUNRECOGNISED, "%s: %s, not a regular file",
+                       path, nerf__file_kind(st->st_mode));
+}
+
+int nerf__file_check_regular(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        return open_error(path, errno);
+    }
+    return S_ISREG(st.st_mode) ? NERF_OK : not_regular(path, &st);
+}
+
+/*
+ * The stat before the open keeps devices from being opened at all (opening
+ * some has effects); O_NONBLOCK keeps a FIFO swapped in after the stat from
+ * blocking the open until a writer comes, and fstat then refuses it.  On a
+ * regular file O_NONBLOCK changes nothing, but it is cleared all the same.
+ */
+int nerf__file_open_read(const char *path, int *fd_out, uint64_t *size_out)
+{
+    *fd_out = -1;
+    *size_out = 0;
+    int rc = nerf__file_check_regular(path);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+    if (fd < 0) {
+        return open_error(path, errno);
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        rc = io_error(path, "cannot stat", errno);
+    } else if (!S_ISREG(st.st_mode)) {
+        rc = not_regular(path, &st);
+    } else {
+        int flags = fcntl(fd, F_GETFL);
+        if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+            rc = io_error(path, "cannot open", errno);
+        }
+    }
+    if (rc != NERF_OK) {
+        close(fd);
+        return rc;
+    }
+    *fd_out = fd;
+    *size_out = (uint64_t)st.st_size;
+    return NERF_OK;
+}
+
+int nerf__file_fopen_read(const char *path, FILE **f_out, uint64_t *size_out)
+{
+    *f_out = NULL;
+    int fd;
+    int rc = nerf__file_open_read(path, &fd, size_out);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    FILE *f = fdopen(fd, "rb");
+    if (f == NULL) {
+        rc = io_error(path, "cannot open", errno);
+        close(fd);
+        return rc;
+    }
+    *f_out = f;
+    return NERF_OK;
+}
+
+int nerf__file_read_fd(const nerf__env *env, const char *path, int fd,
+                       uint64_t size, uint64_t max_size,
+                       unsigned char **data_out, size_t *size_out)
+{
+    *data_out = NULL;
+    *size_out = 0;
     if (size > max_size || size > SIZE_MAX - 1) {
         return nerf__error(NERF_EFORMAT, "%s: file is too large (%llu bytes; "
                            "the limit is %llu)", path,
                            (unsigned long long)size,
                            (unsigned long long)max_size);
     }
+    /* One spare byte: an empty file still yields a non-NULL buffer. */
+    unsigned char *buf = nerf__alloc(env, (size_t)size + 1);
+    if (buf == NULL) {
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    int rc = read_all(fd, path, buf, (size_t)size);
+    if (rc != NERF_OK) {
+        nerf__free(env, buf);
+        return rc;
+    }
+    *data_out = buf;
     *size_out = (size_t)size;
     return NERF_OK;
 }
@@ -86,34 +183,15 @@ int nerf__file_read(const nerf__env *env, const char *path, uint64_t max_size,
 {
     *data_out = NULL;
     *size_out = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
-        return open_error(path, errno);
-    }
-    struct stat st;
-    size_t size = 0;
-    int rc = NERF_OK;
-    if (fstat(fd, &st) != 0) {
-        rc = io_error(path, "cannot stat", errno);
-    }
+    int fd;
+    uint64_t size;
+    int rc = nerf__file_open_read(path, &fd, &size);
     if (rc == NERF_OK) {
-        rc = check_size(path, &st, max_size, &size);
+        rc = nerf__file_read_fd(env, path, fd, size, max_size, data_out,
+                                size_out);
+        close(fd);
     }
-    unsigned char *buf = NULL;
-    if (rc == NERF_OK) {
-        /* One spare byte: an empty file still yields a non-NULL buffer. */
-        buf = nerf__alloc(env, size + 1);
-        rc = buf ? read_all(fd, path, buf, size)
-                 : nerf__error_prefix(NERF_ENOMEM, path);
-    }
-    close(fd);
-    if (rc != NERF_OK) {
-        nerf__free(env, buf);
-        return rc;
-    }
-    *data_out = buf;
-    *size_out = size;
-    return NERF_OK;
+    return rc;
 }
 
 static int write_all(int fd, const unsigned char *data, size_t size)

@@ -7,6 +7,7 @@
 #include <zlib.h>
 
 #include "byteorder.h"
+#include "deflate_bound.h"
 
 #define SIG_LOCAL 0x04034b50u
 #define SIG_CENTRAL 0x02014b50u
@@ -18,13 +19,6 @@
 #define MAX_COMMENT 65535
 #define FLAG_ENCRYPTED 0x0001u
 #define FLAG_STRONG_ENCRYPTION 0x0040u
-
-/*
- * Deflate cannot expand its input more than about 1032 times (a 258-byte
- * match per 2 bits), so a larger declared size is a lie; refusing it keeps
- * a forged header from making us allocate gigabytes.
- */
-#define MAX_INFLATE_RATIO 1032
 
 /* The central directory's bounds, from the end record. */
 typedef struct directory {
@@ -261,7 +255,7 @@ static int check_member(const nerf__zip_entry *e, size_t max_size)
                            "with %zu bytes but declares %zu", NAME_ARG(e),
                            e->comp_size, e->size);
     }
-    if (e->method == 8 && e->size / MAX_INFLATE_RATIO > e->comp_size) {
+    if (e->method == 8 && e->size / NERF__DEFLATE_MAX_RATIO > e->comp_size) {
         return nerf__error(NERF_EFORMAT, "zip member " NAME_FMT ": %zu "
                            "compressed bytes cannot inflate to %zu",
                            NAME_ARG(e), e->comp_size, e->size);

@@ -16,6 +16,7 @@
 
 #include "average.h"
 #include "byteorder.h"
+#include "deflate_bound.h"
 #include "file_io.h"
 #include "fingerprint.h"
 #include "gemm_onednn.h"
@@ -114,9 +115,6 @@
 
 /* Refuse files beyond 64 GiB before reading them. */
 #define MAX_FILE ((uint64_t)1 << 36)
-/* zlib cannot expand data more than about 1032 times; a header claiming
- * more is corrupt, and believing it would allocate without bound. */
-#define MAX_INFLATE_RATIO 1032u
 
 /* The fields of a header, decoded. */
 typedef struct ckpt_header {
@@ -743,7 +741,7 @@ static int unpack(const nerf__env *env, const char *path,
     uint64_t n_out = hd->payload_size;
     uLong src_len = (uLong)n_in;
     uLongf dst_len = (uLongf)n_out;
-    if (n_out / MAX_INFLATE_RATIO > n_in || n_out >= SIZE_MAX ||
+    if (n_out / NERF__DEFLATE_MAX_RATIO > n_in || n_out >= SIZE_MAX ||
         src_len != n_in || dst_len != n_out) {
         return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint header "
                            "(%llu bytes cannot decompress to %llu)", path,

@@ -163,4 +163,324 @@ def _frames_taken(fx, path):
     """A folder holding r_001.png, as nerf-render names view 1."""
     os.mkdir(path)
     write(os.path.join(path, "r_001.png"), b"not yours")
+# ---- readers: files that are not regular, images and datasets ---------------
+
+import json  # noqa: E402 (kept with the fixtures that use them)
+import socket  # noqa: E402
+import struct  # noqa: E402
+import zlib  # noqa: E402
+
+
+@fixture("socket")
+def _socket(fx, path):
+    """A Unix socket's file (left behind: nothing listens on it)."""
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        s.bind(path)
+    finally:
+        s.close()
+    return path
+
+
+@fixture("device")
+def _device(fx, path):
+    """/dev/null through a link: a character device."""
+    os.symlink("/dev/null", path)
+    return path
+
+
+def png_chunk(kind, data):
+    return (struct.pack(">I", len(data)) + kind + data +
+            struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+
+
+def png(width, height, data=None, colour=2):
+    """A PNG of width x height 8-bit pixels (colour type 2 RGB, 6 RGBA),
+    grey; or with data as its (deflated) image data whatever the size."""
+    channels = 4 if colour == 6 else 3
+    if data is None:
+        row = b"\0" + b"\x80" * (width * channels)
+        data = zlib.compress(row * height)
+    head = struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", head) +
+            png_chunk(b"IDAT", data) + png_chunk(b"IEND", b""))
+
+
+def jpeg_claiming(jpeg, width, height):
+    """The JPEG bytes jpeg with their frame header (SOF0..SOF2) set to
+    width x height; the data is left as it was."""
+    i = 2
+    while i + 4 <= len(jpeg):
+        marker, length = jpeg[i + 1], struct.unpack(">H", jpeg[i + 2:i + 4])[0]
+        if marker in (0xC0, 0xC1, 0xC2):
+            out = bytearray(jpeg)
+            out[i + 5:i + 9] = struct.pack(">HH", height, width)
+            return bytes(out)
+        i += 2 + length
+    raise FixtureError("no frame header in the JPEG")
+
+
+@fixture("png-claims-huge")
+def _png_claims_huge(fx, path):
+    """A 100-byte PNG whose header claims 16384x16384 RGBA pixels."""
+    return write(path + ".png", png(16384, 16384, zlib.compress(b"\0" * 64),
+                                    colour=6))
+
+
+@fixture("scene-jpeg")
+def _scene_jpeg(fx, path):
+    """{scene}'s layout with JPEG files."""
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 4, "--val", 0, "--test", 2, "--format", "jpeg")
+    return path
+
+
+@fixture("jpeg-claims-huge")
+def _jpeg_claims_huge(fx, path):
+    """A JPEG of {scene-jpeg} (under 1 KB) whose header claims
+    16384x16384 pixels."""
+    with open(os.path.join(fx.get("scene-jpeg"), "train", "r_0.jpg"),
+              "rb") as f:
+        return write(path + ".jpg", jpeg_claiming(f.read(), 16384, 16384))
+
+
+def damaged(fx, path, base, rel, how):
+    """A copy of fixture base with the file rel (under it) replaced:
+    how is "fifo", "folder", "device", "missing" or bytes to write."""
+    fx.copy(base, path)
+    target = os.path.join(path, rel)
+    if os.path.lexists(target):
+        if os.path.isdir(target) and not os.path.islink(target):
+            shutil.rmtree(target)
+        else:
+            os.remove(target)
+    if how == "fifo":
+        os.mkfifo(target)
+    elif how == "folder":
+        os.mkdir(target)
+    elif how == "device":
+        os.symlink("/dev/null", target)
+    elif how != "missing":
+        write(target, how)
+    return path
+
+
+def edited(fx, path, base, rel, old, new):
+    """A copy of fixture base whose text file rel has old replaced by
+    new (which must be there)."""
+    fx.copy(base, path)
+    target = os.path.join(path, rel)
+    with open(target, encoding="utf-8") as f:
+        text = f.read()
+    if old not in text:
+        raise FixtureError("%s: no %r to replace" % (rel, old))
+    write(target, text.replace(old, new, 1))
+    return path
+
+
+def register_damage(name, base, rel, how):
+    fixture(name)(lambda fx, path: damaged(fx, path, base, rel, how))
+
+
+# Blender layout ({scene}: 4 train views, 2 test views, 16x16 RGBA PNGs).
+register_damage("blender-json-fifo", "scene", "transforms_train.json", "fifo")
+register_damage("blender-train-fifo", "scene", "train/r_1.png", "fifo")
+register_damage("blender-train-device", "scene", "train/r_1.png", "device")
+register_damage("blender-train-folder", "scene", "train/r_1.png", "folder")
+register_damage("blender-train-claims-huge", "scene", "train/r_1.png",
+                png(16384, 16384, zlib.compress(b"\0" * 64), colour=6))
+register_damage("blender-test-fifo", "scene", "test/r_1.png", "fifo")
+register_damage("blender-test-missing", "scene", "test/r_1.png", "missing")
+register_damage("blender-test-folder", "scene", "test/r_1.png", "folder")
+register_damage("blender-test-not-image", "scene", "test/r_1.png",
+                b"not an image\n")
+register_damage("blender-test-truncated", "scene", "test/r_1.png",
+                png(16, 16, colour=6)[:20])
+register_damage("blender-test-wrong-size", "scene", "test/r_1.png",
+                png(8, 8, colour=6))
+register_damage("blender-test-claims-huge", "scene", "test/r_1.png",
+                png(16384, 16384, zlib.compress(b"\0" * 64), colour=6))
+
+
+@fixture("blender-test-dot")
+def _blender_test_dot(fx, path):
+    """The second test frame's file_path is "."."""
+    return edited(fx, path, "scene", "transforms_test.json",
+                  '"./test/r_1"', '"."')
+
+
+@fixture("blender-test-json-broken")
+def _blender_test_json_broken(fx, path):
+    return edited(fx, path, "scene", "transforms_test.json",
+                  '"frames"', '"frames" ]')
+
+
+# instant-ngp layout: one transforms.json, every 8th frame held out.
+@fixture("ngp")
+def _ngp(fx, path):
+    """The built-in scene as one transforms.json: 9 views of 16x16 in
+    images/, view 0 and view 8 held out for test."""
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 7, "--val", 0, "--test", 2, "--layout", "transforms")
+    return path
+
+
+def ngp_image(fx, index):
+    """The name under {ngp}/ of view index's image."""
+    with open(os.path.join(fx.get("ngp"), "transforms.json"),
+              encoding="utf-8") as f:
+        text = f.read()
+    return json.loads(text)["frames"][index]["file_path"]
+
+
+@fixture("ngp-held-fifo")
+def _ngp_held_fifo(fx, path):
+    return damaged(fx, path, "ngp", ngp_image(fx, 8), "fifo")
+
+
+@fixture("ngp-held-missing")
+def _ngp_held_missing(fx, path):
+    return damaged(fx, path, "ngp", ngp_image(fx, 8), "missing")
+
+
+@fixture("ngp-lens")
+def _ngp_lens(fx, path):
+    """k1 5000: beyond the +-1000 every camera call allows."""
+    fx.copy("ngp", path)
+    target = os.path.join(path, "transforms.json")
+    with open(target, encoding="utf-8") as f:
+        data = json.load(f)
+    data["k1"] = 5000.0
+    write(target, json.dumps(data, indent=1))
+    return path
+
+
+# LLFF layout: 10 photos of 16x12 in images/, photos 0 and 8 held out.
+@fixture("llff")
+def _llff(fx, path):
+    fx.tool("nerf-scene", "--out", path, "--capture", "forward", "--width",
+            16, "--height", 12, "--train", 8, "--test", 2)
+    return path
+
+
+register_damage("llff-npy-fifo", "llff", "poses_bounds.npy", "fifo")
+register_damage("llff-train-fifo", "llff", "images/image00001.png", "fifo")
+register_damage("llff-held-fifo", "llff", "images/image00008.png", "fifo")
+register_damage("llff-held-not-image", "llff", "images/image00008.png",
+                b"not an image\n")
+register_damage("llff-held-wrong-size", "llff", "images/image00008.png",
+                png(8, 6))
+
+
+@fixture("llff-images2-full-size")
+def _llff_images2_full_size(fx, path):
+    """images_2/ holding the full-size photos of images/."""
+    fx.copy("llff", path)
+    shutil.copytree(os.path.join(path, "images"),
+                    os.path.join(path, "images_2"))
+    return path
+
+
+# COLMAP layouts: 6 photos of 16x16 in images/, photo 0 held out.
+@fixture("colmap-text")
+def _colmap_text(fx, path):
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 4, "--val", 0, "--test", 2, "--layout", "colmap-text")
+    return path
+
+
+@fixture("colmap-bin")
+def _colmap_bin(fx, path):
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 4, "--val", 0, "--test", 2, "--layout",
+            "colmap-binary")
+    return path
+
+
+register_damage("colmap-cameras-fifo", "colmap-bin", "sparse/0/cameras.bin",
+                "fifo")
+register_damage("colmap-images-fifo", "colmap-text", "sparse/0/images.txt",
+                "fifo")
+register_damage("colmap-points-fifo", "colmap-bin", "sparse/0/points3D.bin",
+                "fifo")
+register_damage("colmap-photo-fifo", "colmap-text", "images/00001.png",
+                "fifo")
+register_damage("colmap-photo-folder", "colmap-text", "images/00001.png",
+                "folder")
+register_damage("colmap-held-missing", "colmap-text", "images/00000.png",
+                "missing")
+register_damage("colmap-held-not-image", "colmap-bin", "images/00000.png",
+                b"not an image\n")
+
+
+@fixture("colmap-held-dot")
+def _colmap_held_dot(fx, path):
+    """Image 1 (00000.png, held out) renamed "."."""
+    return edited(fx, path, "colmap-text", "sparse/0/images.txt",
+                  " 00000.png\n", " .\n")
+
+
+@fixture("colmap-lens-text")
+def _colmap_lens_text(fx, path):
+    """Camera 1 an OPENCV camera with k1 5000."""
+    fx.copy("colmap-text", path)
+    target = os.path.join(path, "sparse", "0", "cameras.txt")
+    with open(target, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    out = []
+    for line in lines:
+        cells = line.split()
+        if cells and cells[0] == "1" and cells[1] == "PINHOLE":
+            line = " ".join(["1", "OPENCV"] + cells[2:] + ["5000", "0", "0",
+                                                           "0"])
+        out.append(line)
+    write(target, "\n".join(out) + "\n")
+    return path
+
+
+def colmap_cameras_bin(cameras):
+    """cameras.bin of (id, model id, width, height, params) records."""
+    out = struct.pack("<Q", len(cameras))
+    for cam_id, model, width, height, params in cameras:
+        out += struct.pack("<IiQQ", cam_id, model, width, height)
+        out += struct.pack("<%dd" % len(params), *params)
+    return out
+
+
+def colmap_bin_camera(fx):
+    """The one camera of {colmap-bin}: id, width, height, PINHOLE's four
+    parameters."""
+    with open(os.path.join(fx.get("colmap-bin"), "sparse", "0",
+                           "cameras.bin"), "rb") as f:
+        data = f.read()
+    cam_id, model, width, height = struct.unpack("<IiQQ", data[8:32])
+    if model != 1:
+        raise FixtureError("cameras.bin: expected one PINHOLE camera")
+    return cam_id, width, height, struct.unpack("<4d", data[32:64])
+
+
+@fixture("colmap-lens-bin")
+def _colmap_lens_bin(fx, path):
+    cam_id, width, height, p = colmap_bin_camera(fx)
+    return damaged(fx, path, "colmap-bin", "sparse/0/cameras.bin",
+                   colmap_cameras_bin([(cam_id, 4, width, height,
+                                        list(p) + [0.0, -2000.0, 0, 0])]))
+
+
+@fixture("colmap-cameras-truncated")
+def _colmap_cameras_truncated(fx, path):
+    """cameras.bin of camera 7 then camera 9, cut inside camera 9's
+    parameters."""
+    cam_id, width, height, p = colmap_bin_camera(fx)
+    data = colmap_cameras_bin([(7, 1, width, height, p),
+                               (9, 1, width, height, p)])
+    return damaged(fx, path, "colmap-bin", "sparse/0/cameras.bin",
+                   data[:-8])
+
+
+@fixture("colmap-images2-full-size")
+def _colmap_images2_full_size(fx, path):
+    fx.copy("colmap-text", path)
+    shutil.copytree(os.path.join(path, "images"),
+                    os.path.join(path, "images_2"))
     return path

@@ -2,6 +2,8 @@
 #include <nerf.h>
 
 #include <stddef.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "data_fixtures.h"
 #include "dataset.h"
@@ -698,6 +700,129 @@ TEST(bad_images)
     CHECK(ds == NULL);
 }
 
+/*
+ * A scene with a test split beside the train split: transforms_test.json
+ * names test/r_0.png .. r_3.png, copies of the train images.
+ */
+static const char *scene_with_test_split(char *dir, size_t size)
+{
+    blender_scene(dir, size);
+    fx_mkdir(dir, "test");
+    float rgba[W * H * 4];
+    for (int f = 0; f < FRAMES; f++) {
+        for (int y = 0; y < H; y++) {
+            for (int x = 0; x < W; x++) {
+                pixel(f, x, y, rgba + 4 * (y * W + x));
+            }
+        }
+        char p[1024], name[32];
+        snprintf(name, sizeof name, "test/r_%d.png", f);
+        fx_path(p, sizeof p, dir, name);
+        fx_write_rgba8(p, W, H, rgba);
+    }
+    char json[16384];
+    scene_json(json, sizeof json, "\"camera_angle_x\": 0.6911112070083618", 0);
+    for (char *at = strstr(json, "./train/"); at; at = strstr(at, "./train/")) {
+        memcpy(at, "./test/ ", 8); /* one byte longer: the space goes */
+        memmove(at + 7, at + 8, strlen(at + 8) + 1);
+    }
+    fx_write_text(dir, "transforms_test.json", json);
+    return dir;
+}
+
+/* Loading the train split of dir fails with status, naming what. */
+static void expect_train_fails(const char *dir, int status, const char *what)
+{
+    nerf_dataset *ds = NULL;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, NULL), status);
+    CHECK(ds == NULL);
+    if (!fx_has(nerf_last_error(), what)) {
+        FAILF("message '%s' lacks '%s'", nerf_last_error(), what);
+    }
+}
+
+/*
+ * Every image the scene names is checked when any split loads: the test
+ * split's images by their headers when the train split loads, so that a
+ * broken test image is found before training, not by the evaluation.  A
+ * missing one is only a warning (a split may be a subset, as lego's val
+ * split is; its own load decides, with skip_missing).
+ */
+TEST(frames_of_other_splits_are_checked)
+{
+    char dir[1024], p[1024];
+    nerf_dataset *ds = NULL;
+    scene_with_test_split(dir, sizeof dir);
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    CHECK_EQ_INT(nerf_dataset_count(ds), FRAMES);
+    nerf_dataset_destroy(ds);
+
+    fx_path(p, sizeof p, dir, "test/r_2.png");
+    fx_write_bytes(p, "not an image", 12);
+    expect_train_fails(dir, NERF_EFORMAT, "test/r_2.png: not a PNG or JPEG");
+    CHECK(unlink(p) == 0);
+    CHECK(mkfifo(p, 0666) == 0);
+    expect_train_fails(dir, NERF_EUNRECOGNISED,
+                       "test/r_2.png: a FIFO (named pipe), not a regular "
+                       "file");
+    CHECK(unlink(p) == 0);
+    CHECK(mkdir(p, 0777) == 0);
+    expect_train_fails(dir, NERF_EUNRECOGNISED,
+                       "test/r_2.png: a folder, not a file");
+    CHECK(rmdir(p) == 0);
+    float wide[(W + 1) * H * 4];
+    memset(wide, 0, sizeof wide);
+    fx_write_rgba8(p, W + 1, H, wide);
+    expect_train_fails(dir, NERF_EFORMAT, "test/r_2.png: image is 9x6");
+
+    /* Missing: logged, once, naming the file; the train split loads. */
+    CHECK(unlink(p) == 0);
+    nerf_hooks hooks;
+    NERF_HOOKS_INIT(&hooks);
+    hooks.log_cb = capture_log;
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.hooks = &hooks;
+    log_text[0] = '\0';
+    CHECK_OK(nerf_dataset_load(&ds, dir, &o));
+    nerf_dataset_destroy(ds);
+    CHECK(fx_has(log_text, "transforms_test.json: 1 frame(s)"));
+    CHECK(fx_has(log_text, "test/r_2.png"));
+    /* ... and the load of the test split itself refuses it. */
+    o.split = NERF_SPLIT_TEST;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_ENOENT);
+    CHECK(fx_has(nerf_last_error(), "test/r_2.png"));
+
+    /* The other file is checked as its own load would check it. */
+    scene_with_test_split(dir, sizeof dir);
+    edit_json(dir, "transforms_test.json", "\"./test/r_1\"", "\".\"");
+    expect_train_fails(dir, NERF_EFORMAT, "transforms_test.json: frame 1 "
+                       "(.): file_path '.' names a folder, not an image");
+    scene_with_test_split(dir, sizeof dir);
+    edit_json(dir, "transforms_test.json", "\"rotation\"",
+              "\"w\": 9, \"h\": 6, \"rotation\"");
+    expect_train_fails(dir, NERF_EFORMAT, "transforms_test.json: frame 0 "
+                       "(./test/r_0): w x h is 9x6");
+    scene_with_test_split(dir, sizeof dir);
+    edit_json(dir, "transforms_test.json", "]}", "]");
+    expect_train_fails(dir, NERF_EFORMAT, "transforms_test.json: invalid "
+                       "JSON");
+    fx_path(p, sizeof p, dir, "transforms_test.json");
+    CHECK(unlink(p) == 0);
+    CHECK(mkfifo(p, 0666) == 0);
+    expect_train_fails(dir, NERF_EUNRECOGNISED, "transforms_test.json: a "
+                       "FIFO (named pipe)");
+
+    /* The frames skip passes over are checked too. */
+    blender_scene(dir, sizeof dir);
+    fx_path(p, sizeof p, dir, "train/r_1.png");
+    fx_write_bytes(p, "not an image", 12);
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.skip = 2;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "train/r_1.png: not a PNG or JPEG"));
+}
+
 TEST(folders_and_options)
 {
     nerf_dataset *ds = NULL;
@@ -802,6 +927,7 @@ int main(void)
     RUN(alpha_kept_beside_pixels);
     RUN(bad_json);
     RUN(bad_images);
+    RUN(frames_of_other_splits_are_checked);
     RUN(folders_and_options);
     RUN(allocator_hooks_balance);
     fx_remove_tree(tmp);

@@ -6,6 +6,9 @@
  */
 #include <nerf.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "colmap.h"
 #include "colmap_poses.h"
 #include "data_fixtures.h"
@@ -375,6 +378,85 @@ TEST(camera_models_map_onto_opencv)
     free_model(&m);
 }
 
+/*
+ * A lens no call that takes a camera accepts (beyond +-1000) is refused by
+ * the parser, naming the file and the camera, in both forms; the bound
+ * itself is a lens the calls take.
+ */
+TEST(lens_beyond_what_cameras_take)
+{
+    nerf__colmap_model m;
+    CHECK_EQ_INT(parse_cameras("3 OPENCV 64 48 50 51 31 23 5000 0 0 0\n",
+                               &m), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "cameras.txt: camera 3: distortion k1 "
+                 "5000 is beyond +-1000"));
+    free_model(&m);
+    CHECK_OK(parse_cameras("3 RADIAL 64 48 50 31 23 -1000 1000\n", &m));
+    free_model(&m);
+    unsigned char bin[8 + 24 + 8 * 8];
+    memset(bin, 0, sizeof bin);
+    bin[0] = 1;        /* one camera */
+    bin[8] = 7;        /* id 7 */
+    bin[8 + 4] = 4;    /* OPENCV */
+    bin[8 + 8] = 64;   /* width */
+    bin[8 + 16] = 48;  /* height */
+    const double p[8] = {50, 51, 31, 23, 0, -2000, 0, 0};
+    memcpy(bin + 32, p, sizeof p); /* little-endian doubles, as COLMAP's */
+    nerf__env env;
+    nerf__env_from_hooks(&env, NULL);
+    memset(&m, 0, sizeof m);
+    CHECK_EQ_INT(nerf__colmap_parse_cameras(&env, "cameras.bin", bin,
+                                            sizeof bin, 1, &m),
+                 NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "cameras.bin: camera 7: distortion k2 "
+                 "-2000 is beyond +-1000"));
+    nerf__colmap_free(&env, &m);
+}
+
+/*
+ * A binary file cut inside a record names it by its id, as every other
+ * message does, once the id is read; before that, by how many records
+ * came whole.
+ */
+TEST(truncation_names_the_record_by_id)
+{
+    enum { REC = 24 + 4 * 8 }; /* a PINHOLE camera */
+    unsigned char bin[8 + 2 * REC];
+    memset(bin, 0, sizeof bin);
+    bin[0] = 2;
+    for (int k = 0; k < 2; k++) {
+        unsigned char *r = bin + 8 + k * REC;
+        r[0] = k ? 9 : 7;
+        r[4] = 1; /* PINHOLE */
+        r[8] = 64;
+        r[16] = 48;
+        const double p[4] = {50, 51, 31, 23};
+        memcpy(r + 24, p, sizeof p);
+    }
+    nerf__env env;
+    nerf__env_from_hooks(&env, NULL);
+    static const struct {
+        size_t size;
+        const char *says;
+    } cuts[] = {
+        {sizeof bin - 8, "cameras.bin: truncated in camera 9"},
+        {8 + REC + 6, "cameras.bin: truncated in camera 9"},
+        {8 + REC + 2, "cameras.bin: truncated after 1 of the 2 cameras"},
+    };
+    for (size_t i = 0; i < sizeof cuts / sizeof cuts[0]; i++) {
+        nerf__colmap_model m;
+        memset(&m, 0, sizeof m);
+        int rc = nerf__colmap_parse_cameras(&env, "cameras.bin", bin,
+                                            cuts[i].size, 1, &m);
+        CHECK_EQ_INT(rc, NERF_EFORMAT);
+        if (!fx_has(nerf_last_error(), cuts[i].says)) {
+            FAILF("cut at %zu: '%s' lacks '%s'", cuts[i].size,
+                  nerf_last_error(), cuts[i].says);
+        }
+        nerf__colmap_free(&env, &m);
+    }
+}
+
 TEST(quaternions_round_trip)
 {
     const double q[4] = {0.5, -0.3, 0.7, 0.1};
@@ -521,7 +603,64 @@ TEST(missing_photo)
     char path[1024];
     fx_path(path, sizeof path, tmp, "photo/images/00003.png");
     CHECK(unlink(path) == 0);
-    expect_failure("photo", NERF_EIO, "00003.png", "missing", "images.txt");
+    expect_failure("photo", NERF_ENOENT, "00003.png", "missing", "images.txt");
+}
+
+/*
+ * The photos of every split are checked when any split loads: the test
+ * split's 00008.png (held out: every 8th) is found by the train split's
+ * load, and what is not a regular file is named for what it is.
+ */
+TEST(photos_of_every_split_are_checked)
+{
+    write_scene("held", NERF_SCENE_LAYOUT_COLMAP_TEXT);
+    char path[1024];
+    fx_path(path, sizeof path, tmp, "held/images/00008.png");
+    CHECK(unlink(path) == 0);
+    expect_failure("held", NERF_ENOENT, "00008.png: missing", "images.txt",
+                   "image 9");
+    CHECK(mkfifo(path, 0666) == 0);
+    expect_failure("held", NERF_EUNRECOGNISED,
+                   "00008.png: a FIFO (named pipe), not a regular file",
+                   "images.txt names it for image 9", "");
+    CHECK(unlink(path) == 0);
+    CHECK(mkdir(path, 0777) == 0);
+    expect_failure("held", NERF_EUNRECOGNISED,
+                   "00008.png: a folder, not a file", "", "");
+    CHECK(rmdir(path) == 0);
+    fx_write_bytes(path, "not an image", 12);
+    expect_failure("held", NERF_EFORMAT,
+                   "00008.png: not a PNG or JPEG file", "", "");
+}
+
+/*
+ * images_2/ must hold the photos at half the cameras' size: a copy of the
+ * full-size photos is refused, naming both sizes.
+ */
+TEST(images_k_of_full_size_photos)
+{
+    write_scene("k2", NERF_SCENE_LAYOUT_COLMAP_BINARY);
+    char from[1024], to[1024];
+    fx_mkdir(tmp, "k2/images_2");
+    for (int i = 0; i < N_ALL; i++) {
+        char name[64];
+        snprintf(name, sizeof name, "k2/images/%05d.png", i);
+        fx_path(from, sizeof from, tmp, name);
+        snprintf(name, sizeof name, "k2/images_2/%05d.png", i);
+        fx_path(to, sizeof to, tmp, name);
+        CHECK(link(from, to) == 0);
+    }
+    char dir[1024];
+    fx_path(dir, sizeof dir, tmp, "k2");
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.downscale = 2;
+    nerf_dataset *ds = NULL;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "images_2: the photos are 32x32"));
+    CHECK(fx_has(nerf_last_error(), "camera 1"));
+    CHECK(fx_has(nerf_last_error(), "divided by 2 is 16x16"));
+    CHECK(ds == NULL);
 }
 
 TEST(zero_quaternion)
@@ -572,6 +711,10 @@ int main(void)
     RUN(counts_larger_than_the_file);
     RUN(unknown_camera_model);
     RUN(missing_photo);
+    RUN(lens_beyond_what_cameras_take);
+    RUN(truncation_names_the_record_by_id);
+    RUN(photos_of_every_split_are_checked);
+    RUN(images_k_of_full_size_photos);
     RUN(zero_quaternion);
     RUN(unknown_folder_names_colmap);
     fx_remove_tree(tmp);

@@ -10,7 +10,9 @@
 
 #include "../harness.h"
 #include "data_fixtures.h"
+#include "image_read.h"
 #include "jpeg_fixtures.h"
+#include "largest_alloc.h"
 #include "nerf.h"
 
 static const char *tmp;
@@ -104,6 +106,10 @@ TEST(exif_orientations)
             check_layout(rgba, w, h, upright[o], o);
         }
         nerf_free(rgba);
+        /* The header alone gives the same upright size. */
+        uint32_t hw = 0, hh = 0;
+        CHECK_OK(nerf__image_read_size(NULL, path, &hw, &hh));
+        CHECK(hw == w && hh == h);
     }
     /* No Exif, or an APP1 that is XMP rather than Exif: as stored. */
     static const uint8_t xmp[] = "http://ns.adobe.com/xap/1.0/\0<x/>";
@@ -229,6 +235,73 @@ TEST(bad_files)
     fx_path(path, sizeof path, tmp, "cmyk.jpg");
     fx_write_jpeg(path, W, H, JCS_CMYK, px, 90, 0, NULL, 0);
     expect_read_error(path, NERF_EFORMAT, "CMYK");
+}
+
+/* Set the frame header (SOF0..SOF2) of the JPEG at path to w x h. */
+static void claim_size(const char *path, uint32_t w, uint32_t h)
+{
+    long size = fx_file_size(path);
+    uint8_t *b = malloc((size_t)size);
+    FILE *f = fopen(path, "rb");
+    if (f == NULL || fread(b, 1, (size_t)size, f) != (size_t)size) {
+        perror(path);
+        exit(1);
+    }
+    fclose(f);
+    long i = 2;
+    while (i + 9 < size && !(b[i + 1] >= 0xc0 && b[i + 1] <= 0xc2)) {
+        i += 2 + (b[i + 2] << 8 | b[i + 3]);
+    }
+    CHECK(i + 9 < size);
+    b[i + 5] = (uint8_t)(h >> 8);
+    b[i + 6] = (uint8_t)h;
+    b[i + 7] = (uint8_t)(w >> 8);
+    b[i + 8] = (uint8_t)w;
+    fx_write_bytes(path, b, (size_t)size);
+    free(b);
+}
+
+/*
+ * A JPEG of 64 x 48 pixels (a few KB) whose header claims 16384 x 16384:
+ * Huffman coding spends at least 1 bit on each 8 x 8 block, and 16384^2
+ * RGB pixels are 12.6 million blocks, 1.5 MB at least.  Refused before
+ * the pixels are allocated, progressive or not; a large flat picture,
+ * which Huffman codes in about 2 bits a block, still reads.
+ */
+TEST(header_claiming_more_than_the_file)
+{
+    enum { W = 64, H = 48 };
+    static uint8_t px[W * H * 3];
+    noise(px, sizeof px, 3);
+    char path[1024];
+    fx_path(path, sizeof path, tmp, "claims.jpg");
+    nerf__env env;
+    for (int flags = 0; flags < 2; flags++) {
+        fx_write_jpeg(path, W, H, JCS_RGB, px, 90, flags, NULL, 0);
+        claim_size(path, 16384, 16384);
+        largest_alloc_env(&env);
+        uint32_t w, h;
+        float *rgba = NULL;
+        CHECK_EQ_INT(nerf__image_read_rgba(&env, path, &w, &h, &rgba),
+                     NERF_EFORMAT);
+        CHECK(fx_has(nerf_last_error(), path));
+        CHECK(fx_has(nerf_last_error(), "claims 16384x16384 pixels"));
+        CHECK_EQ_INT(nerf__image_read_size(&env, path, &w, &h),
+                     NERF_EFORMAT);
+        CHECK(fx_has(nerf_last_error(), "claims 16384x16384 pixels"));
+        /* The file's bytes and libjpeg's state, nothing for pixels. */
+        CHECK(largest_alloc < (size_t)fx_file_size(path) + 4096);
+    }
+    static uint8_t flat[2048 * 2048];
+    memset(flat, 128, sizeof flat);
+    fx_path(path, sizeof path, tmp, "flat.jpg");
+    for (int flags = 0; flags < 4; flags++) {
+        fx_write_jpeg(path, 2048, 2048, JCS_GRAYSCALE, flat, 75, flags, NULL,
+                      0);
+        uint32_t w = 0, h = 0;
+        CHECK_OK(nerf__image_read_size(NULL, path, &w, &h));
+        CHECK(w == 2048 && h == 2048);
+    }
 }
 
 /* Grayscale, progressive and arithmetic-coded files read as RGB. */
@@ -490,6 +563,7 @@ int main(void)
     RUN(exif_orientations);
     RUN(bad_exif);
     RUN(bad_files);
+    RUN(header_claiming_more_than_the_file);
     RUN(colour_spaces_and_codings);
     RUN(scene_round_trip);
     RUN(dataset_from_jpeg_scene);

@@ -4,6 +4,8 @@
  */
 #include <nerf.h>
 
+#include <sys/stat.h>
+
 #include "data_fixtures.h"
 #include "../harness.h"
 
@@ -409,15 +411,94 @@ TEST(bad_images)
     fx_write_text(dir, "images_2/IMG_4028.jpg", "not an image");
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
     CHECK(fx_has(nerf_last_error(), "IMG_4028.jpg: not a PNG or JPEG file"));
-    /* Images whose aspect ratio does not fit the poses' hwf. */
+    /* Images whose aspect ratio does not fit the poses' hwf: in
+     * images_2/ they are not half the poses' size either, which is found
+     * first; in images/, which may hold any size, the aspect is. */
     make_scene(dir, sizeof dir, rows);
     for (int i = 0; i < N; i++) {
         image_path(p, sizeof p, dir, i);
         fx_write_png(p, IW + 2, IH, 2, 8, px, NULL, 0, NULL, 0);
     }
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "images_2: the photos are 10x6"));
+    fx_path(p, sizeof p, dir, "images_2");
+    fx_path(q, sizeof q, dir, "images");
+    CHECK(rename(p, q) == 0);
+    o.downscale = 1;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
     CHECK(fx_has(nerf_last_error(), "does not match"));
     CHECK(ds == NULL);
+}
+
+/*
+ * The images the train split does not load (0 and 8 are held out) are
+ * checked by their headers all the same, so that the test split's load
+ * finds nothing the train split's did not.
+ */
+TEST(held_out_images_are_checked)
+{
+    double rows[N * 17];
+    make_rows(rows, identity);
+    char dir[1024], p[1024];
+    nerf_dataset *ds = NULL;
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.downscale = 2;
+    make_scene(dir, sizeof dir, rows);
+    image_path(p, sizeof p, dir, 8);
+    fx_write_text(dir, "images_2/IMG_4034.png", "not an image");
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "IMG_4034.png: not a PNG or JPEG file"));
+    unlink(p);
+    CHECK(mkfifo(p, 0666) == 0);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EUNRECOGNISED);
+    CHECK(fx_has(nerf_last_error(), "IMG_4034.png: a FIFO (named pipe)"));
+    unlink(p);
+    uint16_t px[IW * 2 * IH * 3] = {0};
+    fx_write_png(p, IW * 2, IH, 2, 8, px, NULL, 0, NULL, 0);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "IMG_4034.png: image is 16x6"));
+    /* The frames skip passes over are checked too. */
+    make_scene(dir, sizeof dir, rows);
+    o.skip = 2;
+    fx_write_text(dir, "images_2/IMG_4028.png", "not an image");
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "IMG_4028.png: not a PNG or JPEG file"));
+    CHECK(ds == NULL);
+}
+
+/*
+ * An images_2/ folder holding the full-size photos (16 x 12, the poses'
+ * size) rather than photos half as large: refused, naming both sizes,
+ * instead of trained at four times the pixels asked for.
+ */
+TEST(images_k_of_full_size_photos)
+{
+    double rows[N * 17];
+    make_rows(rows, identity);
+    char dir[1024], p[1024];
+    make_scene(dir, sizeof dir, rows);
+    uint16_t px[FW * FH * 3] = {0};
+    for (int i = 0; i < N; i++) {
+        image_path(p, sizeof p, dir, i);
+        fx_write_png(p, FW, FH, 2, 8, px, NULL, 0, NULL, 0);
+    }
+    nerf_dataset *ds = NULL;
+    nerf_dataset_options o;
+    NERF_DATASET_OPTIONS_INIT(&o);
+    o.downscale = 2;
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "images_2: the photos are 16x12"));
+    CHECK(fx_has(nerf_last_error(), "divided by 2 is 8x6"));
+    /* Within a pixel of the poses' size over 2 is what the name says,
+     * whichever way the tool that shrank them rounded: 9 x 7 is read. */
+    uint16_t near[(IW + 1) * (IH + 1) * 3] = {0};
+    for (int i = 0; i < N; i++) {
+        image_path(p, sizeof p, dir, i);
+        fx_write_png(p, IW + 1, IH + 1, 2, 8, near, NULL, 0, NULL, 0);
+    }
+    CHECK_OK(nerf_dataset_load(&ds, dir, &o));
+    nerf_dataset_destroy(ds);
 }
 
 int main(void)
@@ -429,6 +510,8 @@ int main(void)
     RUN(downscale_from_smaller_folder);
     RUN(bad_npy);
     RUN(bad_images);
+    RUN(held_out_images_are_checked);
+    RUN(images_k_of_full_size_photos);
     fx_remove_tree(tmp);
     HARNESS_EXIT();
 }

@@ -1,7 +1,12 @@
 /* PNG reading and writing: every colour type and depth, and bad files. */
 #include <nerf.h>
 
+#include <sys/stat.h>
+
 #include "data_fixtures.h"
+#include "image_read.h"
+#include "largest_alloc.h"
+#include "png_io.h"
 #include "../harness.h"
 
 static char *tmp;
@@ -254,6 +259,87 @@ TEST(bad_files)
     CHECK_EQ_INT(nerf_image_read_png(NULL, NULL, NULL, NULL), NERF_EINVAL);
 }
 
+/* Rewrite the IHDR of the PNG at path to claim w x h, CRC included. */
+static void claim_size(const char *path, uint32_t w, uint32_t h)
+{
+    FILE *f = fopen(path, "r+b");
+    unsigned char ihdr[17]; /* "IHDR" and its 13 bytes */
+    if (f == NULL || fseek(f, 12, SEEK_SET) != 0 ||
+        fread(ihdr, 1, sizeof ihdr, f) != sizeof ihdr) {
+        perror(path);
+        exit(1);
+    }
+    fx_be32(ihdr + 4, w);
+    fx_be32(ihdr + 8, h);
+    unsigned char crc[4];
+    fx_be32(crc, (uint32_t)crc32(0L, ihdr, sizeof ihdr));
+    fseek(f, 12, SEEK_SET);
+    fwrite(ihdr, 1, sizeof ihdr, f);
+    fwrite(crc, 1, sizeof crc, f);
+    fclose(f);
+}
+
+/*
+ * A header claiming 16384 x 16384 pixels in a file of a hundred bytes:
+ * such a PNG takes at least 16384^2 / 8 / 1032 = 32520 bytes (1 bit a
+ * pixel, deflated 1032 times), so it is refused before the 4 GiB of its
+ * float pixels are asked for; nothing larger than the file is.
+ */
+TEST(header_claiming_more_than_the_file)
+{
+    char p[1024];
+    path_of(p, "claims.png");
+    uint16_t s[4 * 4 * 4] = {0};
+    fx_write_png(p, 4, 4, 6, 8, s, NULL, 0, NULL, 0);
+    claim_size(p, 16384, 16384);
+    nerf__env env;
+    largest_alloc_env(&env);
+    uint32_t w = 0, h = 0;
+    float *rgba = NULL;
+    CHECK_EQ_INT(nerf__png_read_rgba(&env, p, &w, &h, &rgba), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), p));
+    CHECK(fx_has(nerf_last_error(), "claims 16384x16384 pixels"));
+    CHECK_EQ_INT(nerf__image_read_rgba(&env, p, &w, &h, &rgba),
+                 NERF_EFORMAT);
+    CHECK_EQ_INT(nerf__image_read_size(&env, p, &w, &h), NERF_EFORMAT);
+    CHECK(fx_has(nerf_last_error(), "claims 16384x16384 pixels"));
+    CHECK(largest_alloc < 4096);
+    /* A large picture that deflates well is no such claim: 2048 x 2048
+     * of one grey in under 20 KB, read at its size. */
+    uint16_t *flat = calloc((size_t)2048 * 2048, sizeof *flat);
+    path_of(p, "flat.png");
+    fx_write_png(p, 2048, 2048, 0, 8, flat, NULL, 0, NULL, 0);
+    free(flat);
+    CHECK(fx_file_size(p) < 20000);
+    CHECK_OK(nerf__image_read_size(&env, p, &w, &h));
+    CHECK(w == 2048 && h == 2048);
+    CHECK_OK(nerf__image_read_rgba(&env, p, &w, &h, &rgba));
+    nerf__free(&env, rgba);
+}
+
+/* What is not a regular file is refused, saying what it is, and never
+ * opened for reading: a FIFO without a writer would block. */
+TEST(not_regular_files)
+{
+    char p[1024];
+    path_of(p, "fifo.png");
+    CHECK(mkfifo(p, 0666) == 0);
+    expect_read_error("fifo.png", NERF_EUNRECOGNISED,
+                      "a FIFO (named pipe), not a regular file");
+    uint32_t w, h;
+    CHECK_EQ_INT(nerf__image_read_size(NULL, p, &w, &h), NERF_EUNRECOGNISED);
+    float *rgba = NULL;
+    CHECK_EQ_INT(nerf_image_read(p, &w, &h, &rgba), NERF_EUNRECOGNISED);
+    CHECK(fx_has(nerf_last_error(), "a FIFO"));
+    path_of(p, "folder.png");
+    CHECK(mkdir(p, 0777) == 0);
+    expect_read_error("folder.png", NERF_EUNRECOGNISED,
+                      "a folder, not a file");
+    CHECK_EQ_INT(nerf_image_read("/dev/null", &w, &h, &rgba),
+                 NERF_EUNRECOGNISED);
+    CHECK(fx_has(nerf_last_error(), "/dev/null: a character device"));
+}
+
 TEST(write_errors_and_atomicity)
 {
     char p[1024];
@@ -300,6 +386,8 @@ int main(void)
     RUN(rgba8_and_palette);
     RUN(sixteen_bit);
     RUN(bad_files);
+    RUN(header_claiming_more_than_the_file);
+    RUN(not_regular_files);
     RUN(write_errors_and_atomicity);
     fx_remove_tree(tmp);
     HARNESS_EXIT();

@@ -4,6 +4,7 @@
  */
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include "../harness.h"
@@ -239,6 +240,16 @@ TEST(missing_and_unreadable_paths)
           == 0);
     expect_load_fails(tmpdir, NERF_EUNRECOGNISED, "a directory");
     CHECK(strstr(nerf_last_error(), "a folder, not a file") != NULL);
+    /* Refused without being opened for reading: a FIFO without a writer
+     * would block the load for ever. */
+    path_in(path, sizeof path, "fifo.ckpt");
+    CHECK(mkfifo(path, 0666) == 0);
+    expect_load_fails(path, NERF_EUNRECOGNISED, "a FIFO");
+    CHECK(strstr(nerf_last_error(), "a FIFO (named pipe), not a regular "
+                 "file") != NULL);
+    unlink(path);
+    expect_load_fails("/dev/null", NERF_EUNRECOGNISED, "a device");
+    CHECK(strstr(nerf_last_error(), "a character device") != NULL);
 }
 
 /* ---- atomic replacement ------------------------------------------------- */

@@ -109,8 +109,8 @@ class NerfNotFound(NerfIOError, FileNotFoundError):
 
 class NerfUnrecognised(NerfFormatError):
     """NERF_EUNRECOGNISED: the file or folder is not the kind asked for
-    (no known dataset layout, not a libnerf checkpoint, a folder where a
-    file belongs)."""
+    (no known dataset layout, not a libnerf checkpoint, a folder, FIFO,
+    device or socket where a file belongs)."""
     status = EUNRECOGNISED
 
 
