@@ -9,7 +9,7 @@ from . import _buffers, _handle
 from ._capi import ModelP, lib
 from .core import param_key
 from .structs import (ModelOptions, RendererOptions, SamplerOptions,
-                      ScheduleStruct)
+                      ScheduleStruct, c_int, integer)
 
 # nerf_preset
 PRESET_REFERENCE = 1
@@ -71,7 +71,7 @@ def preset_key(preset: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown preset %r (known: %s)"
                              % (preset, ", ".join(PRESETS))) from None
-    return int(preset)
+    return integer(preset, "preset", c_int)
 
 
 def network_key(network: Union[str, int]) -> int:
@@ -82,7 +82,7 @@ def network_key(network: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown network %r (known: coarse, fine)"
                              % (network,)) from None
-    return int(network)
+    return integer(network, "network", c_int)
 
 
 def matmul_key(matmul: Union[str, int]) -> int:
@@ -94,7 +94,7 @@ def matmul_key(matmul: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown matmul %r (known: %s)"
                              % (matmul, ", ".join(MATMULS))) from None
-    return int(matmul)
+    return integer(matmul, "matmul", c_int)
 
 
 def space_key(space: Union[str, int]) -> int:
@@ -106,7 +106,7 @@ def space_key(space: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown space %r (known: %s)"
                              % (space, ", ".join(SPACES))) from None
-    return int(space)
+    return integer(space, "space", c_int)
 
 
 def matmul_supported(matmul: Union[str, int]) -> bool:
@@ -125,7 +125,7 @@ def model_options(preset: Union[str, int, None] = None, seed: int = 0,
     opts = ModelOptions()
     if preset is not None:
         lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
-    opts.seed = int(seed)
+    opts.seed = seed
     if "matmul" in fields:
         fields["matmul"] = matmul_key(fields["matmul"])
     if "space" in fields:
@@ -318,8 +318,9 @@ class Model(_handle.Handle):
             raise TypeError("sampler must be a nerf.Sampler or "
                             "nerf.SamplerOptions")
         with self._using() as ptr:
-            lib.nerf_model_set_render_settings(ptr, ctypes.byref(opts),
-                                               int(white_background))
+            lib.nerf_model_set_render_settings(
+                ptr, ctypes.byref(opts),
+                integer(white_background, "white_background"))
 
     @property
     def options(self) -> ModelOptions:
@@ -367,30 +368,27 @@ class Model(_handle.Handle):
         """Evaluate one network at ``n`` points (``nerf_model_query``).
 
         Args:
-            positions: n x 3 floats (any shape holding a multiple of 3).
-            directions: n x 3 unit view directions, or None when the model
-                does not use view directions.
+            positions: n x 3 floats (or 3 n flat).
+            directions: n x 3 unit view directions, the same shape as
+                positions, or None when the model does not use view
+                directions.
             network: "coarse", "fine" or 0 / 1; by default the fine
                 network when the model has one, else the coarse one.
 
         Returns:
             ``(rgb, sigma)``: n x 3 colours in [0, 1] and n raw densities.
         """
-        pos = _buffers.as_float_input(positions, "positions")
-        if pos.size % 3:
-            raise ValueError("positions: expected n x 3 floats, got %d"
-                             % pos.size)
-        n = pos.size // 3
+        pos = _buffers.as_float_input(positions, "positions",
+                                      shape=(None, 3))
+        n = pos.shape[0]
         dirs = None
         if directions is not None:
-            dirs = _buffers.as_float_input(directions, "directions")
-            if dirs.size != pos.size:
-                raise ValueError("directions: expected %d floats like "
-                                 "positions, got %d" % (pos.size, dirs.size))
+            dirs = _buffers.as_float_input(directions, "directions",
+                                           shape=(n, 3))
         if network is None:
             network = NETWORK_FINE if self.options.use_fine else NETWORK_COARSE
-        rgb = _buffers.FloatOutput((n, 3))
-        sigma = _buffers.FloatOutput((n,))
+        rgb = _buffers.FloatOutput((n, 3), "rgb")
+        sigma = _buffers.FloatOutput((n,), "sigma")
         with self._using() as ptr:
             lib.nerf_model_query(ptr, network_key(network), n, pos.ptr,
                                  dirs.ptr if dirs else None, rgb.ptr,

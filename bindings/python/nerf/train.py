@@ -10,7 +10,8 @@ from ._capi import TrainerP, lib
 from .data import Dataset
 from .model import Model
 from .render import Sampler
-from .structs import Progress, TrainerOptions, TrainStats, TrainStatsStruct
+from .structs import (Progress, TrainerOptions, TrainStats, TrainStatsStruct,
+                      c_uint64, integer)
 
 LogFn = Optional[Callable[[int, str], Any]]
 ProgressFn = Optional[Callable[[Progress], Any]]
@@ -84,7 +85,8 @@ class Trainer(_handle.ProgressHandle):
         """
         stats = TrainStatsStruct()
         with self._using() as ptr:
-            self._slot.run(lib.nerf_trainer_run, ptr, int(n_steps),
+            self._slot.run(lib.nerf_trainer_run, ptr,
+                           integer(n_steps, "run: n_steps", c_uint64),
                            ctypes.byref(stats), progress=progress)
         return TrainStats.from_struct(stats)
 
