@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ctypes
+import os
+import warnings
 from typing import Any, Callable, FrozenSet, Optional, Tuple, Union
 
 from . import _buffers, _handle
@@ -52,12 +54,14 @@ MODEL_HAS_RENDER_SETTINGS = 0x4
 MODEL_HAS_DATA_RECORD = 0x8
 MODEL_HAS_BATCH_RECORD = 0x10
 MODEL_HAS_ADAM_CORRECTIONS = 0x20
+MODEL_HAS_NONFINITE_WEIGHTS = 0x40
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
             MODEL_HAS_RENDER_SETTINGS: "render_settings",
             MODEL_HAS_DATA_RECORD: "data_record",
             MODEL_HAS_BATCH_RECORD: "batch_record",
-            MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections"}
+            MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections",
+            MODEL_HAS_NONFINITE_WEIGHTS: "nonfinite_weights"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -194,7 +198,12 @@ class Model(_handle.Handle):
         """Load a checkpoint written by :meth:`save` (``nerf_model_load``).
 
         Raises NerfIOError, NerfFormatError or NerfVersionError, with a
-        message naming the file.
+        message naming the file.  A checkpoint of a run that diverged
+        (weights NaN or infinite) loads, for inspection with :meth:`query`,
+        with a RuntimeWarning (and the library's warning, saying where the
+        first such weight is, in the log); its :attr:`contents` hold
+        ``"nonfinite_weights"``, and renderers, trainers, meshes and
+        :meth:`save` refuse it with NerfInvalidArgument.
         """
         hooks = _handle.make_hooks(log, log_level)
         res = _handle.create("Model", ModelP, lib.nerf_model_load,
@@ -202,7 +211,14 @@ class Model(_handle.Handle):
                              _handle.fspath(path),
                              ctypes.byref(hooks[0]) if hooks else None,
                              keep=hooks[1] if hooks else None)
-        return cls._wrap(res)
+        model = cls._wrap(res)
+        if "nonfinite_weights" in model.contents:
+            warnings.warn("%s: the weights are not finite: the run that "
+                          "trained it diverged; it loads for inspection "
+                          "(Model.query), but renderers, trainers, meshes "
+                          "and saves refuse it" % os.fsdecode(path),
+                          RuntimeWarning, stacklevel=2)
+        return model
 
     @classmethod
     def import_npz(cls, path: Any, preset: Union[str, int, None] = None,
@@ -248,7 +264,8 @@ class Model(_handle.Handle):
         :attr:`training_batch`), ``"adam_corrections"`` (a hash-grid
         model's Adam corrections of each table parameter by its own count
         of updates, since 0.10; without them such a model from an older
-        file corrects by the step)."""
+        file corrects by the step), ``"nonfinite_weights"`` (weights that
+        are NaN or infinite: a run that diverged; see :meth:`load`)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)

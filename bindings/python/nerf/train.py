@@ -67,7 +67,10 @@ class Trainer(_handle.ProgressHandle):
     def step(self) -> TrainStats:
         """Take one optimisation step and return its figures
         (``nerf_trainer_step``).  A non-finite loss raises
-        NerfInternalError and leaves the weights as they were."""
+        NerfInternalError ("training diverged"), saying whether the weights
+        are still finite, and leaves them as they were before the step.
+        A model whose weights are not finite is refused by the trainer, by
+        renderers and by :meth:`nerf.Model.save`."""
         stats = TrainStatsStruct()
         with self._using() as ptr:
             self._slot.run(lib.nerf_trainer_step, ptr, ctypes.byref(stats))
