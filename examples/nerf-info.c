@@ -21,10 +21,13 @@ static const char usage[] =
     "usage: nerf-info [MODEL [--json] [--export FILE [--overwrite]]]\n"
     "Without arguments, print libnerf's version and build information.\n"
     "With MODEL (a file nerf-train wrote), describe it: its preset, encodings\n"
-    "and networks, parameter count, training step, scene space and bound,\n"
+    "and networks, parameter count, whether its weights are finite, training\n"
+    "step, scene space and bound,\n"
     "matmul mode, what the file holds (a training checkpoint with the\n"
     "optimiser's moments, or a weights-only export) and the settings it is\n"
-    "rendered with (recorded by training; guessed for older files).\n"
+    "rendered with (recorded by training; guessed for older files).  Status 1\n"
+    "when the weights are not finite (the run that trained MODEL diverged):\n"
+    "it is described, but no program renders, evaluates or trains it.\n"
     "  --json         print the description as one JSON object (default: text)\n"
     "  --export FILE  write MODEL without its optimiser state to FILE (under half\n"
     "                 a checkpoint's size), for sharing, rendering\n"
@@ -111,8 +114,15 @@ static int build_info(void)
 
 static int describe(const args *a)
 {
+    /* The library's warnings (a diverged run's weights, products loaded
+     * as others) say what the description can only name. */
+    nerf_hooks hooks;
+    NERF_HOOKS_INIT(&hooks);
+    hooks.log_cb = cli_log;
+    hooks.log_user = PROGRAM;
+    hooks.log_level = NERF_LOG_WARN;
     nerf_model *model = NULL;
-    int rc = nerf_model_load(&model, a->model, NULL);
+    int rc = nerf_model_load(&model, a->model, &hooks);
     if (rc != NERF_OK) {
         cli_report(PROGRAM, rc);
         return 1;
@@ -124,7 +134,7 @@ static int describe(const args *a)
         model = NULL;
         if (rc == NERF_OK) {
             /* Describe what was written, read back as a user would. */
-            rc = nerf_model_load(&model, a->export_to, NULL);
+            rc = nerf_model_load(&model, a->export_to, &hooks);
         }
         if (rc != NERF_OK) {
             cli_report(PROGRAM, rc);
@@ -135,6 +145,9 @@ static int describe(const args *a)
     struct stat st;
     long long bytes = stat(shown, &st) == 0 ? (long long)st.st_size : -1;
     cJSON *info = model_info(model, shown, bytes);
+    /* Described, but of no use: a script asking nerf-info learns it. */
+    const int diverged = (nerf_model_contents(model) &
+                          NERF_MODEL_HAS_NONFINITE_WEIGHTS) != 0;
     nerf_model_destroy(model);
     if (info == NULL) {
         fprintf(stderr, PROGRAM ": out of memory\n");
@@ -150,6 +163,11 @@ static int describe(const args *a)
         model_info_print_text(info, stdout);
     }
     cJSON_Delete(info);
+    if (diverged) {
+        fprintf(stderr, PROGRAM ": %s: the weights are not finite: the run "
+                "that trained it diverged\n", shown);
+        return 1;
+    }
     return 0;
 }
 

@@ -570,8 +570,12 @@ NERF_API int nerf_model_schedule(const nerf_model *model, nerf_schedule *out);
  * Save the model, its optimiser state and training step to @p path in
  * libnerf's checkpoint format (docs/formats.md).  The file is written to a
  * temporary name beside @p path, flushed and renamed, so an existing file at
- * @p path is replaced only by a complete checkpoint.
- * @return NERF_OK; NERF_EINVAL; NERF_EIO; NERF_ENOMEM.
+ * @p path is replaced only by a complete checkpoint.  A model whose
+ * weights are not finite (NERF_MODEL_HAS_NONFINITE_WEIGHTS) is not saved:
+ * no call could use the file, and a run that diverged would replace its
+ * last good checkpoint with it.
+ * @return NERF_OK; NERF_EINVAL (a NULL argument, weights not finite);
+ * NERF_EIO; NERF_ENOMEM.
  */
 NERF_API int nerf_model_save(const nerf_model *model, const char *path);
 
@@ -581,6 +585,15 @@ NERF_API int nerf_model_save(const nerf_model *model, const char *path);
  * oneDNN products (bf16 or FP32_ONEDNN) loads computing in fp32 through
  * cblas where nerf_matmul_supported() says its kind is not available:
  * its weights are fp32 either way, and a warning goes to the log.
+ * Parameter values are not checked against the file: a checkpoint of a
+ * run that diverged (weights NaN or infinite) loads, with a warning in
+ * the log naming the file, how many weights are not finite and where the
+ * first is, so that it can be inspected (nerf_model_query());
+ * nerf_model_contents() has NERF_MODEL_HAS_NONFINITE_WEIGHTS, and the
+ * calls that would make something of it refuse it with NERF_EINVAL:
+ * nerf_renderer_create() and the render calls, nerf_trainer_create(),
+ * nerf_mesh_extract(), nerf_density_grid_write(), nerf_model_save() and
+ * nerf_model_export().
  * @param hooks allocation and logging for the new model; NULL = defaults.
  * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
  * checkpoint, or not a regular file: a folder, a FIFO, a device, refused
@@ -634,10 +647,18 @@ NERF_API int nerf_model_export(const nerf_model *model, const char *path);
                                            but without them, from an older
                                            libnerf's file, corrects by the
                                            step, as it was trained. */
+#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Since 0.11: weights
+                                           that are NaN or infinite, as a
+                                           run that diverged leaves them:
+                                           the model can be queried, and
+                                           nothing else takes it (see
+                                           nerf_model_load()). */
 
 /**
  * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
  * bits; 0 for NULL.  For a loaded model, which of these its file held.
+ * NERF_MODEL_HAS_NONFINITE_WEIGHTS is found by a pass over the weights
+ * after they last changed (a training step, a load).
  */
 NERF_API uint32_t nerf_model_contents(const nerf_model *model);
 
@@ -1281,8 +1302,10 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
  * sampler may serve several renderers.
  *
  * @return NERF_OK; NERF_EINVAL (NULL model, out-of-range
- * options, a marching sampler with a model that has no occupancy grid);
- * with a NULL sampler, NERF_EFORMAT for recorded settings no sampler
+ * options, a marching sampler with a model that has no occupancy grid,
+ * weights that are not finite: NERF_MODEL_HAS_NONFINITE_WEIGHTS; each
+ * render call refuses them too, should training since have made them
+ * so); with a NULL sampler, NERF_EFORMAT for recorded settings no sampler
  * accepts (a forged file), as nerf_model_render_settings();
  * NERF_EVERSION for an options struct from a newer header with non-zero
  * unknown fields; NERF_ENOMEM.
@@ -2031,8 +2054,9 @@ typedef struct nerf_train_stats {
  * a checkpoint written before libnerf 0.4) gives no warning.
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
- * a marching sampler with a model that has no occupancy grid);
- * NERF_EIO (checkpoint_path cannot be written: a missing folder, a path
+ * a marching sampler with a model that has no occupancy grid, weights
+ * that are not finite: NERF_MODEL_HAS_NONFINITE_WEIGHTS, which Adam
+ * cannot bring back); NERF_EIO (checkpoint_path cannot be written: a missing folder, a path
  * through a regular file, a folder, no permission); NERF_EVERSION
  * (options from a newer header setting unknown fields); NERF_ENOMEM.
  */
@@ -2053,7 +2077,10 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *trainer);
  * @return NERF_OK; NERF_EINVAL; NERF_ENOMEM (first step only: later steps
  * reuse their buffers, except that with ray marching they grow when a
  * step has more samples than any before); NERF_ERROR if the loss is not
- * finite (the weights are then left as they were before the step), if
+ * finite (the weights are then left as they were before the step; the
+ * message says whether they are finite, and if not where the first that
+ * is not lies: "training diverged by step K: the weights are not
+ * finite (...)"), if
  * the grad_hook or checksum_hook failed (the message quotes the hook's),
  * or if the workers' weights differ (see checksum_every).
  */
@@ -2065,7 +2092,10 @@ NERF_API int nerf_trainer_step(nerf_trainer *trainer,
  * NERF_PROGRESS_TRAIN, done and total in steps) after each and saving
  * checkpoints as the options say.
  * @param stats_out NULL, or the figures of the last step taken.
- * @return as nerf_trainer_step(); NERF_ECANCELLED when the callback or
+ * @return as nerf_trainer_step(); NERF_ERROR also when the weights
+ * turned out not finite at a checkpoint due (which is then not written:
+ * the file keeps its last good state) or at the run's end, the losses
+ * having stayed finite; NERF_ECANCELLED when the callback or
  * nerf_trainer_cancel() stopped the run (after a whole step); NERF_EIO
  * when a checkpoint cannot be written, also when the run was cancelled and
  * its final save failed (the file at checkpoint_path is then the last
@@ -2424,7 +2454,8 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
  * @param opts NULL means the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL model or out, resolution 0 or too
  * large, a box of zero volume or not finite, a threshold that is not
- * finite, unknown colour); NERF_EVERSION; NERF_ECANCELLED (the progress
+ * finite, unknown colour, weights that are not finite:
+ * NERF_MODEL_HAS_NONFINITE_WEIGHTS); NERF_EVERSION; NERF_ECANCELLED (the progress
  * callback); NERF_ENOMEM.
  *
  * Reads the model only (as nerf_model_query()): several calls may run on

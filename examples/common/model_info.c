@@ -141,6 +141,14 @@ static cJSON *schedule_object(const nerf_model *model)
     return o;
 }
 
+/* Whether anything can be made of the model (a diverged run's cannot). */
+static const char *weights_state(const nerf_model *model)
+{
+    return nerf_model_contents(model) & NERF_MODEL_HAS_NONFINITE_WEIGHTS
+               ? "not finite: the run that trained it diverged"
+               : "finite";
+}
+
 cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
 {
     nerf_model_options mo;
@@ -158,6 +166,7 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
     cJSON_AddItemToObject(o, "network", network_object(&mo));
     cJSON_AddNumberToObject(o, "parameters",
                             (double)nerf_model_param_count(model));
+    cJSON_AddStringToObject(o, "weights", weights_state(model));
     cJSON_AddNumberToObject(o, "step", (double)nerf_model_step(model));
     cJSON_AddItemToObject(o, "schedule", schedule_object(model));
     cJSON_AddStringToObject(o, "space", space_name(mo.space));

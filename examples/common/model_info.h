@@ -11,9 +11,9 @@
 
 /*
  * The description of model, loaded from path (whose size is given in
- * bytes): preset, encodings, networks, parameter count, step, space,
- * matmul, what the file holds and the render settings.  NULL when out of
- * memory.
+ * bytes): preset, encodings, networks, parameter count, whether the
+ * weights are finite, step, space, matmul, what the file holds and the
+ * render settings.  NULL when out of memory.
  */
 cJSON *model_info(const nerf_model *model, const char *path, long long bytes);
 

@@ -59,6 +59,11 @@ int nerf__geometry_setup(const nerf_model *model, const nerf_mesh_options *opts,
     if (model == NULL) {
         return nerf__error(NERF_EINVAL, "%s: NULL model", who);
     }
+    /* NaN densities would give no surface and a grid of zeros. */
+    rc = nerf__model_check_finite(model, who);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     if (!isfinite(o->threshold)) {
         return nerf__error(NERF_EINVAL, "%s: threshold %g is not a finite "
                            "density", who, (double)o->threshold);

@@ -626,6 +626,15 @@ static int save(const nerf_model *model, const char *path, bool weights_only,
         return nerf__error(NERF_EINVAL, "%s: NULL %s", fn,
                            model ? "path" : "model");
     }
+    if (!nerf__model_finite(model)) {
+        /* No program can use such a file, and a trainer saving a run that
+         * diverged would replace its last good checkpoint with it. */
+        char text[320];
+        nerf__model_nonfinite_text(model, text, sizeof text);
+        return nerf__error(NERF_EINVAL, "%s: %s: not written: the model's "
+                           "weights are not finite (%s): its training "
+                           "diverged", fn, path, text);
+    }
     /* A model that has no moments must not gain zeros that a later run
      * would take for its optimiser's state. */
     weights_only = weights_only || model->weights_only;
@@ -1270,6 +1279,17 @@ static int build_model(const nerf__env *env, const char *path,
         get_floats(s.body[ADAM_V_INDEX], m->adam_v, m->n_params);
     }
     nerf__model_weights_changed(m);
+    size_t len = strlen(path) + 1;
+    m->source = nerf__alloc(env, len);
+    if (m->source == NULL) {
+        nerf_model_destroy(m);
+        return nerf__error_prefix(NERF_ENOMEM, path);
+    }
+    memcpy(m->source, path, len);
+    /* Loaded all the same, for inspection: a diverged run's checkpoint
+     * is said to be one here, where it is first seen, and refused by
+     * whatever would make something of it (finite.c). */
+    nerf__model_warn_nonfinite(m, path);
     *out = m;
     return NERF_OK;
 }

@@ -358,6 +358,7 @@ static uint32_t products_of(uint32_t matmul, const nerf__env *env)
 void nerf__model_weights_changed(nerf_model *m)
 {
     nerf__onednn_weights_changed(m->onednn);
+    nerf__model_finite_unknown(m);
 }
 
 int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
@@ -370,6 +371,7 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
     m->env = *env;
     m->opts = *opts;
     m->opts.hooks = NULL;
+    atomic_init(&m->finite, 0); /* not known yet */
     m->n_nets = opts->use_fine ? 2 : 1;
     size_t offset = 0;
     for (uint32_t i = 0; i < m->n_nets; i++) {
@@ -490,6 +492,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__average_free(model);
     nerf__onednn_destroy(model->onednn);
     nerf__occupancy_destroy(model->grid);
+    nerf__free(&env, model->source);
     nerf__free(&env, model);
 }
 
@@ -540,6 +543,9 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model)
     }
     if (model->corrected && !model->weights_only) {
         c |= NERF_MODEL_HAS_ADAM_CORRECTIONS;
+    }
+    if (!nerf__model_finite(model)) {
+        c |= NERF_MODEL_HAS_NONFINITE_WEIGHTS;
     }
     return c;
 }

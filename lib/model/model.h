@@ -5,6 +5,7 @@
 #ifndef NERF_MODEL_H
 #define NERF_MODEL_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 
 #include "adam.h"
@@ -80,6 +81,14 @@ struct nerf_model {
      * has been taken. */
     float *average;
     bool averaging;
+    /* Whether every weight is finite (finite.c): not known yet, yes or
+     * no.  Found on first asking after the weights change, kept till the
+     * next change; atomic because renderers on several threads may ask
+     * one model at once. */
+    atomic_int finite;
+    /* The file the model was loaded from, for messages that name it;
+     * NULL for a model created or imported. */
+    char *source;
 };
 
 /* The most rays and samples a training step takes
@@ -210,6 +219,24 @@ int nerf__model_backward(nerf_model *m, int network, nerf__workspace *ws,
  * before its next product.  Cheap; nothing happens for an fp32 model.
  */
 void nerf__model_weights_changed(nerf_model *m);
+
+/*
+ * Weights that are not finite (finite.c): a run that diverged.
+ * nerf__model_finite() says whether all are, scanning the weights once
+ * after each change; nerf__model_check_finite() returns NERF_OK, or
+ * NERF_EINVAL with a message from fn naming the model's file, how many
+ * are not finite and where the first is; nerf__model_nonfinite_text()
+ * writes that count and place ("3 of 5000 weights are NaN or infinite,
+ * the first in the coarse network's trunk layer 0 weights [row 0,
+ * column 5]"); nerf__model_warn_nonfinite() logs it as a warning naming
+ * path, as a load does.  nerf__model_weights_changed() makes the answer
+ * unknown again (nerf__model_finite_unknown()).
+ */
+bool nerf__model_finite(const nerf_model *m);
+int nerf__model_check_finite(const nerf_model *m, const char *fn);
+void nerf__model_nonfinite_text(const nerf_model *m, char *buf, size_t size);
+void nerf__model_warn_nonfinite(const nerf_model *m, const char *path);
+void nerf__model_finite_unknown(nerf_model *m);
 
 void nerf__model_zero_grad(nerf_model *m);
 /* Zero the gradients unless they are known to be zero already. */

@@ -156,6 +156,11 @@ static int render_image(nerf_renderer *r, const nerf_camera *camera,
                            "%ux%u image needs %zu", fn, capacity,
                            job.cam.width, job.cam.height, pixels);
     }
+    /* Weights that became NaN in training since the renderer was made. */
+    rc = nerf__model_check_finite(r->model, fn);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     nerf__renderer_eval_setup(r, &job.setup);
     if (r->sampler->opts.ndc && job.setup.ndc_focal == 0.0f) {
         /* No scene frustum: the camera's own, as the reference does when

@@ -102,6 +102,10 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
     nerf__env env;
     int rc = nerf__options_open(&o, sizeof o, opts, "nerf_renderer_options",
                                 check_options, &o.hooks, &env);
+    if (rc == NERF_OK) {
+        /* NaN weights would render black (or NaN) with no word of why. */
+        rc = nerf__model_check_finite(model, "nerf_renderer_create");
+    }
     nerf_sampler *owned = NULL;
     if (rc == NERF_OK && sampler == NULL) {
         rc = own_sampler(model, &o, opts == NULL, &owned);
@@ -259,6 +263,11 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
     }
     if (n_rays > SIZE_MAX / (3 * sizeof(float))) {
         return nerf__error(NERF_EINVAL, "%s: %zu rays is too many", fn, n_rays);
+    }
+    /* Weights that became NaN in training since the renderer was made. */
+    int rc = nerf__model_check_finite(renderer->model, fn);
+    if (rc != NERF_OK) {
+        return rc;
     }
     rays_job job;
     nerf__renderer_eval_setup(renderer, &job.setup);

@@ -27,6 +27,32 @@ static double pass_loss(size_t n, size_t all, const float *rgb,
     return n > 0 ? sum / (double)n : 0.0;
 }
 
+/*
+ * A run that diverged, found at step k: by its loss (then the weights
+ * are left as they were before the step), or by a save or the run's end
+ * finding the weights not finite.  The message says which, and where the
+ * first weight that is not finite lies; file, when given, is the
+ * checkpoint that was therefore not written.
+ */
+static int diverged(const nerf_trainer *t, uint64_t k, double loss,
+                    const char *file)
+{
+    const nerf_model *m = t->model;
+    if (nerf__model_finite(m)) {
+        return nerf__error(NERF_ERROR, "training diverged: the loss is %g at "
+                           "step %llu, the weights still finite (try a "
+                           "lower learning rate)", loss,
+                           (unsigned long long)k);
+    }
+    char text[320];
+    nerf__model_nonfinite_text(m, text, sizeof text);
+    return nerf__error(NERF_ERROR, "training diverged by step %llu: the "
+                       "weights are not finite (%s)%s%s%s (try a lower "
+                       "learning rate)", (unsigned long long)k, text,
+                       file ? "; " : "", file ? file : "",
+                       file ? " was not written and keeps what it held" : "");
+}
+
 static double psnr_of(double mse)
 {
     return mse > 0.0 ? -10.0 * log10(mse) : INFINITY;
@@ -144,9 +170,7 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
     }
     double loss = mse[0] + mse[1];
     if (!isfinite(loss)) {
-        return nerf__error(NERF_ERROR, "training diverged: the loss is %g at "
-                           "step %llu (try a lower learning rate)", loss,
-                           (unsigned long long)k);
+        return diverged(t, k, loss, NULL);
     }
     nerf__model_clear_grad(m);
     if (n > 0) {
@@ -207,6 +231,11 @@ static double seconds(void)
 
 static int save_checkpoint(nerf_trainer *t, nerf__run *r)
 {
+    if (!nerf__model_finite(t->model)) {
+        /* The last good checkpoint stays: a step since made the weights
+         * NaN without the loss showing it yet. */
+        return diverged(t, t->model->step, NAN, t->checkpoint_path);
+    }
     const double begin = nerf__run_elapsed(r);
     int rc = nerf_model_save(t->model, t->checkpoint_path);
     if (rc == NERF_OK) {
@@ -293,6 +322,12 @@ int nerf__run_end(nerf_trainer *t, nerf__run *r, int rc)
             (rc == NERF_OK || rc == NERF_ECANCELLED)) {
             rc = save_rc;
         }
+    }
+    /* Without a checkpoint to save, a run whose steps made the weights NaN
+     * with finite losses says so here rather than at the next use. */
+    if ((rc == NERF_OK || rc == NERF_ECANCELLED) && r->done > 0 &&
+        !nerf__model_finite(t->model)) {
+        rc = diverged(t, t->model->step, NAN, NULL);
     }
     return rc;
 }

@@ -207,6 +207,11 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
                            "has no images");
     }
     rc = nerf__render_check_pair(model, sampler, "nerf_trainer_create");
+    if (rc == NERF_OK) {
+        /* Adam cannot bring NaN weights back: resume from a checkpoint
+         * saved before the run diverged. */
+        rc = nerf__model_check_finite(model, "nerf_trainer_create");
+    }
     if (rc != NERF_OK) {
         return rc;
     }

@@ -258,7 +258,8 @@ _Static_assert(NERF_CAMERA_PIXEL_CORNER == 0x1u &&
 _Static_assert(NERF_MODEL_HAS_OPTIMIZER == 0x1u &&
                NERF_MODEL_HAS_OCCUPANCY == 0x2u &&
                NERF_MODEL_HAS_RENDER_SETTINGS == 0x4u &&
-               NERF_MODEL_HAS_DATA_RECORD == 0x8u,
+               NERF_MODEL_HAS_DATA_RECORD == 0x8u &&
+               NERF_MODEL_HAS_NONFINITE_WEIGHTS == 0x40u,
                "model content bits renumbered");
 
 _Static_assert(NERF_SPLIT_TRAIN == 0 && NERF_SPLIT_VAL == 1 &&

@@ -3,8 +3,12 @@ first use, by the function registered under NAME.  A builder returns the
 path it made; it may use other fixtures through fx.get() and run the
 programs through fx.tool()."""
 
+import json
 import os
 import shutil
+import socket
+import struct
+import zlib
 
 BUILDERS = {}
 
@@ -165,10 +169,6 @@ def _frames_taken(fx, path):
     write(os.path.join(path, "r_001.png"), b"not yours")
 # ---- readers: files that are not regular, images and datasets ---------------
 
-import json  # noqa: E402 (kept with the fixtures that use them)
-import socket  # noqa: E402
-import struct  # noqa: E402
-import zlib  # noqa: E402
 
 
 @fixture("socket")
@@ -484,3 +484,45 @@ def _colmap_images2_full_size(fx, path):
     shutil.copytree(os.path.join(path, "images"),
                     os.path.join(path, "images_2"))
     return path
+# ---- weights: a run that diverged -----------------------------------------
+
+PARAMETERS_TAG = 0x80000003
+
+
+def forge_weight(src, dst, index, value):
+    """Copy the checkpoint src to dst with parameter `index` set to value,
+    through the layout docs/formats.md gives: a 48-byte header (magic,
+    version, header size, payload sizes, CRCs of both payloads, flags, the
+    header's own CRC), then one zlib stream of tagged sections; the
+    parameters are the section 0x80000003, n float32."""
+    import struct
+    import zlib
+    with open(src, "rb") as f:
+        data = f.read()
+    header_size = struct.unpack_from("<I", data, 12)[0]
+    payload = bytearray(zlib.decompress(data[header_size:]))
+    at = 0
+    while at < len(payload):
+        tag, length = struct.unpack_from("<IQ", payload, at)
+        if tag == PARAMETERS_TAG:
+            if 4 * (index + 1) > length:
+                raise FixtureError("%s has no parameter %d" % (src, index))
+            struct.pack_into("<f", payload, at + 12 + 4 * index, value)
+            break
+        at += 12 + length
+    else:
+        raise FixtureError("%s: no parameters section" % src)
+    packed = zlib.compress(bytes(payload))
+    header = bytearray(data[:header_size])
+    struct.pack_into("<QQII", header, 16, len(payload), len(packed),
+                     zlib.crc32(packed), zlib.crc32(payload))
+    struct.pack_into("<I", header, 44, zlib.crc32(bytes(header[:44])))
+    return write(dst, bytes(header) + packed)
+
+
+@fixture("nan-model")
+def _nan_model(fx, path):
+    """{model} with one weight NaN, as a run that diverged leaves it: the
+    coarse network's trunk layer 0, row 0, column 5 (parameter 5; the tiny
+    preset's frequency encoding has no parameters before it)."""
+    return forge_weight(fx.get("model"), path + ".nerf", 5, float("nan"))

@@ -34,8 +34,17 @@ import tempfile
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import fixtures  # noqa: E402 (after the line above)
 
-PROGRAMS = ("nerf-scene", "nerf-train", "nerf-render", "nerf-eval",
-            "nerf-info", "nerf-export")
+# Each program and where the build puts it under BINDIR.  nerf-viewer is
+# built only where SDL2 is found: without it its cases are skipped.
+PROGRAMS = {"nerf-scene": "nerf-scene", "nerf-train": "nerf-train",
+            "nerf-render": "nerf-render", "nerf-eval": "nerf-eval",
+            "nerf-info": "nerf-info", "nerf-export": "nerf-export",
+            "nerf-viewer": os.path.join("viewer", "nerf-viewer")}
+OPTIONAL = ("nerf-viewer",)
+
+
+class Skip(Exception):
+    """The case cannot run in this build; the text says why."""
 
 
 class Case:
@@ -103,7 +112,10 @@ class Runner:
         self.fixtures = fixtures.Fixtures(self, os.path.join(work, "fixtures"))
 
     def program(self, name):
-        return self.wrap + [os.path.join(self.bindir, name)]
+        path = os.path.join(self.bindir, PROGRAMS.get(name, name))
+        if name in OPTIONAL and not os.path.exists(path):
+            raise Skip("%s is not built" % name)
+        return self.wrap + [path]
 
     def run(self, argv, env=None):
         """Run argv with the case time limit; (status, stdout, stderr), or
@@ -251,6 +263,10 @@ def main(argv):
                 problem = runner.check(case)
             except fixtures.FixtureError as e:
                 problem = "fixture: %s" % e
+            except Skip as e:
+                print("skip %s (%s)" % (case.name, e))
+                skipped += 1
+                continue
             if problem:
                 failed += 1
                 print("FAIL %s (%s): %s" % (case.name, case.where, problem))

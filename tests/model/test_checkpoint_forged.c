@@ -1141,6 +1141,147 @@ TEST(data_section)
     forge("data section with a NaN", edit_add_data, NERF_EFORMAT);
 }
 
+/* ---- weights that are not finite: a run that diverged ------------------- */
+
+/* The good file with value at the parameters idx[0..n). */
+static void forge_weights(const char *path, const size_t *idx, int n,
+                          float value)
+{
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    payload p;
+    split_payload(file, size, &p);
+    CHECK_EQ_INT(p.s[2].tag, 0x80000003u);
+    for (int k = 0; k < n; k++) {
+        memcpy(p.s[2].data + 4 * idx[k], &value, sizeof value);
+    }
+    write_payload(path, &p, NULL, 0);
+    free_payload(&p);
+    free(file);
+}
+
+static void check_mentions(const char *text, const char *part,
+                           const char *what)
+{
+    if (strstr(text, part) == NULL) {
+        FAILF("%s: '%s' lacks '%s'", what, text, part);
+    }
+}
+
+/* Such a checkpoint loads, for inspection, saying at load what it is and
+ * where the first such weight is; nothing else takes it. */
+TEST(nonfinite_weights_load_for_inspection)
+{
+    nerf_model *ref = trained_model(true);
+    if (ref == NULL) {
+        return;
+    }
+    const nerf__network *coarse = &ref->nets[0], *fine = &ref->nets[1];
+    const size_t in1 = coarse->trunk[1].in;
+    struct {
+        size_t idx[2];
+        int n;
+        float value;
+        const char *where;
+    } cases[] = {
+        {{coarse->trunk[1].w + 3 * in1 + 5}, 1, NAN,
+         "1 of %zu weights are NaN or infinite, the first in the coarse "
+         "network's trunk layer 1 weights [row 3, column 5]"},
+        {{fine->rgb.b + 2, fine->view[0].w}, 2, INFINITY,
+         "2 of %zu weights are NaN or infinite, the first in the fine "
+         "network's colour layer 0 weights [row 0, column 0]"},
+        {{fine->rgb.b + 2}, 1, -INFINITY,
+         "the first in the fine network's rgb layer bias [2]"},
+        {{coarse->head.b + 1}, 1, NAN,
+         "the first in the coarse network's density head bias [1]"},
+    };
+    char path[128], out[128], where[256];
+    path_in(path, sizeof path, "diverged.ckpt");
+    path_in(out, sizeof out, "diverged-copy.ckpt");
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        forge_weights(path, cases[c].idx, cases[c].n, cases[c].value);
+        snprintf(where, sizeof where, cases[c].where, ref->n_params);
+        nerf_hooks h;
+        NERF_HOOKS_INIT(&h);
+        h.log_cb = keep_warning;
+        h.log_level = NERF_LOG_WARN;
+        warning[0] = '\0';
+        nerf_model *m = NULL;
+        CHECK_OK(nerf_model_load(&m, path, &h));
+        if (m == NULL) {
+            continue;
+        }
+        check_mentions(warning, path, "the load's warning");
+        check_mentions(warning, where, "the load's warning");
+        check_mentions(warning, "diverged", "the load's warning");
+        CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS);
+        /* Inspection: a query runs, whatever it gives. */
+        float rgb[3 * 37], sigma[37];
+        query(m, NERF_NETWORK_COARSE, rgb, sigma);
+        /* Nothing is made of it, and nothing written. */
+        CHECK_EQ_INT(nerf_model_save(m, out), NERF_EINVAL);
+        check_mentions(nerf_last_error(), out, "nerf_model_save");
+        check_mentions(nerf_last_error(), where, "nerf_model_save");
+        CHECK_EQ_INT(nerf_model_export(m, out), NERF_EINVAL);
+        CHECK(access(out, F_OK) != 0);
+        nerf_renderer *r = NULL;
+        CHECK_EQ_INT(nerf_renderer_create(&r, m, NULL, NULL), NERF_EINVAL);
+        CHECK(r == NULL);
+        check_mentions(nerf_last_error(), path, "nerf_renderer_create");
+        check_mentions(nerf_last_error(), "not finite",
+                       "nerf_renderer_create");
+        nerf_mesh *mesh = NULL;
+        CHECK_EQ_INT(nerf_mesh_extract(&mesh, m, NULL), NERF_EINVAL);
+        check_mentions(nerf_last_error(), path, "nerf_mesh_extract");
+        nerf_model_destroy(m);
+    }
+    /* A good file still says nothing and has finite weights. */
+    size_t size = 0;
+    unsigned char *file = good_file(&size);
+    spit(path, file, size);
+    free(file);
+    nerf_hooks h;
+    NERF_HOOKS_INIT(&h);
+    h.log_cb = keep_warning;
+    h.log_level = NERF_LOG_WARN;
+    warning[0] = '\0';
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, &h));
+    CHECK(warning[0] == '\0');
+    CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS));
+    nerf_model_destroy(m);
+    nerf_model_destroy(ref);
+}
+
+/* In a hash-grid model the first such weight may lie in a level of the
+ * hash table; the answer follows the weights as they change. */
+TEST(nonfinite_weights_in_a_hash_table)
+{
+    nerf_model_options o;
+    small_grid_options(&o);
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    if (m == NULL) {
+        return;
+    }
+    const nerf__hashgrid *hg = &m->nets[0].pos_enc.u.hash;
+    CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS));
+    const size_t i = m->nets[0].pos_params + hg->offset[1] + 7;
+    const float was = m->params[i];
+    m->params[i] = NAN;
+    nerf__model_weights_changed(m);
+    CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS);
+    char text[320], want[128];
+    nerf__model_nonfinite_text(m, text, sizeof text);
+    snprintf(want, sizeof want, "the coarse network's hash table, level 1 "
+             "[entry %zu of the table]", hg->offset[1] + 7);
+    check_mentions(text, want, "a hash table's weight");
+    m->params[i] = was;
+    nerf__model_weights_changed(m);
+    CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS));
+    nerf_model_destroy(m);
+}
+
 int main(void)
 {
     make_tmpdir();
@@ -1155,6 +1296,8 @@ int main(void)
     RUN(forged_corrections_sections);
     RUN(matmul_section);
     RUN(data_section);
+    RUN(nonfinite_weights_load_for_inspection);
+    RUN(nonfinite_weights_in_a_hash_table);
     remove_tree(tmpdir);
     HARNESS_EXIT();
 }

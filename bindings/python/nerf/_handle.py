@@ -296,9 +296,23 @@ def make_hooks(log: Optional[Callable[[int, str], Any]],
     return hooks, (hooks, cfunc)
 
 
-def fspath(path: Any) -> bytes:
-    """A path argument as bytes for C."""
-    return os.fsencode(path)
+def fspath(path: Any, name: str = "path") -> bytes:
+    """A path argument as bytes for C: every path the binding passes to the
+    library comes through here.
+
+    Raises:
+        TypeError: ``path`` is not a str, bytes or os.PathLike.
+        ValueError: ``path`` holds a NUL character, where C would cut it
+            short (as Python's own open() refuses it).
+    """
+    try:
+        raw = os.fsencode(path)
+    except TypeError:
+        raise TypeError("%s: expected a str, bytes or os.PathLike path, "
+                        "not %s" % (name, type(path).__name__)) from None
+    if b"\0" in raw:
+        raise ValueError("%s: embedded null character in %r" % (name, path))
+    return raw
 
 
 def create(kind: str, ptr_type: Any, create_fn: Callable[..., Any],

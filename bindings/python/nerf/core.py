@@ -7,7 +7,7 @@ from typing import Any, Callable, Optional, Tuple, Union
 
 from . import errors
 from ._capi import lib
-from .structs import LOG_CB
+from .structs import LOG_CB, c_int, integer
 
 # nerf_log_level
 LOG_ERROR = 0
@@ -48,7 +48,7 @@ def param_key(param: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown parameter %r (known: %s)"
                              % (param, ", ".join(PARAMS))) from None
-    return int(param)
+    return integer(param, "param", c_int)
 
 
 def version() -> Tuple[int, int, int]:

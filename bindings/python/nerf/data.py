@@ -8,7 +8,8 @@ from typing import Any, Callable, List, Optional, Tuple, Union
 
 from . import _buffers, _handle
 from ._capi import CameraPathP, DatasetP, lib
-from .structs import Camera, CameraPathOptions, DatasetOptions, SceneOptions
+from .structs import (Camera, CameraPathOptions, DatasetOptions, SceneOptions,
+                      c_uint32, integer)
 
 # nerf_split and nerf_dataset_format
 SPLIT_TRAIN = 0
@@ -72,7 +73,7 @@ def _split_key(split: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown split %r (known: train, val, test)"
                              % (split,)) from None
-    return int(split)
+    return integer(split, "split")
 
 
 class Dataset(_handle.Handle):
@@ -159,7 +160,7 @@ class Dataset(_handle.Handle):
 
     def _index(self, index: int) -> int:
         n = len(self)
-        i = int(index)
+        i = integer(index, "index", ctypes.c_int64)
         if i < 0:
             i += n
         if not 0 <= i < n:
@@ -201,8 +202,9 @@ class Dataset(_handle.Handle):
         path (LLFF scenes only; NerfInvalidArgument otherwise)."""
         cam = Camera()
         with self._using() as ptr:
-            lib.nerf_dataset_spiral_camera(ptr, int(index), int(n_views),
-                                           ctypes.byref(cam))
+            lib.nerf_dataset_spiral_camera(
+                ptr, integer(index, "spiral_camera: index"),
+                integer(n_views, "spiral_camera: n_views"), ctypes.byref(cam))
         return cam
 
 
@@ -297,28 +299,36 @@ def _read_rgba(reader: Any, path: Any) -> Any:
                                     readonly=False)
 
 
-def _image_geometry(pixels: Any, size: int, width: Optional[int],
+def _image_geometry(shape: Tuple[int, ...], width: Optional[int],
                     height: Optional[int], channels: Optional[int],
                     name: str) -> Tuple[int, int, int]:
-    """(width, height, channels) from explicit values or the shape."""
-    shape = _buffers.array_shape(pixels)
-    if width is None or height is None:
-        if shape is None or len(shape) not in (2, 3):
-            raise ValueError("%s: give width and height, or an array of "
-                             "shape (height, width[, channels])" % name)
-        height, width = shape[0], shape[1]
+    """(width, height, channels) of an image argument: from its shape,
+    (height, width) or (height, width, channels), which values given
+    must agree with; a flat buffer needs width and height."""
+    given = [None if v is None else integer(v, k) for v, k in (
+        (width, "width"), (height, "height"), (channels, "channels"))]
+    width, height, channels = given
+    if len(shape) == 1:
+        if width is None or height is None:
+            raise ValueError("%s: a flat buffer of %d values needs width and "
+                             "height" % (name, shape[0]))
+        pixels = width * height
         if channels is None:
-            channels = shape[2] if len(shape) == 3 else 1
-    if channels is None:
-        if width * height == 0 or size % (width * height):
-            raise ValueError("%s: %d values do not fill %d x %d pixels"
-                             % (name, size, width, height))
-        channels = size // (width * height)
-    if size != width * height * channels:
-        raise ValueError("%s: expected %d x %d x %d = %d values, got %d"
-                         % (name, width, height, channels,
-                            width * height * channels, size))
-    return int(width), int(height), int(channels)
+            if pixels == 0 or shape[0] % pixels:
+                raise ValueError("%s: %d values do not fill %d x %d pixels"
+                                 % (name, shape[0], width, height))
+            channels = shape[0] // pixels
+        _buffers.match_shape(shape, (height, width, channels), name)
+        return width, height, channels
+    if len(shape) not in (2, 3):
+        raise ValueError("%s: expected shape (height, width) or (height, "
+                         "width, channels), got %s" % (name, shape))
+    want = (height, width) + ((channels,) if len(shape) == 3 else ())
+    found = _buffers.match_shape(shape, want, name)
+    if len(shape) == 2 and channels not in (None, 1):
+        raise ValueError("%s: shape %s has 1 channel, not %d"
+                         % (name, shape, channels))
+    return found[1], found[0], found[2] if len(shape) == 3 else 1
 
 
 def write_png(path: Any, pixels: Any, width: Optional[int] = None,
@@ -329,47 +339,47 @@ def write_png(path: Any, pixels: Any, width: Optional[int] = None,
     Float data (``nerf_image_write_png``) is clamped to [0, 1] and rounded;
     uint8 arrays and byte buffers (``bytes``, ``bytearray``, memoryviews of
     format 'B') are written as they are (``nerf_image_write_png8``).  The
-    geometry comes from the array's shape, (height, width) or (height,
-    width, channels), unless given.
+    geometry is the array's shape, (height, width) or (height, width,
+    channels); width, height and channels, when given, must agree with it.
+    A flat buffer needs width and height (and channels, unless its length
+    tells them).
     """
+    raw = _handle.fspath(path)
     if _buffers.is_uint8(pixels):
-        ptr, size, keep = _buffers.as_uint8_input(pixels, "pixels")
-        w, h, c = _image_geometry(pixels, size, width, height, channels,
-                                  "pixels")
-        lib.nerf_image_write_png8(_handle.fspath(path), w, h, c, ptr)
+        ptr, _, keep, shape = _buffers.as_uint8_input(pixels, "pixels")
+        w, h, c = _image_geometry(shape, width, height, channels, "pixels")
+        lib.nerf_image_write_png8(raw, w, h, c, ptr)
         del keep
         return
     buf = _buffers.as_float_input(pixels, "pixels")
-    w, h, c = _image_geometry(pixels, buf.size, width, height, channels,
-                              "pixels")
-    lib.nerf_image_write_png(_handle.fspath(path), w, h, c, buf.ptr)
+    w, h, c = _image_geometry(buf.shape, width, height, channels, "pixels")
+    lib.nerf_image_write_png(raw, w, h, c, buf.ptr)
 
 
 def write_npy(path: Any, values: Any, shape: Optional[Any] = None) -> None:
     """Write float data as a float32 NumPy ``.npy`` file with the library's
     own writer (``nerf_npy_write_float``, libnerf 0.5), through a temporary
     file renamed into place.  The shape (1 to 4 dimensions) is the
-    array's, unless given; ``numpy.load`` reads the file back."""
-    buf = _buffers.as_float_input(values, "values")
-    dims = tuple(int(s) for s in (shape if shape is not None else buf.shape))
-    count = 1
-    for d in dims:
-        count *= d
-    if not 1 <= len(dims) <= 4 or count != buf.size:
-        raise ValueError("write_npy: shape %r does not fit %d values (1 to 4 "
-                         "dimensions)" % (dims, buf.size))
+    array's, unless given; then the array must have that shape (or be
+    flat and hold that many values); ``numpy.load`` reads the file back."""
+    raw = _handle.fspath(path)
+    if shape is not None:
+        shape = tuple(integer(d, "shape", ctypes.c_size_t) for d in shape)
+    buf = _buffers.as_float_input(values, "values", shape=shape)
+    dims = buf.shape
+    if not 1 <= len(dims) <= 4:
+        raise ValueError("write_npy: values: %d dimensions, the file may "
+                         "have 1 to 4" % len(dims))
     c_shape = (ctypes.c_size_t * len(dims))(*dims)
-    lib.nerf_npy_write_float(_handle.fspath(path), buf.ptr, c_shape,
-                             len(dims))
+    lib.nerf_npy_write_float(raw, buf.ptr, c_shape, len(dims))
 
 
 def psnr(a: Any, b: Any) -> float:
     """Peak signal-to-noise ratio in dB of two images in [0, 1] of any
     (equal) layout; ``inf`` for identical images (``nerf_psnr``)."""
-    x = _buffers.as_float_input(a, "a")
-    y = _buffers.as_float_input(b, "b")
-    if x.size != y.size:
-        raise ValueError("psnr: a has %d values, b has %d" % (x.size, y.size))
+    # The library refuses images that hold NaN or infinite values.
+    x = _buffers.as_float_input(a, "psnr: a", finite=True)
+    y = _buffers.as_float_input(b, "psnr: b", shape=x.shape, finite=True)
     out = ctypes.c_double()
     lib.nerf_psnr(x.ptr, y.ptr, x.size, ctypes.byref(out))
     return out.value
@@ -382,11 +392,9 @@ def ssim(a: Any, b: Any, width: Optional[int] = None,
     evaluation computes it (``nerf_ssim``); at least 11 x 11 pixels.  The
     geometry comes from the shape of ``a``, (height, width[, channels]),
     unless given."""
-    x = _buffers.as_float_input(a, "a")
-    y = _buffers.as_float_input(b, "b")
-    if x.size != y.size:
-        raise ValueError("ssim: a has %d values, b has %d" % (x.size, y.size))
-    w, h, c = _image_geometry(a, x.size, width, height, channels, "a")
+    x = _buffers.as_float_input(a, "ssim: a", finite=True)
+    w, h, c = _image_geometry(x.shape, width, height, channels, "ssim: a")
+    y = _buffers.as_float_input(b, "ssim: b", shape=x.shape, finite=True)
     out = ctypes.c_double()
     lib.nerf_ssim(x.ptr, y.ptr, w, h, c, ctypes.byref(out))
     return out.value

@@ -10,7 +10,7 @@ from typing import Any, Callable, Dict, Optional, Sequence
 
 from . import _buffers, _handle
 from ._capi import MeshP, lib
-from .structs import MeshOptions, Progress
+from .structs import MeshOptions, Progress, c_int, integer
 
 # nerf_mesh_colour
 MESH_COLOUR_NONE = 0
@@ -114,7 +114,8 @@ class Mesh(_handle.Handle):
                                  % (format, ", ".join(MESH_FORMATS)))
             format = MESH_FORMATS[format]
         with self._using() as ptr:
-            lib.nerf_mesh_write(ptr, _handle.fspath(path), int(format))
+            lib.nerf_mesh_write(ptr, _handle.fspath(path),
+                                integer(format, "format", c_int))
 
 
 def extract(model_res: Any, model_ptr: Any, opts: MeshOptions,

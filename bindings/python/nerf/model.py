@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import ctypes
+import os
+import warnings
 from typing import Any, Callable, FrozenSet, Optional, Tuple, Union
 
 from . import _buffers, _handle
 from ._capi import ModelP, lib
 from .core import param_key
 from .structs import (ModelOptions, RendererOptions, SamplerOptions,
-                      ScheduleStruct)
+                      ScheduleStruct, c_int, integer)
 
 # nerf_preset
 PRESET_REFERENCE = 1
@@ -52,12 +54,14 @@ MODEL_HAS_RENDER_SETTINGS = 0x4
 MODEL_HAS_DATA_RECORD = 0x8
 MODEL_HAS_BATCH_RECORD = 0x10
 MODEL_HAS_ADAM_CORRECTIONS = 0x20
+MODEL_HAS_NONFINITE_WEIGHTS = 0x40
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
             MODEL_HAS_RENDER_SETTINGS: "render_settings",
             MODEL_HAS_DATA_RECORD: "data_record",
             MODEL_HAS_BATCH_RECORD: "batch_record",
-            MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections"}
+            MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections",
+            MODEL_HAS_NONFINITE_WEIGHTS: "nonfinite_weights"}
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -71,7 +75,7 @@ def preset_key(preset: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown preset %r (known: %s)"
                              % (preset, ", ".join(PRESETS))) from None
-    return int(preset)
+    return integer(preset, "preset", c_int)
 
 
 def network_key(network: Union[str, int]) -> int:
@@ -82,7 +86,7 @@ def network_key(network: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown network %r (known: coarse, fine)"
                              % (network,)) from None
-    return int(network)
+    return integer(network, "network", c_int)
 
 
 def matmul_key(matmul: Union[str, int]) -> int:
@@ -94,7 +98,7 @@ def matmul_key(matmul: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown matmul %r (known: %s)"
                              % (matmul, ", ".join(MATMULS))) from None
-    return int(matmul)
+    return integer(matmul, "matmul", c_int)
 
 
 def space_key(space: Union[str, int]) -> int:
@@ -106,7 +110,7 @@ def space_key(space: Union[str, int]) -> int:
         except KeyError:
             raise ValueError("unknown space %r (known: %s)"
                              % (space, ", ".join(SPACES))) from None
-    return int(space)
+    return integer(space, "space", c_int)
 
 
 def matmul_supported(matmul: Union[str, int]) -> bool:
@@ -125,7 +129,7 @@ def model_options(preset: Union[str, int, None] = None, seed: int = 0,
     opts = ModelOptions()
     if preset is not None:
         lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
-    opts.seed = int(seed)
+    opts.seed = seed
     if "matmul" in fields:
         fields["matmul"] = matmul_key(fields["matmul"])
     if "space" in fields:
@@ -194,7 +198,12 @@ class Model(_handle.Handle):
         """Load a checkpoint written by :meth:`save` (``nerf_model_load``).
 
         Raises NerfIOError, NerfFormatError or NerfVersionError, with a
-        message naming the file.
+        message naming the file.  A checkpoint of a run that diverged
+        (weights NaN or infinite) loads, for inspection with :meth:`query`,
+        with a RuntimeWarning (and the library's warning, saying where the
+        first such weight is, in the log); its :attr:`contents` hold
+        ``"nonfinite_weights"``, and renderers, trainers, meshes and
+        :meth:`save` refuse it with NerfInvalidArgument.
         """
         hooks = _handle.make_hooks(log, log_level)
         res = _handle.create("Model", ModelP, lib.nerf_model_load,
@@ -202,7 +211,14 @@ class Model(_handle.Handle):
                              _handle.fspath(path),
                              ctypes.byref(hooks[0]) if hooks else None,
                              keep=hooks[1] if hooks else None)
-        return cls._wrap(res)
+        model = cls._wrap(res)
+        if "nonfinite_weights" in model.contents:
+            warnings.warn("%s: the weights are not finite: the run that "
+                          "trained it diverged; it loads for inspection "
+                          "(Model.query), but renderers, trainers, meshes "
+                          "and saves refuse it" % os.fsdecode(path),
+                          RuntimeWarning, stacklevel=2)
+        return model
 
     @classmethod
     def import_npz(cls, path: Any, preset: Union[str, int, None] = None,
@@ -248,7 +264,8 @@ class Model(_handle.Handle):
         :attr:`training_batch`), ``"adam_corrections"`` (a hash-grid
         model's Adam corrections of each table parameter by its own count
         of updates, since 0.10; without them such a model from an older
-        file corrects by the step)."""
+        file corrects by the step), ``"nonfinite_weights"`` (weights that
+        are NaN or infinite: a run that diverged; see :meth:`load`)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)
@@ -318,8 +335,9 @@ class Model(_handle.Handle):
             raise TypeError("sampler must be a nerf.Sampler or "
                             "nerf.SamplerOptions")
         with self._using() as ptr:
-            lib.nerf_model_set_render_settings(ptr, ctypes.byref(opts),
-                                               int(white_background))
+            lib.nerf_model_set_render_settings(
+                ptr, ctypes.byref(opts),
+                integer(white_background, "white_background"))
 
     @property
     def options(self) -> ModelOptions:
@@ -367,30 +385,27 @@ class Model(_handle.Handle):
         """Evaluate one network at ``n`` points (``nerf_model_query``).
 
         Args:
-            positions: n x 3 floats (any shape holding a multiple of 3).
-            directions: n x 3 unit view directions, or None when the model
-                does not use view directions.
+            positions: n x 3 floats (or 3 n flat).
+            directions: n x 3 unit view directions, the same shape as
+                positions, or None when the model does not use view
+                directions.
             network: "coarse", "fine" or 0 / 1; by default the fine
                 network when the model has one, else the coarse one.
 
         Returns:
             ``(rgb, sigma)``: n x 3 colours in [0, 1] and n raw densities.
         """
-        pos = _buffers.as_float_input(positions, "positions")
-        if pos.size % 3:
-            raise ValueError("positions: expected n x 3 floats, got %d"
-                             % pos.size)
-        n = pos.size // 3
+        pos = _buffers.as_float_input(positions, "positions",
+                                      shape=(None, 3))
+        n = pos.shape[0]
         dirs = None
         if directions is not None:
-            dirs = _buffers.as_float_input(directions, "directions")
-            if dirs.size != pos.size:
-                raise ValueError("directions: expected %d floats like "
-                                 "positions, got %d" % (pos.size, dirs.size))
+            dirs = _buffers.as_float_input(directions, "directions",
+                                           shape=(n, 3))
         if network is None:
             network = NETWORK_FINE if self.options.use_fine else NETWORK_COARSE
-        rgb = _buffers.FloatOutput((n, 3))
-        sigma = _buffers.FloatOutput((n,))
+        rgb = _buffers.FloatOutput((n, 3), "rgb")
+        sigma = _buffers.FloatOutput((n,), "sigma")
         with self._using() as ptr:
             lib.nerf_model_query(ptr, network_key(network), n, pos.ptr,
                                  dirs.ptr if dirs else None, rgb.ptr,

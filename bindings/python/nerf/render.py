@@ -10,7 +10,7 @@ from ._capi import PointsP, RendererP, SamplerP, lib
 from .model import Model, preset_key
 from .structs import (POINTS_PLY_ASCII, POINTS_PLY_BINARY, Camera,
                       PointsOptions, Progress, RendererOptions,
-                      SamplerOptions)
+                      SamplerOptions, c_size_t, c_uint64, integer)
 
 #: Flag of the sampling calls: random placement as in training.
 SAMPLE_TRAINING = 0x1
@@ -42,7 +42,7 @@ class Sampler(_handle.Handle):
         if preset is not None:
             lib.nerf_sampler_options_preset(ctypes.byref(opts),
                                             preset_key(preset))
-        opts.seed = int(seed)
+        opts.seed = seed
         opts.update(**options)
         hooks = _handle.make_hooks(log, log_level)
         if hooks is not None:
@@ -93,13 +93,14 @@ class Sampler(_handle.Handle):
         of t (``nerf_sampler_sample_coarse``).  ``u``: optional
         ``n_rays`` x ``n_coarse`` uniforms replacing the generator's when
         ``training``."""
-        n_rays = int(n_rays)
-        uu = self._uniforms(u, n_rays * self.n_coarse, "u")
-        out = _buffers.FloatOutput((n_rays, self.n_coarse))
+        n_rays = integer(n_rays, "sample_coarse: n_rays", c_size_t)
+        first_ray = integer(first_ray, "sample_coarse: first_ray", c_uint64)
+        uu = self._uniforms(u, (n_rays, self.n_coarse), "u")
+        out = _buffers.FloatOutput((n_rays, self.n_coarse), "t")
         with self._using() as ptr:
             lib.nerf_sampler_sample_coarse(
                 ptr, n_rays, SAMPLE_TRAINING if training else 0,
-                int(first_ray), uu.ptr if uu else None, out.ptr)
+                first_ray, uu.ptr if uu else None, out.ptr)
         return out.release()
 
     def sample_fine(self, t_coarse: Any, weights: Any, training: bool = False,
@@ -113,33 +114,24 @@ class Sampler(_handle.Handle):
             weights: the compositing weights of those samples, same shape.
             u: optional ``n_rays`` x ``n_fine`` uniforms for training.
         """
-        t = _buffers.as_float_input(t_coarse, "t_coarse")
-        w = _buffers.as_float_input(weights, "weights")
-        if t.size % self.n_coarse:
-            raise ValueError("t_coarse: expected n_rays x %d floats, got %d"
-                             % (self.n_coarse, t.size))
-        if w.size != t.size:
-            raise ValueError("weights: expected %d floats like t_coarse, "
-                             "got %d" % (t.size, w.size))
-        n_rays = t.size // self.n_coarse
-        uu = self._uniforms(u, n_rays * self.n_fine, "u")
-        out = _buffers.FloatOutput((n_rays, self.n_coarse + self.n_fine))
+        t = _buffers.as_float_input(t_coarse, "t_coarse",
+                                    shape=(None, self.n_coarse))
+        n_rays = t.shape[0]
+        w = _buffers.as_float_input(weights, "weights", shape=t.shape)
+        first_ray = integer(first_ray, "sample_fine: first_ray", c_uint64)
+        uu = self._uniforms(u, (n_rays, self.n_fine), "u")
+        out = _buffers.FloatOutput((n_rays, self.n_coarse + self.n_fine), "t")
         with self._using() as ptr:
             lib.nerf_sampler_sample_fine(
                 ptr, n_rays, SAMPLE_TRAINING if training else 0,
-                int(first_ray), t.ptr, w.ptr, uu.ptr if uu else None,
-                out.ptr)
+                first_ray, t.ptr, w.ptr, uu.ptr if uu else None, out.ptr)
         return out.release()
 
     @staticmethod
-    def _uniforms(u: Any, count: int, name: str):
+    def _uniforms(u: Any, shape: Any, name: str):
         if u is None:
             return None
-        buf = _buffers.as_float_input(u, name)
-        if buf.size != count:
-            raise ValueError("%s: expected %d floats, got %d"
-                             % (name, count, buf.size))
-        return buf
+        return _buffers.as_float_input(u, name, shape=shape)
 
 
 class RenderResult(NamedTuple):
@@ -208,11 +200,30 @@ def _copy_out(ptr: Any, n: int, ctype: Any) -> Any:
     return out.release()
 
 
-def _camera_arg(camera: Any) -> Camera:
+def _camera_arg(camera: Any, what: str) -> Camera:
+    """The camera of a render call, checked as the library will check it,
+    before the call allocates the outputs it sizes."""
     if not isinstance(camera, Camera):
-        raise TypeError("camera must be a nerf.Camera, not %s"
-                        % type(camera).__name__)
+        raise TypeError("%s must be a nerf.Camera, not %s"
+                        % (what, type(camera).__name__))
+    camera.check(what)
     return camera
+
+
+def _image_outputs(fn: str, cam: Camera, wanted: Any) -> list:
+    """The output arrays of a render of cam: one per (name, channels, ask),
+    None where not asked; MemoryError says the size when they do not fit."""
+    h, w = int(cam.height), int(cam.width)
+    out = []
+    for name, channels, ask in wanted:
+        shape = (h, w, channels) if channels > 1 else (h, w)
+        if not ask:
+            out.append(None)
+        elif name == "rgb8":
+            out.append(_buffers.Uint8Output(shape, "%s: rgb" % fn))
+        else:
+            out.append(_buffers.FloatOutput(shape, "%s: %s" % (fn, name)))
+    return out
 
 
 class Renderer(_handle.ProgressHandle):
@@ -288,17 +299,15 @@ class Renderer(_handle.ProgressHandle):
             RenderResult: ``rgb`` height x width x 3, ``depth`` and
             ``opacity`` height x width floats; those not asked for are None.
         """
-        cam = _camera_arg(camera)
         if not (rgb or depth or opacity):
             raise ValueError("render_image: ask for at least one output")
-        h, w = int(cam.height), int(cam.width)
-        outs = [_buffers.FloatOutput((h, w, 3)) if rgb else None,
-                _buffers.FloatOutput((h, w)) if depth else None,
-                _buffers.FloatOutput((h, w)) if opacity else None]
+        cam = _camera_arg(camera, "render_image: camera")
+        outs = _image_outputs("render_image", cam, (
+            ("rgb", 3, rgb), ("depth", 1, depth), ("opacity", 1, opacity)))
         ptrs = [o.ptr if o else None for o in outs]
         with self._using() as ptr:
             self._slot.run(lib.nerf_renderer_render_image, ptr,
-                           ctypes.byref(cam), *ptrs, h * w,
+                           ctypes.byref(cam), *ptrs, cam.pixel_count,
                            progress=progress)
         return RenderResult(*(o.release() if o else None for o in outs))
 
@@ -308,18 +317,15 @@ class Renderer(_handle.ProgressHandle):
         """As :meth:`render_image` with 8-bit colours, round(255 clamp(c)):
         ``rgb`` is height x width x 3 uint8 (``bytes``-like without NumPy).
         """
-        cam = _camera_arg(camera)
-        h, w = int(cam.height), int(cam.width)
-        rgb = _buffers.Uint8Output((h, w, 3))
-        outs = [_buffers.FloatOutput((h, w)) if depth else None,
-                _buffers.FloatOutput((h, w)) if opacity else None]
+        cam = _camera_arg(camera, "render_image_u8: camera")
+        outs = _image_outputs("render_image_u8", cam, (
+            ("rgb8", 3, True), ("depth", 1, depth), ("opacity", 1, opacity)))
         ptrs = [o.ptr if o else None for o in outs]
         with self._using() as ptr:
             self._slot.run(lib.nerf_renderer_render_image_u8, ptr,
-                           ctypes.byref(cam), rgb.ptr, *ptrs, h * w,
+                           ctypes.byref(cam), *ptrs, cam.pixel_count,
                            progress=progress)
-        return RenderResult(rgb.release(),
-                            *(o.release() if o else None for o in outs))
+        return RenderResult(*(o.release() if o else None for o in outs))
 
     def render_rays(self, origins: Any, directions: Any, *, rgb: bool = True,
                     depth: bool = True, opacity: bool = True,
@@ -334,17 +340,17 @@ class Renderer(_handle.ProgressHandle):
         Returns:
             RenderResult: ``rgb`` n x 3, ``depth`` and ``opacity`` n floats.
         """
-        o = _buffers.as_float_input(origins, "origins")
-        d = _buffers.as_float_input(directions, "directions")
-        if o.size % 3 or d.size != o.size:
-            raise ValueError("origins and directions must both hold n x 3 "
-                             "floats (got %d and %d)" % (o.size, d.size))
         if not (rgb or depth or opacity):
             raise ValueError("render_rays: ask for at least one output")
-        n = o.size // 3
-        outs = [_buffers.FloatOutput((n, 3)) if rgb else None,
-                _buffers.FloatOutput((n,)) if depth else None,
-                _buffers.FloatOutput((n,)) if opacity else None]
+        # The library refuses rays that are not finite.
+        o = _buffers.as_float_input(origins, "origins", shape=(None, 3),
+                                    finite=True)
+        n = o.shape[0]
+        d = _buffers.as_float_input(directions, "directions", shape=(n, 3),
+                                    finite=True)
+        outs = [_buffers.FloatOutput((n, 3), "rgb") if rgb else None,
+                _buffers.FloatOutput((n,), "depth") if depth else None,
+                _buffers.FloatOutput((n,), "opacity") if opacity else None]
         ptrs = [x.ptr if x else None for x in outs]
         with self._using() as ptr:
             self._slot.run(lib.nerf_renderer_render_rays, ptr, n, o.ptr,
@@ -369,18 +375,16 @@ class Renderer(_handle.ProgressHandle):
             DepthResult: ``rgb`` height x width x 3, the others height x
             width float32; those not asked for are None.
         """
-        cam = _camera_arg(camera)
         if not (rgb or distance or zdepth or opacity):
             raise ValueError("render_depth: ask for at least one output")
-        h, w = int(cam.height), int(cam.width)
-        outs = [_buffers.FloatOutput((h, w, 3)) if rgb else None,
-                _buffers.FloatOutput((h, w)) if distance else None,
-                _buffers.FloatOutput((h, w)) if zdepth else None,
-                _buffers.FloatOutput((h, w)) if opacity else None]
+        cam = _camera_arg(camera, "render_depth: camera")
+        outs = _image_outputs("render_depth", cam, (
+            ("rgb", 3, rgb), ("distance", 1, distance),
+            ("zdepth", 1, zdepth), ("opacity", 1, opacity)))
         ptrs = [o.ptr if o else None for o in outs]
         with self._using() as ptr:
             self._slot.run(lib.nerf_renderer_render_depth, ptr,
-                           ctypes.byref(cam), *ptrs, h * w,
+                           ctypes.byref(cam), *ptrs, cam.pixel_count,
                            progress=progress)
         return DepthResult(*(o.release() if o else None for o in outs))
 
@@ -397,14 +401,14 @@ class Renderer(_handle.ProgressHandle):
         cams = [cameras] if isinstance(cameras, Camera) else list(cameras)
         if not cams:
             raise ValueError("points: no cameras")
-        for cam in cams:
-            _camera_arg(cam)
+        for i, cam in enumerate(cams):
+            _camera_arg(cam, "points: cameras[%d]" % i)
         arr = (Camera * len(cams))(*cams)
         opts = PointsOptions(stride=stride)
         if opacity_threshold is not None:
             opts.opacity_threshold = float(opacity_threshold)
         if max_points is not None:
-            opts.max_points = int(max_points)
+            opts.max_points = max_points
         opts.progress = ctypes.cast(self._slot.thunk, ctypes.c_void_p)
         out = PointsP()
         with self._using() as ptr:

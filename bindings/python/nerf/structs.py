@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import ctypes
 import math
+import operator
 import os
 from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_int32,
                     c_size_t, c_uint32, c_uint64, c_void_p)
 from dataclasses import dataclass
 from typing import Any, Dict, Sequence, Tuple
 
-from . import _buffers
+from . import _buffers, errors
 
 # Callback types (nerf_log_cb, nerf_progress_cb and the allocator hooks).
 LOG_CB = ctypes.CFUNCTYPE(None, c_int, c_char_p, c_void_p)
@@ -35,6 +36,36 @@ def _capi():
     # Imported lazily: _capi needs these classes for its prototypes.
     from . import _capi as capi
     return capi.lib
+
+
+def _int_range(ctype: Any) -> Tuple[int, int]:
+    bits = 8 * ctypes.sizeof(ctype)
+    if ctype(-1).value < 0:
+        return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+    return 0, (1 << bits) - 1
+
+
+def integer(value: Any, name: str, ctype: Any = c_uint32) -> int:
+    """``value`` as an int that the C integer type ``ctype`` holds exactly.
+
+    ctypes wraps silently (-1 becomes 4294967295 in a uint32), so every
+    integer the binding hands to C, struct field or argument, comes through
+    here.
+
+    Raises:
+        TypeError: ``value`` is not an integer (a float, a str, ...).
+        ValueError: ``value`` is out of ``ctype``'s range.
+    """
+    try:
+        v = operator.index(value)
+    except TypeError:
+        raise TypeError("%s: expected an integer, not %s"
+                        % (name, type(value).__name__)) from None
+    lo, hi = _int_range(ctype)
+    if not lo <= v <= hi:
+        raise ValueError("%s: %d is out of range: %s" % (
+            name, v, "0 to %d" % hi if lo == 0 else "%d to %d" % (lo, hi)))
+    return v
 
 
 class _Versioned(ctypes.Structure):
@@ -208,7 +239,7 @@ class Named(int):
         """The int of a name (or of an int); ValueError names the known
         ones."""
         if not isinstance(value, str):
-            return int(value)
+            return integer(value, cls.__name__)
         by_name = {n: v for v, n in cls._names.items()}
         parts = value.split("|") if cls._flags else [value]
         total = 0
@@ -256,6 +287,29 @@ class Space(Named):
     _names = {0: "box", 1: "ndc", 2: "unbounded"}
 
 
+class _IntField:
+    """An integer struct field that refuses what its C type cannot hold
+    (see :func:`integer`) instead of wrapping it; ``offset`` and ``size``
+    are the ctypes field's."""
+
+    def __init__(self, raw: Any, name: str, ctype: Any) -> None:
+        self._raw = raw
+        self._name = name
+        self._ctype = ctype
+
+    offset = property(lambda self: self._raw.offset)
+    size = property(lambda self: self._raw.size)
+
+    def __get__(self, obj: Any, objtype: Any = None) -> Any:
+        if obj is None:
+            return self
+        return self._raw.__get__(obj, objtype)
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        what = "%s.%s" % (type(obj).__name__, self._name)
+        self._raw.__set__(obj, integer(value, what, self._ctype))
+
+
 class _NamedField:
     """A struct field read as a :class:`Named` and set by name or int;
     ``offset`` and ``size`` are the ctypes field's."""
@@ -273,18 +327,40 @@ class _NamedField:
         return self._kind(self._raw.__get__(obj, objtype))
 
     def __set__(self, obj: Any, value: Any) -> None:
-        self._raw.__set__(obj, self._kind.key(value))
+        if isinstance(value, str):
+            value = self._kind.key(value)
+        self._raw.__set__(obj, value)
+
+
+class _PathField(_IntField):
+    """A path (``char *``) field: set from a str, bytes or os.PathLike
+    through the binding's one path converter (a NUL would cut it)."""
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        if value is not None:
+            from ._handle import fspath  # _handle imports this module
+            value = fspath(value, "%s.%s" % (type(obj).__name__, self._name))
+        self._raw.__set__(obj, value)
+
+
+_INTEGER_CODES = "bBhHiIlLqQ"
+
+
+def _check_fields(cls: type) -> None:
+    """Route every integer field of ``cls`` through :func:`integer`, and
+    every path field through the path converter."""
+    for name, ctype, *_ in cls._fields_:
+        if ctype is c_char_p:
+            setattr(cls, name, _PathField(cls.__dict__[name], name, ctype))
+        elif (isinstance(ctype, type) and
+                issubclass(ctype, ctypes._SimpleCData) and
+                ctype._type_ in _INTEGER_CODES):
+            setattr(cls, name, _IntField(cls.__dict__[name], name, ctype))
 
 
 def _name_fields(cls: type, kinds: Dict[str, type]) -> None:
     for name, kind in kinds.items():
         setattr(cls, name, _NamedField(cls.__dict__[name], kind))
-
-
-_name_fields(ModelOptions, {
-    "encoding": Encoding, "encoding_flags": EncodingFlags,
-    "dir_encoding": DirEncoding, "density_activation": DensityActivation,
-    "matmul": Matmul, "space": Space})
 
 
 class SceneOptions(_Versioned):
@@ -402,10 +478,10 @@ class MeshOptions(_Versioned):
 
     def _set(self, name: str, value: Any) -> None:
         if name == "box":
-            value = [float(v) for v in value]
-            if len(value) != 6:
-                raise ValueError("box: expected 6 numbers x0 y0 z0 x1 y1 z1")
-            self.box = (c_float * 6)(*value)
+            # x0 y0 z0 x1 y1 z1; the library refuses a box not finite.
+            buf = _buffers.as_float_input(value, "box", shape=(6,),
+                                          finite=True)
+            ctypes.memmove(self.box, buf.ptr, 6 * 4)
             return
         setattr(self, name, value)
 
@@ -454,7 +530,8 @@ class TrainerOptions(_Versioned):
     """``nerf_trainer_options``: how a trainer draws and weighs rays.
 
     ``checkpoint_path`` accepts a str or path; it is stored encoded with
-    :func:`os.fsencode` and kept alive by the struct.
+    :func:`os.fsencode` (a NUL character in it raises ValueError) and kept
+    alive by the struct.
     ``random_background`` (0 or 1, default 0): 1 composites each training
     ray's target (an image with alpha) and its render onto the same random
     colour, so that the model cannot fill empty space with the background's
@@ -491,11 +568,6 @@ class TrainerOptions(_Versioned):
     ]
     _private_ = ("struct_size", "hooks", "grad_hook", "checksum_hook",
                  "hook_user", "reserved1")
-
-    def _set(self, name: str, value: Any) -> None:
-        if name == "checkpoint_path" and value is not None:
-            value = os.fsencode(value)
-        setattr(self, name, value)
 
     def _get(self, name: str) -> Any:
         value = getattr(self, name)
@@ -649,10 +721,16 @@ class TrainStats:
 
 
 def _vec3(v: Any, name: str) -> Any:
-    buf = _buffers.as_float_input(v, name)
-    if buf.size != 3:
-        raise ValueError("%s: expected 3 numbers, got %d" % (name, buf.size))
-    return buf
+    # nerf_camera_look_at refuses points that are not finite.
+    return _buffers.as_float_input(v, name, shape=(3,), finite=True)
+
+
+#: Shapes a pose may have: 3 x 4, or 4 x 4 with the last row 0 0 0 1
+#: (flat: 12 or 16 numbers, row by row).
+POSE_SHAPES = [(3, 4), (4, 4)]
+# As the library's loaders allow in the last row of a 4 x 4 pose
+# (nerf__pose_problem): exported matrices carry float noise.
+_LAST_ROW_SLACK = 1e-4
 
 
 class Camera(_Versioned):
@@ -704,14 +782,35 @@ class Camera(_Versioned):
 
     @pose.setter
     def pose(self, value: Any) -> None:
-        buf = _buffers.as_float_input(value, "pose")
-        if buf.size == 16:  # accept a 4 x 4 matrix; its last row is dropped
-            ctypes.memmove(self.c2w, buf.ptr, 12 * 4)
-        elif buf.size == 12:
-            ctypes.memmove(self.c2w, buf.ptr, 12 * 4)
-        else:
-            raise ValueError("pose: expected 3 x 4 or 4 x 4 numbers, got %d"
-                             % buf.size)
+        # Every camera call refuses a pose that is not finite.
+        buf = _buffers.as_float_input(value, "pose", shape=POSE_SHAPES,
+                                      finite=True)
+        if buf.shape == (4, 4):
+            last = [buf.ptr[12 + i] for i in range(4)]
+            if any(abs(v - w) > _LAST_ROW_SLACK
+                   for v, w in zip(last, (0.0, 0.0, 0.0, 1.0))):
+                raise ValueError("pose: a 4 x 4 pose must end with the row "
+                                 "0 0 0 1, not %s"
+                                 % " ".join("%g" % v for v in last))
+        ctypes.memmove(self.c2w, buf.ptr, 12 * 4)
+
+    def check(self, what: str = "camera") -> None:
+        """Raise :class:`nerf.NerfInvalidArgument` (a ValueError), naming
+        ``what`` and the camera's size, if the library would refuse this
+        camera: the library's own check (``nerf_camera_rays`` over no
+        pixels: sides 1..65536, positive finite focal lengths, a finite
+        principal point, pose and lens).  Render calls make it before they
+        allocate the arrays the camera's size asks for."""
+        try:
+            _capi().nerf_camera_rays(ctypes.byref(self), 0, 0, None, None)
+        except errors.NerfError as err:
+            reason = err.message
+            prefix = "nerf_camera_rays: "
+            if reason.startswith(prefix):
+                reason = reason[len(prefix):]
+            raise errors.error_for_status(
+                err.code, "%s: %s (a %d x %d camera)"
+                % (what, reason, self.width, self.height)) from None
 
     @property
     def pixel_count(self) -> int:
@@ -752,10 +851,19 @@ class Camera(_Versioned):
         """Origins and unnormalised directions of pixels ``first`` ..
         ``first + count - 1`` (row by row; all remaining pixels by default),
         as two ``count`` x 3 float arrays (``nerf_camera_rays``)."""
+        self.check("rays: camera")
+        first = integer(first, "rays: first", c_size_t)
+        pixels = self.pixel_count
         if count is None:
-            count = max(self.pixel_count - int(first), 0)
-        origins = _buffers.FloatOutput((count, 3))
-        dirs = _buffers.FloatOutput((count, 3))
+            count = max(pixels - first, 0)
+        count = integer(count, "rays: count", c_size_t)
+        if first + count > pixels:
+            # As nerf_camera_rays would refuse it, after the allocation.
+            raise errors.NerfInvalidArgument(
+                errors.EINVAL, "rays: pixels %d to %d are beyond the %d x %d "
+                "image" % (first, first + count - 1, self.width, self.height))
+        origins = _buffers.FloatOutput((count, 3), "origins")
+        dirs = _buffers.FloatOutput((count, 3), "directions")
         _capi().nerf_camera_rays(ctypes.byref(self), first, count,
                                  origins.ptr, dirs.ptr)
         return origins.release(), dirs.release()
@@ -767,3 +875,11 @@ ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                TrainerOptions, TrainStatsStruct, CameraPathOptions,
                ScheduleStruct, PointsOptions, MeshOptions,
                ExchangeStruct)
+
+for _cls in ALL_STRUCTS:
+    _check_fields(_cls)
+# After the checks: a named field sets its int through the checked one.
+_name_fields(ModelOptions, {
+    "encoding": Encoding, "encoding_flags": EncodingFlags,
+    "dir_encoding": DirEncoding, "density_activation": DensityActivation,
+    "matmul": Matmul, "space": Space})

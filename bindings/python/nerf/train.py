@@ -10,7 +10,8 @@ from ._capi import TrainerP, lib
 from .data import Dataset
 from .model import Model
 from .render import Sampler
-from .structs import Progress, TrainerOptions, TrainStats, TrainStatsStruct
+from .structs import (Progress, TrainerOptions, TrainStats, TrainStatsStruct,
+                      c_uint64, integer)
 
 LogFn = Optional[Callable[[int, str], Any]]
 ProgressFn = Optional[Callable[[Progress], Any]]
@@ -66,7 +67,10 @@ class Trainer(_handle.ProgressHandle):
     def step(self) -> TrainStats:
         """Take one optimisation step and return its figures
         (``nerf_trainer_step``).  A non-finite loss raises
-        NerfInternalError and leaves the weights as they were."""
+        NerfInternalError ("training diverged"), saying whether the weights
+        are still finite, and leaves them as they were before the step.
+        A model whose weights are not finite is refused by the trainer, by
+        renderers and by :meth:`nerf.Model.save`."""
         stats = TrainStatsStruct()
         with self._using() as ptr:
             self._slot.run(lib.nerf_trainer_step, ptr, ctypes.byref(stats))
@@ -84,7 +88,8 @@ class Trainer(_handle.ProgressHandle):
         """
         stats = TrainStatsStruct()
         with self._using() as ptr:
-            self._slot.run(lib.nerf_trainer_run, ptr, int(n_steps),
+            self._slot.run(lib.nerf_trainer_run, ptr,
+                           integer(n_steps, "run: n_steps", c_uint64),
                            ctypes.byref(stats), progress=progress)
         return TrainStats.from_struct(stats)
 
