@@ -167,6 +167,9 @@ def _frames_taken(fx, path):
     """A folder holding r_001.png, as nerf-render names view 1."""
     os.mkdir(path)
     write(os.path.join(path, "r_001.png"), b"not yours")
+    return path
+
+
 # ---- readers: files that are not regular, images and datasets ---------------
 
 
