@@ -714,7 +714,7 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                        .jpg in file_path: what a camera
                                        gives, with no mask. */
 
-/** Since 0.10.12: the sizes and view counts nerf_scene_write() takes (a
+/** Since 0.11: the sizes and view counts nerf_scene_write() takes (a
  * program's help can quote them: plain integers). */
 #define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
 #define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
