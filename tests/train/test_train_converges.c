@@ -14,21 +14,34 @@
 #include "train_fixture.h"
 
 /*
- * On the 2-core development machine these settings reach 23.3 dB in about
- * 45 s (release build); the threshold leaves a margin for floating-point
- * differences between BLAS builds, not for a regression.  The learning
- * rate is ten times the paper's: the tiny network tolerates it and needs
- * it to learn within a test's budget.  NERF_TEST_STEPS, NERF_TEST_BATCH
- * and NERF_TEST_LR override the settings for experiments.  MAX_GAP
- * allows for bf16's rounding changing the path the optimiser takes, not
- * for a broken backward pass, which costs many dB.
+ * These settings reach 23.4 dB from seed 0 in about 45 s (release build,
+ * 2 cores).  A processor that rounds its products otherwise sends
+ * training down another path, as another seed does, so the threshold sits
+ * below the spread over seeds: NERF_TEST_SEED=0..12 (2026-12, Intel Xeon,
+ * 0.11.0) gave 21.29 to 23.38 dB, mean 22.53, sd 0.74, so mean - 4 sd is
+ * 19.6, and the runs under NERF_FUSED=0 and under NERF_ISA=baseline with
+ * OpenBLAS's Haswell kernels fell within it.  One seed in 13 (4) starts
+ * dead: its initial density is nowhere positive, so nothing learns (8.94
+ * dB before and after); that is decided by the initial weights, which
+ * the seed alone sets on every processor, not by rounding, and seed 0
+ * starts alive everywhere.  A broken backward pass costs far more: the
+ * untrained model scores 7 to 9 dB.
+ *
+ * bf16 rounding changes the optimiser's path too: over the same seeds
+ * bf16 ended -0.72 to +0.55 dB from fp32 (sd 0.33), so MAX_GAP allows
+ * it to end 1.5 dB below, about 4.5 sd; no bound above it.
+ *
+ * The learning rate is ten times the paper's: the tiny network tolerates
+ * it and needs it to learn within a test's budget.  NERF_TEST_STEPS,
+ * NERF_TEST_BATCH, NERF_TEST_LR and NERF_TEST_SEED override the settings
+ * for experiments.
  */
 #define WIDTH 32
 #define STEPS 300
 #define BATCH 256
-#define MIN_PSNR 21.0
+#define MIN_PSNR 19.5
 #define LEARNING_RATE 5e-3
-#define MAX_GAP 1.0
+#define MAX_GAP 1.5
 
 typedef struct run {
     int steps;
@@ -122,7 +135,7 @@ TEST(bf16_training_matches_fp32)
            "%.2f)\n", bf16.steps, fp32.test, bf16.test, fp32.train,
            bf16.train);
     CHECK(bf16.test >= MIN_PSNR);
-    CHECK(fabs(bf16.test - fp32.test) <= MAX_GAP);
+    CHECK(bf16.test >= fp32.test - MAX_GAP);
 }
 
 int main(void)

@@ -4,15 +4,15 @@
  * a backdrop 40 units away):
  * - forward-facing (LLFF layout): the grids over NDC space, the rays
  *   warped and marched there; it learns the held-out views;
- * - all-round: the grids over contracted space learn the held-out views
+ * - all-round: the grids over contracted space fit the training views
  *   better than the same model confined to a box, which cannot hold the
  *   backdrop;
  * - models and samplers of different spaces refuse to pair.
  * Small images, a small hash grid and few steps: what is checked is that
  * each space trains, by margins far from the noise of a short run.
  *
- * NERF_TEST_STEPS and NERF_TEST_CURVE (print the test PSNR every that many
- * steps) override the settings for experiments.
+ * NERF_TEST_STEPS, NERF_TEST_CURVE (print the test PSNR every that many
+ * steps) and NERF_TEST_SEED override the settings for experiments.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -22,13 +22,24 @@
 #include "train_fixture.h"
 
 #define STEPS 200
+#define STEPS_UNBOUNDED 400
 #define BATCH 128
 #define LEARNING_RATE 1e-2
-/* Test PSNR the forward-facing capture reaches, and what the contracted
- * model must gain over the boxed one on the all-round capture. */
-#define MIN_PSNR_FORWARD 17.0
-#define MIN_PSNR_UNBOUNDED 16.0
-#define MIN_GAIN_UNBOUNDED 2.0
+/*
+ * Test PSNR the forward-facing capture reaches, and what the contracted
+ * model must gain over the boxed one in fitting the all-round capture's
+ * training views.  A processor that rounds its products otherwise sends
+ * training down another path, as another seed does, so the thresholds
+ * sit below the spread over seeds: NERF_TEST_SEED=0..12 (2026-12, Intel
+ * Xeon, 0.11.0) gave 17.95 to 19.59 dB forward-facing (mean 18.9, sd
+ * 0.45, so mean - 4 sd 17.1), and a gain of 3.9 to 8.2 dB in 400 steps
+ * (mean 6.2, sd 1.4).  In 200 steps the gain went down to 0.3 dB, and the
+ * contracted model's test PSNR (14.7 to 22.2 dB in 400 steps) fell below
+ * the boxed one's for 3 of the 13 seeds: held-out views of so small a
+ * capture say little, so they are printed, not compared.
+ */
+#define MIN_PSNR_FORWARD 16.5
+#define MIN_GAIN_UNBOUNDED 1.0
 /* Steps across the grid's diagonal: a quarter of the preset's, which
  * images of 40 pixels do not miss, and a quarter of the samples. */
 #define MARCH_STEPS 256
@@ -113,10 +124,10 @@ static nerf_sampler *space_sampler(const nerf_dataset *ds, bool ndc,
 /* Train m for the test's steps; returns the test PSNR after, and the
  * PSNR of renders of the training views in *train_psnr. */
 static double train(nerf_model *m, nerf_sampler *s, const fixture *f,
-                    const char *what, double *train_psnr)
+                    const char *what, int default_steps, double *train_psnr)
 {
     *train_psnr = -1.0;
-    const int steps = env_int("NERF_TEST_STEPS", STEPS);
+    const int steps = env_int("NERF_TEST_STEPS", default_steps);
     const int curve = env_int("NERF_TEST_CURVE", 0);
     if (m == NULL || s == NULL) {
         return -1.0;
@@ -182,7 +193,7 @@ TEST(forward_facing_trains_in_ndc)
     nerf_model *m = space_model(space, bound);
     nerf_sampler *s = space_sampler(f.train, true, 0.0f, 1.0f);
     double fit;
-    const double psnr = train(m, s, &f, "forward-facing, NDC", &fit);
+    const double psnr = train(m, s, &f, "forward-facing, NDC", STEPS, &fit);
     CHECK(psnr >= MIN_PSNR_FORWARD);
 
     /* NDC rays into a box model's grid, or world rays into an NDC
@@ -227,15 +238,16 @@ TEST(all_round_trains_better_contracted_than_boxed)
     nerf_sampler *s_unb = space_sampler(f.train, false, 0.1f, 1e4f);
     double fit_unb, fit_box;
     const double p_unb = train(unb, s_unb, &f, "all-round, contracted",
-                               &fit_unb);
+                               STEPS_UNBOUNDED, &fit_unb);
     nerf_model *box = space_model(NERF_SPACE_BOX, 1.5f);
     nerf_sampler *s_box = space_sampler(f.train, false, 0.1f, 1e4f);
-    const double p_box = train(box, s_box, &f, "all-round, boxed", &fit_box);
-    CHECK(p_unb >= MIN_PSNR_UNBOUNDED);
+    const double p_box = train(box, s_box, &f, "all-round, boxed",
+                               STEPS_UNBOUNDED, &fit_box);
     /* The box's fit of the views it was shown is what the backdrop
-     * limits; held-out views of so small a capture say less. */
+     * limits. */
+    printf("  contracted against boxed: %+.2f dB on the training views, "
+           "%+.2f on the test views\n", fit_unb - fit_box, p_unb - p_box);
     CHECK(fit_unb >= fit_box + MIN_GAIN_UNBOUNDED);
-    CHECK(p_unb > p_box);
     /* Contracted models march world rays only. */
     nerf_sampler *ndc = space_sampler(f.train, true, 0.0f, 1.0f);
     nerf_renderer *r = NULL;
