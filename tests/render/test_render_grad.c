@@ -10,9 +10,11 @@
 #include <string.h>
 
 #include "../harness.h"
+#include "network_fused.h"
 #include "occupancy.h"
 #include "render_batch.h"
 #include "rng.h"
+#include "smm.h"
 
 enum { RAYS = 12 };
 
@@ -329,9 +331,27 @@ TEST(no_fine_network)
 TEST(batch_split_reproducible)
 {
     /* Training draws are keyed by ray: one batch of 12 and two of 6 give
-     * the same samples and noise. */
+     * the same samples and noise.  What passes through the network is the
+     * same where every sample is computed alone, whatever else shares its
+     * products: the fused path, forced here from before the batch's first
+     * forward (a workspace reserved off it stays off it) on a tiny model
+     * one narrower, so that its head (width + 1 outputs) fits the fused
+     * kernels; oneDNN models, which it does not apply to, only where
+     * nerf__model_rows_alone() says so. */
+    const int was = nerf__smm_variant();
+    CHECK_OK(nerf__smm_use(nerf__smm_best()));
     fixture f;
     setup(&f, 16, true);
+    nerf_model_destroy(f.m);
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_options_preset(&mo, NERF_PRESET_TINY);
+    mo.width = NERF__FUSED_MAX_WIDTH - 1;
+    mo.seed = 9;
+    CHECK_OK(nerf_model_create(&f.m, &mo));
+    bias_density(f.m);
+    f.setup.model = f.m;
+    CHECK(f.m->onednn != NULL || !nerf__model_uses_blas(f.m));
     f.use_pass[0] = f.use_pass[1] = 1;
     loss(&f);
     const uint32_t n0 = f.b.n_samples[0], n1 = f.b.n_samples[1];
@@ -343,27 +363,35 @@ TEST(batch_split_reproducible)
     memcpy(s_all, f.b.sigma[0], sizeof(float) * RAYS * n0);
     nerf__pass_out out[2];
     memset(out, 0, sizeof out);
+    int differ = 0;
     for (int half = 0; half < 2; half++) {
         nerf__render_setup s = f.setup;
         s.first_ray += 6 * half;
         CHECK_OK(nerf__render_batch(&f.b, &s, 6, f.o + 18 * half,
                                     f.d + 18 * half, out));
-        /* Jittered samples and noise are bitwise equal; what passes
-         * through the network may differ in the last bits, since the
-         * matrix products see other batches. */
+        /* The jittered coarse samples do not depend on the network. */
         CHECK(memcmp(f.b.t[0], t0_all + 6 * half * n0,
                      sizeof(float) * 6 * n0) == 0);
-        for (uint32_t i = 0; i < 6 * n0; i++) {
-            CHECK_NEAR(f.b.sigma[0][i], s_all[6 * half * n0 + i], 1e-4);
-        }
-        for (uint32_t i = 0; i < 6 * n1; i++) {
-            CHECK_NEAR(f.b.t[1][i], t_all[6 * half * n1 + i], 1e-4);
-        }
+        /* Densities with their noise, and the fine samples they place. */
+        differ += memcmp(f.b.sigma[0], s_all + 6 * half * n0,
+                         sizeof(float) * 6 * n0) != 0;
+        differ += memcmp(f.b.t[1], t_all + 6 * half * n1,
+                         sizeof(float) * 6 * n1) != 0;
+    }
+    if (nerf__model_rows_alone(f.m)) {
+        CHECK_EQ_INT(differ, 0);
+    } else {
+        /* A oneDNN model that made a primitive other than brgemm; the
+         * fine samples move by where the densities put the weights, for
+         * which no bound is derived here. */
+        printf("  densities and fine samples not compared (%d differ): "
+               "this oneDNN model does not compute samples alone\n", differ);
     }
     free(t0_all);
     free(t_all);
     free(s_all);
     teardown(&f);
+    CHECK_OK(nerf__smm_use(was));
 }
 
 static int ball(void *ctx, size_t n, const float *xyz, float *sigma)
@@ -508,7 +536,12 @@ TEST(marching_fast_model)
     CHECK(f.b.march.total > RAYS && f.b.march.total < RAYS * 400);
     check_direction(&f, 0, 21, true);
     check_direction(&f, 0, 22, false);
-    /* Jittered samples are keyed by ray: one batch or two, the same. */
+    /* Jittered samples are keyed by ray: one batch or two, the same.
+     * Training cuts each ray where the densities turn it opaque, which
+     * would make march.t depend on the network's rounding too; these
+     * densities cut nothing (the premise, asserted), so what is compared
+     * is the march alone. */
+    CHECK_EQ_INT(f.b.n_evaluated, f.b.march.total);
     const size_t total = f.b.march.total;
     float *t_all = malloc(sizeof(float) * total);
     memcpy(t_all, f.b.march.t, sizeof(float) * total);
@@ -520,6 +553,7 @@ TEST(marching_fast_model)
         s.first_ray += 6 * half;
         CHECK_OK(nerf__render_batch(&f.b, &s, 6, f.o + 18 * half,
                                     f.d + 18 * half, out));
+        CHECK_EQ_INT(f.b.n_evaluated, f.b.march.total);
         CHECK(at + f.b.march.total <= total);
         if (at + f.b.march.total <= total) {
             CHECK(memcmp(f.b.march.t, t_all + at,
