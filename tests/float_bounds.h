@@ -14,6 +14,7 @@
 #define NERF_TESTS_FLOAT_BOUNDS_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 /* Unit roundoff of float (round to nearest). */
 #define FLOAT_U 0x1p-24
@@ -168,6 +169,258 @@ static inline fb fb_expm1f(fb a)
 static inline bool fb_holds(double got, fb a)
 {
     return fabs(got - a.v) <= (a.e + a.ed) * (1.0 + 0x1p-30);
+}
+
+/* max(s, 0); where the float and the exact value may fall on either side
+ * of 0, both lie in [0, |v| + e + ed]. */
+static inline fb fb_relu(fb a)
+{
+    if (a.v - a.e - a.ed > 0.0) {
+        return a;
+    }
+    if (a.v + a.e + a.ed <= 0.0) {
+        return fb_in(0.0);
+    }
+    return (fb){a.v > 0.0 ? a.v : 0.0, fb_mag(a), fb_mag(a)};
+}
+
+/* Whether the float and the exact value of a are on the same side of 0
+ * (a branch on a's sign takes the same way in both). */
+static inline bool fb_sign_known(fb a)
+{
+    return fabs(a.v) > a.e + a.ed;
+}
+
+/* A value whose error is not bounded (a branch that may go either way). */
+static inline fb fb_unknown(double v)
+{
+    return (fb){v, INFINITY, INFINITY};
+}
+
+/*
+ * Mirrors of the compositing of one ray, operation by operation as the
+ * library's C evaluates them, on float inputs t (and dt or dir_norm, bg,
+ * the gradients of the outputs) and on colours rgb[3n] and densities
+ * sigma[n] given as fb (exact where they are the library's own inputs,
+ * with bounds where they come from a network).  bg NULL: black.
+ */
+
+/* The longest ray the backward mirrors take (they leave longer ones'
+ * outputs unwritten: callers check). */
+#define FB_RAY_MAX 256
+
+/* What composite_packed.c accumulates: colour sums, depth, opacity and the
+ * transmittance in front of the next sample. */
+typedef struct fb_ray {
+    fb rgb[3], depth, opacity, trans;
+} fb_ray;
+
+static inline void fb_ray_init(fb_ray *r)
+{
+    r->rgb[0] = r->rgb[1] = r->rgb[2] = fb_in(0.0);
+    r->depth = r->opacity = fb_in(0.0);
+    r->trans = fb_in(1.0);
+}
+
+/* nerf__composite_packed_ray()'s alpha_of(): -expm1f(-sigma dt). */
+static inline fb fb_packed_alpha(fb sigma, double dt)
+{
+    return fb_neg(fb_expm1f(fb_mul(fb_neg(sigma), fb_in(dt))));
+}
+
+/* One sample of nerf__composite_packed_ray(); its weight into *w. */
+static inline void fb_packed_step(fb_ray *r, double t, double dt,
+                                  const fb *rgb, fb sigma, fb *w)
+{
+    const fb alpha = fb_packed_alpha(sigma, dt);
+    const fb wi = fb_mul(r->trans, alpha);
+    for (int c = 0; c < 3; c++) {
+        r->rgb[c] = fb_add(r->rgb[c], fb_mul(wi, rgb[c]));
+    }
+    r->depth = fb_add(r->depth, fb_mul(wi, fb_in(t)));
+    r->opacity = fb_add(r->opacity, wi);
+    r->trans = fb_mul(r->trans, fb_sub(fb_in(1.0), alpha));
+    if (w) {
+        *w = wi;
+    }
+}
+
+/* nerf__composite_state_rgb(): sum w c + (1 - opacity) bg. */
+static inline void fb_packed_rgb(const fb_ray *r, const float *bg, fb *rgb)
+{
+    const fb rest = fb_sub(fb_in(1.0), r->opacity);
+    for (int c = 0; c < 3; c++) {
+        rgb[c] = bg ? fb_add(r->rgb[c], fb_mul(rest, fb_in(bg[c])))
+                    : r->rgb[c];
+    }
+}
+
+/* The per-weight gradient g_i of both backward passes:
+ * dc . rgb_i - dc . bg + d_depth t_i + d_opacity, left to right. */
+static inline fb fb_weight_grad(const double *dc, fb dbg, const fb *rgb,
+                                double t, double d_depth, double d_opacity)
+{
+    fb g = fb_add(fb_mul(fb_in(dc[0]), rgb[0]), fb_mul(fb_in(dc[1]), rgb[1]));
+    g = fb_add(g, fb_mul(fb_in(dc[2]), rgb[2]));
+    g = fb_sub(g, dbg);
+    g = fb_add(g, fb_mul(fb_in(d_depth), fb_in(t)));
+    return fb_add(g, fb_in(d_opacity));
+}
+
+static inline fb fb_bg_grad(const double *dc, const float *bg)
+{
+    if (bg == NULL) {
+        return fb_in(0.0);
+    }
+    fb d = fb_add(fb_mul(fb_in(dc[0]), fb_in(bg[0])),
+                  fb_mul(fb_in(dc[1]), fb_in(bg[1])));
+    return fb_add(d, fb_mul(fb_in(dc[2]), fb_in(bg[2])));
+}
+
+/*
+ * nerf__composite_packed_ray_backward() on the m samples it uses (m <=
+ * FB_RAY_MAX): d_rgb[3m] and d_sigma[m].  dc: dL/d(rgb) (3 values).
+ */
+static inline void fb_packed_backward(uint32_t m, const float *t,
+                                      const float *dt, const fb *rgb,
+                                      const fb *sigma, const float *bg,
+                                      const double *dc, double d_depth,
+                                      double d_opacity, fb *d_rgb,
+                                      fb *d_sigma)
+{
+    fb trans[FB_RAY_MAX];
+    fb T = fb_in(1.0);
+    if (m > FB_RAY_MAX) {
+        return;
+    }
+    for (uint32_t i = 0; i < m; i++) {
+        trans[i] = T;
+        T = fb_mul(T, fb_sub(fb_in(1.0), fb_packed_alpha(sigma[i], dt[i])));
+    }
+    const fb dbg = fb_bg_grad(dc, bg);
+    fb rest = fb_in(0.0);
+    for (uint32_t i = m; i-- > 0;) {
+        const fb alpha = fb_packed_alpha(sigma[i], dt[i]);
+        const fb q = fb_sub(fb_in(1.0), alpha);
+        const fb w = fb_mul(trans[i], alpha);
+        const fb g = fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth,
+                                    d_opacity);
+        for (int c = 0; c < 3; c++) {
+            d_rgb[3 * i + c] = fb_mul(w, fb_in(dc[c]));
+        }
+        d_sigma[i] = fb_mul(fb_mul(fb_mul(trans[i], fb_sub(g, rest)),
+                                   fb_in(dt[i])),
+                            q);
+        rest = fb_add(fb_mul(g, alpha), fb_mul(q, rest));
+    }
+}
+
+/* composite.c's delta_i: (t_(i+1) - t_i) |d|, the last 1e10 |d|. */
+static inline fb fb_composite_delta(uint32_t n, const float *t, uint32_t i,
+                                    double dir_norm)
+{
+    const fb dt = i + 1 < n ? fb_sub(fb_in(t[i + 1]), fb_in(t[i]))
+                            : fb_in((double)1e10f);
+    return fb_mul(dt, fb_in(dir_norm));
+}
+
+/* composite.c's alpha_i = 1 - expf(-relu(s_i) delta_i), with the exp
+ * into *e (the backward's factor). */
+static inline fb fb_composite_alpha(fb sigma, fb delta, fb *e)
+{
+    const fb ex = fb_expf(fb_mul(fb_neg(fb_relu(sigma)), delta));
+    if (e) {
+        *e = ex;
+    }
+    return fb_sub(fb_in(1.0), ex);
+}
+
+/* composite.c's T_(i+1) = T_i (1 - alpha_i + 1e-10). */
+static inline fb fb_composite_q(fb alpha)
+{
+    return fb_add(fb_sub(fb_in(1.0), alpha), fb_in((double)1e-10f));
+}
+
+/*
+ * nerf__composite_ray_bg():
+ * rgb[3], depth, opacity; weights[n] if not NULL.
+ */
+static inline void fb_composite_forward(uint32_t n, const float *t,
+                                        double dir_norm, const fb *rgb,
+                                        const fb *sigma, const float *bg,
+                                        fb *out_rgb, fb *depth, fb *opacity,
+                                        fb *weights)
+{
+    fb T = fb_in(1.0), r[3] = {fb_in(0.0), fb_in(0.0), fb_in(0.0)};
+    fb dep = fb_in(0.0), acc = fb_in(0.0);
+    for (uint32_t i = 0; i < n; i++) {
+        const fb alpha = fb_composite_alpha(
+            sigma[i], fb_composite_delta(n, t, i, dir_norm), NULL);
+        const fb w = fb_mul(alpha, T);
+        T = fb_mul(T, fb_composite_q(alpha));
+        if (weights) {
+            weights[i] = w;
+        }
+        for (int c = 0; c < 3; c++) {
+            r[c] = fb_add(r[c], fb_mul(w, rgb[3 * i + c]));
+        }
+        dep = fb_add(dep, fb_mul(w, fb_in(t[i])));
+        acc = fb_add(acc, w);
+    }
+    for (int c = 0; c < 3; c++) {
+        out_rgb[c] = bg ? fb_add(r[c], fb_mul(fb_sub(fb_in(1.0), acc),
+                                              fb_in(bg[c])))
+                        : r[c];
+    }
+    *depth = dep;
+    *opacity = acc;
+}
+
+/*
+ * nerf__composite_ray_backward_bg() (n <= FB_RAY_MAX): d_rgb[3n],
+ * d_sigma[n].
+ */
+static inline void fb_composite_backward(uint32_t n, const float *t,
+                                         double dir_norm, const fb *rgb,
+                                         const fb *sigma, const float *bg,
+                                         const double *dc, double d_depth,
+                                         double d_opacity, fb *d_rgb,
+                                         fb *d_sigma)
+{
+    fb trans[FB_RAY_MAX];
+    fb T = fb_in(1.0);
+    if (n > FB_RAY_MAX) {
+        return;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        trans[i] = T;
+        T = fb_mul(T, fb_composite_q(fb_composite_alpha(
+                          sigma[i], fb_composite_delta(n, t, i, dir_norm),
+                          NULL)));
+    }
+    const fb dbg = fb_bg_grad(dc, bg);
+    fb rest = fb_in(0.0);
+    for (uint32_t i = n; i-- > 0;) {
+        const fb dist = fb_composite_delta(n, t, i, dir_norm);
+        fb e;
+        const fb alpha = fb_composite_alpha(sigma[i], dist, &e);
+        const fb w = fb_mul(alpha, trans[i]);
+        const fb g = fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth,
+                                    d_opacity);
+        for (int c = 0; c < 3; c++) {
+            d_rgb[3 * i + c] = fb_mul(w, fb_in(dc[c]));
+        }
+        const fb d_alpha = fb_mul(trans[i], fb_sub(g, rest));
+        if (!fb_sign_known(sigma[i])) {
+            d_sigma[i] = fb_unknown(0.0);
+        } else if (sigma[i].v > 0.0) {
+            d_sigma[i] = fb_mul(fb_mul(d_alpha, dist), e);
+        } else {
+            d_sigma[i] = fb_in(0.0);
+        }
+        rest = fb_add(fb_mul(g, alpha),
+                      fb_mul(fb_composite_q(alpha), rest));
+    }
 }
 
 #endif
