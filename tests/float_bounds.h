@@ -198,6 +198,79 @@ static inline fb fb_unknown(double v)
 }
 
 /*
+ * Forward-mode derivatives in the same mirror: x a value, dx its
+ * derivative along one direction of the inputs, both fb.  dx.v is the
+ * derivative computed in double and dx.ed bounds its distance from the
+ * exact derivative of the exact computation (dx.e means nothing: no
+ * float computes it).  This differentiates a forward formula without a
+ * step: nothing is truncated.
+ */
+typedef struct fbd {
+    fb x, dx;
+} fbd;
+
+/* An input held fixed, and one that moves: x + h dx. */
+static inline fbd fbd_in(double x)
+{
+    return (fbd){fb_in(x), fb_in(0.0)};
+}
+
+static inline fbd fbd_var(double x, double dx)
+{
+    return (fbd){fb_in(x), fb_in(dx)};
+}
+
+static inline fbd fbd_neg(fbd a)
+{
+    return (fbd){fb_neg(a.x), fb_neg(a.dx)};
+}
+
+static inline fbd fbd_add(fbd a, fbd b)
+{
+    return (fbd){fb_add(a.x, b.x), fb_add(a.dx, b.dx)};
+}
+
+static inline fbd fbd_sub(fbd a, fbd b)
+{
+    return fbd_add(a, fbd_neg(b));
+}
+
+static inline fbd fbd_mul(fbd a, fbd b)
+{
+    return (fbd){fb_mul(a.x, b.x),
+                 fb_add(fb_mul(a.x, b.dx), fb_mul(a.dx, b.x))};
+}
+
+static inline fbd fbd_div(fbd a, fbd b)
+{
+    const fb q = fb_div(a.x, b.x);
+    return (fbd){q, fb_div(fb_sub(a.dx, fb_mul(q, b.dx)), b.x)};
+}
+
+static inline fbd fbd_expf(fbd a)
+{
+    const fb e = fb_expf(a.x);
+    return (fbd){e, fb_mul(e, a.dx)};
+}
+
+/* d expm1(x) = exp(x) dx; the exp's bound as fb_expf() gives it. */
+static inline fbd fbd_expm1f(fbd a)
+{
+    return (fbd){fb_expm1f(a.x), fb_mul(fb_expf(a.x), a.dx)};
+}
+
+static inline fbd fbd_relu(fbd a)
+{
+    if (a.x.v - a.x.e - a.x.ed > 0.0) {
+        return a;
+    }
+    if (a.x.v + a.x.e + a.x.ed <= 0.0) {
+        return fbd_in(0.0);
+    }
+    return (fbd){fb_relu(a.x), fb_unknown(0.0)};
+}
+
+/*
  * Mirrors of the compositing of one ray, operation by operation as the
  * library's C evaluates them, on float inputs t (and dt or dir_norm, bg,
  * the gradients of the outputs) and on colours rgb[3n] and densities
@@ -207,50 +280,47 @@ static inline fb fb_unknown(double v)
 
 /* The longest ray the backward mirrors take (they leave longer ones'
  * outputs unwritten: callers check). */
-#define FB_RAY_MAX 256
+#define FB_RAY_MAX 1024
 
 /* What composite_packed.c accumulates: colour sums, depth, opacity and the
  * transmittance in front of the next sample. */
 typedef struct fb_ray {
-    fb rgb[3], depth, opacity, trans;
+    fbd rgb[3], depth, opacity, trans;
 } fb_ray;
 
 static inline void fb_ray_init(fb_ray *r)
 {
-    r->rgb[0] = r->rgb[1] = r->rgb[2] = fb_in(0.0);
-    r->depth = r->opacity = fb_in(0.0);
-    r->trans = fb_in(1.0);
+    r->rgb[0] = r->rgb[1] = r->rgb[2] = fbd_in(0.0);
+    r->depth = r->opacity = fbd_in(0.0);
+    r->trans = fbd_in(1.0);
 }
 
-/* nerf__composite_packed_ray()'s alpha_of(): -expm1f(-sigma dt). */
-static inline fb fb_packed_alpha(fb sigma, double dt)
-{
-    return fb_neg(fb_expm1f(fb_mul(fb_neg(sigma), fb_in(dt))));
-}
-
-/* One sample of nerf__composite_packed_ray(); its weight into *w. */
+/* One sample of nerf__composite_packed_ray() (alpha = -expm1f(-sigma
+ * dt)); its weight into *w if not NULL. */
 static inline void fb_packed_step(fb_ray *r, double t, double dt,
-                                  const fb *rgb, fb sigma, fb *w)
+                                  const fbd *rgb, fbd sigma, fbd *w)
 {
-    const fb alpha = fb_packed_alpha(sigma, dt);
-    const fb wi = fb_mul(r->trans, alpha);
+    const fbd alpha =
+        fbd_neg(fbd_expm1f(fbd_mul(fbd_neg(sigma), fbd_in(dt))));
+    const fbd wi = fbd_mul(r->trans, alpha);
     for (int c = 0; c < 3; c++) {
-        r->rgb[c] = fb_add(r->rgb[c], fb_mul(wi, rgb[c]));
+        r->rgb[c] = fbd_add(r->rgb[c], fbd_mul(wi, rgb[c]));
     }
-    r->depth = fb_add(r->depth, fb_mul(wi, fb_in(t)));
-    r->opacity = fb_add(r->opacity, wi);
-    r->trans = fb_mul(r->trans, fb_sub(fb_in(1.0), alpha));
+    r->depth = fbd_add(r->depth, fbd_mul(wi, fbd_in(t)));
+    r->opacity = fbd_add(r->opacity, wi);
+    r->trans = fbd_mul(r->trans, fbd_sub(fbd_in(1.0), alpha));
     if (w) {
         *w = wi;
     }
 }
 
 /* nerf__composite_state_rgb(): sum w c + (1 - opacity) bg. */
-static inline void fb_packed_rgb(const fb_ray *r, const float *bg, fb *rgb)
+static inline void fb_packed_rgb(const fb_ray *r, const float *bg,
+                                 fbd *rgb)
 {
-    const fb rest = fb_sub(fb_in(1.0), r->opacity);
+    const fbd rest = fbd_sub(fbd_in(1.0), r->opacity);
     for (int c = 0; c < 3; c++) {
-        rgb[c] = bg ? fb_add(r->rgb[c], fb_mul(rest, fb_in(bg[c])))
+        rgb[c] = bg ? fbd_add(r->rgb[c], fbd_mul(rest, fbd_in(bg[c])))
                     : r->rgb[c];
     }
 }
@@ -275,6 +345,12 @@ static inline fb fb_bg_grad(const double *dc, const float *bg)
     fb d = fb_add(fb_mul(fb_in(dc[0]), fb_in(bg[0])),
                   fb_mul(fb_in(dc[1]), fb_in(bg[1])));
     return fb_add(d, fb_mul(fb_in(dc[2]), fb_in(bg[2])));
+}
+
+/* alpha_of() of composite_packed.c: -expm1f(-sigma dt). */
+static inline fb fb_packed_alpha(fb sigma, double dt)
+{
+    return fb_neg(fb_expm1f(fb_mul(fb_neg(sigma), fb_in(dt))));
 }
 
 /*
@@ -342,34 +418,38 @@ static inline fb fb_composite_q(fb alpha)
 }
 
 /*
- * nerf__composite_ray_bg():
- * rgb[3], depth, opacity; weights[n] if not NULL.
+ * nerf__composite_ray_bg(): rgb[3], depth, opacity; weights[n] if not
+ * NULL.
  */
 static inline void fb_composite_forward(uint32_t n, const float *t,
-                                        double dir_norm, const fb *rgb,
-                                        const fb *sigma, const float *bg,
-                                        fb *out_rgb, fb *depth, fb *opacity,
-                                        fb *weights)
+                                        double dir_norm, const fbd *rgb,
+                                        const fbd *sigma, const float *bg,
+                                        fbd *out_rgb, fbd *depth,
+                                        fbd *opacity, fbd *weights)
 {
-    fb T = fb_in(1.0), r[3] = {fb_in(0.0), fb_in(0.0), fb_in(0.0)};
-    fb dep = fb_in(0.0), acc = fb_in(0.0);
+    fbd T = fbd_in(1.0), r[3] = {fbd_in(0.0), fbd_in(0.0), fbd_in(0.0)};
+    fbd dep = fbd_in(0.0), acc = fbd_in(0.0);
     for (uint32_t i = 0; i < n; i++) {
-        const fb alpha = fb_composite_alpha(
-            sigma[i], fb_composite_delta(n, t, i, dir_norm), NULL);
-        const fb w = fb_mul(alpha, T);
-        T = fb_mul(T, fb_composite_q(alpha));
+        const fbd delta = {fb_composite_delta(n, t, i, dir_norm),
+                           fb_in(0.0)};
+        const fbd alpha = fbd_sub(
+            fbd_in(1.0),
+            fbd_expf(fbd_mul(fbd_neg(fbd_relu(sigma[i])), delta)));
+        const fbd w = fbd_mul(alpha, T);
+        T = fbd_mul(T, fbd_add(fbd_sub(fbd_in(1.0), alpha),
+                               fbd_in((double)1e-10f)));
         if (weights) {
             weights[i] = w;
         }
         for (int c = 0; c < 3; c++) {
-            r[c] = fb_add(r[c], fb_mul(w, rgb[3 * i + c]));
+            r[c] = fbd_add(r[c], fbd_mul(w, rgb[3 * i + c]));
         }
-        dep = fb_add(dep, fb_mul(w, fb_in(t[i])));
-        acc = fb_add(acc, w);
+        dep = fbd_add(dep, fbd_mul(w, fbd_in(t[i])));
+        acc = fbd_add(acc, w);
     }
     for (int c = 0; c < 3; c++) {
-        out_rgb[c] = bg ? fb_add(r[c], fb_mul(fb_sub(fb_in(1.0), acc),
-                                              fb_in(bg[c])))
+        out_rgb[c] = bg ? fbd_add(r[c], fbd_mul(fbd_sub(fbd_in(1.0), acc),
+                                                fbd_in(bg[c])))
                         : r[c];
     }
     *depth = dep;
