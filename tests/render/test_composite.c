@@ -1,7 +1,8 @@
 /*
  * Compositing along one ray: closed-form cases (slab, step, empty space)
- * and the backward pass against central differences of an independent
- * double-precision forward.
+ * and the backward pass against the derivatives of a double-precision
+ * mirror of the forward, taken in forward mode, within bounds derived
+ * from the arithmetic.
  */
 #include <math.h>
 #include <string.h>
@@ -152,38 +153,32 @@ TEST(disparity_and_weights)
 /* ---- gradients ------------------------------------------------------- */
 
 /* L = g_rgb . rgb + g_d depth + g_o opacity in the mirror of the forward
- * (float_bounds.h): its v is L in double, its ed a bound on that double's
- * error. */
-static fb loss_d(uint32_t n, const float *t, float dnorm, const fb *rgb,
-                 const fb *sigma, const float *bg, const float *g)
+ * (float_bounds.h), with its derivative along the input that moves. */
+static fbd loss_d(uint32_t n, const float *t, float dnorm, const fbd *rgb,
+                  const fbd *sigma, const float *bg, const float *g)
 {
-    fb c[3], depth, acc;
+    fbd c[3], depth, acc;
     fb_composite_forward(n, t, dnorm, rgb, sigma, bg, c, &depth, &acc,
                          NULL);
-    fb l = fb_in(0.0);
+    fbd l = fbd_in(0.0);
     for (int k = 0; k < 3; k++) {
-        l = fb_add(l, fb_mul(fb_in(g[k]), c[k]));
+        l = fbd_add(l, fbd_mul(fbd_in(g[k]), c[k]));
     }
-    l = fb_add(l, fb_mul(fb_in(g[3]), depth));
-    return fb_add(l, fb_mul(fb_in(g[4]), acc));
+    l = fbd_add(l, fbd_mul(fbd_in(g[3]), depth));
+    return fbd_add(l, fbd_mul(fbd_in(g[4]), acc));
 }
 
 /* bg: NULL (black), white (through the bool entry point) or a colour. */
 static const float white_bg[3] = {1.0f, 1.0f, 1.0f};
 
 /*
- * The backward against central differences of L in double, with a
- * tolerance from the arithmetic on both sides:
- *  - the float backward lies within the running bound of its operations
- *    (fb_composite_backward(), float_bounds.h) of the exact derivative;
- *  - L is affine in each colour, and in E = exp(-s_i delta_i) as a
- *    function of s_i > 0 (w_i = T_i (1 - E); every later T has the factor
- *    E + 1e-10), so the central difference of step h is exact for a
- *    colour, and for a density, times h delta / sinh(h delta); raw
- *    densities stay at least 0.2 from the ReLU's kink, beyond h.  Left:
- *    L's rounding in double (the mirror's ed) over 2h, and the
- *    correction's, some 2^-50 relative.
- * h = 2^-7: x +- h is exact in double for these floats (asserted).
+ * The backward against the derivative of the forward formula taken in
+ * forward mode (float_bounds.h: no step, nothing truncated), each input
+ * in turn: the float backward lies within the running bound of its own
+ * operations (fb_composite_backward()) of the exact derivative, and the
+ * forward-mode derivative, in double, within its bound of it too.  Raw
+ * densities stay at least 0.2 from the ReLU's kink, so both sides take
+ * the same branch.
  */
 static void check_grad(uint32_t n, const float *bg, uint64_t seed,
                        double *worst)
@@ -210,53 +205,42 @@ static void check_grad(uint32_t n, const float *bg, uint64_t seed,
         nerf__composite_ray_backward_bg(n, t, dnorm, rgb, sigma, bg, g, g[3],
                                         g[4], d_rgb, d_sigma);
     }
-    fb c[3 * 64], sd[64], want_rgb[3 * 64], want_sigma[64];
+    fbd c[3 * 64], sd[64];
+    fb cx[3 * 64], sx[64], want_rgb[3 * 64], want_sigma[64];
     for (uint32_t i = 0; i < n; i++) {
-        sd[i] = fb_in(sigma[i]);
+        sd[i] = fbd_in(sigma[i]);
+        sx[i] = sd[i].x;
         for (int k = 0; k < 3; k++) {
-            c[3 * i + k] = fb_in(rgb[3 * i + k]);
+            c[3 * i + k] = fbd_in(rgb[3 * i + k]);
+            cx[3 * i + k] = c[3 * i + k].x;
         }
     }
     const double dc[3] = {g[0], g[1], g[2]};
-    fb_composite_backward(n, t, dnorm, c, sd, bg, dc, g[3], g[4], want_rgb,
+    fb_composite_backward(n, t, dnorm, cx, sx, bg, dc, g[3], g[4], want_rgb,
                           want_sigma);
-    const double h = 0x1p-7;
     for (uint32_t i = 0; i < 4 * n; i++) {
         const bool is_sigma = i < n;
-        fb *x = is_sigma ? &sd[i] : &c[i - n];
-        float analytic = is_sigma ? d_sigma[i] : d_rgb[i - n];
+        fbd *x = is_sigma ? &sd[i] : &c[i - n];
+        const float analytic = is_sigma ? d_sigma[i] : d_rgb[i - n];
         const fb want = is_sigma ? want_sigma[i] : want_rgb[i - n];
-        const double x0 = x->v;
-        *x = fb_in(x0 + h);
-        const fb lp = loss_d(n, t, dnorm, c, sd, bg, g);
-        *x = fb_in(x0 - h);
-        const fb lm = loss_d(n, t, dnorm, c, sd, bg, g);
-        *x = fb_in(x0);
-        CHECK((x0 + h) - h == x0 && (x0 - h) + h == x0);
-        double fd = (lp.v - lm.v) / (2 * h);
-        double fd_err = (lp.ed + lm.ed) / (2 * h);
-        if (is_sigma) {
-            const double delta = i + 1 < n
-                                     ? ((double)t[i + 1] - t[i]) * dnorm
-                                     : 1e10 * dnorm;
-            const double a = h * delta;
-            fd *= a < 700.0 ? a / sinh(a) : 0.0;
-        }
-        fd_err += 0x1p-40 * fabs(fd);
-        const double err = fabs(analytic - fd);
-        const double tol = (want.e + want.ed) * (1.0 + 0x1p-30) + fd_err;
+        const fbd keep = *x;
+        *x = fbd_var(keep.x.v, 1.0);
+        const fb d = loss_d(n, t, dnorm, c, sd, bg, g).dx;
+        *x = keep;
+        const double err = fabs(analytic - d.v);
+        const double tol = (want.e + want.ed + d.ed) * (1.0 + 0x1p-30);
         if (err / tol > *worst) {
             *worst = err / tol;
         }
         if (!(err <= tol)) {
-            FAILF("%s %u: analytic %.9g, finite difference %.9g "
-                  "(tolerance %.2g)", i < n ? "sigma" : "rgb",
-                  i < n ? i : i - n, analytic, fd, tol);
+            FAILF("%s %u: analytic %.9g, forward mode %.9g (tolerance %.2g)",
+                  i < n ? "sigma" : "rgb", i < n ? i : i - n, analytic, d.v,
+                  tol);
         }
     }
 }
 
-TEST(backward_matches_finite_differences)
+TEST(backward_matches_forward_mode)
 {
     double worst = 0.0;
     for (uint64_t seed = 0; seed < 6; seed++) {
@@ -345,7 +329,7 @@ int main(void)
     RUN(opaque_step_depth);
     RUN(empty_space_background);
     RUN(disparity_and_weights);
-    RUN(backward_matches_finite_differences);
+    RUN(backward_matches_forward_mode);
     RUN(coloured_background);
     RUN(backward_opaque_sample);
     HARNESS_EXIT();

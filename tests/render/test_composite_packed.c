@@ -1,7 +1,8 @@
 /*
  * Compositing of packed samples with per-sample dt: the forward against a
  * double-precision evaluation of the formula, piecewise accumulation,
- * early termination, and the backward against central differences.
+ * early termination, and the backward against forward-mode derivatives
+ * of the forward, each within a bound derived from the arithmetic.
  */
 #include <math.h>
 #include <string.h>
@@ -49,23 +50,24 @@ static void make_batch(batch *b, uint64_t seed, float dense)
     }
 }
 
-/* The colours and densities of n samples as exact inputs of a mirror. */
+/* The colours and densities of n samples as exact inputs of a mirror
+ * (float_bounds.h), held fixed. */
 static void exact_inputs(uint32_t n, const float *rgb, const float *sigma,
-                         fb *rgb_fb, fb *sigma_fb)
+                         fbd *rgb_in, fbd *sigma_in)
 {
     for (uint32_t i = 0; i < n; i++) {
-        sigma_fb[i] = fb_in(sigma[i]);
+        sigma_in[i] = fbd_in(sigma[i]);
         for (int c = 0; c < 3; c++) {
-            rgb_fb[3 * i + c] = fb_in(rgb[3 * i + c]);
+            rgb_in[3 * i + c] = fbd_in(rgb[3 * i + c]);
         }
     }
 }
 
-/* The first m samples of a ray composited in the mirror (float_bounds.h):
- * out = rgb[3], depth, opacity; w[m] the weights, if not NULL. */
+/* The first m samples of a ray composited in the mirror: out = rgb[3],
+ * depth, opacity; w[m] the weights, if not NULL. */
 static void mirror(uint32_t m, const float *t, const float *dt,
-                   const fb *rgb, const fb *sigma, const float *bg,
-                   fb out[5], fb *w)
+                   const fbd *rgb, const fbd *sigma, const float *bg,
+                   fbd out[5], fbd *w)
 {
     fb_ray r;
     fb_ray_init(&r);
@@ -106,7 +108,7 @@ TEST(forward_matches_formula)
         for (size_t k = 0; k < N_RAYS; k++) {
             const size_t at = b.offsets[k];
             const uint32_t n = (uint32_t)(b.offsets[k + 1] - at);
-            fb c[3 * MAX_PER_RAY], sg[MAX_PER_RAY], w[MAX_PER_RAY], ref[5];
+            fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY], w[MAX_PER_RAY], ref[5];
             exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
             const float *bg = mode < 2 ? b.bg + (mode == 0 ? 3 * k : 0)
                                        : NULL;
@@ -115,12 +117,12 @@ TEST(forward_matches_formula)
             const float got[5] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2],
                                   depth[k], opacity[k]};
             for (int j = 0; j < 5; j++) {
-                bad += !fb_holds(got[j], ref[j]);
-                worst = fmax(worst, fabs(got[j] - ref[j].v));
-                bound = fmax(bound, ref[j].e + ref[j].ed);
+                bad += !fb_holds(got[j], ref[j].x);
+                worst = fmax(worst, fabs(got[j] - ref[j].x.v));
+                bound = fmax(bound, ref[j].x.e + ref[j].x.ed);
             }
             for (uint32_t i = 0; i < n; i++) {
-                bad += !fb_holds(weights[at + i], w[i]);
+                bad += !fb_holds(weights[at + i], w[i].x);
             }
             if (n == 0) {
                 CHECK(opacity[k] == 0.0f && depth[k] == 0.0f);
@@ -153,18 +155,18 @@ TEST(thin_media_keep_precision)
      * roundings of T and of 1 - alpha near 1, each at most u relative). */
     fb_ray r;
     fb_ray_init(&r);
-    const fb white[3] = {fb_in(1.0), fb_in(1.0), fb_in(1.0)};
+    const fbd white[3] = {fbd_in(1.0), fbd_in(1.0), fbd_in(1.0)};
     for (int i = 0; i < 1000; i++) {
-        fb_packed_step(&r, t[i], dt[i], white, fb_in(sigma[i]), NULL);
+        fb_packed_step(&r, t[i], dt[i], white, fbd_in(sigma[i]), NULL);
     }
-    CHECK(fb_holds(s.opacity, r.opacity) && fb_holds(s.trans, r.trans));
+    const fb op = r.opacity.x, tr = r.trans.x;
+    CHECK(fb_holds(s.opacity, op) && fb_holds(s.trans, tr));
     /* And that is float precision: 1 - expf(-x) per step would leave
      * alpha = 1e-5 with only its rounding to 2^-24 (a relative error up
      * to 3e-3), the opacity off by as much. */
-    CHECK(r.opacity.e + r.opacity.ed < 2e-4 * r.opacity.v);
+    CHECK(op.e + op.ed < 2e-4 * op.v);
     printf("  opacity %.9g, bound %.2g; transmittance %.9g, bound %.2g\n",
-           (double)s.opacity, r.opacity.e + r.opacity.ed, (double)s.trans,
-           r.trans.e + r.trans.ed);
+           (double)s.opacity, op.e + op.ed, (double)s.trans, tr.e + tr.ed);
 }
 
 TEST(pieces_equal_one_call)
@@ -238,15 +240,15 @@ TEST(early_termination)
          * eps. */
         fb_ray r;
         fb_ray_init(&r);
-        fb c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
+        fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
         exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
         uint32_t expect = 0;
-        while (expect < n && r.trans.v >= eps) {
+        while (expect < n && r.trans.x.v >= eps) {
             fb_packed_step(&r, b.t[at + expect], b.dt[at + expect],
                            c + 3 * expect, sg[expect], NULL);
             expect++;
         }
-        fb T_cut = r.trans;
+        fb T_cut = r.trans.x;
         if (used1[k] < expect) {
             /* The float stopped first: replay to its cut. */
             fb_ray_init(&r);
@@ -254,7 +256,7 @@ TEST(early_termination)
                 fb_packed_step(&r, b.t[at + i], b.dt[at + i], c + 3 * i,
                                sg[i], NULL);
             }
-            T_cut = r.trans;
+            T_cut = r.trans.x;
         }
         if (used1[k] != expect) {
             near_eps++;
@@ -295,35 +297,28 @@ TEST(early_termination)
 
 /* ---- gradients ------------------------------------------------------- */
 
-/* L = g . (rgb, depth, opacity) over the first m samples, in the mirror:
- * its v is L in double, its ed a bound on that double's error. */
-static fb loss(uint32_t m, const float *t, const float *dt, const fb *rgb,
-               const fb *sigma, const float *bg, const float g[5])
+/* L = g . (rgb, depth, opacity) over the first m samples, in the mirror
+ * with its derivative along the input that moves. */
+static fbd loss(uint32_t m, const float *t, const float *dt, const fbd *rgb,
+                const fbd *sigma, const float *bg, const float g[5])
 {
-    fb out[5];
+    fbd out[5];
     mirror(m, t, dt, rgb, sigma, bg, out, NULL);
-    fb l = fb_in(0.0);
+    fbd l = fbd_in(0.0);
     for (int k = 0; k < 5; k++) {
-        l = fb_add(l, fb_mul(fb_in(g[k]), out[k]));
+        l = fbd_add(l, fbd_mul(fbd_in(g[k]), out[k]));
     }
     return l;
 }
 
 /*
- * The backward against central differences of L in double, with a
- * tolerance from the arithmetic on both sides:
- *  - the float backward is within the running bound of its operations
- *    (fb_packed_backward(), float_bounds.h) of the exact derivative;
- *  - L is affine in each colour, and in E = exp(-s_i dt_i) as a function
- *    of s_i (w_i = T_i (1 - E), and every later T has the factor E), so
- *    the central difference of step h is exact for a colour and
- *    -b E sinh(h dt)/h against the derivative -b E dt for a density:
- *    multiplied by h dt / sinh(h dt) it is exact too.  What is left is L's
- *    rounding in double (the mirror's ed) over 2h, and the correction's,
- *    some 2^-50 relative.
- * h = 2^-7: x +- h is exact in double for these floats (asserted).
+ * The backward against the derivative of the forward formula taken in
+ * forward mode (float_bounds.h: no step, nothing truncated), each input
+ * in turn: the float backward lies within the running bound of its own
+ * operations (fb_packed_backward()) of the exact derivative, and the
+ * forward-mode derivative, in double, within its bound of it too.
  */
-TEST(backward_matches_finite_differences)
+TEST(backward_matches_forward_mode)
 {
     static batch b;
     const float g5[5] = {0.3f, -1.1f, 0.7f, 0.05f, -0.4f};
@@ -351,11 +346,18 @@ TEST(backward_matches_finite_differences)
             CHECK_EQ_INT(m, nerf__composite_packed_ray(
                                 &s, n, t, dt, b.rgb + 3 * at, b.sigma + at,
                                 eps, NULL));
-            fb c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
-            fb mr[3 * MAX_PER_RAY], ms[MAX_PER_RAY];
+            fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
+            fb cx[3 * MAX_PER_RAY], sx[MAX_PER_RAY];
+            fb want_rgb[3 * MAX_PER_RAY], want_sigma[MAX_PER_RAY];
             exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
-            fb_packed_backward(m, t, dt, c, sg, bg, dc, g5[3], g5[4], mr, ms);
-            const double h = 0x1p-7;
+            for (uint32_t i = 0; i < n; i++) {
+                sx[i] = sg[i].x;
+                for (int ch = 0; ch < 3; ch++) {
+                    cx[3 * i + ch] = c[3 * i + ch].x;
+                }
+            }
+            fb_packed_backward(m, t, dt, cx, sx, bg, dc, g5[3], g5[4],
+                               want_rgb, want_sigma);
             for (uint32_t i = 0; i < 4 * n; i++) {
                 const bool is_sigma = i < n;
                 const uint32_t j = is_sigma ? i : i - n;
@@ -365,31 +367,21 @@ TEST(backward_matches_finite_differences)
                     CHECK(analytic == 0.0f);
                     continue;
                 }
-                fb *x = is_sigma ? &sg[j] : &c[j];
-                const double x0 = x->v;
-                *x = fb_in(x0 + h);
-                const fb lp = loss(m, t, dt, c, sg, bg, g5);
-                *x = fb_in(x0 - h);
-                const fb lm = loss(m, t, dt, c, sg, bg, g5);
-                *x = fb_in(x0);
-                CHECK((x0 + h) - h == x0 && (x0 - h) + h == x0);
-                double fd = (lp.v - lm.v) / (2 * h);
-                double fd_err = (lp.ed + lm.ed) / (2 * h);
-                if (is_sigma) {
-                    const double a = h * dt[j];
-                    fd *= a / sinh(a);
-                }
-                fd_err += 0x1p-40 * fabs(fd);
-                const fb want = is_sigma ? ms[j] : mr[j];
-                const double err = fabs(analytic - fd);
-                const double tol = (want.e + want.ed) * (1.0 + 0x1p-30) +
-                                   fd_err;
+                fbd *x = is_sigma ? &sg[j] : &c[j];
+                const fbd keep = *x;
+                *x = fbd_var(keep.x.v, 1.0);
+                const fb d = loss(m, t, dt, c, sg, bg, g5).dx;
+                *x = keep;
+                const fb want = is_sigma ? want_sigma[j] : want_rgb[j];
+                const double err = fabs(analytic - d.v);
+                const double tol = (want.e + want.ed + d.ed) *
+                                   (1.0 + 0x1p-30);
                 worst = fmax(worst, err / tol);
                 checked++;
-                if (err > tol && bad++ < 5) {
-                    FAILF("round %d ray %zu %s %u: analytic %.9g, finite "
-                          "difference %.9g (tolerance %.2g)", round, k,
-                          is_sigma ? "sigma" : "rgb", j, analytic, fd, tol);
+                if (!(err <= tol) && bad++ < 5) {
+                    FAILF("round %d ray %zu %s %u: analytic %.9g, forward "
+                          "mode %.9g (tolerance %.2g)", round, k,
+                          is_sigma ? "sigma" : "rgb", j, analytic, d.v, tol);
                 }
             }
         }
@@ -445,7 +437,7 @@ int main(void)
     RUN(thin_media_keep_precision);
     RUN(pieces_equal_one_call);
     RUN(early_termination);
-    RUN(backward_matches_finite_differences);
+    RUN(backward_matches_forward_mode);
     RUN(batch_backward_matches_rays);
     HARNESS_EXIT();
 }
