@@ -194,6 +194,13 @@ TEST(chunks_and_threads_bitwise)
     }
     /* A random model is neither empty nor opaque everywhere. */
     CHECK(mean > 0.01 && mean < 0.999);
+    /* Bit for bit on every kernel: whatever the chunk size (rounded up to
+     * a multiple of the block) and the threads, the renderer evaluates
+     * the same fixed blocks of NERF__RENDER_BLOCK rays from the first,
+     * each one product per pass, and gemm.c cuts products at fixed rows
+     * whatever the threads.  The chunks below are smaller than, equal to,
+     * not multiples of and larger than the block. */
+    _Static_assert(NERF__RENDER_BLOCK == 64, "the cases assume 64");
     static const uint32_t cases[][2] = {
         {1, 1}, {64, 2}, {100, 3}, {128, 2}, {200, 4}, {4096, 0}, {65, 7},
     };
