@@ -14,7 +14,6 @@
 #define NERF_TESTS_FLOAT_BOUNDS_H
 
 #include <stddef.h>
-#include <stdint.h>
 
 /* Unit roundoff of float (round to nearest). */
 #define FLOAT_U 0x1p-24
@@ -32,6 +31,7 @@ static inline double float_gamma(double n)
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdint.h>
 
 /*
  * Relative error of libm's expf and expm1f (and of exp and expm1 in
