@@ -37,8 +37,9 @@ static inline double float_gamma(double n)
  * Relative error of libm's expf and expm1f (and of exp and expm1 in
  * double), as a multiple of the result.  glibc's manual ("Known Maximum
  * Errors in Math Functions") lists at most 1 ulp for these in float and
- * double on x86-64 and aarch64; an ulp of y is at most 2u |y|, and we
- * allow 2 ulps.
+ * double on x86-64 and aarch64 (every third float in [-112, 0], the range
+ * compositing uses, gave at most 0.502 and 0.771 ulp with glibc 2.36's
+ * x86-64 variants); an ulp of y is at most 2u |y|, and we allow 2 ulps.
  */
 #define FLOAT_EXP_REL (4.0 * FLOAT_U)
 #define DOUBLE_U 0x1p-53
