@@ -125,8 +125,7 @@ static inline fb fb_neg(fb a)
 static inline fb fb_add(fb a, fb b)
 {
     const double r = fabs(a.v + b.v) + a.e + a.ed + b.e + b.ed;
-    return (fb){a.v + b.v, a.e + b.e + FLOAT_U * r,
-                a.ed + b.ed + DOUBLE_U * r};
+    return (fb){a.v + b.v, a.e + b.e + FLOAT_U * r, a.ed + b.ed + DOUBLE_U * r};
 }
 
 static inline fb fb_sub(fb a, fb b)
@@ -302,8 +301,7 @@ static inline void fb_ray_init(fb_ray *r)
 static inline void fb_packed_step(fb_ray *r, double t, double dt,
                                   const fbd *rgb, fbd sigma, fbd *w)
 {
-    const fbd alpha =
-        fbd_neg(fbd_expm1f(fbd_mul(fbd_neg(sigma), fbd_in(dt))));
+    const fbd alpha = fbd_neg(fbd_expm1f(fbd_mul(fbd_neg(sigma), fbd_in(dt))));
     const fbd wi = fbd_mul(r->trans, alpha);
     for (int c = 0; c < 3; c++) {
         r->rgb[c] = fbd_add(r->rgb[c], fbd_mul(wi, rgb[c]));
@@ -317,13 +315,12 @@ static inline void fb_packed_step(fb_ray *r, double t, double dt,
 }
 
 /* nerf__composite_state_rgb(): sum w c + (1 - opacity) bg. */
-static inline void fb_packed_rgb(const fb_ray *r, const float *bg,
-                                 fbd *rgb)
+static inline void fb_packed_rgb(const fb_ray *r, const float *bg, fbd *rgb)
 {
     const fbd rest = fbd_sub(fbd_in(1.0), r->opacity);
     for (int c = 0; c < 3; c++) {
-        rgb[c] = bg ? fbd_add(r->rgb[c], fbd_mul(rest, fbd_in(bg[c])))
-                    : r->rgb[c];
+        rgb[c] =
+            bg ? fbd_add(r->rgb[c], fbd_mul(rest, fbd_in(bg[c]))) : r->rgb[c];
     }
 }
 
@@ -363,8 +360,7 @@ static inline void fb_packed_backward(uint32_t m, const float *t,
                                       const float *dt, const fb *rgb,
                                       const fb *sigma, const float *bg,
                                       const double *dc, double d_depth,
-                                      double d_opacity, fb *d_rgb,
-                                      fb *d_sigma)
+                                      double d_opacity, fb *d_rgb, fb *d_sigma)
 {
     fb trans[FB_RAY_MAX];
     fb T = fb_in(1.0);
@@ -381,14 +377,13 @@ static inline void fb_packed_backward(uint32_t m, const float *t,
         const fb alpha = fb_packed_alpha(sigma[i], dt[i]);
         const fb q = fb_sub(fb_in(1.0), alpha);
         const fb w = fb_mul(trans[i], alpha);
-        const fb g = fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth,
-                                    d_opacity);
+        const fb g =
+            fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth, d_opacity);
         for (int c = 0; c < 3; c++) {
             d_rgb[3 * i + c] = fb_mul(w, fb_in(dc[c]));
         }
-        d_sigma[i] = fb_mul(fb_mul(fb_mul(trans[i], fb_sub(g, rest)),
-                                   fb_in(dt[i])),
-                            q);
+        d_sigma[i] =
+            fb_mul(fb_mul(fb_mul(trans[i], fb_sub(g, rest)), fb_in(dt[i])), q);
         rest = fb_add(fb_mul(g, alpha), fb_mul(q, rest));
     }
 }
@@ -397,8 +392,8 @@ static inline void fb_packed_backward(uint32_t m, const float *t,
 static inline fb fb_composite_delta(uint32_t n, const float *t, uint32_t i,
                                     double dir_norm)
 {
-    const fb dt = i + 1 < n ? fb_sub(fb_in(t[i + 1]), fb_in(t[i]))
-                            : fb_in((double)1e10f);
+    const fb dt =
+        i + 1 < n ? fb_sub(fb_in(t[i + 1]), fb_in(t[i])) : fb_in((double)1e10f);
     return fb_mul(dt, fb_in(dir_norm));
 }
 
@@ -426,20 +421,18 @@ static inline fb fb_composite_q(fb alpha)
 static inline void fb_composite_forward(uint32_t n, const float *t,
                                         double dir_norm, const fbd *rgb,
                                         const fbd *sigma, const float *bg,
-                                        fbd *out_rgb, fbd *depth,
-                                        fbd *opacity, fbd *weights)
+                                        fbd *out_rgb, fbd *depth, fbd *opacity,
+                                        fbd *weights)
 {
     fbd T = fbd_in(1.0), r[3] = {fbd_in(0.0), fbd_in(0.0), fbd_in(0.0)};
     fbd dep = fbd_in(0.0), acc = fbd_in(0.0);
     for (uint32_t i = 0; i < n; i++) {
-        const fbd delta = {fb_composite_delta(n, t, i, dir_norm),
-                           fb_in(0.0)};
+        const fbd delta = {fb_composite_delta(n, t, i, dir_norm), fb_in(0.0)};
         const fbd alpha = fbd_sub(
-            fbd_in(1.0),
-            fbd_expf(fbd_mul(fbd_neg(fbd_relu(sigma[i])), delta)));
+            fbd_in(1.0), fbd_expf(fbd_mul(fbd_neg(fbd_relu(sigma[i])), delta)));
         const fbd w = fbd_mul(alpha, T);
-        T = fbd_mul(T, fbd_add(fbd_sub(fbd_in(1.0), alpha),
-                               fbd_in((double)1e-10f)));
+        T = fbd_mul(
+            T, fbd_add(fbd_sub(fbd_in(1.0), alpha), fbd_in((double)1e-10f)));
         if (weights) {
             weights[i] = w;
         }
@@ -476,9 +469,9 @@ static inline void fb_composite_backward(uint32_t n, const float *t,
     }
     for (uint32_t i = 0; i < n; i++) {
         trans[i] = T;
-        T = fb_mul(T, fb_composite_q(fb_composite_alpha(
-                          sigma[i], fb_composite_delta(n, t, i, dir_norm),
-                          NULL)));
+        T = fb_mul(T,
+                   fb_composite_q(fb_composite_alpha(
+                       sigma[i], fb_composite_delta(n, t, i, dir_norm), NULL)));
     }
     const fb dbg = fb_bg_grad(dc, bg);
     fb rest = fb_in(0.0);
@@ -487,8 +480,8 @@ static inline void fb_composite_backward(uint32_t n, const float *t,
         fb e;
         const fb alpha = fb_composite_alpha(sigma[i], dist, &e);
         const fb w = fb_mul(alpha, trans[i]);
-        const fb g = fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth,
-                                    d_opacity);
+        const fb g =
+            fb_weight_grad(dc, dbg, rgb + 3 * i, t[i], d_depth, d_opacity);
         for (int c = 0; c < 3; c++) {
             d_rgb[3 * i + c] = fb_mul(w, fb_in(dc[c]));
         }
@@ -500,8 +493,7 @@ static inline void fb_composite_backward(uint32_t n, const float *t,
         } else {
             d_sigma[i] = fb_in(0.0);
         }
-        rest = fb_add(fb_mul(g, alpha),
-                      fb_mul(fb_composite_q(alpha), rest));
+        rest = fb_add(fb_mul(g, alpha), fb_mul(fb_composite_q(alpha), rest));
     }
 }
 
