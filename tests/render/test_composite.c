@@ -1,11 +1,13 @@
 /*
  * Compositing along one ray: closed-form cases (slab, step, empty space)
- * and the backward pass against central differences of an independent
- * double-precision forward.
+ * and the backward pass against the derivatives of a double-precision
+ * mirror of the forward, taken in forward mode, within bounds derived
+ * from the arithmetic.
  */
 #include <math.h>
 #include <string.h>
 
+#include "../float_bounds.h"
 #include "../harness.h"
 #include "composite.h"
 #include "rng.h"
@@ -123,53 +125,65 @@ TEST(disparity_and_weights)
     }
     nerf__ray_out out;
     nerf__composite_ray(32, t, 1.0f, rgb, sigma, false, w, &out);
+    /* Sums of the weights the call returned, in double: the products of
+     * floats are exact there, and each of the 32 additions rounds by at
+     * most 2^-53 of the partial sum. */
+    const int n = 32;
     double sum = 0.0, depth = 0.0;
-    for (int i = 0; i < 32; i++) {
+    for (int i = 0; i < n; i++) {
         CHECK(w[i] >= 0.0f);
         sum += w[i];
         depth += (double)w[i] * t[i];
     }
-    CHECK_NEAR(out.opacity, sum, 1e-6);
-    CHECK_NEAR(out.depth, depth, 1e-5);
-    CHECK_NEAR(out.disparity, sum / depth, 1e-6);
+    const double dbl = n * DOUBLE_U;
+    /* The float opacity adds the n weights (n - 1 roundings after the
+     * first, exact, addition to 0): within gamma(n - 1) of their exact
+     * sum, all terms being >= 0.  The depth rounds each product w t too:
+     * gamma(n). */
+    CHECK_NEAR(out.opacity, sum, (float_gamma(n - 1) + dbl) * sum);
+    CHECK_NEAR(out.depth, depth, (float_gamma(n) + dbl) * depth);
+    /* disparity = 1 / (depth / opacity): the two sums' relative errors,
+     * the division's and the reciprocal's, 2n + 1 factors (1 + d)^(+-1)
+     * in all (Higham's lemma 3.1): gamma(2n + 1) relative. */
+    const double disparity = sum / depth;
+    CHECK_NEAR(out.disparity, disparity,
+               (float_gamma(2 * n + 1) + 3 * dbl) * disparity);
 }
 
 /* ---- gradients ------------------------------------------------------- */
 
-/* The loss L = g_rgb . rgb + g_d depth + g_o opacity of the double forward. */
-static double loss_d(uint32_t n, const double *t, double dnorm,
-                     const double *rgb, const double *sigma, const float *bg,
-                     const double *g)
+/* L = g_rgb . rgb + g_d depth + g_o opacity in the mirror of the forward
+ * (float_bounds.h), with its derivative along the input that moves. */
+static fbd loss_d(uint32_t n, const float *t, float dnorm, const fbd *rgb,
+                  const fbd *sigma, const float *bg, const float *g)
 {
-    double trans = 1.0, c[3] = {0, 0, 0}, depth = 0.0, acc = 0.0;
-    for (uint32_t i = 0; i < n; i++) {
-        double dt = i + 1 < n ? t[i + 1] - t[i] : 1e10;
-        double s = sigma[i] > 0.0 ? sigma[i] : 0.0;
-        double alpha = 1.0 - exp(-s * dt * dnorm);
-        double w = alpha * trans;
-        trans *= 1.0 - alpha + 1e-10;
-        for (int k = 0; k < 3; k++) {
-            c[k] += w * rgb[3 * i + k];
-        }
-        depth += w * t[i];
-        acc += w;
+    fbd c[3], depth, acc;
+    fb_composite_forward(n, t, dnorm, rgb, sigma, bg, c, &depth, &acc,
+                         NULL);
+    fbd l = fbd_in(0.0);
+    for (int k = 0; k < 3; k++) {
+        l = fbd_add(l, fbd_mul(fbd_in(g[k]), c[k]));
     }
-    if (bg) {
-        for (int k = 0; k < 3; k++) {
-            c[k] += (1.0 - acc) * bg[k];
-        }
-    }
-    return g[0] * c[0] + g[1] * c[1] + g[2] * c[2] + g[3] * depth + g[4] * acc;
+    l = fbd_add(l, fbd_mul(fbd_in(g[3]), depth));
+    return fbd_add(l, fbd_mul(fbd_in(g[4]), acc));
 }
 
 /* bg: NULL (black), white (through the bool entry point) or a colour. */
 static const float white_bg[3] = {1.0f, 1.0f, 1.0f};
 
+/*
+ * The backward against the derivative of the forward formula taken in
+ * forward mode (float_bounds.h: no step, nothing truncated), each input
+ * in turn: the float backward lies within the running bound of its own
+ * operations (fb_composite_backward()) of the exact derivative, and the
+ * forward-mode derivative, in double, within its bound of it too.  Raw
+ * densities stay at least 0.2 from the ReLU's kink, so both sides take
+ * the same branch.
+ */
 static void check_grad(uint32_t n, const float *bg, uint64_t seed,
                        double *worst)
 {
     float t[64], rgb[3 * 64], sigma[64], d_rgb[3 * 64], d_sigma[64];
-    double td[64], rgbd[3 * 64], sd[64];
     nerf__rng rng = nerf__rng_make(seed, 1);
     float acc_t = 2.0f;
     for (uint32_t i = 0; i < n; i++) {
@@ -191,47 +205,49 @@ static void check_grad(uint32_t n, const float *bg, uint64_t seed,
         nerf__composite_ray_backward_bg(n, t, dnorm, rgb, sigma, bg, g, g[3],
                                         g[4], d_rgb, d_sigma);
     }
-    double gd[5];
-    for (int k = 0; k < 5; k++) {
-        gd[k] = g[k];
-    }
+    fbd c[3 * 64], sd[64];
+    fb cx[3 * 64], sx[64], want_rgb[3 * 64], want_sigma[64];
     for (uint32_t i = 0; i < n; i++) {
-        td[i] = t[i];
-        sd[i] = sigma[i];
-        for (int c = 0; c < 3; c++) {
-            rgbd[3 * i + c] = rgb[3 * i + c];
+        sd[i] = fbd_in(sigma[i]);
+        sx[i] = sd[i].x;
+        for (int k = 0; k < 3; k++) {
+            c[3 * i + k] = fbd_in(rgb[3 * i + k]);
+            cx[3 * i + k] = c[3 * i + k].x;
         }
     }
-    const double h = 1e-6;
+    const double dc[3] = {g[0], g[1], g[2]};
+    fb_composite_backward(n, t, dnorm, cx, sx, bg, dc, g[3], g[4], want_rgb,
+                          want_sigma);
     for (uint32_t i = 0; i < 4 * n; i++) {
-        double *x = i < n ? &sd[i] : &rgbd[i - n];
-        float analytic = i < n ? d_sigma[i] : d_rgb[i - n];
-        double x0 = *x;
-        *x = x0 + h;
-        double lp = loss_d(n, td, dnorm, rgbd, sd, bg, gd);
-        *x = x0 - h;
-        double lm = loss_d(n, td, dnorm, rgbd, sd, bg, gd);
-        *x = x0;
-        double fd = (lp - lm) / (2 * h);
-        double err = fabs(analytic - fd) / (fabs(fd) + 1e-3);
-        if (err > *worst) {
-            *worst = err;
+        const bool is_sigma = i < n;
+        fbd *x = is_sigma ? &sd[i] : &c[i - n];
+        const float analytic = is_sigma ? d_sigma[i] : d_rgb[i - n];
+        const fb want = is_sigma ? want_sigma[i] : want_rgb[i - n];
+        const fbd keep = *x;
+        *x = fbd_var(keep.x.v, 1.0);
+        const fb d = loss_d(n, t, dnorm, c, sd, bg, g).dx;
+        *x = keep;
+        const double err = fabs(analytic - d.v);
+        const double tol = (want.e + want.ed + d.ed) * (1.0 + 0x1p-30);
+        if (err / tol > *worst) {
+            *worst = err / tol;
         }
-        if (err > 1e-3) {
-            FAILF("%s %u: analytic %.8g, finite difference %.8g",
-                  i < n ? "sigma" : "rgb", i < n ? i : i - n, analytic, fd);
+        if (!(err <= tol)) {
+            FAILF("%s %u: analytic %.9g, forward mode %.9g (tolerance %.2g)",
+                  i < n ? "sigma" : "rgb", i < n ? i : i - n, analytic, d.v,
+                  tol);
         }
     }
 }
 
-TEST(backward_matches_finite_differences)
+TEST(backward_matches_forward_mode)
 {
     double worst = 0.0;
     for (uint64_t seed = 0; seed < 6; seed++) {
         check_grad(seed % 2 ? 24 : 7, seed % 3 == 0 ? white_bg : NULL, seed,
                    &worst);
     }
-    printf("  worst relative error %.2e\n", worst);
+    printf("  the largest error %.2f of its tolerance\n", worst);
 }
 
 /*
@@ -283,7 +299,7 @@ TEST(coloured_background)
                                      {0.7f, 0.05f, 0.3f}};
         check_grad(seed % 2 ? 24 : 7, colours[seed % 3], seed + 40, &worst);
     }
-    printf("  worst relative error %.2e\n", worst);
+    printf("  the largest error %.2f of its tolerance\n", worst);
 }
 
 TEST(backward_opaque_sample)
@@ -313,7 +329,7 @@ int main(void)
     RUN(opaque_step_depth);
     RUN(empty_space_background);
     RUN(disparity_and_weights);
-    RUN(backward_matches_finite_differences);
+    RUN(backward_matches_forward_mode);
     RUN(coloured_background);
     RUN(backward_opaque_sample);
     HARNESS_EXIT();

@@ -1,11 +1,13 @@
 /*
  * Compositing of packed samples with per-sample dt: the forward against a
  * double-precision evaluation of the formula, piecewise accumulation,
- * early termination, and the backward against central differences.
+ * early termination, and the backward against forward-mode derivatives
+ * of the forward, each within a bound derived from the arithmetic.
  */
 #include <math.h>
 #include <string.h>
 
+#include "../float_bounds.h"
 #include "../harness.h"
 #include "composite_packed.h"
 #include "rng.h"
@@ -48,39 +50,43 @@ static void make_batch(batch *b, uint64_t seed, float dense)
     }
 }
 
-/* rgb[3], depth, opacity of the first m samples in double. */
-static void reference(uint32_t m, const double *t, const double *dt,
-                      const double *rgb, const double *sigma,
-                      const double *bg, double out[5], double *w_out)
+/* The colours and densities of n samples as exact inputs of a mirror
+ * (float_bounds.h), held fixed. */
+static void exact_inputs(uint32_t n, const float *rgb, const float *sigma,
+                         fbd *rgb_in, fbd *sigma_in)
 {
-    double trans = 1.0, acc = 0.0;
-    memset(out, 0, 5 * sizeof(double));
-    for (uint32_t i = 0; i < m; i++) {
-        double alpha = 1.0 - exp(-sigma[i] * dt[i]);
-        double w = trans * alpha;
+    for (uint32_t i = 0; i < n; i++) {
+        sigma_in[i] = fbd_in(sigma[i]);
         for (int c = 0; c < 3; c++) {
-            out[c] += w * rgb[3 * i + c];
-        }
-        out[3] += w * t[i];
-        acc += w;
-        trans *= 1.0 - alpha;
-        if (w_out) {
-            w_out[i] = w;
+            rgb_in[3 * i + c] = fbd_in(rgb[3 * i + c]);
         }
     }
-    for (int c = 0; c < 3 && bg; c++) {
-        out[c] += (1.0 - acc) * bg[c];
-    }
-    out[4] = acc;
 }
 
-static void to_double(const float *x, double *y, size_t n)
+/* The first m samples of a ray composited in the mirror: out = rgb[3],
+ * depth, opacity; w[m] the weights, if not NULL. */
+static void mirror(uint32_t m, const float *t, const float *dt,
+                   const fbd *rgb, const fbd *sigma, const float *bg,
+                   fbd out[5], fbd *w)
 {
-    for (size_t i = 0; i < n; i++) {
-        y[i] = x[i];
+    fb_ray r;
+    fb_ray_init(&r);
+    for (uint32_t i = 0; i < m; i++) {
+        fb_packed_step(&r, t[i], dt[i], rgb + 3 * i, sigma[i],
+                       w ? w + i : NULL);
     }
+    fb_packed_rgb(&r, bg, out);
+    out[3] = r.depth;
+    out[4] = r.opacity;
 }
 
+/*
+ * Every output and weight within its running error bound (float_bounds.h)
+ * of the formula evaluated in exact arithmetic on the same inputs: the
+ * bound follows the float operations one by one, the relative error of
+ * 1 - alpha included, which grows like alpha / (1 - alpha) where alpha
+ * nears 1.
+ */
 TEST(forward_matches_formula)
 {
     static batch b;
@@ -97,32 +103,26 @@ TEST(forward_matches_formula)
                                  .bg_stride = mode == 0 ? 3 : 0, .eps = 0.0f};
         nerf__packed_out out = {rgb, depth, opacity, used, weights};
         nerf__composite_packed(&pb, &out);
-        double worst = 0.0, worst_w = 0.0;
+        double worst = 0.0, bound = 0.0;
+        size_t bad = 0;
         for (size_t k = 0; k < N_RAYS; k++) {
             const size_t at = b.offsets[k];
             const uint32_t n = (uint32_t)(b.offsets[k + 1] - at);
-            double t[MAX_PER_RAY], dt[MAX_PER_RAY], c[3 * MAX_PER_RAY];
-            double s[MAX_PER_RAY], w[MAX_PER_RAY], bg[3], ref[5];
-            to_double(b.t + at, t, n);
-            to_double(b.dt + at, dt, n);
-            to_double(b.rgb + 3 * at, c, 3 * n);
-            to_double(b.sigma + at, s, n);
-            to_double(b.bg + (mode == 0 ? 3 * k : 0), bg, 3);
-            reference(n, t, dt, c, s, mode < 2 ? bg : NULL, ref, w);
+            fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY], w[MAX_PER_RAY], ref[5];
+            exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
+            const float *bg = mode < 2 ? b.bg + (mode == 0 ? 3 * k : 0)
+                                       : NULL;
+            mirror(n, b.t + at, b.dt + at, c, sg, bg, ref, w);
             CHECK_EQ_INT(used[k], n);
-            for (int ch = 0; ch < 3; ch++) {
-                worst = fmax(worst, fabs(rgb[3 * k + ch] - ref[ch]));
+            const float got[5] = {rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2],
+                                  depth[k], opacity[k]};
+            for (int j = 0; j < 5; j++) {
+                bad += !fb_holds(got[j], ref[j].x);
+                worst = fmax(worst, fabs(got[j] - ref[j].x.v));
+                bound = fmax(bound, ref[j].x.e + ref[j].x.ed);
             }
-            worst = fmax(worst, fabs(depth[k] - ref[3]) / (1.0 + ref[3]));
-            worst = fmax(worst, fabs(opacity[k] - ref[4]));
-            /* Not fmax: GCC 12 for aarch64 crashes (internal compiler
-             * error) vectorising an fmax reduction over widened floats.
-             * A NaN error is skipped here just as fmax skips it. */
             for (uint32_t i = 0; i < n; i++) {
-                const double e = fabs(weights[at + i] - w[i]);
-                if (e > worst_w) {
-                    worst_w = e;
-                }
+                bad += !fb_holds(weights[at + i], w[i].x);
             }
             if (n == 0) {
                 CHECK(opacity[k] == 0.0f && depth[k] == 0.0f);
@@ -130,9 +130,9 @@ TEST(forward_matches_formula)
                                               : 0.0f));
             }
         }
-        CHECK(worst < 2e-6 && worst_w < 1e-6);
-        printf("  background mode %d: largest error %.2g (weights %.2g)\n",
-               mode, worst, worst_w);
+        CHECK_EQ_INT(bad, 0);
+        printf("  background mode %d: largest error %.2g (largest bound "
+               "%.2g)\n", mode, worst, bound);
     }
 }
 
@@ -151,9 +151,22 @@ TEST(thin_media_keep_precision)
     nerf__composite_state_init(&s);
     CHECK_EQ_INT(nerf__composite_packed_ray(&s, 1000, t, dt, rgb, sigma,
                                             0.0f, NULL), 1000);
-    double expect = -expm1(-0.01);
-    CHECK(fabs(s.opacity - expect) < 1e-4 * expect);
-    CHECK(fabs(s.trans - (1.0 - expect)) < 3e-5);
+    /* Within the running bound of the float operations (about 2000
+     * roundings of T and of 1 - alpha near 1, each at most u relative). */
+    fb_ray r;
+    fb_ray_init(&r);
+    const fbd white[3] = {fbd_in(1.0), fbd_in(1.0), fbd_in(1.0)};
+    for (int i = 0; i < 1000; i++) {
+        fb_packed_step(&r, t[i], dt[i], white, fbd_in(sigma[i]), NULL);
+    }
+    const fb op = r.opacity.x, tr = r.trans.x;
+    CHECK(fb_holds(s.opacity, op) && fb_holds(s.trans, tr));
+    /* And that is float precision: 1 - expf(-x) per step would leave
+     * alpha = 1e-5 with only its rounding to 2^-24 (a relative error up
+     * to 3e-3), the opacity off by as much. */
+    CHECK(op.e + op.ed < 2e-4 * op.v);
+    printf("  opacity %.9g, bound %.2g; transmittance %.9g, bound %.2g\n",
+           (double)s.opacity, op.e + op.ed, (double)s.trans, tr.e + tr.ed);
 }
 
 TEST(pieces_equal_one_call)
@@ -207,7 +220,7 @@ TEST(early_termination)
     nerf__packed_out out1 = {.rgb = rgb1, .opacity = op1, .used = used1,
                              .weights = w1};
     nerf__composite_packed(&pb, &out1);
-    size_t stopped = 0, bad = 0, all = 0, kept = 0;
+    size_t stopped = 0, bad = 0, all = 0, kept = 0, near_eps = 0;
     double worst = 0.0;
     for (size_t k = 0; k < N_RAYS; k++) {
         const size_t at = b.offsets[k];
@@ -215,22 +228,49 @@ TEST(early_termination)
         all += n;
         kept += used1[k];
         stopped += used1[k] < n;
-        for (int c = 0; c < 3; c++) {
-            worst = fmax(worst, fabs(rgb0[3 * k + c] - rgb1[3 * k + c]));
+        double d = fabs(op0[k] - op1[k]);
+        for (int ch = 0; ch < 3; ch++) {
+            d = fmax(d, fabs(rgb0[3 * k + ch] - rgb1[3 * k + ch]));
         }
-        worst = fmax(worst, fabs(op0[k] - op1[k]));
-        /* The ray stops at the first sample with T below eps. */
-        double trans = 1.0;
+        worst = fmax(worst, d);
+        /* The ray stops at the first sample whose float T is below eps.
+         * Exactly, it stops at the first whose exact T is; the two counts
+         * differ only where, at the first sample at which one of them
+         * stops, the exact T lies within the float T's running bound of
+         * eps. */
+        fb_ray r;
+        fb_ray_init(&r);
+        fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
+        exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
         uint32_t expect = 0;
-        while (expect < n && trans >= eps) {
-            trans *= exp(-(double)b.sigma[at + expect] * b.dt[at + expect]);
+        while (expect < n && r.trans.x.v >= eps) {
+            fb_packed_step(&r, b.t[at + expect], b.dt[at + expect],
+                           c + 3 * expect, sg[expect], NULL);
             expect++;
         }
-        bad += used1[k] != expect && fabs(trans - eps) > 1e-4 * eps;
+        fb T_cut = r.trans.x;
+        if (used1[k] < expect) {
+            /* The float stopped first: replay to its cut. */
+            fb_ray_init(&r);
+            for (uint32_t i = 0; i < used1[k]; i++) {
+                fb_packed_step(&r, b.t[at + i], b.dt[at + i], c + 3 * i,
+                               sg[i], NULL);
+            }
+            T_cut = r.trans.x;
+        }
+        if (used1[k] != expect) {
+            near_eps++;
+            bad += !(fabs(T_cut.v - eps) <= (T_cut.e + T_cut.ed) *
+                                                (1.0 + 0x1p-30));
+        }
         /* The densities alone tell the same count. */
         float T = 1.0f;
         bad += nerf__composite_packed_ray_used(n, b.dt + at, b.sigma + at,
                                                eps, &T) != used1[k];
+        /* What the samples after the cut could have added, in float
+         * (float_early_stop_bound()); nothing where nothing was cut. */
+        bad += d > (used1[k] < n ? float_early_stop_bound(n, used1[k], T)
+                                 : 0.0);
         /* And so do they counted in two pieces, the transmittance carried
          * from the first to the second. */
         const uint32_t first = n / 3;
@@ -249,34 +289,42 @@ TEST(early_termination)
         }
     }
     CHECK_EQ_INT(bad, 0);
-    CHECK(worst < eps);
     CHECK(stopped > N_RAYS / 3);
     printf("  %zu of %d rays stop early, %zu of %zu samples used; largest "
-           "difference %.2g\n", stopped, N_RAYS, kept, all, worst);
+           "difference %.2g; %zu counts off the exact one by eps's "
+           "rounding\n", stopped, N_RAYS, kept, all, worst, near_eps);
 }
 
 /* ---- gradients ------------------------------------------------------- */
 
-/* L = g . (rgb, depth, opacity) over the first m samples. */
-static double loss(uint32_t m, const double *t, const double *dt,
-                   const double *rgb, const double *sigma, const double *bg,
-                   const double g[5])
+/* L = g . (rgb, depth, opacity) over the first m samples, in the mirror
+ * with its derivative along the input that moves. */
+static fbd loss(uint32_t m, const float *t, const float *dt, const fbd *rgb,
+                const fbd *sigma, const float *bg, const float g[5])
 {
-    double out[5];
-    reference(m, t, dt, rgb, sigma, bg, out, NULL);
-    double l = 0.0;
+    fbd out[5];
+    mirror(m, t, dt, rgb, sigma, bg, out, NULL);
+    fbd l = fbd_in(0.0);
     for (int k = 0; k < 5; k++) {
-        l += g[k] * out[k];
+        l = fbd_add(l, fbd_mul(fbd_in(g[k]), out[k]));
     }
     return l;
 }
 
-TEST(backward_matches_finite_differences)
+/*
+ * The backward against the derivative of the forward formula taken in
+ * forward mode (float_bounds.h: no step, nothing truncated), each input
+ * in turn: the float backward lies within the running bound of its own
+ * operations (fb_packed_backward()) of the exact derivative, and the
+ * forward-mode derivative, in double, within its bound of it too.
+ */
+TEST(backward_matches_forward_mode)
 {
     static batch b;
     const float g5[5] = {0.3f, -1.1f, 0.7f, 0.05f, -0.4f};
+    const double dc[3] = {g5[0], g5[1], g5[2]};
     double worst = 0.0;
-    size_t checked = 0;
+    size_t checked = 0, bad = 0;
     for (int round = 0; round < 4; round++) {
         /* Densities up to 60 with eps > 0 make some rays terminate; the
          * samples used are then held fixed (the cut is piecewise
@@ -289,23 +337,27 @@ TEST(backward_matches_finite_differences)
             const uint32_t n = (uint32_t)(b.offsets[k + 1] - at);
             float d_rgb[3 * MAX_PER_RAY], d_sigma[MAX_PER_RAY];
             const float *bg = with_bg ? b.bg + 3 * k : NULL;
+            const float *t = b.t + at, *dt = b.dt + at;
             uint32_t m = nerf__composite_packed_ray_backward(
-                n, b.t + at, b.dt + at, b.rgb + 3 * at, b.sigma + at, bg, eps,
-                g5, g5[3], g5[4], d_rgb, d_sigma);
+                n, t, dt, b.rgb + 3 * at, b.sigma + at, bg, eps, g5, g5[3],
+                g5[4], d_rgb, d_sigma);
             nerf__composite_state s;
             nerf__composite_state_init(&s);
             CHECK_EQ_INT(m, nerf__composite_packed_ray(
-                                &s, n, b.t + at, b.dt + at, b.rgb + 3 * at,
-                                b.sigma + at, eps, NULL));
-            double t[MAX_PER_RAY], dt[MAX_PER_RAY], c[3 * MAX_PER_RAY];
-            double sg[MAX_PER_RAY], bgd[3], g[5];
-            to_double(b.t + at, t, n);
-            to_double(b.dt + at, dt, n);
-            to_double(b.rgb + 3 * at, c, 3 * n);
-            to_double(b.sigma + at, sg, n);
-            to_double(b.bg + 3 * k, bgd, 3);
-            to_double(g5, g, 5);
-            const double h = 1e-6;
+                                &s, n, t, dt, b.rgb + 3 * at, b.sigma + at,
+                                eps, NULL));
+            fbd c[3 * MAX_PER_RAY], sg[MAX_PER_RAY];
+            fb cx[3 * MAX_PER_RAY], sx[MAX_PER_RAY];
+            fb want_rgb[3 * MAX_PER_RAY], want_sigma[MAX_PER_RAY];
+            exact_inputs(n, b.rgb + 3 * at, b.sigma + at, c, sg);
+            for (uint32_t i = 0; i < n; i++) {
+                sx[i] = sg[i].x;
+                for (int ch = 0; ch < 3; ch++) {
+                    cx[3 * i + ch] = c[3 * i + ch].x;
+                }
+            }
+            fb_packed_backward(m, t, dt, cx, sx, bg, dc, g5[3], g5[4],
+                               want_rgb, want_sigma);
             for (uint32_t i = 0; i < 4 * n; i++) {
                 const bool is_sigma = i < n;
                 const uint32_t j = is_sigma ? i : i - n;
@@ -315,26 +367,28 @@ TEST(backward_matches_finite_differences)
                     CHECK(analytic == 0.0f);
                     continue;
                 }
-                double *x = is_sigma ? &sg[j] : &c[j];
-                const double x0 = *x;
-                *x = x0 + h;
-                double lp = loss(m, t, dt, c, sg, with_bg ? bgd : NULL, g);
-                *x = x0 - h;
-                double lm = loss(m, t, dt, c, sg, with_bg ? bgd : NULL, g);
-                *x = x0;
-                const double fd = (lp - lm) / (2 * h);
-                const double err = fabs(analytic - fd) / (fabs(fd) + 1e-3);
-                worst = fmax(worst, err);
+                fbd *x = is_sigma ? &sg[j] : &c[j];
+                const fbd keep = *x;
+                *x = fbd_var(keep.x.v, 1.0);
+                const fb d = loss(m, t, dt, c, sg, bg, g5).dx;
+                *x = keep;
+                const fb want = is_sigma ? want_sigma[j] : want_rgb[j];
+                const double err = fabs(analytic - d.v);
+                const double tol = (want.e + want.ed + d.ed) *
+                                   (1.0 + 0x1p-30);
+                worst = fmax(worst, err / tol);
                 checked++;
-                if (err > 1e-3) {
-                    FAILF("round %d ray %zu %s %u: analytic %.8g, finite "
-                          "difference %.8g", round, k,
-                          is_sigma ? "sigma" : "rgb", j, analytic, fd);
+                if (!(err <= tol) && bad++ < 5) {
+                    FAILF("round %d ray %zu %s %u: analytic %.9g, forward "
+                          "mode %.9g (tolerance %.2g)", round, k,
+                          is_sigma ? "sigma" : "rgb", j, analytic, d.v, tol);
                 }
             }
         }
     }
-    printf("  %zu derivatives, worst relative error %.2e\n", checked, worst);
+    CHECK_EQ_INT(bad, 0);
+    printf("  %zu derivatives, the largest error %.2f of its tolerance\n",
+           checked, worst);
 }
 
 TEST(batch_backward_matches_rays)
@@ -383,7 +437,7 @@ int main(void)
     RUN(thin_media_keep_precision);
     RUN(pieces_equal_one_call);
     RUN(early_termination);
-    RUN(backward_matches_finite_differences);
+    RUN(backward_matches_forward_mode);
     RUN(batch_backward_matches_rays);
     HARNESS_EXIT();
 }
