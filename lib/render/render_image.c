@@ -20,11 +20,16 @@ typedef struct image_job {
  * block of rays each, instead of in rows.  The samples of a tile's rays
  * lie close together at every level of a hash grid, so a block reads
  * fewer of the table's lines and finds more of them in cache: a trained
- * lego model rendered 800x800 frames 8% faster.  A ray's result does not
- * depend on the rays beside it, and a marching render draws no random
- * numbers (rays are numbered by their place in the tile order), so the
- * images are the same bit for bit; the other samplers keep rows, whose
- * blocks their products were measured and made reproducible on.
+ * lego model rendered 800x800 frames 8% faster.  Where each sample's
+ * values come from it alone (the fused path; oneDNN's brgemm kernels), a
+ * ray's result does not depend on the rays beside it, and a marching
+ * render draws no random numbers (rays are numbered by their place in
+ * the tile order), so the images are those of rows bit for bit; through
+ * the CBLAS, whose kernels may round a sample by the rows of its product,
+ * they agree to rounding.  Either way an image is the same for every
+ * chunk size and thread count, since its blocks are.  The other samplers
+ * keep rows, whose blocks their products were measured and made
+ * reproducible on.
  */
 #define TILE 8
 _Static_assert(TILE * TILE == NERF__RENDER_BLOCK, "a tile is a block");
