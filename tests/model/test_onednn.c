@@ -37,6 +37,7 @@
 #include "../harness.h"
 #include "dispatch.h"
 #include "gemm_onednn.h"
+#include "layer.h"
 #include "layer_bounds.h"
 #include "model.h"
 #include "nerf.h"
@@ -458,13 +459,118 @@ static void backward_checked(nerf_model *m, int net, nerf__workspace *ws,
 }
 
 /*
+ * Each layer's backward products alone (nerf__layer_backward()), through
+ * network net's backend, on the inputs the forward kept in ws and a
+ * gradient drawn here: dW and dX against double, each within one
+ * product's bound.  The whole backward's bound carries the error of every
+ * layer's gradient to the layers below; for bf16 over the reference
+ * network's eleven layers that grows past the gradients themselves, so
+ * these products are checked one by one as well.  Returns the worst ratio
+ * to a bound.
+ */
+static double check_layer_products(nerf_model *m, int net,
+                                   nerf__workspace *ws, const char *what)
+{
+    const nerf__network *nw = &m->nets[net];
+    const double eps = lb_eps(nw);
+    const nerf__layer_ctx ctx = {nw->onednn, &ws->onednn, &ws->env};
+    const size_t n = ws->n;
+    const uint32_t W = nw->width, V = nw->view_width, Ep = nw->pos_width;
+    const uint32_t HW = nerf__network_head_width(nw);
+    nerf__linear layers[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
+    const int count = network_layers(nw, layers);
+    lb_result res = {0.0, 0};
+    for (int li = 0; li < count; li++) {
+        const nerf__linear *l = &layers[li];
+        const uint32_t i = (uint32_t)li;
+        /* The layer's input parts, as network.c gives them. */
+        nerf__layer_part parts[2];
+        int np = 1;
+        if (i == 0) {
+            parts[0] = (nerf__layer_part){ws->enc_pos, Ep, Ep};
+        } else if (i < nw->depth) {
+            const nerf__layer_part h = {nerf__trunk_buffer(nw, ws, i - 1), W,
+                                        W};
+            parts[0] = h;
+            if (i == nw->skip) {
+                parts[0] = (nerf__layer_part){ws->enc_pos, Ep, Ep};
+                parts[np++] = h;
+            }
+        } else if (i == nw->depth) {
+            parts[0] = (nerf__layer_part){
+                nerf__trunk_buffer(nw, ws, nw->depth - 1), W, W};
+        } else if (i == nw->depth + 1) {
+            const uint32_t F = nerf__network_feature_width(nw);
+            parts[0] = (nerf__layer_part){ws->head, HW, F};
+            parts[np++] = (nerf__layer_part){ws->enc_dir, nw->dir_width,
+                                             nw->dir_width};
+        } else {
+            parts[0] = (nerf__layer_part){
+                nerf__view_buffer(nw, ws, i - nw->depth - 2), V, V};
+        }
+        /* The gradient goes on through the last part (the skip's h),
+         * but through the head's part of the colour branch's input. */
+        const int dx_part = i == nw->depth + 1 ? 0 : np - 1;
+        size_t col = 0;
+        for (int p = 0; p < dx_part; p++) {
+            col += parts[p].in;
+        }
+        const uint32_t out = l->out, in = l->in, dxw = parts[dx_part].in;
+        float *dy = malloc(n * out * sizeof(float));
+        float *dw = calloc((size_t)out * in, sizeof(float));
+        float *dx = malloc(n * dxw * sizeof(float));
+        for (size_t k = 0; k < n * out; k++) {
+            dy[k] = uniform(-1.0f, 1.0f);
+        }
+        CHECK_OK(nerf__layer_backward(&ctx, n, out, dy, out, NULL, parts, np,
+                                      NULL, m->params + l->w, in, dw, dx_part,
+                                      dx, dxw));
+        for (uint32_t o = 0; o < out; o++) {
+            for (uint32_t k = 0, p = 0, pk = 0; k < in; k++, pk++) {
+                if (pk == parts[p].in) {
+                    p++;
+                    pk = 0;
+                }
+                double s = 0.0, mag = 0.0;
+                for (size_t r = 0; r < n; r++) {
+                    const double t = (double)dy[r * out + o] *
+                                     parts[p].x[r * parts[p].ldx + pk];
+                    s += t;
+                    mag += fabs(t);
+                }
+                lb_compare(&res, what, "dW of", li, o, k, dw[o * in + k], s,
+                           float_product_bound((double)n + 1, eps, 0.0, mag));
+            }
+        }
+        for (size_t r = 0; r < n; r++) {
+            for (uint32_t k = 0; k < dxw; k++) {
+                double s = 0.0, mag = 0.0;
+                for (uint32_t o = 0; o < out; o++) {
+                    const double t = (double)dy[r * out + o] *
+                                     m->params[l->w + o * in + col + k];
+                    s += t;
+                    mag += fabs(t);
+                }
+                lb_compare(&res, what, "dX of", li, r, k, dx[r * dxw + k], s,
+                           float_product_bound((double)out + 1, eps, 0.0,
+                                               mag));
+            }
+        }
+        free(dy);
+        free(dw);
+        free(dx);
+    }
+    return res.worst;
+}
+
+/*
  * Gradients, two ways.
  *
  * The backward products alone: one forward of the oneDNN model, then its
  * backward once with its own products and once with fp32 ones through
  * the CBLAS, on the same activations: each against the exact gradient at
  * those activations (layer_bounds.h), and how far apart the two land is
- * printed.
+ * printed; and each layer's products alone (check_layer_products()).
  *
  * The whole chain: an fp32 and a oneDNN model, each forward and backward,
  * with the gradient of a loss that pulls every colour towards grey and
@@ -507,6 +613,9 @@ static void compare_gradients(int preset, const char *name, size_t n)
         }
         backward_checked(m[1], (int)net, &ws, pos, d_rgb, d_sigma, what);
         memcpy(g_onednn, m[1]->grads, P * sizeof(float));
+        printf("  %s, network %u: each layer's backward products at most "
+               "%.3f of their bounds\n", what, net,
+               check_layer_products(m[1], (int)net, &ws, what));
         struct nerf__onednn *keep = m[1]->nets[net].onednn;
         m[1]->nets[net].onednn = NULL; /* the same backward in fp32 */
         snprintf(what, sizeof what, "%s, %s forward, CBLAS backward", name,
