@@ -242,7 +242,9 @@ static inline void lb_dense(lb_net *b, int li, const double *x,
     }
 }
 
-/* Worst |got - want| / bound of one check, and how many exceeded it. */
+/* Worst |got - want| / bound of one check, and how many exceeded it.
+ * Failures name the element: (sample, column) of an activation, (output,
+ * input) of a weight's gradient. */
 typedef struct lb_result {
     double worst;
     size_t bad;
@@ -263,8 +265,8 @@ static inline void lb_compare(lb_result *res, const char *what,
     const double d = fabs(got - want);
     if (!(d <= bound)) {
         if (res->bad++ < 5) {
-            FAILF("%s, %s layer %d, sample %zu, column %zu: %.9g, in double "
-                  "%.9g, apart %.3g > bound %.3g",
+            FAILF("%s, %s layer %d at (%zu, %zu): %.9g, in double %.9g, "
+                  "apart %.3g > bound %.3g",
                   what, where, li, row, col, got, want, d, bound);
         }
         return;

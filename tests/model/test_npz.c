@@ -235,9 +235,9 @@ static void keep_warnings(int level, const char *msg, void *user)
  */
 enum { LINEAR, RELU, SIGMOID };
 
-static void check_lin(const lin *l, size_t rows, const double *x,
-                      const float *y, int act, double eps, size_t sample,
-                      lb_result *res)
+static void check_lin(const char *name, const lin *l, size_t rows,
+                      const double *x, const float *y, int act, double eps,
+                      size_t sample, lb_result *res)
 {
     for (size_t o = 0; o < rows; o++) {
         double s = l->b[o], mag = 0.0;
@@ -254,8 +254,7 @@ static void check_lin(const lin *l, size_t rows, const double *x,
             s = sigmoid(s);
             e = e / 4 + FLOAT_SIGMOID_ABS;
         }
-        lb_compare(res, "imported network", "reference", 0, sample, o, y[o],
-                   s, e);
+        lb_compare(res, "imported network", name, 0, sample, o, y[o], s, e);
     }
 }
 
@@ -324,7 +323,7 @@ static void compare_with_reference(nerf_model *m, int network,
             if (l > 0) {
                 widen(nerf__trunk_buffer(net, &ws, l - 1) + i * W, W, x + at);
             }
-            check_lin(&r->trunk[l], W, x,
+            check_lin("pts_linears", &r->trunk[l], W, x,
                       nerf__trunk_buffer(net, &ws, l) + i * W, RELU, eps, i,
                       &res);
         }
@@ -332,7 +331,8 @@ static void compare_with_reference(nerf_model *m, int network,
         const float *head = ws.head + i * HW;
         if (!o->use_viewdirs) {
             /* The first four of output_linear's rows. */
-            check_lin(&r->output, 4, x, head, LINEAR, eps, i, &res);
+            check_lin("output_linear", &r->output, 4, x, head, LINEAR, eps,
+                      i, &res);
             CHECK(sigma[i] == head[3]);
             for (int c = 0; c < 3; c++) {
                 lb_compare(&res, "imported network", "rgb", 0, i, (size_t)c,
@@ -341,8 +341,10 @@ static void compare_with_reference(nerf_model *m, int network,
             }
             continue;
         }
-        check_lin(&r->feature, W, x, head, LINEAR, eps, i, &res);
-        check_lin(&r->alpha, 1, x, head + W, LINEAR, eps, i, &res);
+        check_lin("feature_linear", &r->feature, W, x, head, LINEAR, eps, i,
+                  &res);
+        check_lin("alpha_linear", &r->alpha, 1, x, head + W, LINEAR, eps, i,
+                  &res);
         CHECK(sigma[i] == head[W]);
         encode(o, dir + 3 * i, o->dir_frequencies, ed);
         const float *encd = ws.enc_dir + i * Ed;
@@ -352,12 +354,13 @@ static void compare_with_reference(nerf_model *m, int network,
         }
         widen(head, W, x);
         widen(encd, Ed, x + W);
-        check_lin(&r->views, o->view_width, x,
+        check_lin("views_linears", &r->views, o->view_width, x,
                   nerf__view_buffer(net, &ws, 0) + i * o->view_width, RELU,
                   eps, i, &res);
         widen(nerf__view_buffer(net, &ws, 0) + i * o->view_width,
               o->view_width, x);
-        check_lin(&r->rgb, 3, x, rgb + 3 * i, SIGMOID, eps, i, &res);
+        check_lin("rgb_linear", &r->rgb, 3, x, rgb + 3 * i, SIGMOID, eps, i,
+                  &res);
     }
     printf("  network %d: at most %.3f of the bounds\n", network, res.worst);
     nerf__workspace_release(nerf__model_env(m), &ws);
