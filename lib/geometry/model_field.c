@@ -7,8 +7,7 @@
 #include "parallel.h"
 #include "space.h"
 
-/* Points per network call: large products, bounded workspaces. */
-#define CHUNK 4096
+#define CHUNK NERF__FIELD_CHUNK
 
 int nerf__model_field_init(nerf__model_field *f, const nerf_model *model,
                            unsigned threads)

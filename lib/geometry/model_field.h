@@ -10,6 +10,11 @@
 
 #include "model.h"
 
+/* Points per network call: large products, bounded workspaces.  A call
+ * for fewer than 2 NERF__FIELD_CHUNK points runs on the calling thread
+ * alone, as one network call, whatever the thread count. */
+#define NERF__FIELD_CHUNK 4096
+
 typedef struct nerf__model_field {
     const nerf_model *model;
     int net;               /* network index */

@@ -10,10 +10,6 @@
 #include "occupancy.h"
 #include "options.h"
 
-/* Samples per block in nerf_model_query(): bounds its memory (about 10 MB
- * for the reference network) while keeping each sgemm large. */
-#define QUERY_BLOCK 4096
-
 /* The defaults are the reference preset: the paper's network. */
 static void model_defaults(nerf_model_options *o)
 {
@@ -607,7 +603,7 @@ NERF_API int nerf_model_query(const nerf_model *model, int network, size_t n,
     }
     nerf__workspace ws;
     memset(&ws, 0, sizeof ws);
-    size_t block = n < QUERY_BLOCK ? n : QUERY_BLOCK;
+    size_t block = n < NERF__QUERY_BLOCK ? n : NERF__QUERY_BLOCK;
     int rc = nerf__workspace_reserve(&model->env, &ws, net, block, false);
     if (rc != NERF_OK) {
         return rc;

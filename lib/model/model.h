@@ -96,6 +96,11 @@ struct nerf_model {
 #define NERF__BATCH_RAYS_MAX (1u << 20)
 #define NERF__BATCH_SAMPLES_MAX (1u << 26)
 
+/* Samples per block in nerf_model_query(): bounds its memory (about 10 MB
+ * for the reference network) while keeping each sgemm large.  A query of
+ * more samples makes the calls that queries of its blocks would. */
+#define NERF__QUERY_BLOCK 4096
+
 /* Cells per axis of a model's occupancy grid. */
 #define NERF__MODEL_GRID_RESOLUTION 128u
 

@@ -2,7 +2,8 @@
  * The layer products, against sums in double: with OpenBLAS on one thread
  * (the products cut into blocks over libnerf's workers) and on two (one
  * call each), at shapes that cut along each dimension, with strides and
- * accumulation.
+ * accumulation, on entries whose every sum a float holds exactly, so that
+ * any kernel, order, blocking or thread split must give the exact value.
  */
 #include <math.h>
 #include <stdint.h>
@@ -46,14 +47,30 @@ static float *random_matrix(size_t rows, size_t ld)
     return m;
 }
 
-/* |got - want| within a float sum's error bound over k terms of size 1. */
-static int close_to(const float *got, const double *want, size_t rows,
-                    size_t cols, size_t ld, size_t k)
+/*
+ * Entries j / 8 with |j| <= 8: every product of two is a multiple of 2^-6
+ * at most 1 in magnitude, so every partial sum of the products here (at
+ * most 4100 terms, the initial value included) is a multiple of 2^-6
+ * below 2^13, which a float holds exactly (19 significant bits of its
+ * 24).  Any summation order, blocking or fused multiply-add then gives
+ * the exact sum, and a wrong element, row or operand shows.
+ */
+static float *exact_matrix(size_t rows, size_t ld)
 {
-    const double tol = 4e-7 * (double)(k + 1) + 1e-6;
+    float *m = malloc(rows * ld * sizeof *m);
+    for (size_t i = 0; i < rows * ld; i++) {
+        m[i] = (float)(int)(uniform() * 8.5f) / 8.0f;
+    }
+    return m;
+}
+
+/* got == want, exactly (exact_matrix()). */
+static int exactly(const float *got, const double *want, size_t rows,
+                   size_t cols, size_t ld)
+{
     for (size_t i = 0; i < rows; i++) {
         for (size_t j = 0; j < cols; j++) {
-            if (fabs((double)got[i * ld + j] - want[i * cols + j]) > tol) {
+            if ((double)got[i * ld + j] != want[i * cols + j]) {
                 FAILF("element (%zu, %zu): %.9g, want %.9g", i, j,
                       (double)got[i * ld + j], want[i * cols + j]);
                 return 0;
@@ -78,12 +95,12 @@ static void check_shape(const shape *s)
 {
     const size_t n = s->n, out = s->out, in = s->in;
     const size_t ldx = in + 3, ldw = in + 5, ldy = out + 2;
-    float *x = random_matrix(n, ldx);
-    float *w = random_matrix(out, ldw);
-    float *y = random_matrix(n, ldy); /* beta = 1 adds to it */
-    float *dy = random_matrix(n, ldy);
-    float *dw = random_matrix(out, ldw); /* the gradient accumulates */
-    float *dx = random_matrix(n, ldx);
+    float *x = exact_matrix(n, ldx);
+    float *w = exact_matrix(out, ldw);
+    float *y = exact_matrix(n, ldy); /* beta = 1 adds to it */
+    float *dy = exact_matrix(n, ldy);
+    float *dw = exact_matrix(out, ldw); /* the gradient accumulates */
+    float *dx = exact_matrix(n, ldx);
     double *want_y = malloc(n * out * sizeof *want_y);
     double *want_dw = malloc(out * in * sizeof *want_dw);
     double *want_dx = malloc(n * in * sizeof *want_dx);
@@ -115,9 +132,9 @@ static void check_shape(const shape *s)
     nerf__gemm_forward(n, s->out, s->in, x, ldx, w, ldw, 1.0f, y, ldy);
     nerf__gemm_input_grad(n, s->out, s->in, dy, ldy, w, ldw, dx, ldx);
     nerf__gemm_weight_grad(n, s->out, s->in, dy, ldy, x, ldx, dw, ldw);
-    CHECK(close_to(y, want_y, n, out, ldy, in + 1));
-    CHECK(close_to(dx, want_dx, n, in, ldx, out));
-    CHECK(close_to(dw, want_dw, out, in, ldw, n + 1));
+    CHECK(exactly(y, want_y, n, out, ldy));
+    CHECK(exactly(dx, want_dx, n, in, ldx));
+    CHECK(exactly(dw, want_dw, out, in, ldw));
     free(x);
     free(w);
     free(y);

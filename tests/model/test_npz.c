@@ -3,7 +3,8 @@
  * (float32 and float64 members, stored and deflated, NumPy's zip64-style
  * local headers) and checks nerf_model_query() against a plain
  * double-precision forward pass written here from the reference
- * implementation's definition.
+ * implementation's definition, layer by layer from the library's own
+ * float activations.
  */
 #include <dirent.h>
 #include <math.h>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include "../harness.h"
+#include "layer_bounds.h"
 #include "model.h"
 #include "nerf.h"
 #include "npz_writer.h"
@@ -132,54 +134,9 @@ static size_t encode(const nerf_model_options *o, const float *x, uint32_t L,
     return n;
 }
 
-static void apply(const lin *l, const double *x, double *y, bool relu)
-{
-    for (size_t o = 0; o < l->out; o++) {
-        double s = l->b[o];
-        for (size_t i = 0; i < l->in; i++) {
-            s += l->w[o * l->in + i] * x[i];
-        }
-        y[o] = relu && s < 0 ? 0 : s;
-    }
-}
-
 static double sigmoid(double z)
 {
     return 1 / (1 + exp(-z));
-}
-
-static void ref_forward(const refnet *r, const float *pos, const float *dir,
-                        double rgb[3], double *sigma)
-{
-    const nerf_model_options *o = r->o;
-    double ep[64], in[512], h[256], view_in[512], v[256], out[8];
-    size_t Ep = encode(o, pos, o->pos_frequencies, ep), W = o->width;
-    memcpy(in, ep, Ep * sizeof(double));
-    for (uint32_t i = 0; i < o->depth; i++) {
-        if (i > 0 && i == o->skip_layer) {
-            memcpy(in, ep, Ep * sizeof(double));
-            memcpy(in + Ep, h, W * sizeof(double));
-        } else if (i > 0) {
-            memcpy(in, h, W * sizeof(double));
-        }
-        apply(&r->trunk[i], in, h, true);
-    }
-    if (!o->use_viewdirs) {
-        apply(&r->output, h, out, false);
-        for (int c = 0; c < 3; c++) {
-            rgb[c] = sigmoid(out[c]);
-        }
-        *sigma = out[3];
-        return;
-    }
-    apply(&r->alpha, h, sigma, false);
-    apply(&r->feature, h, view_in, false);
-    encode(o, dir, o->dir_frequencies, view_in + W);
-    apply(&r->views, view_in, v, true);
-    apply(&r->rgb, v, out, false);
-    for (int c = 0; c < 3; c++) {
-        rgb[c] = sigmoid(out[c]);
-    }
 }
 
 /* ---- archives of reference weights -------------------------------------- */
@@ -270,11 +227,59 @@ static void keep_warnings(int level, const char *msg, void *user)
     }
 }
 
-static void compare_with_reference(const nerf_model *m, int network,
+/*
+ * Reference layer l at the library's float input x (in double) against
+ * the library's float output y: within float_product_bound() of its
+ * double value (ReLU is 1-Lipschitz; the sigmoid's slope is at most 1/4,
+ * and the library's sigmoid errs by FLOAT_SIGMOID_ABS).
+ */
+enum { LINEAR, RELU, SIGMOID };
+
+static void check_lin(const char *name, const lin *l, size_t rows,
+                      const double *x, const float *y, int act, double eps,
+                      size_t sample, lb_result *res)
+{
+    for (size_t o = 0; o < rows; o++) {
+        double s = l->b[o], mag = 0.0;
+        for (size_t k = 0; k < l->in; k++) {
+            const double t = l->w[o * l->in + k] * x[k];
+            s += t;
+            mag += fabs(t);
+        }
+        double e = float_product_bound((double)l->in + 1, eps, fabs(l->b[o]),
+                                       mag);
+        if (act == RELU) {
+            s = s > 0 ? s : 0;
+        } else if (act == SIGMOID) {
+            s = sigmoid(s);
+            e = e / 4 + FLOAT_SIGMOID_ABS;
+        }
+        lb_compare(res, "imported network", name, 0, sample, o, y[o], s, e);
+    }
+}
+
+static void widen(const float *x, size_t n, double *out)
+{
+    for (size_t k = 0; k < n; k++) {
+        out[k] = x[k];
+    }
+}
+
+/*
+ * The imported network's query against the reference's layers: the
+ * query's outputs are those of a forward keeping its activations (the
+ * same products), whose encodings are checked against the reference's
+ * and each layer against the reference's layer from the same float
+ * input.  So the bounds need no error carried through the layers, and
+ * hold whatever kernel computes the products.
+ */
+static void compare_with_reference(nerf_model *m, int network,
                                    const refnet *r)
 {
     enum { N = 64 };
+    const nerf_model_options *o = r->o;
     float pos[3 * N], dir[3 * N], rgb[3 * N], sigma[N];
+    float rgb2[3 * N], sigma2[N];
     for (int i = 0; i < N; i++) {
         double d[3], norm = 0;
         for (int c = 0; c < 3; c++) {
@@ -287,21 +292,78 @@ static void compare_with_reference(const nerf_model *m, int network,
         }
     }
     CHECK_OK(nerf_model_query(m, network, N, pos,
-                              r->o->use_viewdirs ? dir : NULL, rgb, sigma));
-    double worst = 0;
-    for (int i = 0; i < N; i++) {
-        double want[3], want_sigma;
-        ref_forward(r, pos + 3 * i, dir + 3 * i, want, &want_sigma);
-        for (int c = 0; c < 3; c++) {
-            worst = fmax(worst, fabs(rgb[3 * i + c] - want[c]) /
-                                    (1 + fabs(want[c])));
+                              o->use_viewdirs ? dir : NULL, rgb, sigma));
+    const int k = nerf__model_network(m, network);
+    const nerf__network *net = &m->nets[k];
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    CHECK_OK(nerf__model_forward(m, k, &ws, N, pos,
+                                 o->use_viewdirs ? dir : NULL, rgb2, sigma2));
+    CHECK(memcmp(rgb, rgb2, sizeof rgb) == 0);
+    CHECK(memcmp(sigma, sigma2, sizeof sigma) == 0);
+    const double eps = lb_eps(net);
+    const size_t W = o->width, Ep = net->pos_width, Ed = net->dir_width;
+    const size_t HW = nerf__network_head_width(net);
+    CHECK_EQ_INT(Ep, enc_width(o, o->pos_frequencies));
+    lb_result res = {0.0, 0};
+    double ep[64], ed[64], x[512];
+    for (size_t i = 0; i < N; i++) {
+        encode(o, pos + 3 * i, o->pos_frequencies, ep);
+        const float *enc = ws.enc_pos + i * Ep;
+        for (size_t j = 0; j < Ep; j++) {
+            lb_compare(&res, "imported network", "position encoding", 0, i,
+                       j, enc[j], ep[j], float_frequency_bound(ep[j]));
         }
-        worst = fmax(worst, fabs(sigma[i] - want_sigma) /
-                                (1 + fabs(want_sigma)));
+        for (uint32_t l = 0; l < o->depth; l++) {
+            size_t at = 0;
+            if (l == 0 || l == o->skip_layer) {
+                widen(enc, Ep, x);
+                at = Ep;
+            }
+            if (l > 0) {
+                widen(nerf__trunk_buffer(net, &ws, l - 1) + i * W, W, x + at);
+            }
+            check_lin("pts_linears", &r->trunk[l], W, x,
+                      nerf__trunk_buffer(net, &ws, l) + i * W, RELU, eps, i,
+                      &res);
+        }
+        widen(nerf__trunk_buffer(net, &ws, o->depth - 1) + i * W, W, x);
+        const float *head = ws.head + i * HW;
+        if (!o->use_viewdirs) {
+            /* The first four of output_linear's rows. */
+            check_lin("output_linear", &r->output, 4, x, head, LINEAR, eps,
+                      i, &res);
+            CHECK(sigma[i] == head[3]);
+            for (int c = 0; c < 3; c++) {
+                lb_compare(&res, "imported network", "rgb", 0, i, (size_t)c,
+                           rgb[3 * i + c], sigmoid(head[c]),
+                           FLOAT_SIGMOID_ABS);
+            }
+            continue;
+        }
+        check_lin("feature_linear", &r->feature, W, x, head, LINEAR, eps, i,
+                  &res);
+        check_lin("alpha_linear", &r->alpha, 1, x, head + W, LINEAR, eps, i,
+                  &res);
+        CHECK(sigma[i] == head[W]);
+        encode(o, dir + 3 * i, o->dir_frequencies, ed);
+        const float *encd = ws.enc_dir + i * Ed;
+        for (size_t j = 0; j < Ed; j++) {
+            lb_compare(&res, "imported network", "direction encoding", 0, i,
+                       j, encd[j], ed[j], float_frequency_bound(ed[j]));
+        }
+        widen(head, W, x);
+        widen(encd, Ed, x + W);
+        check_lin("views_linears", &r->views, o->view_width, x,
+                  nerf__view_buffer(net, &ws, 0) + i * o->view_width, RELU,
+                  eps, i, &res);
+        widen(nerf__view_buffer(net, &ws, 0) + i * o->view_width,
+              o->view_width, x);
+        check_lin("rgb_linear", &r->rgb, 3, x, rgb + 3 * i, SIGMOID, eps, i,
+                  &res);
     }
-    if (!(worst < 1e-4)) {
-        FAILF("network %d differs from the reference by %g", network, worst);
-    }
+    printf("  network %d: at most %.3f of the bounds\n", network, res.worst);
+    nerf__workspace_release(nerf__model_env(m), &ws);
 }
 
 static void import_matches_reference(bool viewdirs)

@@ -1,24 +1,24 @@
 /*
- * oneDNN's products against cblas's fp32 ones: bf16 (NERF_MATMUL_BF16, by
- * default) or, with --fp32-onednn, NERF_MATMUL_FP32_ONEDNN.
+ * oneDNN's products, bf16 (NERF_MATMUL_BF16, by default) or, with
+ * --fp32-onednn, NERF_MATMUL_FP32_ONEDNN, checked layer by layer against
+ * the network in double from the float inputs the products were given
+ * (layer_bounds.h): bounds derived from the arithmetic, which hold for
+ * any order of the sums, any processor, any of oneDNN's kernels.
  *
- * Tolerances.  bf16 keeps 8 significant bits, so rounding an operand moves
- * it by at most 2^-9 of itself, and a product of two rounded operands by
- * about 2^-8 ~ 0.4%.  Summed over a layer's inputs with mixed signs that
- * stays a relative error of a few tenths of a percent of the layer's output
- * scale, and it compounds over the 10 layers of the reference network.
- * The checks below therefore compare with the fp32 model relative to the
- * scale of what is compared (its RMS): at most 2% for the outputs (fp32
- * against fp32 computed in another order would agree to about 1e-6); for
- * gradients see compare_gradients().  The measured errors are printed; on
- * the development machine they are several times below these bounds.
- * Each check also requires the bf16 result to differ from fp32 somewhere,
- * so that a model silently computing in fp32 cannot pass.
+ * bf16 rounds both operands of every product to 8 significant bits, each
+ * within 2^-8 of itself, so a product term within FLOAT_BF16_PRODUCT
+ * (about 2^-7) of the exact one; the sums accumulate in fp32, within
+ * gamma(K) of their terms, as fp32 products are (../float_bounds.h).
+ * Forward: every layer's output against its double value from its own
+ * input.  Backward: the gradient against the exact gradient at the same
+ * activations, its bound carried down the layers.
  *
- * oneDNN's fp32 products differ from cblas's by the order of their sums
- * only, so there every tolerance is tight (tol_fp32 below), and again the
- * results must differ somewhere: a model silently computing through cblas
- * cannot pass.
+ * How far the bf16 or oneDNN model lands from an fp32 model end to end is
+ * printed, not asserted: the rounding of one layer's output moves some
+ * ReLU inputs across zero in the next, which bf16 does to many units, and
+ * no bound on the whole chain is worth having.  That oneDNN ran, and bf16
+ * rounded, is asked of the model (its backend, its primitives), not read
+ * from results that differ.
  *
  * Without oneDNN, or where nerf_matmul_supported() says no, only the
  * checks of that refusal run, and the program reports itself skipped.
@@ -35,22 +35,17 @@
 #include <unistd.h>
 
 #include "../harness.h"
+#include "dispatch.h"
 #include "gemm_onednn.h"
+#include "layer.h"
+#include "layer_bounds.h"
 #include "model.h"
 #include "nerf.h"
 #include "nerf_config.h"
 
-/* What the tests compare: kind, and the tolerances that go with it. */
+/* What the tests compare. */
 static int kind = NERF_MATMUL_BF16;
 static const char *kind_name = "bf16";
-typedef struct tolerances {
-    double out, backward, chain, chain_cosine;
-} tolerances;
-/* bf16: see above and compare_gradients(). */
-static const tolerances tol_bf16 = {0.02, 0.04, 0.10, 0.995};
-/* fp32 in another order: about 1e-6 relative, with a wide margin. */
-static const tolerances tol_fp32 = {1e-4, 1e-4, 1e-3, 0.999999};
-static tolerances tol;
 
 static int have_kind;
 
@@ -102,19 +97,37 @@ static nerf_model *make_model(int preset, int matmul)
     return m;
 }
 
-/* RMS of a - b relative to the RMS of b, and whether they differ at all. */
-static double rel_rms(const float *a, const float *b, size_t n, int *differ)
+/* RMS of a - b relative to the RMS of b (a measurement, printed). */
+static double rel_rms(const float *a, const float *b, size_t n)
 {
     double d2 = 0.0, b2 = 0.0;
     for (size_t i = 0; i < n; i++) {
         double d = (double)a[i] - b[i];
         d2 += d * d;
         b2 += (double)b[i] * b[i];
-        if (a[i] != b[i]) {
-            *differ = 1;
-        }
     }
     return b2 > 0.0 ? sqrt(d2 / b2) : sqrt(d2);
+}
+
+/*
+ * Whether this process computes fp32 models through oneDNN
+ * (NERF_FP32_PRODUCTS=onednn, where oneDNN has fp32 products): their
+ * options still say NERF_MATMUL_FP32, but they have a oneDNN backend.
+ */
+static bool fp32_through_onednn(void)
+{
+    return nerf__fp32_onednn_override() &&
+           nerf_matmul_supported(NERF_MATMUL_FP32_ONEDNN);
+}
+
+/* m runs kind's products through oneDNN, which made primitives. */
+static void check_backend(nerf_model *m)
+{
+    CHECK(m->onednn != NULL);
+    if (m->onednn) {
+        CHECK(nerf__onednn_primitives(m->onednn) > 0);
+        CHECK_EQ_INT(nerf__onednn_rounds(m->onednn), kind == NERF_MATMUL_BF16);
+    }
 }
 
 /* The fast preset makes a random hash table; its weights move the same
@@ -194,7 +207,7 @@ TEST(options)
         NERF_MODEL_OPTIONS_INIT(&got);
         CHECK_OK(nerf_model_get_options(m, &got));
         CHECK_EQ_INT(got.matmul, NERF_MATMUL_FP32);
-        CHECK(m->onednn == NULL);
+        CHECK((m->onednn != NULL) == fp32_through_onednn());
         /* And it reads back only as much as it knows. */
         got.matmul = 77;
         got.struct_size = offsetof(nerf_model_options, matmul);
@@ -238,7 +251,7 @@ TEST(fp32_checkpoint_loads_as_fp32)
     nerf_model *l = saved_and_loaded(m);
     if (l) {
         CHECK_EQ_INT(matmul_of(l), NERF_MATMUL_FP32);
-        CHECK(l->onednn == NULL);
+        CHECK((l->onednn != NULL) == fp32_through_onednn());
     }
     nerf_model_destroy(l);
     nerf_model_destroy(m);
@@ -297,7 +310,36 @@ TEST(rounding)
 #endif
 }
 
-static void compare_forward(int preset, const char *name)
+/*
+ * A forward of network net of m, keeping its activations, checked layer
+ * by layer against double (layer_bounds.h) with m's products as they are
+ * now; rgb and sigma, when not NULL, receive its outputs.
+ */
+static void forward_checked(nerf_model *m, int net, size_t n,
+                            const float *pos, const float *dir,
+                            nerf__workspace *ws, float *rgb, float *sigma,
+                            const char *what)
+{
+    float *s = sigma ? sigma : malloc(n * sizeof(float));
+    CHECK_OK(nerf__model_forward(m, net, ws, n, pos, dir, rgb, s));
+    lb_net b;
+    lb_open(&b, &m->nets[net], m->params);
+    double worst = lb_check_forward(&b, ws, pos, s, lb_eps(&m->nets[net]),
+                                    what);
+    printf("  %s, network %d forward: at most %.3f of the bounds\n", what,
+           net, worst);
+    lb_close(&b);
+    if (s != sigma) {
+        free(s);
+    }
+}
+
+/*
+ * The oneDNN model's forward, layer by layer against double.  Its query
+ * is the same products without the kept activations (the same bits), and
+ * how far it lands from the fp32 model's is printed.
+ */
+static void compare_forward(int preset, const char *name, size_t n)
 {
     nerf_model *f = make_model(preset, NERF_MATMUL_FP32);
     nerf_model *b = make_model(preset, kind);
@@ -307,28 +349,30 @@ static void compare_forward(int preset, const char *name)
         return;
     }
     copy_params(b, f);
-    const size_t n = 3001; /* odd: the last row runs padded */
     float *pos = malloc(n * 3 * sizeof(float));
     float *dir = malloc(n * 3 * sizeof(float));
-    float *rgb[2], *sigma[2];
-    for (int k = 0; k < 2; k++) {
+    float *rgb[3], *sigma[3];
+    for (int k = 0; k < 3; k++) {
         rgb[k] = malloc(n * 3 * sizeof(float));
         sigma[k] = malloc(n * sizeof(float));
     }
     make_points(n, pos, dir);
     for (uint32_t net = 0; net < f->n_nets; net++) {
+        nerf__workspace ws;
+        memset(&ws, 0, sizeof ws);
+        forward_checked(b, (int)net, n, pos, dir, &ws, rgb[2], sigma[2],
+                        name);
+        nerf__workspace_release(&b->env, &ws);
+        check_backend(b);
         CHECK_OK(nerf_model_query(f, (int)net, n, pos, dir, rgb[0], sigma[0]));
         CHECK_OK(nerf_model_query(b, (int)net, n, pos, dir, rgb[1], sigma[1]));
-        int differ = 0;
-        double e_rgb = rel_rms(rgb[1], rgb[0], 3 * n, &differ);
-        double e_sigma = rel_rms(sigma[1], sigma[0], n, &differ);
-        printf("  %s, network %u: relative RMS error rgb %.2e, sigma %.2e\n",
-               name, net, e_rgb, e_sigma);
-        CHECK(e_rgb <= tol.out);
-        CHECK(e_sigma <= tol.out);
-        CHECK(differ); /* oneDNN really ran */
+        CHECK(memcmp(rgb[1], rgb[2], n * 3 * sizeof(float)) == 0);
+        CHECK(memcmp(sigma[1], sigma[2], n * sizeof(float)) == 0);
+        printf("  %s, network %u: against fp32, relative RMS rgb %.2e, "
+               "sigma %.2e\n", name, net, rel_rms(rgb[1], rgb[0], 3 * n),
+               rel_rms(sigma[1], sigma[0], n));
     }
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
         free(rgb[k]);
         free(sigma[k]);
     }
@@ -338,11 +382,14 @@ static void compare_forward(int preset, const char *name)
     nerf_model_destroy(b);
 }
 
+/* 3001 samples: odd, so that the last row runs padded; the reference
+ * network in 257 (256 and a padded row), its layers being a hundred times
+ * the others' work to check in double. */
 TEST(forward_matches_fp32)
 {
-    compare_forward(NERF_PRESET_REFERENCE, "reference");
-    compare_forward(NERF_PRESET_FAST, "fast");
-    compare_forward(NERF_PRESET_TINY, "tiny");
+    compare_forward(NERF_PRESET_REFERENCE, "reference", 257);
+    compare_forward(NERF_PRESET_FAST, "fast", 3001);
+    compare_forward(NERF_PRESET_TINY, "tiny", 3001);
 }
 
 /* The layers of a network, in order: trunk, head, colour branch. */
@@ -362,38 +409,23 @@ static int network_layers(const nerf__network *nw, nerf__linear *layers)
     return count;
 }
 
-/* Per layer (W and b) and for a hash table: relative RMS of g against
- * want, at most limit, and not identical.  Returns the worst. */
-static double check_layers(const nerf__network *nw, const float *g,
-                           const float *want, double limit, const char *what)
+/* The largest relative RMS difference of a layer's gradient (W and b)
+ * or the hash table's, g against want: a measurement. */
+static double worst_layer(const nerf__network *nw, const float *g,
+                          const float *want)
 {
     nerf__linear layers[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
     int count = network_layers(nw, layers);
     double worst = 0.0;
     for (int l = 0; l < count; l++) {
         size_t len = (size_t)layers[l].in * layers[l].out + layers[l].out;
-        int differ = 0;
-        double e = rel_rms(g + layers[l].w, want + layers[l].w, len, &differ);
+        double e = rel_rms(g + layers[l].w, want + layers[l].w, len);
         worst = e > worst ? e : worst;
-        if (getenv("NERF_TEST_VERBOSE")) {
-            printf("    %s, layer %d: %.3g\n", what, l, e);
-        }
-        if (!(e <= limit) || !differ) {
-            FAILF("%s, layer %d: relative RMS error %.3g (tolerance %g, "
-                  "differ %d)", what, l, e, limit, differ);
-        }
     }
-    if ((nw->pos_enc.kind == NERF_ENCODING_HASHGRID)) {
-        int differ = 0;
+    if (nerf__encoding_params(&nw->pos_enc)) {
         double e = rel_rms(g + nw->pos_params, want + nw->pos_params,
-                           nw->pos_enc.u.hash.count, &differ);
+                           nw->pos_enc.u.hash.count);
         worst = e > worst ? e : worst;
-        /* The table's gradient comes through one 64-term input gradient,
-         * which oneDNN's fp32 kernels may sum in cblas's order: only the
-         * layers above must show that oneDNN ran. */
-        if (!(e <= limit) || (!differ && kind == NERF_MATMUL_BF16)) {
-            FAILF("%s, hash table: relative RMS error %.3g", what, e);
-        }
     }
     return worst;
 }
@@ -409,24 +441,152 @@ static double cosine(const float *a, const float *b, size_t n)
     return ab / sqrt(aa * bb + 1e-300);
 }
 
+/* The backward of the forward kept in ws into m's zeroed gradients,
+ * checked against the exact gradient at ws's activations. */
+static void backward_checked(nerf_model *m, int net, nerf__workspace *ws,
+                             const float *pos, const float *d_rgb,
+                             const float *d_sigma, const char *what)
+{
+    nerf__model_zero_grad(m);
+    CHECK_OK(nerf__model_backward(m, net, ws, d_rgb, d_sigma));
+    lb_net b;
+    lb_open(&b, &m->nets[net], m->params);
+    double worst = lb_check_backward(&b, ws, pos, d_rgb, d_sigma, m->grads,
+                                     lb_eps(&m->nets[net]), what);
+    printf("  %s, network %d backward: at most %.3f of the bounds\n", what,
+           net, worst);
+    lb_close(&b);
+}
+
+/*
+ * Each layer's backward products alone (nerf__layer_backward()), through
+ * network net's backend, on the inputs the forward kept in ws and a
+ * gradient drawn here: dW and dX against double, each within one
+ * product's bound.  The whole backward's bound carries the error of every
+ * layer's gradient to the layers below; for bf16 over the reference
+ * network's eleven layers that grows past the gradients themselves, so
+ * these products are checked one by one as well.  Returns the worst ratio
+ * to a bound.
+ */
+static double check_layer_products(nerf_model *m, int net,
+                                   nerf__workspace *ws, const char *what)
+{
+    const nerf__network *nw = &m->nets[net];
+    const double eps = lb_eps(nw);
+    const nerf__layer_ctx ctx = {nw->onednn, &ws->onednn, &ws->env};
+    const size_t n = ws->n;
+    const uint32_t W = nw->width, V = nw->view_width, Ep = nw->pos_width;
+    const uint32_t HW = nerf__network_head_width(nw);
+    nerf__linear layers[NERF__MAX_DEPTH + NERF__MAX_VIEW_DEPTH + 2];
+    const int count = network_layers(nw, layers);
+    lb_result res = {0.0, 0};
+    for (int li = 0; li < count; li++) {
+        const nerf__linear *l = &layers[li];
+        const uint32_t i = (uint32_t)li;
+        /* The layer's input parts, as network.c gives them. */
+        nerf__layer_part parts[2];
+        int np = 1;
+        if (i == 0) {
+            parts[0] = (nerf__layer_part){ws->enc_pos, Ep, Ep};
+        } else if (i < nw->depth) {
+            const nerf__layer_part h = {nerf__trunk_buffer(nw, ws, i - 1), W,
+                                        W};
+            parts[0] = h;
+            if (i == nw->skip) {
+                parts[0] = (nerf__layer_part){ws->enc_pos, Ep, Ep};
+                parts[np++] = h;
+            }
+        } else if (i == nw->depth) {
+            parts[0] = (nerf__layer_part){
+                nerf__trunk_buffer(nw, ws, nw->depth - 1), W, W};
+        } else if (i == nw->depth + 1) {
+            const uint32_t F = nerf__network_feature_width(nw);
+            parts[0] = (nerf__layer_part){ws->head, HW, F};
+            parts[np++] = (nerf__layer_part){ws->enc_dir, nw->dir_width,
+                                             nw->dir_width};
+        } else {
+            parts[0] = (nerf__layer_part){
+                nerf__view_buffer(nw, ws, i - nw->depth - 2), V, V};
+        }
+        /* The gradient goes on through the last part (the skip's h),
+         * but through the head's part of the colour branch's input. */
+        const int dx_part = i == nw->depth + 1 ? 0 : np - 1;
+        size_t col = 0;
+        for (int p = 0; p < dx_part; p++) {
+            col += parts[p].in;
+        }
+        const uint32_t out = l->out, in = l->in, dxw = parts[dx_part].in;
+        float *dy = malloc(n * out * sizeof(float));
+        float *dw = calloc((size_t)out * in, sizeof(float));
+        float *dx = malloc(n * dxw * sizeof(float));
+        for (size_t k = 0; k < n * out; k++) {
+            dy[k] = uniform(-1.0f, 1.0f);
+        }
+        CHECK_OK(nerf__layer_backward(&ctx, n, out, dy, out, NULL, parts, np,
+                                      NULL, m->params + l->w, in, dw, dx_part,
+                                      dx, dxw));
+        /* dW = dY^T X in double, sample by sample, with sum |dY| |X|. */
+        double *s = calloc((size_t)out * in, sizeof(double));
+        double *mag = calloc((size_t)out * in, sizeof(double));
+        double *x = malloc(in * sizeof(double));
+        for (size_t r = 0; r < n; r++) {
+            for (int p = 0, at = 0; p < np; at += (int)parts[p].in, p++) {
+                lb_widen(parts[p].x + r * parts[p].ldx, parts[p].in, x + at);
+            }
+            for (uint32_t o = 0; o < out; o++) {
+                const double d = dy[r * out + o], a = fabs(d);
+                double *so = s + (size_t)o * in, *mo = mag + (size_t)o * in;
+                for (uint32_t k = 0; k < in; k++) {
+                    so[k] += d * x[k];
+                    mo[k] += a * fabs(x[k]);
+                }
+            }
+        }
+        for (size_t j = 0; j < (size_t)out * in; j++) {
+            lb_compare(&res, what, "dW of", li, j / in, j % in, dw[j], s[j],
+                       float_product_bound((double)n + 1, eps, 0.0, mag[j]));
+        }
+        free(s);
+        free(mag);
+        free(x);
+        for (size_t r = 0; r < n; r++) {
+            for (uint32_t k = 0; k < dxw; k++) {
+                double v = 0.0, a = 0.0;
+                for (uint32_t o = 0; o < out; o++) {
+                    const double t = (double)dy[r * out + o] *
+                                     m->params[l->w + o * in + col + k];
+                    v += t;
+                    a += fabs(t);
+                }
+                lb_compare(&res, what, "dX of", li, r, k, dx[r * dxw + k], v,
+                           float_product_bound((double)out + 1, eps, 0.0, a));
+            }
+        }
+        free(dy);
+        free(dw);
+        free(dx);
+    }
+    return res.worst;
+}
+
 /*
  * Gradients, two ways.
  *
- * The backward products alone: one bf16 forward, then its backward once
- * with bf16 products and once with fp32 ones, on the same activations.
- * Each layer's gradient then differs only by the rounding of the backward
- * products: tol.backward.
+ * The backward products alone: one forward of the oneDNN model, then its
+ * backward against the exact gradient at those activations
+ * (layer_bounds.h), and each layer's products alone
+ * (check_layer_products()); how far the same backward through the CBLAS
+ * lands from it is printed.
  *
- * The whole chain: an fp32 and a bf16 model, each forward and backward,
+ * The whole chain: an fp32 and a oneDNN model, each forward and backward,
  * with the gradient of a loss that pulls every colour towards grey and
- * every density up.  Here the forward's rounding moves some ReLU inputs
- * across zero, and each unit that flips adds or drops a whole sample's
- * term, so early layers differ more (several percent on the reference
- * trunk's first layer): tol.chain per layer, and the whole gradient must
- * point the same way (cosine above tol.chain_cosine).
+ * every density up, each checked against double from its own
+ * activations.  Between the two models the forward's rounding moves some
+ * ReLU inputs across zero, and each unit that flips adds or drops a whole
+ * sample's term, so how far apart their gradients land (several percent
+ * on the reference trunk's first layer in bf16) is printed, not asserted.
  */
-
-static void compare_gradients(int preset, const char *name)
+static void compare_gradients(int preset, const char *name, size_t n)
 {
     nerf_model *m[2] = {make_model(preset, NERF_MATMUL_FP32),
                         make_model(preset, kind)};
@@ -436,19 +596,21 @@ static void compare_gradients(int preset, const char *name)
         return;
     }
     copy_params(m[1], m[0]);
-    const size_t n = 2049, P = m[0]->n_params;
+    const size_t P = m[0]->n_params;
     float *pos = malloc(n * 3 * sizeof(float));
     float *dir = malloc(n * 3 * sizeof(float));
     float *rgb = malloc(n * 3 * sizeof(float));
-    float *sigma = malloc(n * sizeof(float));
     float *d_rgb = malloc(n * 3 * sizeof(float));
     float *d_sigma = malloc(n * sizeof(float));
-    float *g_bf16 = malloc(P * sizeof(float));
+    float *g_onednn = malloc(P * sizeof(float));
+    char what[96];
     make_points(n, pos, dir);
 
     for (uint32_t net = 0; net < m[1]->n_nets; net++) {
         nerf__workspace ws;
         memset(&ws, 0, sizeof ws);
+        snprintf(what, sizeof what, "%s, %s", name, kind_name);
+        /* A forward checked in forward_matches_fp32. */
         CHECK_OK(nerf__model_forward(m[1], (int)net, &ws, n, pos, dir, NULL,
                                      NULL));
         for (size_t i = 0; i < 3 * n; i++) {
@@ -457,65 +619,74 @@ static void compare_gradients(int preset, const char *name)
         for (size_t i = 0; i < n; i++) {
             d_sigma[i] = uniform(-1.0f, 1.0f);
         }
-        nerf__model_zero_grad(m[1]);
-        CHECK_OK(nerf__model_backward(m[1], (int)net, &ws, d_rgb, d_sigma));
-        memcpy(g_bf16, m[1]->grads, P * sizeof(float));
-        nerf__model_zero_grad(m[1]);
+        backward_checked(m[1], (int)net, &ws, pos, d_rgb, d_sigma, what);
+        memcpy(g_onednn, m[1]->grads, P * sizeof(float));
+        printf("  %s, network %u: each layer's backward products at most "
+               "%.3f of their bounds\n", what, net,
+               check_layer_products(m[1], (int)net, &ws, what));
+        /* The same backward through the CBLAS (whose path the fp32 model
+         * below is checked on), for the distance printed. */
         struct nerf__onednn *keep = m[1]->nets[net].onednn;
-        m[1]->nets[net].onednn = NULL; /* the same backward in fp32 */
+        m[1]->nets[net].onednn = NULL;
+        nerf__model_zero_grad(m[1]);
         CHECK_OK(nerf__model_backward(m[1], (int)net, &ws, d_rgb, d_sigma));
         m[1]->nets[net].onednn = keep;
         nerf__workspace_release(&m[1]->env, &ws);
-        double worst = check_layers(&m[1]->nets[net], g_bf16, m[1]->grads,
-                                    tol.backward, name);
-        printf("  %s, network %u: backward products, worst layer error "
-               "%.2e\n", name, net, worst);
+        printf("  %s, network %u: backward products apart from the CBLAS's "
+               "by at most %.2e (relative RMS of a layer)\n", name, net,
+               worst_layer(&m[1]->nets[net], g_onednn, m[1]->grads));
     }
 
-    for (int k = 0; k < 2; k++) {
-        nerf__model_zero_grad(m[k]);
-        for (uint32_t net = 0; net < m[k]->n_nets; net++) {
+    float *g[2] = {malloc(P * sizeof(float)), malloc(P * sizeof(float))};
+    for (uint32_t net = 0; net < m[0]->n_nets; net++) {
+        for (int k = 0; k < 2; k++) {
             nerf__workspace ws;
             memset(&ws, 0, sizeof ws);
-            CHECK_OK(nerf__model_forward(m[k], (int)net, &ws, n, pos, dir,
-                                         rgb, sigma));
+            snprintf(what, sizeof what, "%s, %s, whole chain", name,
+                     k ? kind_name : "fp32");
+            if (k == 0) {
+                forward_checked(m[k], (int)net, n, pos, dir, &ws, rgb, NULL,
+                                what);
+            } else { /* checked in forward_matches_fp32 */
+                CHECK_OK(nerf__model_forward(m[k], (int)net, &ws, n, pos, dir,
+                                             rgb, NULL));
+            }
             for (size_t i = 0; i < 3 * n; i++) {
                 d_rgb[i] = 2.0f * (rgb[i] - 0.5f) / (float)n;
             }
             for (size_t i = 0; i < n; i++) {
                 d_sigma[i] = -1.0f / (float)n;
             }
-            CHECK_OK(nerf__model_backward(m[k], (int)net, &ws, d_rgb,
-                                          d_sigma));
+            backward_checked(m[k], (int)net, &ws, pos, d_rgb, d_sigma, what);
+            memcpy(g[k], m[k]->grads, P * sizeof(float));
             nerf__workspace_release(&m[k]->env, &ws);
         }
-    }
-    for (uint32_t net = 0; net < m[0]->n_nets; net++) {
         const nerf__network *nw = &m[0]->nets[net];
-        double worst = check_layers(nw, m[1]->grads, m[0]->grads, tol.chain,
-                                    name);
-        double c = cosine(m[1]->grads + nw->offset, m[0]->grads + nw->offset,
-                          nw->count);
-        printf("  %s, network %u: whole chain, worst layer error %.2e, "
-               "cosine %.6f\n", name, net, worst, c);
-        CHECK(c >= tol.chain_cosine);
+        printf("  %s, network %u: whole chain against fp32, worst layer "
+               "%.2e (relative RMS), cosine %.6f\n", name, net,
+               worst_layer(nw, g[1], g[0]),
+               cosine(g[1] + nw->offset, g[0] + nw->offset, nw->count));
     }
+    check_backend(m[1]);
+    free(g[0]);
+    free(g[1]);
     free(pos);
     free(dir);
     free(rgb);
-    free(sigma);
     free(d_rgb);
     free(d_sigma);
-    free(g_bf16);
+    free(g_onednn);
     nerf_model_destroy(m[0]);
     nerf_model_destroy(m[1]);
 }
 
+/* 2049 samples: 2048 and a padded row; the reference network in 257, as
+ * above. */
 TEST(gradients_match_fp32)
 {
-    compare_gradients(NERF_PRESET_REFERENCE, "reference");
-    compare_gradients(NERF_PRESET_FAST, "fast");
-    compare_gradients(NERF_PRESET_TINY, "tiny");
+    compare_gradients(NERF_PRESET_REFERENCE, "reference", 257);
+    compare_gradients(NERF_PRESET_FAST, "fast", 2049);
+    compare_gradients(NERF_PRESET_TINY, "tiny", 2049);
 }
 
 /* Network net's parameter gradients for d_rgb at n points, into g. */
@@ -534,7 +705,10 @@ static void gradients_of(nerf_model *m, int net, size_t n, const float *pos,
 /*
  * Repeating a forward and a backward gives the same bits, and a row's
  * output does not depend on which rows share its call (so images do not
- * depend on chunk sizes or thread counts).
+ * depend on chunk sizes or thread counts) while oneDNN's primitives are
+ * its brgemm kernels, as the model records (nerf__model_rows_alone()):
+ * another kernel may order a row's sums by the call's size, and then
+ * only the layer bounds above hold.
  */
 TEST(deterministic)
 {
@@ -551,20 +725,29 @@ TEST(deterministic)
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, a, a + 3 * n));
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n, pos, dir, b, b + 3 * n));
     CHECK(memcmp(a, b, n * 4 * sizeof(float)) == 0);
-    /* The same rows in two calls of other sizes (odd: padded rows). */
+    /* The same rows in two calls of other sizes (odd: padded rows), and
+     * single rows. */
     memset(b, 0, n * 4 * sizeof(float));
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, cut, pos, dir, b,
                               b + 3 * n));
     CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, n - cut, pos + 3 * cut,
                               dir + 3 * cut, b + 3 * cut, b + 3 * n + cut));
-    CHECK(memcmp(a, b, n * 4 * sizeof(float)) == 0);
+    float rgb[4][3], sigma[4];
     for (size_t i = 1; i < 5; i++) {
-        /* One row alone, too. */
-        float rgb[3], sigma;
         CHECK_OK(nerf_model_query(m, NERF_NETWORK_FINE, 1, pos + 3 * (i * 97),
-                                  dir + 3 * (i * 97), rgb, &sigma));
-        CHECK(memcmp(rgb, a + 3 * (i * 97), sizeof rgb) == 0);
-        CHECK(memcmp(&sigma, a + 3 * n + i * 97, sizeof sigma) == 0);
+                                  dir + 3 * (i * 97), rgb[i - 1],
+                                  &sigma[i - 1]));
+    }
+    if (nerf__model_rows_alone(m)) {
+        CHECK(memcmp(a, b, n * 4 * sizeof(float)) == 0);
+        for (size_t i = 1; i < 5; i++) {
+            CHECK(memcmp(rgb[i - 1], a + 3 * (i * 97), sizeof rgb[0]) == 0);
+            CHECK(memcmp(&sigma[i - 1], a + 3 * n + i * 97,
+                         sizeof sigma[0]) == 0);
+        }
+    } else {
+        printf("  not every primitive oneDNN made is brgemm: rows in calls "
+               "of other sizes may round otherwise, not compared\n");
     }
     /* Gradients: twice the same. */
     float *g[2] = {malloc(m->n_params * sizeof(float)),
@@ -697,10 +880,12 @@ TEST(weights_refresh_when_they_change)
     CHECK_OK(nerf_model_query(b, 0, N, pos, dir, r1, r1 + 3 * N));
     memcpy(f->params, b->params, b->n_params * sizeof(float));
     CHECK_OK(nerf_model_query(f, 0, N, pos, dir, r2, r2 + 3 * N));
-    int differ = 0;
-    double e = rel_rms(r1, r2, 4 * N, &differ);
-    printf("  after a step: relative RMS error against fp32 %.2e\n", e);
-    CHECK(e <= tol.out && differ);
+    printf("  after a step: relative RMS against fp32 %.2e\n",
+           rel_rms(r1, r2, 4 * N));
+    nerf__workspace ws;
+    memset(&ws, 0, sizeof ws);
+    forward_checked(b, 0, N, pos, dir, &ws, NULL, NULL, "after a step");
+    nerf__workspace_release(&b->env, &ws);
     nerf_model_destroy(b);
     nerf_model_destroy(f);
 }
@@ -792,14 +977,12 @@ TEST(concurrent_queries)
 int main(int argc, char **argv)
 {
     int refusal = 0;
-    tol = tol_bf16;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--unsupported") == 0) {
             refusal = 1;
         } else if (strcmp(argv[i], "--fp32-onednn") == 0) {
             kind = NERF_MATMUL_FP32_ONEDNN;
             kind_name = "oneDNN fp32";
-            tol = tol_fp32;
         }
     }
     have_kind = nerf_matmul_supported(kind);
