@@ -33,14 +33,22 @@ static int split_over_pool(void)
  * small products (rows x out x in up to 10^6, or fewer than 1200 rows x
  * out) to other kernels on SkylakeX and later cores, and its Haswell and
  * Zen kernels round a row by its place in the tile.  So a split over the
- * pool cuts the rows at fixed places, ROWS_PER_CALL apart from the first,
- * never a share per thread: the calls are then the same for any thread
- * count and however busy the pool is.  Large enough that each call runs
- * at the BLAS's full rate; the weight gradient, whose calls each sum over
- * all the samples, is cut into UNITS_PER_CALL rows (or columns) of dW.
+ * pool never cuts where the pool's threads happen to be free:
+ *  - forward and input-gradient products are cut at fixed rows,
+ *    ROWS_PER_CALL apart from the first, the same calls for any thread
+ *    count and however busy the pool is;
+ *  - a weight gradient, each of whose calls sums over all the samples
+ *    and packs all of one operand, is cut into as many calls as the pool
+ *    has threads (not as many as are free): finer cuts pack that operand
+ *    again for each, which cost the reference preset's step 15% with
+ *    32-row cuts on two cores.  Its results are deterministic for a
+ *    given thread count, as oneDNN's weight gradients are.
+ * ROWS_PER_CALL is large enough that each call runs at the BLAS's full
+ * rate, and small enough that a render's coarse pass (64 rays of 64
+ * samples) still spreads over the cores: 4096 cost the reference
+ * preset's render 30% on two cores.
  */
 #define ROWS_PER_CALL 1024
-#define UNITS_PER_CALL 32
 
 static size_t calls(size_t n, size_t per_call)
 {
@@ -50,6 +58,7 @@ static size_t calls(size_t n, size_t per_call)
 typedef struct product {
     uint32_t out, in;
     size_t n;
+    size_t per_call; /* rows or columns of dW a weight-gradient call takes */
     const float *a, *b;
     size_t lda, ldb;
     float beta;
@@ -92,7 +101,7 @@ void nerf__gemm_forward(size_t n, uint32_t out, uint32_t in, const float *x,
                         size_t ldx, const float *w, size_t ldw, float beta,
                         float *y, size_t ldy)
 {
-    product p = {out, in, n, x, w, ldx, ldw, beta, y, ldy};
+    product p = {out, in, n, 0, x, w, ldx, ldw, beta, y, ldy};
     if (split_over_pool()) {
         nerf__parallel_blocks(calls(n, ROWS_PER_CALL),
                               ROWS_PER_CALL * item_cost(out, in),
@@ -123,7 +132,7 @@ void nerf__gemm_input_grad(size_t n, uint32_t out, uint32_t in, const float *dy,
                            size_t lddy, const float *w, size_t ldw, float *dx,
                            size_t lddx)
 {
-    product p = {out, in, n, dy, w, lddy, ldw, 0.0f, dx, lddx};
+    product p = {out, in, n, 0, dy, w, lddy, ldw, 0.0f, dx, lddx};
     if (split_over_pool()) {
         nerf__parallel_blocks(calls(n, ROWS_PER_CALL),
                               ROWS_PER_CALL * item_cost(out, in),
@@ -156,7 +165,7 @@ static void weight_grad_row_block(void *ctx, size_t b)
 {
     const product *p = ctx;
     size_t begin, end;
-    block_range(b, UNITS_PER_CALL, p->out, &begin, &end);
+    block_range(b, p->per_call, p->out, &begin, &end);
     weight_grad_rows(ctx, begin, end);
 }
 
@@ -164,7 +173,7 @@ static void weight_grad_col_block(void *ctx, size_t b)
 {
     const product *p = ctx;
     size_t begin, end;
-    block_range(b, UNITS_PER_CALL, p->in, &begin, &end);
+    block_range(b, p->per_call, p->in, &begin, &end);
     weight_grad_cols(ctx, begin, end);
 }
 
@@ -172,16 +181,19 @@ void nerf__gemm_weight_grad(size_t n, uint32_t out, uint32_t in,
                             const float *dy, size_t lddy, const float *x,
                             size_t ldx, float *dw, size_t lddw)
 {
-    product p = {out, in, n, dy, x, lddy, ldx, 1.0f, dw, lddw};
-    if (!split_over_pool()) {
+    product p = {out, in, n, 0, dy, x, lddy, ldx, 1.0f, dw, lddw};
+    const size_t parts = nerf__parallel_threads();
+    if (!split_over_pool() || parts < 2) {
         weight_grad_rows(&p, 0, out);
     } else if (out >= in) {
-        nerf__parallel_blocks(calls(out, UNITS_PER_CALL),
-                              UNITS_PER_CALL * item_cost(n, in),
+        p.per_call = calls(out, parts);
+        nerf__parallel_blocks(calls(out, p.per_call),
+                              p.per_call * item_cost(n, in),
                               weight_grad_row_block, &p);
     } else {
-        nerf__parallel_blocks(calls(in, UNITS_PER_CALL),
-                              UNITS_PER_CALL * item_cost(n, out),
+        p.per_call = calls(in, parts);
+        nerf__parallel_blocks(calls(in, p.per_call),
+                              p.per_call * item_cost(n, out),
                               weight_grad_col_block, &p);
     }
 }

@@ -3,16 +3,19 @@
  *
  * When the BLAS runs on one thread (OpenBLAS with OPENBLAS_NUM_THREADS=1,
  * or after openblas_set_num_threads(1)), each product is cut into blocks
- * of rows at fixed places, spread over libnerf's own workers
- * (common/parallel.h).  That is how the small layers of the fast preset
- * use every core: OpenBLAS's own threading of a 64-wide product spends a
- * third of the time handing work between its threads.  Each element of a
- * result comes from one sgemm call over the whole reduction, and the calls
- * are the same for any number of workers, so results do not depend on
- * the thread count.  They may depend, in the last bits, on the rows a
- * product holds: the BLAS can round a row by the size of its call and
- * the row's place in it (gemm.c), so a sample's values can differ with
- * the samples beside it, unlike on the fused path (network_fused.h).
+ * at fixed places, spread over libnerf's own workers (common/parallel.h).
+ * That is how the small layers of the fast preset use every core:
+ * OpenBLAS's own threading of a 64-wide product spends a third of the
+ * time handing work between its threads.  Each element of a result comes
+ * from one sgemm call over the whole reduction.  Forward and input-
+ * gradient calls are the same for any number of workers, so their results
+ * do not depend on the thread count; a weight gradient is cut into one
+ * call per thread of the pool, and is deterministic for a given thread
+ * count, however busy the pool.  Results may depend, in the last bits,
+ * on the rows a product holds: the BLAS can round a row by the size of
+ * its call and the row's place in it (gemm.c), so a sample's values can
+ * differ with the samples beside it, unlike on the fused path
+ * (network_fused.h).
  */
 #ifndef NERF_MLP_GEMM_H
 #define NERF_MLP_GEMM_H

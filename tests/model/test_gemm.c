@@ -196,8 +196,10 @@ static void run_triple(void *ctx, size_t begin, size_t end)
 /*
  * Over a one-thread BLAS the products give the same bits whether the pool
  * spreads them or the caller runs them alone (as it does when the pool is
- * busy with another call): the rows are cut at fixed places, because the
- * BLAS may round a row by its call's size and its place in the call
+ * busy with another call): the calls are cut at fixed places (rows for
+ * the forward and input gradient; one call per pool thread for a weight
+ * gradient), because the BLAS may round a row by its call's size and its
+ * place in the call
  * (OpenBLAS's small-matrix kernels, its Haswell and Zen tiles).  Shapes
  * whose halves would fall on tile boundaries that differ from the fixed
  * cuts', and one of few rows per call.
