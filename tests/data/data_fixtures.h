@@ -17,6 +17,23 @@
 #include <zlib.h>
 
 /* A fresh folder under $TMPDIR (or /tmp); the caller removes it. */
+/* The whole file at path, malloc'd (free it), its length in *size; NULL
+ * if it cannot be opened. */
+static inline unsigned char *fx_slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        return NULL;
+    }
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc(n > 0 ? (size_t)n : 1);
+    *size = b ? fread(b, 1, (size_t)n, f) : 0;
+    fclose(f);
+    return b;
+}
+
 static inline char *fx_make_temp_dir(void)
 {
     const char *base = getenv("TMPDIR");

@@ -60,6 +60,18 @@ static void image_path(char *buf, size_t size, const char *dir, int i)
     fx_path(buf, size, dir, name);
 }
 
+/* Every photo of images_2/ replaced by a black one of w x h. */
+static void resize_images(const char *dir, uint32_t w, uint32_t h)
+{
+    uint16_t *px = calloc((size_t)w * h * 3, sizeof *px);
+    char p[1024];
+    for (int i = 0; px && i < N; i++) {
+        image_path(p, sizeof p, dir, i);
+        fx_write_png(p, w, h, 2, 8, px, NULL, 0, NULL, 0);
+    }
+    free(px);
+}
+
 /* A scene folder: poses_bounds.npy from rows, images_2/ with N images. */
 static void make_scene(char *dir, size_t size, const double *rows)
 {
@@ -415,10 +427,7 @@ TEST(bad_images)
      * images_2/ they are not half the poses' size either, which is found
      * first; in images/, which may hold any size, the aspect is. */
     make_scene(dir, sizeof dir, rows);
-    for (int i = 0; i < N; i++) {
-        image_path(p, sizeof p, dir, i);
-        fx_write_png(p, IW + 2, IH, 2, 8, px, NULL, 0, NULL, 0);
-    }
+    resize_images(dir, IW + 2, IH);
     CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EFORMAT);
     CHECK(fx_has(nerf_last_error(), "images_2: the photos are 10x6"));
     fx_path(p, sizeof p, dir, "images_2");
@@ -476,13 +485,9 @@ TEST(images_k_of_full_size_photos)
 {
     double rows[N * 17];
     make_rows(rows, identity);
-    char dir[1024], p[1024];
+    char dir[1024];
     make_scene(dir, sizeof dir, rows);
-    uint16_t px[FW * FH * 3] = {0};
-    for (int i = 0; i < N; i++) {
-        image_path(p, sizeof p, dir, i);
-        fx_write_png(p, FW, FH, 2, 8, px, NULL, 0, NULL, 0);
-    }
+    resize_images(dir, FW, FH);
     nerf_dataset *ds = NULL;
     nerf_dataset_options o;
     NERF_DATASET_OPTIONS_INIT(&o);
@@ -492,11 +497,7 @@ TEST(images_k_of_full_size_photos)
     CHECK(fx_has(nerf_last_error(), "divided by 2 is 8x6"));
     /* Within a pixel of the poses' size over 2 is what the name says,
      * whichever way the tool that shrank them rounded: 9 x 7 is read. */
-    uint16_t near[(IW + 1) * (IH + 1) * 3] = {0};
-    for (int i = 0; i < N; i++) {
-        image_path(p, sizeof p, dir, i);
-        fx_write_png(p, IW + 1, IH + 1, 2, 8, near, NULL, 0, NULL, 0);
-    }
+    resize_images(dir, IW + 1, IH + 1);
     CHECK_OK(nerf_dataset_load(&ds, dir, &o));
     nerf_dataset_destroy(ds);
 }

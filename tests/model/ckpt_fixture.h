@@ -18,6 +18,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "../data/data_fixtures.h"
 #include "model.h"
 #include "nerf.h"
 #include "occupancy.h"
@@ -40,21 +41,6 @@ static inline void make_tmpdir(void)
 static inline void path_in(char *buf, size_t size, const char *name)
 {
     snprintf(buf, size, "%s/%s", tmpdir, name);
-}
-
-static inline unsigned char *slurp(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        return NULL;
-    }
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc(n > 0 ? (size_t)n : 1);
-    *size = fread(b, 1, (size_t)n, f);
-    fclose(f);
-    return b;
 }
 
 static inline void spit(const char *path, const void *data, size_t size)
@@ -282,7 +268,7 @@ static inline unsigned char *good_file(size_t *size)
     nerf_model *m = trained_model(true);
     CHECK_OK(nerf_model_save(m, path));
     nerf_model_destroy(m);
-    unsigned char *b = slurp(path, size);
+    unsigned char *b = fx_slurp(path, size);
     CHECK(b != NULL && *size > 200);
     return b;
 }

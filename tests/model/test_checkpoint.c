@@ -64,7 +64,7 @@ TEST(weights_and_moments_are_copied)
     nerf_model *m = trained_model(true);
     CHECK_OK(nerf_model_save(m, path));
     size_t size = 0;
-    unsigned char *b = slurp(path, &size);
+    unsigned char *b = fx_slurp(path, &size);
     if (m && b) {
         CHECK(size - HEADER >= 3 * 4 * m->n_params);
     }
@@ -272,7 +272,7 @@ TEST(failed_save_keeps_the_old_checkpoint)
     nerf_model *old = trained_model(false), *other = trained_model(true);
     CHECK_OK(nerf_model_save(old, path));
     size_t size = 0;
-    unsigned char *before = slurp(path, &size);
+    unsigned char *before = fx_slurp(path, &size);
 
     /* A full disk, simulated with a file size limit (this works as root,
      * where a read-only directory would not stop the write). */
@@ -289,7 +289,7 @@ TEST(failed_save_keeps_the_old_checkpoint)
     CHECK(strstr(nerf_last_error(), path) == nerf_last_error());
 
     size_t after_size = 0;
-    unsigned char *after = slurp(path, &after_size);
+    unsigned char *after = fx_slurp(path, &after_size);
     CHECK(after && after_size == size && memcmp(before, after, size) == 0);
     CHECK_EQ_INT(count_temp_files(tmpdir), 0);
     free(after);
@@ -308,7 +308,7 @@ TEST(failed_save_keeps_the_old_checkpoint)
         chmod(tmpdir, 0555);
         CHECK_EQ_INT(nerf_model_save(other, path), NERF_EIO);
         chmod(tmpdir, 0755);
-        after = slurp(path, &after_size);
+        after = fx_slurp(path, &after_size);
         CHECK(after && after_size == size && memcmp(before, after, size) == 0);
         free(after);
     }

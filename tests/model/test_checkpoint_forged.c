@@ -636,7 +636,7 @@ static void forge_grid(const char *name, void (*edit)(payload *), int want,
     nerf_model *ref = grid_model();
     CHECK_OK(nerf_model_save(ref, path));
     size_t size = 0;
-    unsigned char *file = slurp(path, &size);
+    unsigned char *file = fx_slurp(path, &size);
     payload p;
     split_grid_payload(file, size, &p);
     if (edit) {
@@ -695,7 +695,7 @@ TEST(occupancy_grid_section)
     nerf_model *m = grid_model();
     CHECK_OK(nerf_model_save(m, path));
     size_t size = 0;
-    unsigned char *file = slurp(path, &size);
+    unsigned char *file = fx_slurp(path, &size);
     payload p;
     split_grid_payload(file, size, &p);
     /* Optional tag 7, last: u32 resolution, u32 0, u64 updates, then the
@@ -729,7 +729,7 @@ TEST(occupancy_grid_section)
     nerf_model *tiny = trained_model(true);
     CHECK(tiny && tiny->grid == NULL);
     CHECK_OK(nerf_model_save(tiny, path));
-    file = slurp(path, &size);
+    file = fx_slurp(path, &size);
     split_payload(file, size, &p);
     CHECK_EQ_INT(p.n, 7);
     /* ... and refuses one forged into its file. */
@@ -738,7 +738,7 @@ TEST(occupancy_grid_section)
         char gpath[128];
         path_in(gpath, sizeof gpath, "grid2.ckpt");
         CHECK_OK(nerf_model_save(m, gpath));
-        unsigned char *gfile = slurp(gpath, &gsize);
+        unsigned char *gfile = fx_slurp(gpath, &gsize);
         payload gp;
         split_grid_payload(gfile, gsize, &gp);
         if (gp.n == 8) {
@@ -766,7 +766,7 @@ TEST(occupancy_grid_section)
     path_in(path, sizeof path, "grid.ckpt");
     m = grid_model();
     CHECK_OK(nerf_model_save(m, path));
-    file = slurp(path, &size);
+    file = fx_slurp(path, &size);
     split_grid_payload(file, size, &p);
     free(p.s[6].data);
     p.s[6] = p.s[7];
@@ -810,7 +810,7 @@ static void save_corrected(const char *path, payload *p,
     CHECK_OK(nerf_model_save(m, path));
     nerf_model_destroy(m);
     size_t size = 0;
-    *file = slurp(path, &size);
+    *file = fx_slurp(path, &size);
     split_payload(*file, size, p);
 }
 
@@ -946,6 +946,19 @@ static void keep_warning(int level, const char *msg, void *user)
     }
 }
 
+/* Load path, the warnings logged on the way kept in `warning`. */
+static nerf_model *load_keeping_warnings(const char *path)
+{
+    nerf_hooks h;
+    NERF_HOOKS_INIT(&h);
+    h.log_cb = keep_warning;
+    h.log_level = NERF_LOG_WARN;
+    warning[0] = '\0';
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, &h));
+    return m;
+}
+
 /* A file of the good model with a matmul section of `kind` loads with
  * that kind where it is available, else as fp32 with a warning. */
 static void load_matmul_section(uint32_t kind)
@@ -962,13 +975,8 @@ static void load_matmul_section(uint32_t kind)
     path_in(path, sizeof path, kind == NERF_MATMUL_BF16 ? "bf16.ckpt"
                                                         : "onednn.ckpt");
     write_payload(path, &p, NULL, 0);
-    nerf_hooks h;
-    NERF_HOOKS_INIT(&h);
-    h.log_cb = keep_warning;
-    h.log_level = NERF_LOG_WARN;
-    warning[0] = '\0';
-    nerf_model *m = NULL, *ref = trained_model(true);
-    CHECK_OK(nerf_model_load(&m, path, &h));
+    nerf_model *ref = trained_model(true);
+    nerf_model *m = load_keeping_warnings(path);
     if (m && ref) {
         nerf_model_options o;
         NERF_MODEL_OPTIONS_INIT(&o);
@@ -1011,7 +1019,7 @@ TEST(matmul_section)
         CHECK_OK(nerf_model_save(b, path));
         nerf_model_destroy(b);
         size_t size = 0;
-        unsigned char *file = slurp(path, &size);
+        unsigned char *file = fx_slurp(path, &size);
         payload p;
         split_payload(file, size, &p);
         CHECK_EQ_INT(p.n, 8);
@@ -1110,7 +1118,7 @@ TEST(data_section)
     path_in(path, sizeof path, "data.ckpt");
     CHECK_OK(nerf_model_save(m, path));
     nerf_model_destroy(m);
-    file = slurp(path, &size);
+    file = fx_slurp(path, &size);
     split_payload(file, size, &p);
     const section *d = &p.s[p.n - 1];
     CHECK_EQ_INT(d->tag, 0x0000000Bu);
@@ -1209,13 +1217,7 @@ TEST(nonfinite_weights_load_for_inspection)
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         forge_weights(path, cases[c].idx, cases[c].n, cases[c].value);
         snprintf(where, sizeof where, cases[c].where, ref->n_params);
-        nerf_hooks h;
-        NERF_HOOKS_INIT(&h);
-        h.log_cb = keep_warning;
-        h.log_level = NERF_LOG_WARN;
-        warning[0] = '\0';
-        nerf_model *m = NULL;
-        CHECK_OK(nerf_model_load(&m, path, &h));
+        nerf_model *m = load_keeping_warnings(path);
         if (m == NULL) {
             continue;
         }
@@ -1248,13 +1250,7 @@ TEST(nonfinite_weights_load_for_inspection)
     unsigned char *file = good_file(&size);
     spit(path, file, size);
     free(file);
-    nerf_hooks h;
-    NERF_HOOKS_INIT(&h);
-    h.log_cb = keep_warning;
-    h.log_level = NERF_LOG_WARN;
-    warning[0] = '\0';
-    nerf_model *m = NULL;
-    CHECK_OK(nerf_model_load(&m, path, &h));
+    nerf_model *m = load_keeping_warnings(path);
     CHECK(warning[0] == '\0');
     CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS));
     nerf_model_destroy(m);

@@ -29,21 +29,6 @@ static void spoil(nerf_model *m, size_t i)
     nerf__model_weights_changed(m);
 }
 
-static unsigned char *slurp(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        return NULL;
-    }
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc(n > 0 ? (size_t)n : 1);
-    *size = b ? fread(b, 1, (size_t)n, f) : 0;
-    fclose(f);
-    return b;
-}
-
 static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
                                   const char *checkpoint)
 {
@@ -70,7 +55,7 @@ TEST(every_use_refuses_them)
     snprintf(path, sizeof path, "%s/good.nerf", fx.dir);
     CHECK_OK(nerf_model_save(m, path));
     size_t before_size = 0;
-    unsigned char *before = slurp(path, &before_size);
+    unsigned char *before = fx_slurp(path, &before_size);
 
     spoil(m, m->nets[1].trunk[2].b + 4);
     const char *where = "the fine network's trunk layer 2 bias [4]";
@@ -110,7 +95,7 @@ TEST(every_use_refuses_them)
     mentions(path, "nerf_model_save");
     mentions(where, "nerf_model_save");
     size_t after_size = 0;
-    unsigned char *after = slurp(path, &after_size);
+    unsigned char *after = fx_slurp(path, &after_size);
     CHECK(before && after && before_size == after_size &&
           memcmp(before, after, before_size) == 0);
     free(before);
@@ -164,7 +149,7 @@ TEST(a_run_keeps_its_last_good_checkpoint)
     }
     CHECK_OK(nerf_trainer_run(t, 1, NULL));
     size_t before_size = 0;
-    unsigned char *before = slurp(path, &before_size);
+    unsigned char *before = fx_slurp(path, &before_size);
     CHECK_EQ_INT(fixture_saved_step(path), 1);
     spoil(m, m->nets[0].trunk[0].w + 3);
     CHECK_EQ_INT(nerf_trainer_run(t, 2, NULL), NERF_ERROR);
@@ -173,7 +158,7 @@ TEST(a_run_keeps_its_last_good_checkpoint)
              "nerf_trainer_run");
     mentions(path, "nerf_trainer_run");
     size_t after_size = 0;
-    unsigned char *after = slurp(path, &after_size);
+    unsigned char *after = fx_slurp(path, &after_size);
     CHECK(before && after && before_size == after_size &&
           memcmp(before, after, before_size) == 0);
     free(before);
