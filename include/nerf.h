@@ -1674,8 +1674,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *  - sparse/0/ or sparse/ holding COLMAP's cameras and images files
  *    (.bin preferred to .txt; points3D optional): COLMAP.  Camera models
  *    SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV, intrinsics
- *    per image; photos (PNG) from images/ (or images_K/ as for LLFF) under
- *    the model's names, sorted by name and split every llff_holdout-th.
+ *    per image; photos (PNG or JPEG) from images/ (or images_K/ as for
+ *    LLFF) under the model's names, sorted by name and split every llff_holdout-th.
  *    Poses are turned from COLMAP's world-to-camera quaternions and
  *    OpenCV axes into camera-to-world OpenGL ones, then moved so that the
  *    sparse points' per-axis median is the origin, the cameras' mean up
@@ -1726,8 +1726,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * count not matching the poses, no frames left, a forward-facing COLMAP
  * model without sparse points in front of its cameras, an images_K/
  * folder whose photos are not K times smaller than the poses say, an
- * image header claiming more pixels than its file holds); NERF_ENOMEM.  Messages name the file and
- * the problem.  On failure *out is NULL.
+ * image header claiming more pixels than its file holds); NERF_ENOMEM.
+ * Messages name the file and the problem.  On failure *out is NULL.
  * Reentrant: separate loads may run on separate threads.
  */
 NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
@@ -2056,8 +2056,9 @@ typedef struct nerf_train_stats {
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid, weights
  * that are not finite: NERF_MODEL_HAS_NONFINITE_WEIGHTS, which Adam
- * cannot bring back); NERF_EIO (checkpoint_path cannot be written: a missing folder, a path
- * through a regular file, a folder, no permission); NERF_EVERSION
+ * cannot bring back); NERF_EIO (checkpoint_path cannot be written: a
+ * missing folder, a path through a regular file, a folder, no
+ * permission); NERF_EVERSION
  * (options from a newer header setting unknown fields); NERF_ENOMEM.
  */
 NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
@@ -2455,8 +2456,8 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
  * @return NERF_OK; NERF_EINVAL (NULL model or out, resolution 0 or too
  * large, a box of zero volume or not finite, a threshold that is not
  * finite, unknown colour, weights that are not finite:
- * NERF_MODEL_HAS_NONFINITE_WEIGHTS); NERF_EVERSION; NERF_ECANCELLED (the progress
- * callback); NERF_ENOMEM.
+ * NERF_MODEL_HAS_NONFINITE_WEIGHTS); NERF_EVERSION; NERF_ECANCELLED (the
+ * progress callback); NERF_ENOMEM.
  *
  * Reads the model only (as nerf_model_query()): several calls may run on
  * one model at once while nothing trains it.  Memory beyond the mesh is
