@@ -1675,7 +1675,8 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  *    (.bin preferred to .txt; points3D optional): COLMAP.  Camera models
  *    SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV, intrinsics
  *    per image; photos (PNG or JPEG) from images/ (or images_K/ as for
- *    LLFF) under the model's names, sorted by name and split every llff_holdout-th.
+ *    LLFF) under the model's names, sorted by name and split every
+ *    llff_holdout-th.
  *    Poses are turned from COLMAP's world-to-camera quaternions and
  *    OpenCV axes into camera-to-world OpenGL ones, then moved so that the
  *    sparse points' per-axis median is the origin, the cameras' mean up
