@@ -45,7 +45,9 @@ static const char usage[] =
     "  --downscale K  with --data: read the scene's images and cameras K\n"
     "                 times smaller (an LLFF or COLMAP scene's images_K/;\n"
     "                 default 1), which sets the size of the views of\n"
-    "                 --data and of --path unless --width/--height do\n"
+    "                 --data and of --path unless --width/--height do;\n"
+    "                 a --path without it takes the first of images/,\n"
+    "                 images_2/ ... images_16/ the scene has\n"
     "  --path orbit   a circle of --frames views around the origin at 30\n"
     "                 degrees elevation, as for Blender scenes, framed to\n"
     "                 keep the sphere of radius 1.5 (the box Blender scenes\n"
@@ -453,6 +455,43 @@ static int mine(uint32_t i)
  * input), and said so. */
 #define REFUSED 3
 
+/*
+ * The scene of --data.  A path needs the scene's cameras and bounds, not
+ * its photos: without --downscale it takes the photos of the first of
+ * images/, images_2/, images_4/ ... the scene has (fern ships images_8/
+ * alone), and says which; with --downscale, or without --path, exactly
+ * what was asked.
+ */
+static int load_scene(args *a, const nerf_model *m, const nerf_hooks *hooks,
+                      nerf_dataset **out)
+{
+    nerf_dataset_options dopt;
+    NERF_DATASET_OPTIONS_INIT(&dopt);
+    dopt.split = (uint32_t)a->split;
+    dopt.downscale = (uint32_t)a->downscale;
+    dopt.forward_facing = setup_forward_facing(m, -1);
+    dopt.hooks = hooks;
+    int rc = nerf_dataset_load(out, a->data, &dopt);
+    if (rc != NERF_ENOENT || a->path == NULL || a->downscale_given) {
+        return rc;
+    }
+    char first[1024];
+    snprintf(first, sizeof first, "%s", nerf_last_error());
+    for (uint32_t k = 2; k <= 16; k *= 2) {
+        dopt.downscale = k;
+        if (nerf_dataset_load(out, a->data, &dopt) == NERF_OK) {
+            fprintf(stderr, "%s: %s has no photos at full size; the path "
+                    "takes its cameras from its photos reduced %u times "
+                    "(as --downscale %u)\n", PROG, a->data, k, k);
+            a->downscale = k;
+            return NERF_OK;
+        }
+    }
+    fprintf(stderr, "%s: %s: %s\n", PROG, nerf_status_string(NERF_ENOENT),
+            first);
+    return REPORTED;
+}
+
 /* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
 static volatile sig_atomic_t interrupted;
 
@@ -826,13 +865,7 @@ static int run(int argc, char **argv)
         rc = load_poses(&a, &hooks, &cp);
     }
     if (rc == NERF_OK && a.data) {
-        nerf_dataset_options dopt;
-        NERF_DATASET_OPTIONS_INIT(&dopt);
-        dopt.split = (uint32_t)a.split;
-        dopt.downscale = (uint32_t)a.downscale;
-        dopt.forward_facing = setup_forward_facing(m, -1);
-        dopt.hooks = &hooks;
-        rc = nerf_dataset_load(&ds, a.data, &dopt);
+        rc = load_scene(&a, m, &hooks, &ds);
     }
     if (rc == NERF_OK) {
         sampler_choice c = SAMPLER_AS_RECORDED;
@@ -896,6 +929,7 @@ static int run(int argc, char **argv)
            : rc == NERF_OK   ? 0
                              : 1;
 }
+
 
 int main(int argc, char **argv)
 {

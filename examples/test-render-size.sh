@@ -95,6 +95,15 @@ $wrap "$render" --model "$work/model.nerf" --data "$work/half" \
   { cat "$work/half.log"; fail "images_2/ alone: spiral --downscale 2 at 12x8"; }
 [ "$(size "$work/half-spiral/r_000.png")" = 12x8 ] ||
   fail "images_2/ alone: spiral gave $(size "$work/half-spiral/r_000.png")"
+# Without --downscale a path takes the cameras from images_2/, the one
+# folder there is, says so, and frames the photos' size.
+$wrap "$render" --model "$work/model.nerf" --data "$work/half" \
+  --path spiral --frames 1 --out "$work/half-auto" 2>"$work/auto.log" ||
+  { cat "$work/auto.log"; fail "images_2/ alone: spiral without --downscale"; }
+grep -q "reduced 2 times (as --downscale 2)" "$work/auto.log" ||
+  { cat "$work/auto.log"; fail "images_2/ alone: which photos not said"; }
+[ "$(size "$work/half-auto/r_000.png")" = 24x16 ] ||
+  fail "images_2/ alone: spiral gave $(size "$work/half-auto/r_000.png")"
 
 render views --width 12 --height 8 --depth
 [ "$(size "$work/views/r_000.png")" = 12x8 ] ||

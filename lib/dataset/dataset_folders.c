@@ -38,7 +38,7 @@ int nerf__find_image_dir(const nerf__env *env, const char *dir,
         }
         nerf__free(env, path);
     }
-    return nerf__error(NERF_EIO, "%s: no image folder for downscale %u "
+    return nerf__error(NERF_ENOENT, "%s: no image folder for downscale %u "
                        "(looked for images_%u/, images_M/ with M dividing "
                        "%u, and images/)", dir, (unsigned)factor,
                        (unsigned)factor, (unsigned)factor);

@@ -301,7 +301,7 @@ TEST(downscale_from_smaller_folder)
     /* No images/ at all for downscale 1. */
     nerf_dataset_options o;
     NERF_DATASET_OPTIONS_INIT(&o);
-    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_EIO);
+    CHECK_EQ_INT(nerf_dataset_load(&ds, dir, &o), NERF_ENOENT);
     CHECK(fx_has(nerf_last_error(), "no image folder"));
     /* Skip applies within the split: train 1..7, every second. */
     o.downscale = 2;
