@@ -1251,7 +1251,10 @@ TEST(nonfinite_weights_load_for_inspection)
     spit(path, file, size);
     free(file);
     nerf_model *m = load_keeping_warnings(path);
-    CHECK(warning[0] == '\0');
+    /* (NERF_FP32_PRODUCTS=onednn, where oneDNN has no fp32 products, may
+     * warn of its own.) */
+    CHECK(strstr(warning, "NaN or infinite") == NULL &&
+          strstr(warning, "diverged") == NULL);
     CHECK(!(nerf_model_contents(m) & NERF_MODEL_HAS_NONFINITE_WEIGHTS));
     nerf_model_destroy(m);
     nerf_model_destroy(ref);
