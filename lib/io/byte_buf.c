@@ -7,6 +7,29 @@
 
 #include "file_io.h"
 
+static bool set_cap(nerf__buf *b, size_t cap)
+{
+    unsigned char *p = nerf__alloc(b->env, cap);
+    if (p == NULL) {
+        b->failed = true;
+        return false;
+    }
+    if (b->data) {
+        memcpy(p, b->data, b->size);
+    }
+    nerf__free(b->env, b->data);
+    b->data = p;
+    b->cap = cap;
+    return true;
+}
+
+void nerf__buf_reserve(nerf__buf *b, size_t n)
+{
+    if (!b->failed && b->size + n > b->cap) {
+        set_cap(b, b->size + n);
+    }
+}
+
 unsigned char *nerf__buf_grow(nerf__buf *b, size_t n)
 {
     if (b->failed) {
@@ -17,17 +40,9 @@ unsigned char *nerf__buf_grow(nerf__buf *b, size_t n)
         while (cap < b->size + n) {
             cap *= 2;
         }
-        unsigned char *p = nerf__alloc(b->env, cap);
-        if (p == NULL) {
-            b->failed = true;
+        if (!set_cap(b, cap)) {
             return NULL;
         }
-        if (b->data) {
-            memcpy(p, b->data, b->size);
-        }
-        nerf__free(b->env, b->data);
-        b->data = p;
-        b->cap = cap;
     }
     unsigned char *at = b->data + b->size;
     b->size += n;

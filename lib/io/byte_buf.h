@@ -24,6 +24,10 @@ unsigned char *nerf__buf_grow(nerf__buf *b, size_t n);
 
 void nerf__buf_put(nerf__buf *b, const void *data, size_t n);
 
+/* Room for n more bytes in one allocation, for a writer that knows roughly
+ * how much it will write: a hint, past which the buffer still grows. */
+void nerf__buf_reserve(nerf__buf *b, size_t n);
+
 /* Formatted text, without its terminating NUL. */
 void nerf__buf_printf(nerf__buf *b, const char *fmt, ...) NERF__PRINTF(2, 3);
 
