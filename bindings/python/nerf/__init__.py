@@ -44,7 +44,8 @@ from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
                    SCENE_CAPTURE_FORWARD, SCENE_CAPTURE_OBJECT,
                    SCENE_CAPTURE_UNBOUNDED, SCENE_LAYOUT_BLENDER,
                    SCENE_LAYOUT_COLMAP_BINARY, SCENE_LAYOUT_COLMAP_TEXT,
-                   SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS, SPLIT_TEST,
+                   SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS,
+                   SCENE_MAX_SIDE, SCENE_MAX_VIEWS, SCENE_MIN_SIDE, SPLIT_TEST,
                    SPLIT_TRAIN, SPLIT_VAL, Dataset, load_camera_path, psnr,
                    read_image, read_png, ssim, write_npy, write_png,
                    write_scene)
@@ -62,7 +63,8 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     SPACE_BOX, SPACE_NDC, SPACE_UNBOUNDED,
                     MODEL_HAS_OPTIMIZER, MODEL_HAS_OCCUPANCY,
                     MODEL_HAS_RENDER_SETTINGS, MODEL_HAS_DATA_RECORD,
-                    matmul_supported)
+                    MODEL_HAS_BATCH_RECORD, MODEL_HAS_ADAM_CORRECTIONS,
+                    MODEL_HAS_NONFINITE_WEIGHTS, matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
                      DepthResult, PointCloud, RenderResult, Renderer, Sampler)
 from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
@@ -72,8 +74,13 @@ from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
 from .train import Trainer
-from .mesh import (MESH_COLOUR_NONE, MESH_COLOUR_NORMAL, Mesh)
-from .structs import MeshOptions, PROGRESS_GEOMETRY
+from .mesh import (MESH_COLOUR_NONE, MESH_COLOUR_NORMAL, MESH_FORMAT_AUTO,
+                   MESH_FORMAT_OBJ, MESH_FORMAT_PLY, MESH_FORMAT_PLY_ASCII,
+                   Mesh)
+from .structs import (EXCHANGE_MAX_SPARSE, POINTS_DEFAULT_MAX,
+                      POINTS_DEFAULT_OPACITY, POINTS_PLY_ASCII,
+                      POINTS_PLY_BINARY, PROGRESS_GEOMETRY, SCHEDULE_FITTED,
+                      SCHEDULE_MEASURING, SCHEDULE_STEPS, MeshOptions)
 
 #: The version of the loaded library, "major.minor.patch".
 __version__ = version_string()
@@ -124,5 +131,12 @@ __all__ = [
     "SCENE_LAYOUT_COLMAP_TEXT", "SCENE_LAYOUT_COLMAP_BINARY",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
     "MESH_COLOUR_NONE", "MESH_COLOUR_NORMAL", "PROGRESS_GEOMETRY",
+    "MODEL_HAS_BATCH_RECORD", "MODEL_HAS_ADAM_CORRECTIONS",
+    "MODEL_HAS_NONFINITE_WEIGHTS", "SCENE_MIN_SIDE", "SCENE_MAX_SIDE",
+    "SCENE_MAX_VIEWS", "MESH_FORMAT_AUTO", "MESH_FORMAT_PLY",
+    "MESH_FORMAT_PLY_ASCII", "MESH_FORMAT_OBJ", "EXCHANGE_MAX_SPARSE",
+    "POINTS_DEFAULT_MAX", "POINTS_DEFAULT_OPACITY", "POINTS_PLY_ASCII",
+    "POINTS_PLY_BINARY", "SCHEDULE_STEPS", "SCHEDULE_MEASURING",
+    "SCHEDULE_FITTED",
 ]
 

@@ -17,9 +17,9 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
                     c_uint, c_uint8, c_uint32, c_uint64, c_void_p)
 
 from . import _loader, errors
-from .structs import (LOG_CB, Camera, CameraPathOptions, DatasetOptions,
-                      Hooks, MeshOptions, ModelOptions, PointsOptions,
-                      ProgressStruct, RendererOptions, SamplerOptions,
+from .structs import (LOG_CB, PROGRESS_CB, Camera, CameraPathOptions,
+                      DatasetOptions, Hooks, MeshOptions, ModelOptions,
+                      PointsOptions, RendererOptions, SamplerOptions,
                       SceneOptions, ScheduleStruct, TrainerOptions,
                       TrainStatsStruct)
 
@@ -69,8 +69,6 @@ TrainerP = POINTER(nerf_trainer)
 CameraPathP = POINTER(nerf_camera_path)
 PointsP = POINTER(nerf_points)
 MeshP = POINTER(nerf_mesh)
-
-PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
 
 _F = POINTER(c_float)
 _D = POINTER(c_double)

@@ -51,9 +51,10 @@ IMAGE_FORMAT_JPEG = 1
 CAMERA_PATH_FILE_SIZE = 0x1
 CAMERA_PATH_FILE_INTRINSICS = 0x2
 
-# nerf_scene_layout: the files write_scene() writes.
-SCENE_LAYOUT_BLENDER = 0
-SCENE_LAYOUT_TRANSFORMS = 1
+# The sides and view count write_scene() takes.
+SCENE_MIN_SIDE = 8
+SCENE_MAX_SIDE = 4096
+SCENE_MAX_VIEWS = 10000
 
 LogFn = Optional[Callable[[int, str], Any]]
 

@@ -10,7 +10,7 @@ from typing import Any, Callable, Dict, Optional, Sequence
 
 from . import _buffers, _handle
 from ._capi import MeshP, lib
-from .structs import MeshOptions, Progress, c_int, integer
+from .structs import PROGRESS_CB, MeshOptions, Progress, c_int, integer
 
 # nerf_mesh_colour
 MESH_COLOUR_NONE = 0
@@ -64,11 +64,11 @@ def run_with_progress(opts: MeshOptions, progress: ProgressFn,
     return value cancels (NerfCancelled), an exception raised by the
     callback is re-raised, and Ctrl-C stops the call after a plane."""
     slot = _handle.ProgressSlot("Model")
-    opts.progress = ctypes.cast(slot.thunk, ctypes.c_void_p)
+    opts.progress = slot.thunk
     try:
         return slot.run(fn, *args, progress=progress)
     finally:
-        opts.progress = None
+        opts.progress = PROGRESS_CB()
 
 
 class Mesh(_handle.Handle):

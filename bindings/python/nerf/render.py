@@ -409,7 +409,7 @@ class Renderer(_handle.ProgressHandle):
             opts.opacity_threshold = float(opacity_threshold)
         if max_points is not None:
             opts.max_points = max_points
-        opts.progress = ctypes.cast(self._slot.thunk, ctypes.c_void_p)
+        opts.progress = self._slot.thunk
         out = PointsP()
         with self._using() as ptr:
             self._slot.run(lib.nerf_points_from_views, ctypes.byref(out),

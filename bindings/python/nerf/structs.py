@@ -145,6 +145,52 @@ class Hooks(_Versioned):
     ]
 
 
+class ProgressStruct(_Versioned):
+    """``nerf_progress``, as the library passes it to progress callbacks."""
+
+    _c_name_ = "nerf_progress"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("kind", c_uint32),
+        ("done", c_uint64),
+        ("total", c_uint64),
+        ("elapsed", c_double),
+        ("loss", c_double),
+        ("psnr", c_double),
+    ]
+
+
+#: Longest list of sparse ranges in a nerf_exchange.
+EXCHANGE_MAX_SPARSE = 4
+
+
+class ExchangeStruct(_Versioned):
+    """``nerf_exchange``, as a trainer passes it to its gradient and
+    checksum hooks (since libnerf 0.5)."""
+
+    _c_name_ = "nerf_exchange"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("worker_rank", c_uint32),
+        ("worker_count", c_uint32),
+        ("n_sparse", c_uint32),
+        ("step", c_uint64),
+        ("sparse_begin", c_uint64 * EXCHANGE_MAX_SPARSE),
+        ("sparse_end", c_uint64 * EXCHANGE_MAX_SPARSE),
+        ("rays", c_uint64),
+        ("batch_rays", c_uint64),
+        ("message", ctypes.c_char * 256),
+    ]
+
+
+# nerf_progress_cb and the trainer's hooks, as the C structs hold them.
+PROGRESS_CB = ctypes.CFUNCTYPE(c_int, POINTER(ProgressStruct), c_void_p)
+GRAD_HOOK = ctypes.CFUNCTYPE(c_int, c_void_p, POINTER(c_float), c_size_t,
+                             POINTER(ExchangeStruct))
+CHECKSUM_HOOK = ctypes.CFUNCTYPE(c_int, c_void_p, POINTER(c_uint32),
+                                 POINTER(ExchangeStruct))
+
+
 class ModelOptions(_Versioned):
     """``nerf_model_options``: structural settings of a model.
 
@@ -448,8 +494,8 @@ class PointsOptions(_Versioned):
         ("stride", c_uint32),
         ("reserved0", c_uint32),
         ("hooks", POINTER(Hooks)),
-        # A nerf_progress_cb; the binding sets it to its progress thunk.
-        ("progress", c_void_p),
+        # The binding sets it to its progress thunk.
+        ("progress", PROGRESS_CB),
         ("progress_user", c_void_p),
     ]
 
@@ -471,7 +517,7 @@ class MeshOptions(_Versioned):
         ("min_component_faces", c_uint32),
         ("threads", c_uint32),
         ("reserved0", c_uint32),
-        ("progress", c_void_p),
+        ("progress", PROGRESS_CB),
         ("progress_user", c_void_p),
         ("hooks", POINTER(Hooks)),
     ]
@@ -558,8 +604,8 @@ class TrainerOptions(_Versioned):
         # the binding leaves them NULL.
         ("worker_rank", c_uint32),
         ("worker_count", c_uint32),
-        ("grad_hook", c_void_p),
-        ("checksum_hook", c_void_p),
+        ("grad_hook", GRAD_HOOK),
+        ("checksum_hook", CHECKSUM_HOOK),
         ("hook_user", c_void_p),
         ("checksum_every", c_uint32),
         ("reserved1", c_uint32),
@@ -574,21 +620,6 @@ class TrainerOptions(_Versioned):
         if name == "checkpoint_path" and value is not None:
             return os.fsdecode(value)
         return value
-
-
-class ProgressStruct(_Versioned):
-    """``nerf_progress``, as the library passes it to progress callbacks."""
-
-    _c_name_ = "nerf_progress"
-    _fields_ = [
-        ("struct_size", c_uint32),
-        ("kind", c_uint32),
-        ("done", c_uint64),
-        ("total", c_uint64),
-        ("elapsed", c_double),
-        ("loss", c_double),
-        ("psnr", c_double),
-    ]
 
 
 class TrainStatsStruct(_Versioned):
@@ -609,6 +640,12 @@ class TrainStatsStruct(_Versioned):
     ]
 
 
+# nerf_schedule_state: ScheduleStruct.state.
+SCHEDULE_STEPS = 0
+SCHEDULE_MEASURING = 1
+SCHEDULE_FITTED = 2
+
+
 class ScheduleStruct(_Versioned):
     """``nerf_schedule``: how a model's learning-rate schedule came about
     (since libnerf 0.5)."""
@@ -621,25 +658,6 @@ class ScheduleStruct(_Versioned):
         ("steps_per_second", c_double),
         ("fit_step", c_uint64),
         ("total_steps", c_uint64),
-    ]
-
-
-class ExchangeStruct(_Versioned):
-    """``nerf_exchange``, as a trainer passes it to its gradient and
-    checksum hooks (since libnerf 0.5)."""
-
-    _c_name_ = "nerf_exchange"
-    _fields_ = [
-        ("struct_size", c_uint32),
-        ("worker_rank", c_uint32),
-        ("worker_count", c_uint32),
-        ("n_sparse", c_uint32),
-        ("step", c_uint64),
-        ("sparse_begin", c_uint64 * 4),
-        ("sparse_end", c_uint64 * 4),
-        ("rays", c_uint64),
-        ("batch_rays", c_uint64),
-        ("message", ctypes.c_char * 256),
     ]
 
 
@@ -664,6 +682,9 @@ PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train",
 # nerf_points_format (libnerf 0.5)
 POINTS_PLY_BINARY = 0
 POINTS_PLY_ASCII = 1
+#: PointsOptions' defaults: the opacity a ray must reach, the most points.
+POINTS_DEFAULT_OPACITY = 0.9
+POINTS_DEFAULT_MAX = 1000000
 
 
 @dataclass(frozen=True)
