@@ -10,9 +10,10 @@
 /*
  * Below this much work (in the simple operations of parallel.h, about four
  * to a nanosecond) a part is not worth waking a thread for.  Waking a
- * sleeping worker and waiting for it costs up to about 60 microseconds on a
- * virtual machine, so a job is split only from about 130 microseconds of
- * work (two parts); bench_parallel measures the break-even.
+ * sleeping worker and waiting for it costs more than many small loops take,
+ * above all on a virtual machine, so a job is split only once it has work
+ * for two such parts; bench_parallel measures the break-even
+ * (docs/perf-log/2026-11-26-rendering-a-trained-fast-model.md).
  */
 #define MIN_WORK_PER_PART ((size_t)1 << 18)
 #define MAX_WORKERS 63

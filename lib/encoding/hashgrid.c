@@ -15,20 +15,19 @@
  * tile (straight-line arithmetic the compiler vectorises), a second
  * gathers or scatters them.  The second pass is bound by the latency of
  * the hashed tables, which live in L3 (a default level is 4 MiB, the
- * whole table 46 MiB): on the 2-core Xeon it takes about 90% of the time.
- * Its loads are independent from sample to sample, and the out-of-order
- * core overlaps some of them; prefetching the corners of the sample
- * AHEAD places on overlaps more.  bench_hashgrid, 2^18 samples along
- * rays, 2 threads, on the 2-core Xeon: forward 7.9-8.3 Msamples/s without,
- * 10.5-11.0 with 16 ahead (9.5-10.7 with 8); backward 6.8-7.4 without,
- * 8.6-9.1 with 16 (8.2 with 8, 7.0 with 64).  (An earlier trial, a few
- * samples ahead, measured no gain.)  Huge pages measured no faster.
+ * whole table 46 MiB), and takes most of the time.  Its loads are
+ * independent from sample to sample, and the out-of-order core overlaps
+ * some of them; prefetching the corners of the sample AHEAD places on
+ * overlaps more.  bench_hashgrid chose the distance: 16 ahead gained more
+ * than 8 in both directions, 64 nothing in the backward (docs/perf-log/
+ * 2026-11-26-fused-small-mlp-and-step-floor.md).  Huge pages were no
+ * faster.
  *
  * Levels are the outer loop over a block of BLOCK samples, so a level's
  * table keeps the core's cache to itself while the block visits it
- * instead of sharing it with 15 others.  On 2^18 random samples one level
- * at a time over 2^16 or more samples was about 20% faster than 2^14 and
- * 40% faster than all levels per tile.  A tile (19 KiB) stays in L1.
+ * instead of sharing it with 15 others.  On random samples one level at a
+ * time over blocks of 2^16 or more samples was faster than over 2^14, and
+ * faster still than all levels per tile.  A tile (19 KiB) stays in L1.
  */
 #ifndef TILE
 #  define TILE 256

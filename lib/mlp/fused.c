@@ -77,10 +77,11 @@ static void column_span(const fused_job *j, size_t begin, size_t end,
 /*
  * The ReLU backward goes through whole rows: cutting rows into column
  * ranges, as the bias gradient below does, reads each row in pieces a row
- * apart, which the hardware prefetchers follow badly (4 to 5 times slower
- * for 256-wide layers here).  Its bias sums stay independent of the thread
- * count another way: each fixed block of NERF__RELU_ROWS rows sums into its
- * own partial, and the partials are added in block order.
+ * apart, which the hardware prefetchers follow badly (docs/perf-log/
+ * 2026-11-22-nerf-bench-reference-and-tiny.md, commit 9198f86).  Its bias
+ * sums stay independent of the thread count another way: each fixed block
+ * of NERF__RELU_ROWS rows sums into its own partial, and the partials are
+ * added in block order.
  */
 static void block_span(const fused_job *j, size_t block, size_t *r0,
                        size_t *r1)

@@ -40,13 +40,13 @@ static int split_over_pool(void)
  *  - a weight gradient, each of whose calls sums over all the samples
  *    and packs all of one operand, is cut into as many calls as the pool
  *    has threads (not as many as are free): finer cuts pack that operand
- *    again for each, which cost the reference preset's step 15% with
+ *    again for each, which made the reference preset's step slower with
  *    32-row cuts on two cores.  Its results are deterministic for a
  *    given thread count, as oneDNN's weight gradients are.
  * ROWS_PER_CALL is large enough that each call runs at the BLAS's full
  * rate, and small enough that a render's coarse pass (64 rays of 64
- * samples) still spreads over the cores: 4096 cost the reference
- * preset's render 30% on two cores.
+ * samples) still spreads over the cores: 4096 made the reference
+ * preset's render slower on two cores.
  */
 #define ROWS_PER_CALL 1024
 

@@ -5,8 +5,9 @@
  * or after openblas_set_num_threads(1)), each product is cut into blocks
  * at fixed places, spread over libnerf's own workers (common/parallel.h).
  * That is how the small layers of the fast preset use every core:
- * OpenBLAS's own threading of a 64-wide product spends a third of the
- * time handing work between its threads.  Each element of a result comes
+ * OpenBLAS's own threading of a 64-wide product spends much of its time
+ * handing work between its threads (docs/perf-log/
+ * early-first-measurements.md).  Each element of a result comes
  * from one sgemm call over the whole reduction.  Forward and input-
  * gradient calls are the same for any number of workers, so their results
  * do not depend on the thread count; a weight gradient is cut into one

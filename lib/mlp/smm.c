@@ -416,7 +416,8 @@ int nerf__smm_best(void)
 
 /*
  * The portable kernels are no faster than the BLAS's own (about equal to
- * OpenBLAS's SSE kernels on x86, docs/performance.md), so without AVX2
+ * OpenBLAS's SSE kernels on x86, docs/perf-log/
+ * 2026-11-26-fused-small-mlp-and-step-floor.md), so without AVX2
  * the layers keep going through the BLAS, unless NERF_FUSED says which.
  */
 int nerf__smm_default(void)

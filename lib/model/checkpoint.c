@@ -50,9 +50,10 @@ typedef struct ckpt_header {
 
 /*
  * Stretches of a payload that zlib is to copy rather than compress:
- * trained weights and moments are noisy floats, which level 1 shrinks by
- * a tenth at about 40 MB/s (a fast-preset save took 6 s), while the rest
- * (the corrections, mostly zeros, the occupancy grid) shrinks many times.
+ * trained weights and moments are noisy floats, which level 1 barely
+ * shrinks and spends most of a save's time on (docs/perf-log/
+ * 2026-11-29-0.10.5-to-0.10.8.md, "0.10.7"), while the rest (the
+ * corrections, mostly zeros, the occupancy grid) shrinks many times.
  * Neighbouring stored sections make one stretch.
  */
 #define MAX_STORED N_SECTIONS

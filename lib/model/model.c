@@ -55,7 +55,8 @@ static void fast_options(nerf_model_options *o)
     o->use_fine = 0;
     /* Mueller et al. spread the levels to 2048 cells; in the tens of
      * thousands of steps a CPU trains, 1024 scored higher on lego (ten
-     * and thirty minutes) and on fern (docs/performance.md, 0.10.5). */
+     * and thirty minutes) and on fern (docs/perf-log/
+     * 2026-11-29-0.10.5-to-0.10.8.md, "0.10.5"). */
     o->hash_max_resolution = 1024;
     /* Eight levels of four features where Mueller et al. take sixteen of
      * two: the same 32 inputs to the network and about as many table
@@ -63,7 +64,8 @@ static void fast_options(nerf_model_options *o)
      * entry's four features share a cache line), which is what a CPU
      * step waits on.  A step learns a little less, and a timed run
      * takes more of them: on lego, ten minutes scored higher on all
-     * three seeds (docs/performance.md, 0.10.8). */
+     * three seeds (docs/perf-log/2026-11-29-0.10.5-to-0.10.8.md,
+     * "0.10.8"). */
     o->hash_levels = 8;
     o->hash_features = 4;
 }

@@ -392,8 +392,9 @@ int nerf__occupancy_update(nerf__occupancy *g, nerf__density_fn density,
     update_job j = {.g = g};
     j.p = n_random >= g->cells ? 1.0 : (double)n_random / (double)g->cells;
     /* Each empty cell costs a draw of its own stream (two mixes and a
-     * generator), and once the grid is carved most cells are empty: a
-     * 128^3 grid's selection took 9 ms on one core. */
+     * generator), and once the grid is carved most cells are empty, so
+     * the selection is worth spreading over the pool (docs/perf-log/
+     * 2026-11-27-0.10.4.md). */
     nerf__parallel_blocks(g->blocks, 32 * BLOCK_CELLS, select_block, &j);
     /* Walk the selection in cell order, a chunk at a time. */
     const size_t chunk = g->opts.chunk;

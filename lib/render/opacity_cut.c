@@ -11,7 +11,7 @@
  * Round r takes up to FIRST_PIECE << r more samples of each ray still
  * going.  On lego a ray that meets the object turns opaque a few samples
  * behind its surface; the march goes on through the occupied cells
- * inside it, and 55 to 70% of a step's samples lie behind that point.
+ * inside it, and most of a step's samples lie behind that point.
  * Small pieces evaluate few of those, but each round costs a network
  * call; doubling bounds the rounds of the long rays through thin matter
  * to a handful.

@@ -19,8 +19,9 @@ typedef struct image_job {
  * Marching renders visit the image in tiles of TILE x TILE pixels, a
  * block of rays each, instead of in rows.  The samples of a tile's rays
  * lie close together at every level of a hash grid, so a block reads
- * fewer of the table's lines and finds more of them in cache: a trained
- * lego model rendered 800x800 frames 8% faster.  Where each sample's
+ * fewer of the table's lines and finds more of them in cache, and frames
+ * of a trained model render faster (docs/perf-log/
+ * 2026-11-26-rendering-a-trained-fast-model.md).  Where each sample's
  * values come from it alone (the fused path; oneDNN's brgemm kernels), a
  * ray's result does not depend on the rays beside it, and a marching
  * render draws no random numbers (rays are numbered by their place in

@@ -23,12 +23,12 @@
  * end most of them.  The samples of a piece past the point where its ray
  * turned opaque cost a density for nothing (not a colour: see
  * evaluate_used()), and each round costs a march and a network call.  On
- * 4 orbit views of a trained lego model (composited: 16.4 M samples),
- * pieces of 16 to 256 (a budget of 1024) evaluated 24.5 M samples, pieces
- * of 8 to 16 19.4 M, these 18.2 M; with bench_render_model, pieces of 4 to
- * 8 rendered 5% faster than 4 to 16, and pieces from 2 to 6 alike.  With
- * the colours of those samples spared, pieces of 8 to 16 (a budget of
- * 512) and of 6 to 12 were still no faster.
+ * a trained lego model larger pieces evaluate many samples past opacity
+ * and smaller ones need more rounds; in bench_render_model pieces of 4 to
+ * 8 rendered fastest, and with the colours of those samples spared,
+ * larger pieces were still no faster (docs/perf-log/
+ * 2026-11-26-rendering-a-trained-fast-model.md and
+ * 2026-11-30-0.10.8-to-0.10.10-amd-epyc.md, "0.10.10").
  */
 #define PIECE_BUDGET 256u
 #define PIECE_MIN 4u
@@ -264,8 +264,9 @@ static void move_rows(float *rows, size_t width, size_t to, size_t from,
 /*
  * Each ray's samples cut where compositing will stop.  Behind a surface a
  * ray turns opaque and its later samples get no gradient, yet the march
- * goes on through the occupied cells inside the object: on lego past the
- * first thousand steps, 55 to 70% of a step's samples.  A density pass in
+ * goes on through the occupied cells inside the object: on lego, after
+ * the first steps, most of a step's samples (docs/perf-log/
+ * 2026-11-27-0.9-to-0.10.2.md, "0.10.1").  A density pass in
  * rounds (opacity_cut.h) finds where each ray stops, evaluating few of
  * the samples behind, and the forward and backward that keep activations
  * run on the samples before alone.  The densities are the ones the full

@@ -13,14 +13,14 @@
 /*
  * Workers when the caller leaves the choice to us.  Each worker's sgemm
  * already runs on the BLAS's threads, so one worker per core on top of an
- * OpenBLAS threaded over every core oversubscribes them.  bench_render on
- * 2 cores, 100x100: with OpenBLAS on 2 threads, 1 worker gave 6930 rays/s
- * (tiny) and 296 (reference), 2 workers 5815 and 278; with
- * OPENBLAS_NUM_THREADS=1, 1 worker 4914 and 188, 2 workers 9353 and 367.
- * So: cores divided by the BLAS's threads, at least 1.  A model on the
- * fused path calls no BLAS: one worker per core, or a lone worker would
- * hand every small loop of its blocks to the thread pool (a trained fast
- * lego model, 800x800 on 2 cores: 4.4 s a frame against 0.9).
+ * OpenBLAS threaded over every core oversubscribes them.  In bench_render
+ * a second worker over a two-thread OpenBLAS gained nothing, while two
+ * workers over a one-thread OpenBLAS were the fastest set-up
+ * (docs/perf-log/early-first-measurements.md, "Rendering").  So: cores
+ * divided by the BLAS's threads, at least 1.  A model on the fused path
+ * calls no BLAS: one worker per core, or a lone worker would hand every
+ * small loop of its blocks to the thread pool, which made frames several
+ * times slower (docs/perf-log/2026-11-26-rendering-a-trained-fast-model.md).
  */
 static uint32_t auto_threads(const nerf_model *m)
 {

@@ -19,20 +19,21 @@
 #define MEASURE_SHARE 0.25
 /* The rate is taken over the last third of the measuring time: steps of a
  * marching sampler get faster for minutes as the occupancy grid learns
- * where the scene is (on lego, about 11 steps/s in the first minute and
- * 30 after five), so the latest rate is the best guess of the rest. */
+ * where the scene is (on lego several times as many a second after five
+ * minutes as in the first), so the latest rate is the best guess of the
+ * rest. */
 #define WINDOW_START (MEASURE_SHARE * 2.0 / 3.0)
 /* They are still getting faster at the fit: a run fitted there alone
- * ended 4% early in 10 minutes of lego at 1024 rays a step, 11% in 5 at
- * 2048.  Fitted again at half the budget alone, a run on a machine whose
- * steps then turned slower ended 4% late (626 s of 600).  So the call that
+ * ended early on lego, and fitted again at half the budget alone, a run
+ * on a machine whose steps then turned slower ended late (docs/perf-log/
+ * 2026-11-25-lego-ten-minutes-by-the-clock.md).  So the call that
  * fitted fits the length again at these shares of the budget; the last
  * leaves an error in the rate a tenth of the time to act on.  Each takes
  * the rate over the quarter of the time before it, or since the fit before
  * if that is later.  A run that reaches its length before the next share
  * fits it again then: in a one-minute budget of lego at 2048 rays a step
- * the fit took 2.3 steps/s (the grid not yet carved) and the run ended
- * at 30 s, its length reached at the moment of the fit at half. */
+ * the fit took the rate of a grid not yet carved, and the run reached its
+ * length at the moment of the fit at half, with half its budget unused. */
 static const double refit_shares[] = {0.5, 0.75, 0.9};
 #define N_REFITS (sizeof refit_shares / sizeof refit_shares[0])
 #define REFIT_WINDOW 0.75
@@ -60,7 +61,7 @@ static void window_mark(rate_window *w, const nerf__run *r, double elapsed,
 /*
  * Steps a second of training alone since the mark: a save inside the
  * window (the first timed one falls there in a 10-minute budget) would
- * lower it by a tenth.  One step may outlast the whole window: then the
+ * lower it noticeably.  One step may outlast the whole window: then the
  * rate since the run's start is all there is.
  */
 static double window_rate(const rate_window *w, const nerf__run *r,
@@ -83,9 +84,9 @@ static uint64_t steps_for(double rate, double seconds_left)
 /*
  * The training time left once saves are taken out, from the last save's
  * duration (none before the first): the share that timed saves will take
- * (a save of the fast preset takes seconds: with saves every 2 minutes,
- * 3% of a run, which a length fitted to the whole time left would
- * overrun), and the save that ends the run.
+ * (a save of the fast preset takes seconds, every 2 minutes, which a
+ * length fitted to the whole time left would overrun), and the save that
+ * ends the run.
  */
 static double training_left(const nerf_trainer *t, const nerf__run *r,
                             double left)

@@ -61,15 +61,15 @@ struct nerf_trainer {
  * cells and a random 1/NERF__GRID_RANDOM_DIV of all cells, where
  * instant-ngp takes a quarter: its steps train on 2^18 samples, ours on
  * a few tens of thousands, so a quarter of the 2M cells every 16 steps
- * cost as much as training itself.  On lego (1024-ray steps, 600
- * CPU-seconds of training from scratch) a sixteenth gave 8,800 steps and
- * 29.5 dB test PSNR (10 views) against 8,100 steps and 29.3 dB with a
- * quarter: cells that leave the grid are found again more slowly, but
- * the empty ones, no longer refreshed as often, fall out of it sooner.
- * For the same reason the updates after the first 256 steps come every
- * 32 steps: a refresh was still a tenth of a late step, and lego's
- * test PSNR after 10,000 steps did not drop (docs/performance.md,
- * "0.10.6").
+ * cost as much as training itself.  On lego, in the same training time,
+ * a sixteenth gave more steps and a higher test PSNR than a quarter
+ * (docs/perf-log/2026-11-24-lego-curve-and-what-the-changes-bought.md):
+ * cells that leave the grid are found again more slowly, but the empty
+ * ones, no longer refreshed as often, fall out of it sooner.  For the
+ * same reason the updates after the first 256 steps come every 32 steps:
+ * a refresh was still a noticeable share of a late step, and lego's test
+ * PSNR after 10,000 steps did not drop (docs/perf-log/
+ * 2026-11-29-0.10.5-to-0.10.8.md, "0.10.6").
  */
 #define NERF__GRID_EVERY_WARMUP 16u
 #define NERF__GRID_EVERY 32u
