@@ -7,8 +7,8 @@
  *   bench_render [--quick] [--ref-rss-seconds S] [--no-rss]
  *                [--preset tiny|reference] [--side 100|400]
  *
- * --quick skips the reference preset at 400x400 (about 10 minutes per
- * thread count on 2 cores) and cancels the reference memory run after
+ * --quick skips the reference preset at 400x400 (by far the longest part
+ * of the run on a few cores) and cancels the reference memory run after
  * 10 s; --preset and --side restrict the throughput table.
  *
  * Sample counts: reference 64 + 128 (the paper's); tiny 32 + 64 (the tiny
@@ -18,8 +18,8 @@
  *
  * Peak memory is measured in a child process per configuration, forked
  * before this process touches the BLAS, so each figure is that render's
- * own ru_maxrss.  The reference preset renders 800x800 at a few hundred
- * rays/s on a small machine, i.e. for many minutes: its child cancels
+ * own ru_maxrss.  The reference preset renders 800x800 slowly on a small
+ * machine, for many minutes (docs/performance.md): its child cancels
  * after --ref-rss-seconds (default 60) through the progress callback.
  * Memory does not grow with progress (workers allocate their scratch on
  * their first block and the output buffers are touched up front), so the

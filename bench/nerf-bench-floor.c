@@ -107,9 +107,11 @@ static void entry_add(float *e, uint32_t f, bool pairs)
 /*
  * Independent reads (or read-modify-writes) of the listed entries.  The
  * reads go to four sums: with one, each read waits for the add before it.
- * A loop over a run-time feature count cost 2 ns a read of a cached entry
- * on an AMD EPYC, the one written for pairs 0.5, so both are timed and
- * the better kept: the floor is the memory's cost, not a loop's.
+ * A loop over a run-time feature count read cached entries much more
+ * slowly on an AMD EPYC than the one written for pairs (docs/perf-log/
+ * 2026-11-26-fused-small-mlp-and-step-floor.md, "On an AMD EPYC"), so both
+ * are timed and the better kept: the floor is the memory's cost, not a
+ * loop's.
  */
 static void access_block(void *ctx, size_t block)
 {

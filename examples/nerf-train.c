@@ -145,18 +145,18 @@ static void on_signal(int sig)
 
 /* Without --checkpoint-every, MODEL is saved every this many seconds of
  * training (the trainer's checkpoint_seconds): a save of the fast preset
- * (157 MB) takes about 2 s here (6 s before 0.10.7), so one every 500
- * steps (20 s) would cost a tenth of a run's time. */
+ * writes a large file and takes seconds, so one every 500 steps, a few
+ * seconds of training apart, would take a large share of a run's time
+ * (docs/perf-log/2026-11-25-lego-ten-minutes-by-the-clock.md). */
 #define SAVE_SECONDS 120.0
 
 /*
  * The steps of its grid's diagonal a marching model renders in unless
  * --render-march-steps says otherwise; it trains in the fast preset's
- * 1024.  Three lego models of thirty minutes scored 33.97 dB on the 200
- * test views in 1024 steps, 34.07 in 1280, 34.12 in 2048, at 0.71, 0.84
- * and 1.17 s an 800x800 frame; trained in 1280 as well, seed 0's scored
- * 33.98 in them against 34.14 (docs/performance.md): the gain is the
- * render's.
+ * 1024.  Rendered in 1280, lego's thirty-minute models scored higher
+ * than in 1024 for a little more time a frame, and nearly as high as in
+ * 2048 for much less; a model trained in 1280 as well scored no higher
+ * (docs/performance.md, "An 800x800 frame"): the gain is the render's.
  */
 #define RENDER_MARCH 1280
 
@@ -491,9 +491,9 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
 
 /*
  * Without --matmul: the fastest fp32 products for the preset.  oneDNN's
- * trains the reference preset about 1.3 times and the tiny one about 1.9
- * times as fast as cblas where it has its AVX-512 kernels
- * (docs/performance.md); the fast preset's narrow layers run fastest on
+ * trains the reference and tiny presets faster than cblas where it has
+ * its AVX-512 kernels (docs/performance.md, "The reference and tiny
+ * presets"); the fast preset's narrow layers run fastest on
  * the library's own fused kernels, which only the cblas setting uses.
  */
 static uint32_t default_matmul(int preset)
@@ -635,9 +635,10 @@ static void report_budget(const nerf_model *m, int rc)
  * Rays and samples a step, as given, else as the resumed model was trained
  * (a run goes on bit for bit only at its batch), else the preset's: the
  * fast preset's per-step work beside the rays (Adam over the whole table,
- * a share of the grid refresh) pays better over 2048, which reached
- * 0.4-0.7 dB more than 1024 in ten minutes of lego on three machines
- * (docs/performance.md).  Those 2048 rays take at most FAST_SAMPLES
+ * a share of the grid refresh) pays better over 2048, which reached a
+ * higher test PSNR than 1024 in ten minutes of lego on three machines
+ * (docs/perf-log/2026-11-25-lego-ten-minutes-by-the-clock.md).  Those
+ * 2048 rays take at most FAST_SAMPLES
  * samples: while the occupancy grid is still uncarved a ray marches
  * hundreds, and the cap keeps the first steps as cheap as the later ones,
  * so that the grid, refreshed every 16 steps at first, is carved
@@ -729,8 +730,8 @@ static int run(int argc, char **argv)
         if (mo.encoding == NERF_ENCODING_HASHGRID) {
             /* Mueller et al. train without the reference's central crop,
              * and marching needs none: during a crop the grid keeps the
-             * untrained rim occupied.  On the built-in scene (64 px, 600
-             * steps) 500 crop steps gave 33.4 dB test PSNR, none 35.9. */
+             * untrained rim occupied.  On the built-in scene a run with
+             * crop steps scored a lower test PSNR than one without. */
             to.precrop_steps = 0;
             /* As Mueller et al.: with a background the images do not
              * show, the density must go to zero wherever the images are

@@ -97,7 +97,8 @@ static void note_thread(void *ctx, size_t begin, size_t end)
  * A renderer's 64-ray block costs tens of microseconds a pass, less than
  * waking a worker and waiting for it: it stays on the calling thread.
  * Handing such loops over made one render worker several times slower
- * than running them itself (docs/performance.md).
+ * than running them itself (docs/perf-log/
+ * 2026-11-26-rendering-a-trained-fast-model.md).
  */
 TEST(small_loops_stay_on_the_caller)
 {
