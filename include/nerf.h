@@ -6,6 +6,29 @@
  * rules every declaration follows and docs/threading.md for the threading
  * contract.
  *
+ * Contents, in the order of the sections below (search for "N. Title"):
+ *   (the @file comment)  Conventions in brief
+ *    1. Status codes and errors
+ *    2. Version
+ *    3. Logging and allocation hooks
+ *    4. Progress reports      (callbacks of renderers, trainers, geometry)
+ *    5. Handles               (the eight opaque handle types)
+ *    6. Cameras               (nerf_camera, used by several handles)
+ *    7. Sampler and renderer settings  (their options structs; a model
+ *                             records them, so they come before it)
+ *    8. Model
+ *    9. Sampler
+ *   10. Renderer              (images, depth, rays)
+ *   11. Datasets and camera paths
+ *   12. Trainer
+ *   13. Built-in scene        (nerf_scene_write)
+ *   14. Meshes
+ *   15. Point clouds
+ *   16. Density grids
+ *   17. Utilities: images, arrays and metrics
+ * A type is declared before the first call that takes it, which is why
+ * sections 6 and 7 come ahead of the handles that use them.
+ *
  * Copyright (c) 2026 the libnerf authors.  MIT licence, see LICENSE.
  */
 #ifndef NERF_H
@@ -57,9 +80,9 @@ extern "C" {
  *  - The library never prints to stdout, never exits and never aborts.
  */
 
-/* ------------------------------------------------------------------------ */
-/* Status codes and errors                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 1. Status codes and errors
+ * ======================================================================== */
 
 /** Status codes.  Values are fixed forever; new codes get new numbers. */
 typedef enum nerf_status {
@@ -103,9 +126,9 @@ NERF_API const char *nerf_last_error(void);
 /** Forget the calling thread's last error message. Thread-safe. */
 NERF_API void nerf_clear_error(void);
 
-/* ------------------------------------------------------------------------ */
-/* Version                                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 2. Version
+ * ======================================================================== */
 
 /**
  * The library's version as NERF_VERSION_NUMBER encodes it
@@ -126,9 +149,9 @@ NERF_API const char *nerf_version_string(void);
  */
 NERF_API const char *nerf_build_info(void);
 
-/* ------------------------------------------------------------------------ */
-/* Logging and allocation hooks                                             */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 3. Logging and allocation hooks
+ * ======================================================================== */
 
 /** Log levels; a message is delivered when its level <= the threshold. */
 typedef enum nerf_log_level {
@@ -200,10 +223,53 @@ NERF_API int nerf_hooks_init(nerf_hooks *hooks, size_t struct_size);
  */
 #define NERF_HOOKS_INIT(h) nerf_hooks_init((h), sizeof *(h))
 
-/* ------------------------------------------------------------------------ */
-/* Handles                                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 4. Progress reports
+ * ======================================================================== */
 
+/** What a nerf_progress report is about. */
+typedef enum nerf_progress_kind {
+    NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
+    NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
+                                   psnr are those of the last step. */
+    NERF_PROGRESS_GEOMETRY = 3 /**< Since 0.5.  nerf_mesh_extract() and
+                                   nerf_density_grid_write(): done and
+                                   total count planes of grid samples. */
+} nerf_progress_kind;
+
+/**
+ * A progress report, passed by pointer to a nerf_progress_cb.  Versioned:
+ * read a field only if struct_size covers it (fields are only appended).
+ */
+typedef struct nerf_progress {
+    uint32_t struct_size; /**< sizeof the library's struct. */
+    uint32_t kind;        /**< nerf_progress_kind. */
+    uint64_t done;        /**< Units of work finished so far. */
+    uint64_t total;       /**< Units of work of the whole call. */
+    double elapsed;       /**< Seconds since the call started. */
+    double loss;          /**< NERF_PROGRESS_TRAIN: loss of the last step;
+                               otherwise 0. */
+    double psnr;          /**< NERF_PROGRESS_TRAIN: PSNR (dB) of the last
+                               step's fine colours; otherwise 0. */
+} nerf_progress;
+
+/**
+ * Progress callback.  It runs on the thread that made the call, never on a
+ * worker thread, and must not call back into the handle that reports.
+ * Return 0 to continue, nonzero to cancel: the call then returns
+ * NERF_ECANCELLED.  @p p is valid only during the callback.
+ */
+typedef int (*nerf_progress_cb)(const nerf_progress *p, void *user);
+
+/* ===========================================================================
+ * 5. Handles
+ * ======================================================================== */
+
+/*
+ * Every handle is opaque: made by its *_create() or *_load() call (or
+ * nerf_points_from_views(), nerf_mesh_extract()), released by its
+ * *_destroy().  Its calls are in its own section below.
+ */
 typedef struct nerf_model nerf_model;       /**< Scene networks and weights. */
 typedef struct nerf_sampler nerf_sampler;   /**< Sample placement along rays. */
 typedef struct nerf_renderer nerf_renderer; /**< Compositing and images. */
@@ -211,9 +277,265 @@ typedef struct nerf_dataset nerf_dataset;   /**< Images and cameras. */
 typedef struct nerf_trainer nerf_trainer;   /**< Optimisation loop state. */
 typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 
-/* ------------------------------------------------------------------------ */
-/* Model                                                                    */
-/* ------------------------------------------------------------------------ */
+/**
+ * Since 0.5: a point cloud: read-only arrays owned by the handle.
+ */
+typedef struct nerf_points nerf_points;
+
+/**
+ * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
+ * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
+ * number of threads may read one mesh and write it at the same time.
+ */
+typedef struct nerf_mesh nerf_mesh;
+
+/* ===========================================================================
+ * 6. Cameras
+ * ======================================================================== */
+
+/**
+ * Flags for nerf_camera.flags.
+ *
+ * By default the ray of pixel (column i, row j) passes through the pixel's
+ * centre, (i + 0.5, j + 0.5).  NERF_CAMERA_PIXEL_CORNER uses (i, j), as the
+ * reference implementation does; set it to reproduce its rays exactly.
+ */
+#define NERF_CAMERA_PIXEL_CORNER 0x1u
+
+/**
+ * A camera in the OpenGL/Blender convention: in camera space x points
+ * right, y up, and the camera looks down -z.  A pinhole camera unless its
+ * distortion coefficients are set.
+ *
+ * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
+ * c2w[.][3] (the camera centre) and the unnormalised direction
+ * R ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), R being the left 3x3
+ * of c2w: its camera-space z component is -1, so t along the ray is depth
+ * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
+ * set.
+ *
+ * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
+ * acting on normalised image coordinates in OpenCV's axes (x right, y
+ * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
+ * at
+ *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
+ *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
+ * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
+ * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
+ * through the undistorted point, direction R (x, -y, -1), found by
+ * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
+ * A pixel that no point distorts onto (beyond the fold of a strong barrel
+ * lens, where r_d stops growing with r) gets the ray of the point whose
+ * distortion comes closest to it.  Images are never resampled.  COLMAP's
+ * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
+ * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
+ * All zero (the default, and what a caller built against a header without
+ * them gets) is a pinhole camera, with the rays above bit for bit.
+ *
+ * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
+ * the fields.  The defaults (identity pose, all intrinsics 0) are not a
+ * usable camera: width, height, fx and fy must be set.
+ */
+typedef struct nerf_camera {
+    uint32_t struct_size; /**< Set by nerf_camera_init(). */
+    uint32_t flags;       /**< NERF_CAMERA_*; default 0. */
+    uint32_t width;       /**< Image width in pixels, 1..65536. */
+    uint32_t height;      /**< Image height in pixels, 1..65536. */
+    float c2w[12];        /**< Camera-to-world 3x4, row-major: columns are
+                               the camera's right, up and back axes and its
+                               centre, in world units.  Default [I | 0]. */
+    float fx, fy;         /**< Focal lengths in pixels, > 0.  For a
+                               horizontal field of view a:
+                               fx = 0.5 width / tan(0.5 a). */
+    float cx, cy;         /**< Principal point in pixels from the top-left
+                               image corner; usually width/2, height/2. */
+    /* Since 0.3.  Zero-filled by an older caller: a pinhole camera. */
+    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
+                               within +-1000; default 0. */
+    float p1, p2;         /**< Tangential distortion; finite, within
+                               +-1000; default 0. */
+    float k3;             /**< Radial distortion, r^6 term; finite, within
+                               +-1000; default 0. */
+} nerf_camera;
+
+/**
+ * Fill @p camera with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
+
+/**
+ * Compute the rays of pixels first .. first + n - 1 of @p camera, pixels
+ * being numbered row by row (index = row * width + column).
+ *
+ * @param origins_out    n x 3 floats, world units.
+ * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
+ *                       their length scales distances when compositing.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
+ * (sizes, non-positive or non-finite focal, non-finite pose, distortion
+ * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
+ * newer header with non-zero unknown fields.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
+                              size_t n, float *origins_out,
+                              float *directions_out);
+
+/**
+ * Set the pose of @p camera (its c2w; nothing else) to look from @p eye
+ * at @p target, with @p up (world space) pointing up in the image: the
+ * camera's -z axis points at the target, its x axis is up x z normalised.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an uninitialised
+ * struct, eye equal to target, or up parallel to the viewing direction.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
+                                 const float target[3], const float up[3]);
+
+/* ===========================================================================
+ * 7. Sampler and renderer settings
+ * ======================================================================== */
+
+/**
+ * Settings of a sampler, fixed at creation.  The defaults are the
+ * reference configuration for Blender scenes: 64 + 128 samples for t in
+ * [2, 6], linear in depth, jittered in training.
+ *
+ * Forward-facing (LLFF) scenes: set ndc = 1, t_near = 0 and t_far = 1.
+ * Rays are then warped to normalised device coordinates with the near plane
+ * at world depth 1 (the frustum given by ndc_focal, ndc_width, ndc_height),
+ * and t_near and t_far are NDC depths in [0, 1]: 0 is the near plane, 1
+ * infinity.
+ */
+typedef struct nerf_sampler_options {
+    uint32_t struct_size; /**< Set by nerf_sampler_options_init(). */
+    uint32_t n_coarse;    /**< Stratified samples per ray, 2..4096;
+                               default 64. */
+    uint32_t n_fine;      /**< Hierarchical samples per ray, 0..4096
+                               (0: coarse pass only; needs n_coarse >= 3
+                               otherwise); default 128. */
+    uint32_t perturb;     /**< 1: jitter the stratified samples and draw
+                               the hierarchical ones at random in training
+                               (evaluation is never random); default 1. */
+    uint32_t lindisp;     /**< 1: sample linearly in disparity (1/depth)
+                               instead of depth; needs t_near > 0;
+                               default 0. */
+    uint32_t paper_bins;  /**< 1: stratified samples as the paper's eq. 2
+                               (one uniform draw in each of n_coarse equal
+                               bins; bin centres in evaluation) instead of
+                               the reference implementation's evenly spaced
+                               values with both ends included; default 0. */
+    uint32_t ndc;         /**< 1: warp rays to NDC first; default 0. */
+    uint32_t reserved0;   /**< Must be 0. */
+    float t_near;         /**< Start of the sampled range of t; default 2. */
+    float t_far;          /**< End of the sampled range, > t_near; default 6. */
+    float ndc_focal;      /**< NDC frustum: focal length in pixels of the
+                               training images; one focal serves both axes,
+                               as in the reference.  0 (the default) takes
+                               the rendered camera's fx, width and height
+                               instead; then only image rendering works. */
+    uint32_t ndc_width;   /**< NDC frustum: image width in pixels. */
+    uint32_t ndc_height;  /**< NDC frustum: image height in pixels. */
+    uint32_t reserved1;   /**< Must be 0. */
+    uint64_t seed;        /**< Key of the random streams; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    /* Since 0.2: ray marching.  Zero-filled by an older caller, which
+     * gives stratified and hierarchical sampling. */
+    uint32_t march_steps; /**< 0 (the default): stratified and
+                               hierarchical sampling as above.  N in
+                               1..65536: march through the model's
+                               occupancy grid (hash-grid models only) in
+                               steps of a world distance of the grid's
+                               diagonal / N, from max(t_near, entry into
+                               the bound) to min(t_far, exit), skipping
+                               empty cells and stopping a ray once its
+                               transmittance falls below 1e-4.  n_fine,
+                               lindisp and paper_bins are then unused.
+                               With ndc the warped rays are marched
+                               (the model's space must be NDC); an
+                               UNBOUNDED model's samples are spaced
+                               evenly in contracted space beyond its
+                               central cube (docs/formats.md, "Scene
+                               spaces").  NERF_PRESET_FAST sets 1024
+                               (instant-ngp's). */
+    uint32_t max_samples; /**< With march_steps: at most this many samples
+                               per ray, 1..65536; default 1024. */
+} nerf_sampler_options;
+
+/**
+ * Fill @p opts with the reference sampler settings and record
+ * @p struct_size (or use NERF_SAMPLER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
+                                       size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
+
+/**
+ * Set the sample counts of a nerf_preset in an initialised @p opts; other
+ * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
+ * NERF_PRESET_TINY: 32 + 64.  NERF_PRESET_FAST: ray marching, march_steps
+ * 1024 and max_samples 1024 (n_coarse 128 and n_fine 0 for a caller that
+ * turns marching off); the other presets set march_steps 0.
+ * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
+ * NERF_EVERSION as nerf_sampler_create().
+ */
+NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
+                                         int preset);
+
+/** Sentinel for nerf_renderer_options.raw_noise_std. */
+#define NERF_NOISE_AUTO (-1.0f)
+
+/** Settings of a renderer, fixed at creation. */
+typedef struct nerf_renderer_options {
+    uint32_t struct_size;      /**< Set by nerf_renderer_options_init(). */
+    uint32_t white_background; /**< 1: composite onto white (Blender
+                                    scenes): rgb += 1 - opacity; default 0
+                                    (black). */
+    float raw_noise_std;       /**< Standard deviation of the Gaussian
+                                    noise added to raw density before the
+                                    ReLU, in training only.  Default
+                                    NERF_NOISE_AUTO: 1 when the sampler
+                                    uses NDC (forward-facing scenes, as the
+                                    reference), else 0. */
+    uint32_t chunk_rays;       /**< Rays per unit of work handed to a
+                                    thread; progress is reported after each
+                                    chunk.  Rounded up to a multiple of 64;
+                                    1..2^20; default 512.  Neither memory
+                                    use nor results depend on it. */
+    uint32_t threads;          /**< Worker threads for image and ray
+                                    rendering, 0..1024.  0 (the default):
+                                    the cores the process may run on (its
+                                    CPU affinity) divided by OpenBLAS's
+                                    own thread count (each worker's matrix
+                                    products already use that many; more
+                                    workers would oversubscribe the cores),
+                                    at least 1; all cores with another
+                                    BLAS, and (since 0.6.1) for a model
+                                    whose products need no BLAS (the fast
+                                    preset's fp32 network on x86-64).
+                                    Results do not depend on it. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
+                                    defaults. */
+} nerf_renderer_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size (or use
+ * NERF_RENDERER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
+                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
+
+/* ===========================================================================
+ * 8. Model
+ * ======================================================================== */
 
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
@@ -618,6 +940,19 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
  */
 NERF_API int nerf_model_export(const nerf_model *model, const char *path);
 
+/**
+ * Create a model with @p opts and fill its weights from a NumPy .npz file
+ * holding the state dict of the reference implementation, with names
+ * prefixed by network: "coarse.pts_linears.0.weight" ... and "fine." ones
+ * (see docs/formats.md).  Optimiser state starts at zero.
+ * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
+ * regular file: a folder, a FIFO, a device); NERF_EIO; NERF_EFORMAT (not
+ * an npz, bad member, missing
+ * name, shape that does not match @p opts); NERF_EINVAL; NERF_ENOMEM.
+ */
+NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
+                                   const nerf_model_options *opts);
+
 /** Bits of nerf_model_contents() (since 0.4). */
 #define NERF_MODEL_HAS_OPTIMIZER 0x1u /**< The Adam moments: training can
                                            resume (every model but one
@@ -692,449 +1027,47 @@ NERF_API int nerf_model_training_batch(const nerf_model *model,
                                        uint32_t *rays, uint32_t *samples);
 
 /**
- * Create a model with @p opts and fill its weights from a NumPy .npz file
- * holding the state dict of the reference implementation, with names
- * prefixed by network: "coarse.pts_linears.0.weight" ... and "fine." ones
- * (see docs/formats.md).  Optimiser state starts at zero.
- * @return NERF_OK; NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a
- * regular file: a folder, a FIFO, a device); NERF_EIO; NERF_EFORMAT (not
- * an npz, bad member, missing
- * name, shape that does not match @p opts); NERF_EINVAL; NERF_ENOMEM.
+ * Since 0.4: record what rendering @p model needs: the sampling fields of
+ * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
+ * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
+ * are composited on white (@p white_background 1) or black (0).
+ * nerf_trainer_create() records those it trains with, and checkpoints keep
+ * them (docs/formats.md), so that nerf_model_render_settings() gives them
+ * back to a caller who knows nothing of the scene.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
+ * would refuse, white_background not 0 or 1); NERF_EVERSION as
+ * nerf_sampler_create().
  */
-NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
-                                   const nerf_model_options *opts);
-
-/* ------------------------------------------------------------------------ */
-/* Built-in scene                                                           */
-/* ------------------------------------------------------------------------ */
-
-/** Values of nerf_scene_options.image_format. */
-#define NERF_IMAGE_FORMAT_PNG 0u  /**< PNGs (RGBA for the object capture). */
-#define NERF_IMAGE_FORMAT_JPEG 1u /**< RGB JPEGs composited on white, named
-                                       .jpg in file_path: what a camera
-                                       gives, with no mask. */
-
-/** Since 0.11: the sizes and view counts nerf_scene_write() takes (a
- * program's help can quote them: plain integers). */
-#define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
-#define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
-#define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
-
-/** What nerf_scene_write() produces. */
-typedef struct nerf_scene_options {
-    uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
-    uint32_t width;       /**< Image width in pixels, NERF_SCENE_MIN_SIDE..
-                               NERF_SCENE_MAX_SIDE (8..4096); default 100. */
-    uint32_t height;      /**< Image height in pixels, as width; default
-                               100. */
-    uint32_t n_train;     /**< Training views, 1..NERF_SCENE_MAX_VIEWS
-                               (10000); default 100. */
-    uint32_t n_val;       /**< Validation views, 0..NERF_SCENE_MAX_VIEWS;
-                               default 8. */
-    uint32_t n_test;      /**< Test views (a circle at 30 degrees),
-                               0..NERF_SCENE_MAX_VIEWS; default 16. */
-    uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
-    uint32_t reserved0;   /**< Must be 0. */
-    uint64_t seed;        /**< Placement of the validation views; default 0. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    uint32_t capture;     /**< Since 0.3.  How the scene is photographed:
-                               NERF_SCENE_CAPTURE_*; default OBJECT. */
-    uint32_t layout;      /**< Since 0.3.  The files it is written as:
-                               NERF_SCENE_LAYOUT_*; default BLENDER.  The
-                               usual pairs: OBJECT and UNBOUNDED in
-                               BLENDER, FORWARD in LLFF. */
-    uint32_t image_format; /**< Since 0.3.  NERF_IMAGE_FORMAT_*: the views'
-                                files; default NERF_IMAGE_FORMAT_PNG. */
-    uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
-                                (default) = 95.  Ignored for PNG. */
-    float k1, k2, p1, p2, k3; /**< Since 0.3.  The lens the views are
-                               photographed through (nerf_camera's
-                               distortion): each pixel holds what its ray
-                               through that lens sees, and the files
-                               record the coefficients (the LLFF layout
-                               cannot, COLMAP's OPENCV model has no k3).
-                               Default 0: a pinhole camera. */
-} nerf_scene_options;
-
-/** Captures of the built-in scene (nerf_scene_options.capture). */
-#define NERF_SCENE_CAPTURE_OBJECT 0u    /**< The solids alone on a
-    transparent background, from a hemisphere of views at distance 4. */
-#define NERF_SCENE_CAPTURE_FORWARD 1u   /**< A forward-facing capture, as
-    LLFF's: the solids on a ground before a backdrop 40 units away, seen
-    from a jittered grid of cameras 3.2 units in front of them on one side,
-    all looking the same way (within a degree), spread over 0.8 x 0.6
-    units; horizontal field of view 1 radian.  Opaque. */
-#define NERF_SCENE_CAPTURE_UNBOUNDED 2u /**< An all-round capture with a far
-    background: the solids on a ground within a backdrop 40 units away,
-    from rings of cameras 2.2 to 3 units from them looking at them;
-    horizontal field of view 1 radian.  Opaque. */
-
-/** Layouts of the written scene (nerf_scene_options.layout). */
-#define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}
-    .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
-    opaque captures, whose files also record instant-ngp's aabb_scale 16
-    at top level for UNBOUNDED). */
-#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One instant-ngp style
-    transforms.json holding every view (train, then val, then test, under
-    images/), with fl_x, fl_y, cx, cy, w, h, k1, k2, p1, p2, k3 and
-    aabb_scale at top level (16 for the opaque captures, 2 for OBJECT).
-    Loading it splits it every llff_holdout-th frame, not by the counts
-    written. */
-#define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
-    poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
-    order), n_train + n_test views in all (n_val is not used): a loader
-    holds out every 8th as LLFF has no split files.  Bounds per view are
-    the 0.1 and 99.9 percentiles of its pixels' depths along the optical
-    axis, as LLFF's imgs2poses takes them from the sparse points. */
-#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< A COLMAP model as COLMAP's
-    text files: images/ (RGB PNGs, composited onto white for OBJECT, named
-    00000.png ... over the train, val and test views in that order) and
-    sparse/0/ cameras.txt, images.txt, points3D.txt: one PINHOLE camera,
-    every view's pose in COLMAP's convention, and sparse points where
-    pixels' rays of opacity above 0.95 end in a few views, each with a
-    track of the views whose ray through its projection ends there too. */
-#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< The same as COLMAP's binary
-    files (cameras.bin, images.bin, points3D.bin). */
+NERF_API int nerf_model_set_render_settings(nerf_model *model,
+                                            const nerf_sampler_options *sampler,
+                                            uint32_t white_background);
 
 /**
- * Fill @p opts with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
-                                     size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
-
-/**
- * Write the built-in scene to the folder @p dir (created if missing) in the
- * capture and layout the options say.  The scene is a few coloured solids
- * with smooth density edges inside a sphere of radius 1.6 about the
- * origin (z up), rendered by numerically exact volume rendering.  The
- * OBJECT capture (the default) is a Blender-format dataset:
- * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
- * test/, from cameras at distance 4 (use near 2, far 6, as for the Blender
- * scenes).  The FORWARD and UNBOUNDED captures add a ground (the
- * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
- * sky, hills and a sun), so every pixel is opaque and depths reach 40;
- * they are what scenes of forward-facing and all-round photos are like.
- * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
- * JPEG (RGB, composited on white for OBJECT) for the views.  With a lens
- * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
- * sees (nerf_camera's model).  Same options, same bytes.
- * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
- * capture or layout, a layout that does not fit the capture or is not
- * supported yet); NERF_EIO (cannot create or write a file, named in the
- * message); NERF_ENOMEM.
- */
-NERF_API int nerf_scene_write(const char *dir,
-                              const nerf_scene_options *opts);
-
-/* ------------------------------------------------------------------------ */
-/* Cameras, sampling and rendering                                          */
-/* ------------------------------------------------------------------------ */
-
-/**
- * Flags for nerf_camera.flags.
+ * Since 0.4: the settings to render @p model with.  Either output may be
+ * NULL; each must be initialised (its struct_size set).  Into @p sampler go
+ * the fields nerf_model_set_render_settings() lists; its seed, perturb
+ * and hooks are kept.  Into @p renderer goes white_background; its other
+ * fields are kept.
  *
- * By default the ray of pixel (column i, row j) passes through the pixel's
- * centre, (i + 0.5, j + 0.5).  NERF_CAMERA_PIXEL_CORNER uses (i, j), as the
- * reference implementation does; set it to reproduce its rays exactly.
+ * A model without recorded settings (nerf_model_contents() lacks
+ * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
+ * a file of libnerf before 0.4) gets those its shape suggests: the sample
+ * counts of the preset whose networks it has (the reference ones
+ * otherwise; all in one pass without a fine network), ray marching for a
+ * hash-grid model; t in [2, 6] on white for a BOX model (Blender scenes),
+ * NDC depths [0, 1] on black for an NDC one, and [0.05, 10^4] x bound on
+ * black for an UNBOUNDED one.
+ * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
+ * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
+ * forged file).
  */
-#define NERF_CAMERA_PIXEL_CORNER 0x1u
+NERF_API int nerf_model_render_settings(const nerf_model *model,
+                                        nerf_sampler_options *sampler,
+                                        nerf_renderer_options *renderer);
 
-/**
- * A camera in the OpenGL/Blender convention: in camera space x points
- * right, y up, and the camera looks down -z.  A pinhole camera unless its
- * distortion coefficients are set.
- *
- * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
- * c2w[.][3] (the camera centre) and the unnormalised direction
- * R ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), R being the left 3x3
- * of c2w: its camera-space z component is -1, so t along the ray is depth
- * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
- * set.
- *
- * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
- * acting on normalised image coordinates in OpenCV's axes (x right, y
- * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
- * at
- *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
- *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
- * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
- * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
- * through the undistorted point, direction R (x, -y, -1), found by
- * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
- * A pixel that no point distorts onto (beyond the fold of a strong barrel
- * lens, where r_d stops growing with r) gets the ray of the point whose
- * distortion comes closest to it.  Images are never resampled.  COLMAP's
- * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
- * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
- * All zero (the default, and what a caller built against a header without
- * them gets) is a pinhole camera, with the rays above bit for bit.
- *
- * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
- * the fields.  The defaults (identity pose, all intrinsics 0) are not a
- * usable camera: width, height, fx and fy must be set.
- */
-typedef struct nerf_camera {
-    uint32_t struct_size; /**< Set by nerf_camera_init(). */
-    uint32_t flags;       /**< NERF_CAMERA_*; default 0. */
-    uint32_t width;       /**< Image width in pixels, 1..65536. */
-    uint32_t height;      /**< Image height in pixels, 1..65536. */
-    float c2w[12];        /**< Camera-to-world 3x4, row-major: columns are
-                               the camera's right, up and back axes and its
-                               centre, in world units.  Default [I | 0]. */
-    float fx, fy;         /**< Focal lengths in pixels, > 0.  For a
-                               horizontal field of view a:
-                               fx = 0.5 width / tan(0.5 a). */
-    float cx, cy;         /**< Principal point in pixels from the top-left
-                               image corner; usually width/2, height/2. */
-    /* Since 0.3.  Zero-filled by an older caller: a pinhole camera. */
-    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
-                               within +-1000; default 0. */
-    float p1, p2;         /**< Tangential distortion; finite, within
-                               +-1000; default 0. */
-    float k3;             /**< Radial distortion, r^6 term; finite, within
-                               +-1000; default 0. */
-} nerf_camera;
-
-/**
- * Fill @p camera with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
-
-/**
- * Compute the rays of pixels first .. first + n - 1 of @p camera, pixels
- * being numbered row by row (index = row * width + column).
- *
- * @param origins_out    n x 3 floats, world units.
- * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
- *                       their length scales distances when compositing.
- * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
- * (sizes, non-positive or non-finite focal, non-finite pose, distortion
- * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
- * newer header with non-zero unknown fields.
- * Reentrant.
- */
-NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
-                              size_t n, float *origins_out,
-                              float *directions_out);
-
-/**
- * Set the pose of @p camera (its c2w; nothing else) to look from @p eye
- * at @p target, with @p up (world space) pointing up in the image: the
- * camera's -z axis points at the target, its x axis is up x z normalised.
- * @return NERF_OK; NERF_EINVAL for NULL pointers, an uninitialised
- * struct, eye equal to target, or up parallel to the viewing direction.
- * Reentrant.
- */
-NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
-                                 const float target[3], const float up[3]);
-
-/**
- * Flags for nerf_camera_path_options.flags.  Without them the options'
- * size and intrinsics, when set, win over the file's; with them the file's
- * win where it has any, and the options serve as the fallback.
- */
-#define NERF_CAMERA_PATH_FILE_SIZE 0x1u /**< A frame whose file gives w and
-                                             h keeps that size; width and
-                                             height serve only frames
-                                             without one. */
-#define NERF_CAMERA_PATH_FILE_INTRINSICS 0x2u /**< A frame whose file gives
-                                                   fl_x or camera_angle_x
-                                                   keeps the file's
-                                                   intrinsics; focal or
-                                                   fov_x serve only frames
-                                                   without them (and every
-                                                   .npy pose). */
-
-/**
- * How nerf_camera_path_load() turns a file of poses into cameras.  The
- * defaults take everything from the file, which works for a
- * transforms-style JSON that gives its image size (w, h); a .npy file
- * carries poses only and needs width, height and focal or fov_x.
- */
-typedef struct nerf_camera_path_options {
-    uint32_t struct_size; /**< Set by nerf_camera_path_options_init(). */
-    uint32_t width;       /**< Image width in pixels, 1..65536, or 0 (the
-                               default) for the file's w.  Set width and
-                               height together or leave both 0.  When the
-                               file gives w and h, its intrinsics are
-                               scaled by width / w and height / h (the
-                               field of view is kept). */
-    uint32_t height;      /**< Image height in pixels, 1..65536, or 0 for
-                               the file's h. */
-    uint32_t flags;       /**< NERF_CAMERA_PATH_*; default 0. */
-    float focal;          /**< > 0: fx = fy = focal, in pixels of the
-                               rendered image, principal point at the
-                               centre, replacing the file's intrinsics
-                               (see NERF_CAMERA_PATH_FILE_INTRINSICS);
-                               default 0 (none). */
-    float fov_x;          /**< Horizontal field of view in degrees, in
-                               (0, 180): as focal with focal =
-                               0.5 width / tan(0.5 fov_x); default 0
-                               (none).  At most one of focal and fov_x may
-                               be set. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-} nerf_camera_path_options;
-
-/**
- * Fill @p opts with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
-                                           size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
-    nerf_camera_path_options_init((o), sizeof *(o))
-
-/**
- * Load a camera path (a sequence of poses to render) from the file
- * @p path, in one of two forms (docs/formats.md has the details):
- *
- *  - A NumPy .npy file (recognised by its magic bytes, or by a ".npy"
- *    name): camera-to-world matrices in the nerf_camera convention, of
- *    shape (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16) (the last two being
- *    the same matrices flattened row by row), dtype '<f4' or '<f8', C
- *    order.  The bottom row of 4 x 4 matrices must be [0, 0, 0, 1].  The
- *    file holds no intrinsics: the options must give width, height and
- *    focal or fov_x.
- *  - Anything else is read as a transforms-style JSON file, as Blender and
- *    instant-ngp write them and nerf_dataset_load() reads them:
- *    frames[].transform_matrix, and camera_angle_x or fl_x (fl_y,
- *    camera_angle_y, cx, cy, w, h optional), at top level or per frame.
- *    frames[].file_path is ignored: no image is read.
- *
- * Every matrix must be finite, representable as float, and have an
- * invertible rotation part.  Files hold at most 100000 poses.  The
- * cameras have flags 0 (rays through pixel centres).
- *
- * @param out  receives the path; release it with nerf_camera_path_destroy().
- *             NULL on failure.
- * @param opts NULL for the defaults.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
- * for a file that gives none, no focal or fov_x for a .npy file);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a regular file: a
- * folder, a FIFO, a device, refused without blocking);
- * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
- * or malformed file, npy dtype, order or shape not listed above, no
- * frames or more than 100000, missing field, NaN or infinite values,
- * bottom row not [0, 0, 0, 1], entries beyond 1e6, degenerate rotation,
- * focal under 1e-3 pixels: docs/formats.md, "Camera sanity"; w or h not a
- * positive whole number); NERF_ENOMEM.  Messages name the file, the frame
- * (with its file_path when it has one) and the problem.
- * Reentrant: separate loads may run on separate threads.
- */
-NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
-                                   const nerf_camera_path_options *opts);
-
-/** Release a camera path.  NULL is a no-op. */
-NERF_API void nerf_camera_path_destroy(nerf_camera_path *camera_path);
-
-/** Number of cameras (at least 1); 0 for NULL. */
-NERF_API uint32_t nerf_camera_path_count(const nerf_camera_path *camera_path);
-
-/**
- * Camera @p index of the path, in file order.
- * @param out initialised with nerf_camera_init(); as many bytes as its
- *            struct_size are written.
- * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
- * uninitialised struct).  Reentrant.
- */
-NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
-                                     uint32_t index, nerf_camera *out);
-
-/**
- * Settings of a sampler, fixed at creation.  The defaults are the
- * reference configuration for Blender scenes: 64 + 128 samples for t in
- * [2, 6], linear in depth, jittered in training.
- *
- * Forward-facing (LLFF) scenes: set ndc = 1, t_near = 0 and t_far = 1.
- * Rays are then warped to normalised device coordinates with the near plane
- * at world depth 1 (the frustum given by ndc_focal, ndc_width, ndc_height),
- * and t_near and t_far are NDC depths in [0, 1]: 0 is the near plane, 1
- * infinity.
- */
-typedef struct nerf_sampler_options {
-    uint32_t struct_size; /**< Set by nerf_sampler_options_init(). */
-    uint32_t n_coarse;    /**< Stratified samples per ray, 2..4096;
-                               default 64. */
-    uint32_t n_fine;      /**< Hierarchical samples per ray, 0..4096
-                               (0: coarse pass only; needs n_coarse >= 3
-                               otherwise); default 128. */
-    uint32_t perturb;     /**< 1: jitter the stratified samples and draw
-                               the hierarchical ones at random in training
-                               (evaluation is never random); default 1. */
-    uint32_t lindisp;     /**< 1: sample linearly in disparity (1/depth)
-                               instead of depth; needs t_near > 0;
-                               default 0. */
-    uint32_t paper_bins;  /**< 1: stratified samples as the paper's eq. 2
-                               (one uniform draw in each of n_coarse equal
-                               bins; bin centres in evaluation) instead of
-                               the reference implementation's evenly spaced
-                               values with both ends included; default 0. */
-    uint32_t ndc;         /**< 1: warp rays to NDC first; default 0. */
-    uint32_t reserved0;   /**< Must be 0. */
-    float t_near;         /**< Start of the sampled range of t; default 2. */
-    float t_far;          /**< End of the sampled range, > t_near; default 6. */
-    float ndc_focal;      /**< NDC frustum: focal length in pixels of the
-                               training images; one focal serves both axes,
-                               as in the reference.  0 (the default) takes
-                               the rendered camera's fx, width and height
-                               instead; then only image rendering works. */
-    uint32_t ndc_width;   /**< NDC frustum: image width in pixels. */
-    uint32_t ndc_height;  /**< NDC frustum: image height in pixels. */
-    uint32_t reserved1;   /**< Must be 0. */
-    uint64_t seed;        /**< Key of the random streams; default 0. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2: ray marching.  Zero-filled by an older caller, which
-     * gives stratified and hierarchical sampling. */
-    uint32_t march_steps; /**< 0 (the default): stratified and
-                               hierarchical sampling as above.  N in
-                               1..65536: march through the model's
-                               occupancy grid (hash-grid models only) in
-                               steps of a world distance of the grid's
-                               diagonal / N, from max(t_near, entry into
-                               the bound) to min(t_far, exit), skipping
-                               empty cells and stopping a ray once its
-                               transmittance falls below 1e-4.  n_fine,
-                               lindisp and paper_bins are then unused.
-                               With ndc the warped rays are marched
-                               (the model's space must be NDC); an
-                               UNBOUNDED model's samples are spaced
-                               evenly in contracted space beyond its
-                               central cube (docs/formats.md, "Scene
-                               spaces").  NERF_PRESET_FAST sets 1024
-                               (instant-ngp's). */
-    uint32_t max_samples; /**< With march_steps: at most this many samples
-                               per ray, 1..65536; default 1024. */
-} nerf_sampler_options;
-
-/**
- * Fill @p opts with the reference sampler settings and record
- * @p struct_size (or use NERF_SAMPLER_OPTIONS_INIT).
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
-                                       size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
-
-/**
- * Set the sample counts of a nerf_preset in an initialised @p opts; other
- * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
- * NERF_PRESET_TINY: 32 + 64.  NERF_PRESET_FAST: ray marching, march_steps
- * 1024 and max_samples 1024 (n_coarse 128 and n_fine 0 for a caller that
- * turns marching off); the other presets set march_steps 0.
- * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
- * NERF_EVERSION as nerf_sampler_create().
- */
-NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
-                                         int preset);
+/* ===========================================================================
+ * 9. Sampler
+ * ======================================================================== */
 
 /**
  * Create a sampler.  @p opts is copied; NULL means the defaults.
@@ -1204,86 +1137,9 @@ NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
                                       const float *weights, const float *u,
                                       float *t_out);
 
-/** What a nerf_progress report is about. */
-typedef enum nerf_progress_kind {
-    NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
-    NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
-                                   psnr are those of the last step. */
-    NERF_PROGRESS_GEOMETRY = 3 /**< Since 0.5.  nerf_mesh_extract() and
-                                   nerf_density_grid_write(): done and
-                                   total count planes of grid samples. */
-} nerf_progress_kind;
-
-/**
- * A progress report, passed by pointer to a nerf_progress_cb.  Versioned:
- * read a field only if struct_size covers it (fields are only appended).
- */
-typedef struct nerf_progress {
-    uint32_t struct_size; /**< sizeof the library's struct. */
-    uint32_t kind;        /**< nerf_progress_kind. */
-    uint64_t done;        /**< Units of work finished so far. */
-    uint64_t total;       /**< Units of work of the whole call. */
-    double elapsed;       /**< Seconds since the call started. */
-    double loss;          /**< NERF_PROGRESS_TRAIN: loss of the last step;
-                               otherwise 0. */
-    double psnr;          /**< NERF_PROGRESS_TRAIN: PSNR (dB) of the last
-                               step's fine colours; otherwise 0. */
-} nerf_progress;
-
-/**
- * Progress callback.  It runs on the thread that made the call, never on a
- * worker thread, and must not call back into the handle that reports.
- * Return 0 to continue, nonzero to cancel: the call then returns
- * NERF_ECANCELLED.  @p p is valid only during the callback.
- */
-typedef int (*nerf_progress_cb)(const nerf_progress *p, void *user);
-
-/** Sentinel for nerf_renderer_options.raw_noise_std. */
-#define NERF_NOISE_AUTO (-1.0f)
-
-/** Settings of a renderer, fixed at creation. */
-typedef struct nerf_renderer_options {
-    uint32_t struct_size;      /**< Set by nerf_renderer_options_init(). */
-    uint32_t white_background; /**< 1: composite onto white (Blender
-                                    scenes): rgb += 1 - opacity; default 0
-                                    (black). */
-    float raw_noise_std;       /**< Standard deviation of the Gaussian
-                                    noise added to raw density before the
-                                    ReLU, in training only.  Default
-                                    NERF_NOISE_AUTO: 1 when the sampler
-                                    uses NDC (forward-facing scenes, as the
-                                    reference), else 0. */
-    uint32_t chunk_rays;       /**< Rays per unit of work handed to a
-                                    thread; progress is reported after each
-                                    chunk.  Rounded up to a multiple of 64;
-                                    1..2^20; default 512.  Neither memory
-                                    use nor results depend on it. */
-    uint32_t threads;          /**< Worker threads for image and ray
-                                    rendering, 0..1024.  0 (the default):
-                                    the cores the process may run on (its
-                                    CPU affinity) divided by OpenBLAS's
-                                    own thread count (each worker's matrix
-                                    products already use that many; more
-                                    workers would oversubscribe the cores),
-                                    at least 1; all cores with another
-                                    BLAS, and (since 0.6.1) for a model
-                                    whose products need no BLAS (the fast
-                                    preset's fp32 network on x86-64).
-                                    Results do not depend on it. */
-    uint32_t reserved0;        /**< Must be 0. */
-    const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
-                                    defaults. */
-} nerf_renderer_options;
-
-/**
- * Fill @p opts with defaults and record @p struct_size (or use
- * NERF_RENDERER_OPTIONS_INIT).
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
-                                        size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
+/* ===========================================================================
+ * 10. Renderer
+ * ======================================================================== */
 
 /**
  * Create a renderer that draws @p model with the samples of @p sampler.
@@ -1338,45 +1194,6 @@ NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
 NERF_API void nerf_renderer_cancel(nerf_renderer *renderer);
 
 /**
- * Since 0.4: record what rendering @p model needs: the sampling fields of
- * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
- * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
- * are composited on white (@p white_background 1) or black (0).
- * nerf_trainer_create() records those it trains with, and checkpoints keep
- * them (docs/formats.md), so that nerf_model_render_settings() gives them
- * back to a caller who knows nothing of the scene.
- * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
- * would refuse, white_background not 0 or 1); NERF_EVERSION as
- * nerf_sampler_create().
- */
-NERF_API int nerf_model_set_render_settings(nerf_model *model,
-                                            const nerf_sampler_options *sampler,
-                                            uint32_t white_background);
-
-/**
- * Since 0.4: the settings to render @p model with.  Either output may be
- * NULL; each must be initialised (its struct_size set).  Into @p sampler go
- * the fields nerf_model_set_render_settings() lists; its seed, perturb
- * and hooks are kept.  Into @p renderer goes white_background; its other
- * fields are kept.
- *
- * A model without recorded settings (nerf_model_contents() lacks
- * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
- * a file of libnerf before 0.4) gets those its shape suggests: the sample
- * counts of the preset whose networks it has (the reference ones
- * otherwise; all in one pass without a fine network), ray marching for a
- * hash-grid model; t in [2, 6] on white for a BOX model (Blender scenes),
- * NDC depths [0, 1] on black for an NDC one, and [0.05, 10^4] x bound on
- * black for an UNBOUNDED one.
- * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
- * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
- * forged file).
- */
-NERF_API int nerf_model_render_settings(const nerf_model *model,
-                                        nerf_sampler_options *sampler,
-                                        nerf_renderer_options *renderer);
-
-/**
  * Render every pixel of @p camera (evaluation: no randomness) into the
  * caller's buffers, row by row from the top-left pixel.
  *
@@ -1424,6 +1241,47 @@ NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
                                            size_t pixel_capacity);
 
 /**
+ * Since 0.5: render every pixel of @p camera as nerf_renderer_render_image()
+ * does, with the depth in world units instead of the raw sum(w t).
+ *
+ * Both depths are those of the expected termination point of the ray
+ * given that it stops in the scene: with weights w_i at depths t_i along
+ * the camera's unnormalised ray d (whose camera-space z is -1), the point
+ * o + s d with s = sum(w t) / sum(w), i.e. divided by the opacity.  The
+ * raw, undivided value is distance x opacity (exactly so: both are 0 where
+ * the opacity is 0).
+ *
+ * For an NDC sampler (forward-facing scenes), t is an NDC depth; s is the
+ * world-space ray parameter of the point that the expected NDC depth
+ * sum(w t) / sum(w) maps back to, on the same ray (the NDC warp keeps
+ * rays straight), so both outputs are world units there too.  An expected
+ * NDC depth of 1 or more (the point at infinity) gives +inf.
+ *
+ * @param rgb_out        height x width x 3 floats, as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param distance_out   height x width floats: s |d|, the distance in
+ *                       world units from the camera centre (the ray's
+ *                       origin) to the point, along the ray; 0 where the
+ *                       opacity is 0.  May be NULL.
+ * @param zdepth_out     height x width floats: s, the point's depth along
+ *                       the camera's optical axis (minus its camera-space
+ *                       z), in world units; 0 where the opacity is 0.  May
+ *                       be NULL.
+ * @param opacity_out    height x width floats, sum(w), as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param pixel_capacity pixels each non-NULL buffer can hold.
+ * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
+ * is NULL); NERF_ENOMEM.
+ * Not reentrant for one renderer.
+ */
+NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
+                                        const nerf_camera *camera,
+                                        float *rgb_out, float *distance_out,
+                                        float *zdepth_out,
+                                        float *opacity_out,
+                                        size_t pixel_capacity);
+
+/**
  * Render a caller's batch of rays (evaluation: no randomness), chunked and
  * threaded as images are.
  *
@@ -1443,134 +1301,9 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
                                        float *rgb_out, float *depth_out,
                                        float *opacity_out);
 
-/* ------------------------------------------------------------------------ */
-/* Images and metrics                                                       */
-/* ------------------------------------------------------------------------ */
-
-/** Largest width or height, in pixels, that the image functions accept. */
-#define NERF_IMAGE_MAX_SIDE 16384
-
-/**
- * Read a PNG file of any colour type (gray, gray+alpha, RGB, RGBA,
- * palette) and bit depth (1 to 16) into RGBA floats in [0, 1].
- *
- * @param rgba_out receives width x height x 4 floats, row-major from the
- *        top-left pixel, channels interleaved, straight (not premultiplied)
- *        alpha; opaque files get alpha 1.  Allocated by libnerf with the
- *        default allocator: release it with nerf_free().  Set to NULL on
- *        failure.
- *
- * 8-bit samples are returned as stored (v / 255).  16-bit samples go
- * through libpng's linear format: v / 65535 when the file has no gAMA or
- * sRGB chunk (the usual case), converted to linear light when it has one;
- * libpng premultiplies those by alpha, so the colour of a fully
- * transparent 16-bit pixel reads as 0.
- *
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
- * device, refused without blocking); NERF_EIO (the file cannot be opened
- * or read); NERF_EFORMAT (not a PNG, truncated, corrupted, a side larger
- * than NERF_IMAGE_MAX_SIDE, or a header claiming more pixels than the
- * file can hold: refused before anything is allocated for them);
- * NERF_ENOMEM.  Messages start with the path.  Reentrant.
- */
-NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
-                                 uint32_t *height_out, float **rgba_out);
-
-/**
- * Since 0.3: read a PNG or a JPEG file, told apart by its first bytes
- * (not its name), as the dataset loaders do.  PNGs are read as by
- * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
- * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
- * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
- * width and height are those of the upright picture, swapped for 5 to 8).
- *
- * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
- * device, refused without blocking); NERF_EIO (the file cannot be opened
- * or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
- * corrupted data (JPEG decoder warnings about the data count as errors),
- * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
- * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
- * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
- * path.  Reentrant.
- */
-NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
-                             uint32_t *height_out, float **rgba_out);
-
-/**
- * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
- * and rounded to the nearest of 256 levels (NaN gives 0).  Use channels 1
- * for depth or opacity maps (scale them into [0, 1] first).
- *
- * @param channels 1 (gray), 3 (RGB) or 4 (RGBA).
- * @param pixels   width x height x channels floats, row-major from the
- *                 top-left pixel, channels interleaved.
- *
- * The file is written to a temporary name beside @p path, flushed and
- * renamed, so an existing file at @p path is only ever replaced by a
- * complete image.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, zero size or a side above
- * NERF_IMAGE_MAX_SIDE, bad channel count); NERF_EIO; NERF_ENOMEM.
- * Reentrant.
- */
-NERF_API int nerf_image_write_png(const char *path, uint32_t width,
-                                  uint32_t height, uint32_t channels,
-                                  const float *pixels);
-
-/**
- * As nerf_image_write_png(), from 8-bit samples written as they are.
- * @param pixels width x height x channels bytes, row-major, interleaved.
- * @return as nerf_image_write_png().
- */
-NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
-                                   uint32_t height, uint32_t channels,
-                                   const uint8_t *pixels);
-
-/**
- * Release a buffer that a libnerf function allocated for the caller (such
- * as the pixels of nerf_image_read_png()).  NULL is a no-op.  Never pass
- * it memory from anywhere else, nor buffers owned by a handle.
- */
-NERF_API void nerf_free(void *ptr);
-
-/**
- * Peak signal-to-noise ratio of two images with values in [0, 1]:
- * -10 log10(MSE), the mean taken over all @p count samples (every channel
- * of every pixel).  Identical images give +infinity (IEEE HUGE_VAL), not a
- * cap.
- * @param a, b  @p count floats each, in any layout (the same for both).
- * @param out   receives the PSNR in decibels.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, count 0, NaN or infinite
- * values).  Reentrant.
- */
-NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
-                       double *out);
-
-/**
- * Structural similarity (Wang et al. 2004) as the reference NeRF
- * evaluation computes it: an 11 x 11 Gaussian window with sigma 1.5,
- * K1 = 0.01, K2 = 0.03, data range 1; local means, variances and
- * covariance by separable filtering over 'valid' positions only (no
- * padding: (width - 10) x (height - 10) windows), population (not sample)
- * variances; the SSIM map is averaged over those positions and over the
- * channels, each channel computed on its own.  Computed in double
- * precision; memory used is O(width), whatever the height.
- *
- * @param a, b      width x height x channels floats in [0, 1], row-major,
- *                  channels interleaved.
- * @param channels  1..4 (3 for RGB).
- * @param out       receives the mean SSIM, 1 for identical images.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, width or height below 11,
- * bad channel count, NaN or infinite values); NERF_ENOMEM.  Reentrant.
- */
-NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
-                       uint32_t height, uint32_t channels, double *out);
-
-/* ------------------------------------------------------------------------ */
-/* Datasets                                                                 */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 11. Datasets and camera paths
+ * ======================================================================== */
 
 /** Which part of a scene to load. */
 typedef enum nerf_split {
@@ -1825,9 +1558,123 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
                                         uint32_t index, uint32_t n_views,
                                         nerf_camera *out);
 
-/* ------------------------------------------------------------------------ */
-/* Training                                                                 */
-/* ------------------------------------------------------------------------ */
+/**
+ * Flags for nerf_camera_path_options.flags.  Without them the options'
+ * size and intrinsics, when set, win over the file's; with them the file's
+ * win where it has any, and the options serve as the fallback.
+ */
+#define NERF_CAMERA_PATH_FILE_SIZE 0x1u /**< A frame whose file gives w and
+                                             h keeps that size; width and
+                                             height serve only frames
+                                             without one. */
+#define NERF_CAMERA_PATH_FILE_INTRINSICS 0x2u /**< A frame whose file gives
+                                                   fl_x or camera_angle_x
+                                                   keeps the file's
+                                                   intrinsics; focal or
+                                                   fov_x serve only frames
+                                                   without them (and every
+                                                   .npy pose). */
+
+/**
+ * How nerf_camera_path_load() turns a file of poses into cameras.  The
+ * defaults take everything from the file, which works for a
+ * transforms-style JSON that gives its image size (w, h); a .npy file
+ * carries poses only and needs width, height and focal or fov_x.
+ */
+typedef struct nerf_camera_path_options {
+    uint32_t struct_size; /**< Set by nerf_camera_path_options_init(). */
+    uint32_t width;       /**< Image width in pixels, 1..65536, or 0 (the
+                               default) for the file's w.  Set width and
+                               height together or leave both 0.  When the
+                               file gives w and h, its intrinsics are
+                               scaled by width / w and height / h (the
+                               field of view is kept). */
+    uint32_t height;      /**< Image height in pixels, 1..65536, or 0 for
+                               the file's h. */
+    uint32_t flags;       /**< NERF_CAMERA_PATH_*; default 0. */
+    float focal;          /**< > 0: fx = fy = focal, in pixels of the
+                               rendered image, principal point at the
+                               centre, replacing the file's intrinsics
+                               (see NERF_CAMERA_PATH_FILE_INTRINSICS);
+                               default 0 (none). */
+    float fov_x;          /**< Horizontal field of view in degrees, in
+                               (0, 180): as focal with focal =
+                               0.5 width / tan(0.5 fov_x); default 0
+                               (none).  At most one of focal and fov_x may
+                               be set. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_camera_path_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
+                                           size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
+    nerf_camera_path_options_init((o), sizeof *(o))
+
+/**
+ * Load a camera path (a sequence of poses to render) from the file
+ * @p path, in one of two forms (docs/formats.md has the details):
+ *
+ *  - A NumPy .npy file (recognised by its magic bytes, or by a ".npy"
+ *    name): camera-to-world matrices in the nerf_camera convention, of
+ *    shape (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16) (the last two being
+ *    the same matrices flattened row by row), dtype '<f4' or '<f8', C
+ *    order.  The bottom row of 4 x 4 matrices must be [0, 0, 0, 1].  The
+ *    file holds no intrinsics: the options must give width, height and
+ *    focal or fov_x.
+ *  - Anything else is read as a transforms-style JSON file, as Blender and
+ *    instant-ngp write them and nerf_dataset_load() reads them:
+ *    frames[].transform_matrix, and camera_angle_x or fl_x (fl_y,
+ *    camera_angle_y, cx, cy, w, h optional), at top level or per frame.
+ *    frames[].file_path is ignored: no image is read.
+ *
+ * Every matrix must be finite, representable as float, and have an
+ * invertible rotation part.  Files hold at most 100000 poses.  The
+ * cameras have flags 0 (rays through pixel centres).
+ *
+ * @param out  receives the path; release it with nerf_camera_path_destroy().
+ *             NULL on failure.
+ * @param opts NULL for the defaults.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
+ * for a file that gives none, no focal or fov_x for a .npy file);
+ * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a regular file: a
+ * folder, a FIFO, a device, refused without blocking);
+ * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
+ * or malformed file, npy dtype, order or shape not listed above, no
+ * frames or more than 100000, missing field, NaN or infinite values,
+ * bottom row not [0, 0, 0, 1], entries beyond 1e6, degenerate rotation,
+ * focal under 1e-3 pixels: docs/formats.md, "Camera sanity"; w or h not a
+ * positive whole number); NERF_ENOMEM.  Messages name the file, the frame
+ * (with its file_path when it has one) and the problem.
+ * Reentrant: separate loads may run on separate threads.
+ */
+NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
+                                   const nerf_camera_path_options *opts);
+
+/** Release a camera path.  NULL is a no-op. */
+NERF_API void nerf_camera_path_destroy(nerf_camera_path *camera_path);
+
+/** Number of cameras (at least 1); 0 for NULL. */
+NERF_API uint32_t nerf_camera_path_count(const nerf_camera_path *camera_path);
+
+/**
+ * Camera @p index of the path, in file order.
+ * @param out initialised with nerf_camera_init(); as many bytes as its
+ *            struct_size are written.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
+ * uninitialised struct).  Reentrant.
+ */
+NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
+                                     uint32_t index, nerf_camera *out);
+
+/* ===========================================================================
+ * 12. Trainer
+ * ======================================================================== */
 
 /** Since 0.5.  Sparse ranges a nerf_exchange can describe. */
 #define NERF_EXCHANGE_MAX_SPARSE 4
@@ -2175,198 +2022,134 @@ NERF_API int nerf_trainer_set_progress(nerf_trainer *trainer,
  */
 NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
 
-/* ------------------------------------------------------------------------ */
-/* Point clouds and depth (Since 0.5)                                       */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 13. Built-in scene
+ * ======================================================================== */
+
+/** Values of nerf_scene_options.image_format. */
+#define NERF_IMAGE_FORMAT_PNG 0u  /**< PNGs (RGBA for the object capture). */
+#define NERF_IMAGE_FORMAT_JPEG 1u /**< RGB JPEGs composited on white, named
+                                       .jpg in file_path: what a camera
+                                       gives, with no mask. */
+
+/** Since 0.11: the sizes and view counts nerf_scene_write() takes (a
+ * program's help can quote them: plain integers). */
+#define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
+#define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
+#define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
+
+/** What nerf_scene_write() produces. */
+typedef struct nerf_scene_options {
+    uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
+    uint32_t width;       /**< Image width in pixels, NERF_SCENE_MIN_SIDE..
+                               NERF_SCENE_MAX_SIDE (8..4096); default 100. */
+    uint32_t height;      /**< Image height in pixels, as width; default
+                               100. */
+    uint32_t n_train;     /**< Training views, 1..NERF_SCENE_MAX_VIEWS
+                               (10000); default 100. */
+    uint32_t n_val;       /**< Validation views, 0..NERF_SCENE_MAX_VIEWS;
+                               default 8. */
+    uint32_t n_test;      /**< Test views (a circle at 30 degrees),
+                               0..NERF_SCENE_MAX_VIEWS; default 16. */
+    uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
+    uint32_t reserved0;   /**< Must be 0. */
+    uint64_t seed;        /**< Placement of the validation views; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    uint32_t capture;     /**< Since 0.3.  How the scene is photographed:
+                               NERF_SCENE_CAPTURE_*; default OBJECT. */
+    uint32_t layout;      /**< Since 0.3.  The files it is written as:
+                               NERF_SCENE_LAYOUT_*; default BLENDER.  The
+                               usual pairs: OBJECT and UNBOUNDED in
+                               BLENDER, FORWARD in LLFF. */
+    uint32_t image_format; /**< Since 0.3.  NERF_IMAGE_FORMAT_*: the views'
+                                files; default NERF_IMAGE_FORMAT_PNG. */
+    uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
+                                (default) = 95.  Ignored for PNG. */
+    float k1, k2, p1, p2, k3; /**< Since 0.3.  The lens the views are
+                               photographed through (nerf_camera's
+                               distortion): each pixel holds what its ray
+                               through that lens sees, and the files
+                               record the coefficients (the LLFF layout
+                               cannot, COLMAP's OPENCV model has no k3).
+                               Default 0: a pinhole camera. */
+} nerf_scene_options;
+
+/** Captures of the built-in scene (nerf_scene_options.capture). */
+#define NERF_SCENE_CAPTURE_OBJECT 0u    /**< The solids alone on a
+    transparent background, from a hemisphere of views at distance 4. */
+#define NERF_SCENE_CAPTURE_FORWARD 1u   /**< A forward-facing capture, as
+    LLFF's: the solids on a ground before a backdrop 40 units away, seen
+    from a jittered grid of cameras 3.2 units in front of them on one side,
+    all looking the same way (within a degree), spread over 0.8 x 0.6
+    units; horizontal field of view 1 radian.  Opaque. */
+#define NERF_SCENE_CAPTURE_UNBOUNDED 2u /**< An all-round capture with a far
+    background: the solids on a ground within a backdrop 40 units away,
+    from rings of cameras 2.2 to 3 units from them looking at them;
+    horizontal field of view 1 radian.  Opaque. */
+
+/** Layouts of the written scene (nerf_scene_options.layout). */
+#define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}
+    .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
+    opaque captures, whose files also record instant-ngp's aabb_scale 16
+    at top level for UNBOUNDED). */
+#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One instant-ngp style
+    transforms.json holding every view (train, then val, then test, under
+    images/), with fl_x, fl_y, cx, cy, w, h, k1, k2, p1, p2, k3 and
+    aabb_scale at top level (16 for the opaque captures, 2 for OBJECT).
+    Loading it splits it every llff_holdout-th frame, not by the counts
+    written. */
+#define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
+    poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
+    order), n_train + n_test views in all (n_val is not used): a loader
+    holds out every 8th as LLFF has no split files.  Bounds per view are
+    the 0.1 and 99.9 percentiles of its pixels' depths along the optical
+    axis, as LLFF's imgs2poses takes them from the sparse points. */
+#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< A COLMAP model as COLMAP's
+    text files: images/ (RGB PNGs, composited onto white for OBJECT, named
+    00000.png ... over the train, val and test views in that order) and
+    sparse/0/ cameras.txt, images.txt, points3D.txt: one PINHOLE camera,
+    every view's pose in COLMAP's convention, and sparse points where
+    pixels' rays of opacity above 0.95 end in a few views, each with a
+    track of the views whose ray through its projection ends there too. */
+#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< The same as COLMAP's binary
+    files (cameras.bin, images.bin, points3D.bin). */
 
 /**
- * Since 0.5: render every pixel of @p camera as nerf_renderer_render_image()
- * does, with the depth in world units instead of the raw sum(w t).
- *
- * Both depths are those of the expected termination point of the ray
- * given that it stops in the scene: with weights w_i at depths t_i along
- * the camera's unnormalised ray d (whose camera-space z is -1), the point
- * o + s d with s = sum(w t) / sum(w), i.e. divided by the opacity.  The
- * raw, undivided value is distance x opacity (exactly so: both are 0 where
- * the opacity is 0).
- *
- * For an NDC sampler (forward-facing scenes), t is an NDC depth; s is the
- * world-space ray parameter of the point that the expected NDC depth
- * sum(w t) / sum(w) maps back to, on the same ray (the NDC warp keeps
- * rays straight), so both outputs are world units there too.  An expected
- * NDC depth of 1 or more (the point at infinity) gives +inf.
- *
- * @param rgb_out        height x width x 3 floats, as
- *                       nerf_renderer_render_image(); may be NULL.
- * @param distance_out   height x width floats: s |d|, the distance in
- *                       world units from the camera centre (the ray's
- *                       origin) to the point, along the ray; 0 where the
- *                       opacity is 0.  May be NULL.
- * @param zdepth_out     height x width floats: s, the point's depth along
- *                       the camera's optical axis (minus its camera-space
- *                       z), in world units; 0 where the opacity is 0.  May
- *                       be NULL.
- * @param opacity_out    height x width floats, sum(w), as
- *                       nerf_renderer_render_image(); may be NULL.
- * @param pixel_capacity pixels each non-NULL buffer can hold.
- * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
- * is NULL); NERF_ENOMEM.
- * Not reentrant for one renderer.
- */
-NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
-                                        const nerf_camera *camera,
-                                        float *rgb_out, float *distance_out,
-                                        float *zdepth_out,
-                                        float *opacity_out,
-                                        size_t pixel_capacity);
-
-/**
- * Since 0.5: write @p data, an array of @p ndim (1..4) dimensions of the
- * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
- * dtype '<f4', the header NumPy itself writes), through a temporary file
- * renamed into place.  numpy.load() reads it back.
- * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
- * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
- * Reentrant.
- */
-NERF_API int nerf_npy_write_float(const char *path, const float *data,
-                                  const size_t *shape, uint32_t ndim);
-
-/**
- * Since 0.5: a point cloud: read-only arrays owned by the handle.
- */
-typedef struct nerf_points nerf_points;
-
-/** Since 0.5: default nerf_points_options.opacity_threshold. */
-#define NERF_POINTS_DEFAULT_OPACITY 0.9f
-/** Since 0.5: default nerf_points_options.max_points. */
-#define NERF_POINTS_DEFAULT_MAX 1000000u
-
-/**
- * Since 0.5: how nerf_points_from_views() turns rendered views into
- * points.  Versioned: fill with nerf_points_options_init().
- */
-typedef struct nerf_points_options {
-    uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
-    float opacity_threshold;   /**< A ray gives a point when its opacity is
-                                    >= this, in [0, 1]; default
-                                    NERF_POINTS_DEFAULT_OPACITY (0.9).  0
-                                    keeps every ray but those of opacity 0
-                                    (which have no depth). */
-    uint64_t max_points;       /**< At most this many points, >= 1; default
-                                    NERF_POINTS_DEFAULT_MAX (10^6).  Beyond
-                                    it the points are thinned evenly in ray
-                                    order (see nerf_points_from_views()). */
-    uint32_t stride;           /**< Render each view at 1/stride of its
-                                    resolution over the same field of view
-                                    (one ray per stride x stride pixels),
-                                    1..1024; default 1. */
-    uint32_t reserved0;        /**< Must be 0. */
-    const nerf_hooks *hooks;   /**< Allocation and logging of the point
-                                    cloud; NULL = defaults. */
-    nerf_progress_cb progress; /**< NULL, or called on the calling thread
-                                    after every chunk of rays (kind
-                                    NERF_PROGRESS_RENDER; done and total
-                                    count the rays of all views); nonzero
-                                    cancels: NERF_ECANCELLED. */
-    void *progress_user;       /**< Passed to progress. */
-} nerf_points_options;
-
-/**
- * Since 0.5: fill @p opts with defaults and record @p struct_size.
+ * Fill @p opts with defaults and record @p struct_size.
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
  */
-NERF_API int nerf_points_options_init(nerf_points_options *opts,
-                                      size_t struct_size);
+NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
+                                     size_t struct_size);
 /** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
+#define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
 
 /**
- * Since 0.5: a point cloud from the expected depth of rendered views.
- *
- * Each view of @p cameras (scaled down by the stride: width and height
- * divided by it, rounded up, focal lengths and principal point divided by
- * it) is rendered with @p renderer as nerf_renderer_render_depth() does.
- * Every ray whose opacity reaches the threshold and whose depth is finite
- * gives one point at o + s d (the expected termination point), coloured
- * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
- *
- * Normals: from the points of the pixel's right and lower neighbours in
- * the same view (the left or upper one at the image's last column or row):
- * the cross product of the differences to them, normalised and oriented
- * toward the camera.  A point gets the normal (0, 0, 0), meaning none,
- * when such a neighbour is missing (no point there) or lies across a depth
- * discontinuity: its distance from the camera differs from the point's by
- * more than 5% x stride of the point's distance.
- *
- * Thinning: when the views give more than max_points points, the points,
- * taken in ray order (views in order, pixels row by row), are thinned
- * evenly: while collecting, every other point is dropped whenever the
- * count would pass 2 max_points (so memory stays bounded), and the
- * remaining n > max_points points are reduced to the points of index
- * floor(k n / max_points), k = 0 .. max_points - 1.  The result depends
- * only on the inputs, not on threads or chunking.
- *
- * The renderer's own progress callback is not called during this call.
- *
- * @param out      the new point cloud (*out is NULL on failure).
- * @param renderer any renderer; its threads render the views.
- * @param cameras  @p n_cameras cameras, each initialised (struct_size set).
- * @param opts     NULL for the defaults.
- * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
- * n_cameras 0, an invalid camera, options out of range);
- * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ * Write the built-in scene to the folder @p dir (created if missing) in the
+ * capture and layout the options say.  The scene is a few coloured solids
+ * with smooth density edges inside a sphere of radius 1.6 about the
+ * origin (z up), rendered by numerically exact volume rendering.  The
+ * OBJECT capture (the default) is a Blender-format dataset:
+ * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
+ * test/, from cameras at distance 4 (use near 2, far 6, as for the Blender
+ * scenes).  The FORWARD and UNBOUNDED captures add a ground (the
+ * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
+ * sky, hills and a sun), so every pixel is opaque and depths reach 40;
+ * they are what scenes of forward-facing and all-round photos are like.
+ * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
+ * JPEG (RGB, composited on white for OBJECT) for the views.  With a lens
+ * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
+ * sees (nerf_camera's model).  Same options, same bytes.
+ * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
+ * capture or layout, a layout that does not fit the capture or is not
+ * supported yet); NERF_EIO (cannot create or write a file, named in the
+ * message); NERF_ENOMEM.
  */
-NERF_API int nerf_points_from_views(nerf_points **out,
-                                    nerf_renderer *renderer,
-                                    const nerf_camera *cameras,
-                                    size_t n_cameras,
-                                    const nerf_points_options *opts);
+NERF_API int nerf_scene_write(const char *dir,
+                              const nerf_scene_options *opts);
 
-/** Since 0.5: the number of points; 0 for NULL. */
-NERF_API size_t nerf_points_count(const nerf_points *points);
-
-/**
- * Since 0.5: the point cloud's arrays, valid until nerf_points_destroy():
- * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
- * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
- * estimated).  Any output may be NULL.  With no points they are NULL.
- * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
- */
-NERF_API int nerf_points_arrays(const nerf_points *points,
-                                const float **positions,
-                                const uint8_t **colours,
-                                const float **normals);
-
-/** Since 0.5: formats of nerf_points_write(). */
-typedef enum nerf_points_format {
-    NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
-    NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
-} nerf_points_format;
-
-/**
- * Since 0.5: write @p points to @p path as a PLY file with one "vertex"
- * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
- * and uchar red, green, blue, through a temporary file renamed into place.
- * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
- * (the file cannot be written, named); NERF_ENOMEM.
- */
-NERF_API int nerf_points_write(const nerf_points *points, const char *path,
-                               int format);
-
-/** Since 0.5: release a point cloud.  NULL is a no-op. */
-NERF_API void nerf_points_destroy(nerf_points *points);
-
-/* ======================================================================
- * Geometry (since 0.5): meshes and density grids
- * ====================================================================== */
-
-/**
- * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
- * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
- * number of threads may read one mesh and write it at the same time.
- */
-typedef struct nerf_mesh nerf_mesh;
+/* ===========================================================================
+ * 14. Meshes
+ * ======================================================================== */
 
 /** Since 0.5: how nerf_mesh_extract() colours the vertices. */
 typedef enum nerf_mesh_colour {
@@ -2495,6 +2278,134 @@ NERF_API const uint8_t *nerf_mesh_colours(const nerf_mesh *mesh);
 NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
                              int format);
 
+/* ===========================================================================
+ * 15. Point clouds
+ * ======================================================================== */
+
+/** Since 0.5: default nerf_points_options.opacity_threshold. */
+#define NERF_POINTS_DEFAULT_OPACITY 0.9f
+/** Since 0.5: default nerf_points_options.max_points. */
+#define NERF_POINTS_DEFAULT_MAX 1000000u
+
+/**
+ * Since 0.5: how nerf_points_from_views() turns rendered views into
+ * points.  Versioned: fill with nerf_points_options_init().
+ */
+typedef struct nerf_points_options {
+    uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
+    float opacity_threshold;   /**< A ray gives a point when its opacity is
+                                    >= this, in [0, 1]; default
+                                    NERF_POINTS_DEFAULT_OPACITY (0.9).  0
+                                    keeps every ray but those of opacity 0
+                                    (which have no depth). */
+    uint64_t max_points;       /**< At most this many points, >= 1; default
+                                    NERF_POINTS_DEFAULT_MAX (10^6).  Beyond
+                                    it the points are thinned evenly in ray
+                                    order (see nerf_points_from_views()). */
+    uint32_t stride;           /**< Render each view at 1/stride of its
+                                    resolution over the same field of view
+                                    (one ray per stride x stride pixels),
+                                    1..1024; default 1. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging of the point
+                                    cloud; NULL = defaults. */
+    nerf_progress_cb progress; /**< NULL, or called on the calling thread
+                                    after every chunk of rays (kind
+                                    NERF_PROGRESS_RENDER; done and total
+                                    count the rays of all views); nonzero
+                                    cancels: NERF_ECANCELLED. */
+    void *progress_user;       /**< Passed to progress. */
+} nerf_points_options;
+
+/**
+ * Since 0.5: fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_points_options_init(nerf_points_options *opts,
+                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
+
+/**
+ * Since 0.5: a point cloud from the expected depth of rendered views.
+ *
+ * Each view of @p cameras (scaled down by the stride: width and height
+ * divided by it, rounded up, focal lengths and principal point divided by
+ * it) is rendered with @p renderer as nerf_renderer_render_depth() does.
+ * Every ray whose opacity reaches the threshold and whose depth is finite
+ * gives one point at o + s d (the expected termination point), coloured
+ * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
+ *
+ * Normals: from the points of the pixel's right and lower neighbours in
+ * the same view (the left or upper one at the image's last column or row):
+ * the cross product of the differences to them, normalised and oriented
+ * toward the camera.  A point gets the normal (0, 0, 0), meaning none,
+ * when such a neighbour is missing (no point there) or lies across a depth
+ * discontinuity: its distance from the camera differs from the point's by
+ * more than 5% x stride of the point's distance.
+ *
+ * Thinning: when the views give more than max_points points, the points,
+ * taken in ray order (views in order, pixels row by row), are thinned
+ * evenly: while collecting, every other point is dropped whenever the
+ * count would pass 2 max_points (so memory stays bounded), and the
+ * remaining n > max_points points are reduced to the points of index
+ * floor(k n / max_points), k = 0 .. max_points - 1.  The result depends
+ * only on the inputs, not on threads or chunking.
+ *
+ * The renderer's own progress callback is not called during this call.
+ *
+ * @param out      the new point cloud (*out is NULL on failure).
+ * @param renderer any renderer; its threads render the views.
+ * @param cameras  @p n_cameras cameras, each initialised (struct_size set).
+ * @param opts     NULL for the defaults.
+ * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
+ * n_cameras 0, an invalid camera, options out of range);
+ * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ */
+NERF_API int nerf_points_from_views(nerf_points **out,
+                                    nerf_renderer *renderer,
+                                    const nerf_camera *cameras,
+                                    size_t n_cameras,
+                                    const nerf_points_options *opts);
+
+/** Since 0.5: the number of points; 0 for NULL. */
+NERF_API size_t nerf_points_count(const nerf_points *points);
+
+/**
+ * Since 0.5: the point cloud's arrays, valid until nerf_points_destroy():
+ * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
+ * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
+ * estimated).  Any output may be NULL.  With no points they are NULL.
+ * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
+ */
+NERF_API int nerf_points_arrays(const nerf_points *points,
+                                const float **positions,
+                                const uint8_t **colours,
+                                const float **normals);
+
+/** Since 0.5: formats of nerf_points_write(). */
+typedef enum nerf_points_format {
+    NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
+    NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
+} nerf_points_format;
+
+/**
+ * Since 0.5: write @p points to @p path as a PLY file with one "vertex"
+ * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
+ * and uchar red, green, blue, through a temporary file renamed into place.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
+ * (the file cannot be written, named); NERF_ENOMEM.
+ */
+NERF_API int nerf_points_write(const nerf_points *points, const char *path,
+                               int format);
+
+/** Since 0.5: release a point cloud.  NULL is a no-op. */
+NERF_API void nerf_points_destroy(nerf_points *points);
+
+/* ===========================================================================
+ * 16. Density grids
+ * ======================================================================== */
+
 /**
  * Since 0.5: sample @p model's density on the grid of @p opts over its box
  * and write it to @p path as a float32 .npy of shape (nz, ny, nx): C order,
@@ -2513,6 +2424,143 @@ NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
 NERF_API int nerf_density_grid_write(const nerf_model *model,
                                      const char *path,
                                      const nerf_mesh_options *opts);
+
+/* ===========================================================================
+ * 17. Utilities: images, arrays and metrics
+ * ======================================================================== */
+
+/** Largest width or height, in pixels, that the image functions accept. */
+#define NERF_IMAGE_MAX_SIDE 16384
+
+/**
+ * Read a PNG file of any colour type (gray, gray+alpha, RGB, RGBA,
+ * palette) and bit depth (1 to 16) into RGBA floats in [0, 1].
+ *
+ * @param rgba_out receives width x height x 4 floats, row-major from the
+ *        top-left pixel, channels interleaved, straight (not premultiplied)
+ *        alpha; opaque files get alpha 1.  Allocated by libnerf with the
+ *        default allocator: release it with nerf_free().  Set to NULL on
+ *        failure.
+ *
+ * 8-bit samples are returned as stored (v / 255).  16-bit samples go
+ * through libpng's linear format: v / 65535 when the file has no gAMA or
+ * sRGB chunk (the usual case), converted to linear light when it has one;
+ * libpng premultiplies those by alpha, so the colour of a fully
+ * transparent 16-bit pixel reads as 0.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (not a PNG, truncated, corrupted, a side larger
+ * than NERF_IMAGE_MAX_SIDE, or a header claiming more pixels than the
+ * file can hold: refused before anything is allocated for them);
+ * NERF_ENOMEM.  Messages start with the path.  Reentrant.
+ */
+NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
+                                 uint32_t *height_out, float **rgba_out);
+
+/**
+ * Since 0.3: read a PNG or a JPEG file, told apart by its first bytes
+ * (not its name), as the dataset loaders do.  PNGs are read as by
+ * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
+ * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
+ * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
+ * width and height are those of the upright picture, swapped for 5 to 8).
+ *
+ * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
+ * corrupted data (JPEG decoder warnings about the data count as errors),
+ * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
+ * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
+ * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
+ * path.  Reentrant.
+ */
+NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
+                             uint32_t *height_out, float **rgba_out);
+
+/**
+ * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
+ * and rounded to the nearest of 256 levels (NaN gives 0).  Use channels 1
+ * for depth or opacity maps (scale them into [0, 1] first).
+ *
+ * @param channels 1 (gray), 3 (RGB) or 4 (RGBA).
+ * @param pixels   width x height x channels floats, row-major from the
+ *                 top-left pixel, channels interleaved.
+ *
+ * The file is written to a temporary name beside @p path, flushed and
+ * renamed, so an existing file at @p path is only ever replaced by a
+ * complete image.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, zero size or a side above
+ * NERF_IMAGE_MAX_SIDE, bad channel count); NERF_EIO; NERF_ENOMEM.
+ * Reentrant.
+ */
+NERF_API int nerf_image_write_png(const char *path, uint32_t width,
+                                  uint32_t height, uint32_t channels,
+                                  const float *pixels);
+
+/**
+ * As nerf_image_write_png(), from 8-bit samples written as they are.
+ * @param pixels width x height x channels bytes, row-major, interleaved.
+ * @return as nerf_image_write_png().
+ */
+NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
+                                   uint32_t height, uint32_t channels,
+                                   const uint8_t *pixels);
+
+/**
+ * Release a buffer that a libnerf function allocated for the caller (such
+ * as the pixels of nerf_image_read_png()).  NULL is a no-op.  Never pass
+ * it memory from anywhere else, nor buffers owned by a handle.
+ */
+NERF_API void nerf_free(void *ptr);
+
+/**
+ * Since 0.5: write @p data, an array of @p ndim (1..4) dimensions of the
+ * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
+ * dtype '<f4', the header NumPy itself writes), through a temporary file
+ * renamed into place.  numpy.load() reads it back.
+ * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
+ * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
+ * Reentrant.
+ */
+NERF_API int nerf_npy_write_float(const char *path, const float *data,
+                                  const size_t *shape, uint32_t ndim);
+
+/**
+ * Peak signal-to-noise ratio of two images with values in [0, 1]:
+ * -10 log10(MSE), the mean taken over all @p count samples (every channel
+ * of every pixel).  Identical images give +infinity (IEEE HUGE_VAL), not a
+ * cap.
+ * @param a, b  @p count floats each, in any layout (the same for both).
+ * @param out   receives the PSNR in decibels.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, count 0, NaN or infinite
+ * values).  Reentrant.
+ */
+NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
+                       double *out);
+
+/**
+ * Structural similarity (Wang et al. 2004) as the reference NeRF
+ * evaluation computes it: an 11 x 11 Gaussian window with sigma 1.5,
+ * K1 = 0.01, K2 = 0.03, data range 1; local means, variances and
+ * covariance by separable filtering over 'valid' positions only (no
+ * padding: (width - 10) x (height - 10) windows), population (not sample)
+ * variances; the SSIM map is averaged over those positions and over the
+ * channels, each channel computed on its own.  Computed in double
+ * precision; memory used is O(width), whatever the height.
+ *
+ * @param a, b      width x height x channels floats in [0, 1], row-major,
+ *                  channels interleaved.
+ * @param channels  1..4 (3 for RGB).
+ * @param out       receives the mean SSIM, 1 for identical images.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, width or height below 11,
+ * bad channel count, NaN or infinite values); NERF_ENOMEM.  Reentrant.
+ */
+NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
+                       uint32_t height, uint32_t channels, double *out);
 
 #ifdef __cplusplus
 }
