@@ -94,15 +94,16 @@ typedef enum nerf_status {
     NERF_EFORMAT = -5,      /**< A file or buffer is malformed or corrupted. */
     NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the call. */
     NERF_EVERSION = -7,     /**< Unsupported struct or file version. */
-    /* Since 0.4.  Before, both were NERF_EIO (and a file that is not a
-     * checkpoint NERF_EFORMAT). */
+    /* Before 0.4 both of the next two were NERF_EIO (and a file that is
+     * not a checkpoint NERF_EFORMAT). */
     NERF_ENOENT = -8,       /**< No such file or folder: a path to read
-                                 does not exist. */
+                                 does not exist.  @since 0.4 */
     NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the
                                  kind asked for: a folder in no known
                                  dataset layout, a file that is not a
                                  libnerf checkpoint, a folder where a file
-                                 is expected or a file where a folder is. */
+                                 is expected or a file where a folder is.
+                                 @since 0.4 */
 } nerf_status;
 
 /**
@@ -232,9 +233,10 @@ typedef enum nerf_progress_kind {
     NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
     NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
                                    psnr are those of the last step. */
-    NERF_PROGRESS_GEOMETRY = 3 /**< Since 0.5.  nerf_mesh_extract() and
+    NERF_PROGRESS_GEOMETRY = 3 /**< nerf_mesh_extract() and
                                    nerf_density_grid_write(): done and
-                                   total count planes of grid samples. */
+                                   total count planes of grid samples.
+                                   @since 0.5 */
 } nerf_progress_kind;
 
 /**
@@ -278,14 +280,16 @@ typedef struct nerf_trainer nerf_trainer;   /**< Optimisation loop state. */
 typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 
 /**
- * Since 0.5: a point cloud: read-only arrays owned by the handle.
+ * A point cloud: read-only arrays owned by the handle.
+ * @since 0.5
  */
 typedef struct nerf_points nerf_points;
 
 /**
- * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
+ * A triangle mesh extracted from a model (nerf_mesh_extract()).
  * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
  * number of threads may read one mesh and write it at the same time.
+ * @since 0.5
  */
 typedef struct nerf_mesh nerf_mesh;
 
@@ -349,7 +353,8 @@ typedef struct nerf_camera {
                                fx = 0.5 width / tan(0.5 a). */
     float cx, cy;         /**< Principal point in pixels from the top-left
                                image corner; usually width/2, height/2. */
-    /* Since 0.3.  Zero-filled by an older caller: a pinhole camera. */
+    /* Lens distortion: zero-filled by an older caller, a pinhole camera.
+     * @since 0.3 */
     float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
                                within +-1000; default 0. */
     float p1, p2;         /**< Tangential distortion; finite, within
@@ -441,8 +446,9 @@ typedef struct nerf_sampler_options {
     uint32_t reserved1;   /**< Must be 0. */
     uint64_t seed;        /**< Key of the random streams; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2: ray marching.  Zero-filled by an older caller, which
-     * gives stratified and hierarchical sampling. */
+    /* Ray marching: zero-filled by an older caller, which gives
+     * stratified and hierarchical sampling.
+     * @since 0.2 */
     uint32_t march_steps; /**< 0 (the default): stratified and
                                hierarchical sampling as above.  N in
                                1..65536: march through the model's
@@ -540,19 +546,18 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
-    NERF_ENCODING_HASHGRID = 2,   /**< Since 0.2.  Multiresolution hash
+    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash
                                        grid (positions only; its tables
                                        are trained).  The model then also
                                        owns an occupancy grid (128^3
                                        cells over the bound) for
-                                       ray-marching samplers. */
-    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Since 0.2.  Real
+                                       ray-marching samplers.  @since 0.2 */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real
                                        spherical harmonics (directions
-                                       only). */
+                                       only).  @since 0.2 */
 } nerf_encoding_kind;
 
-/** Activation turning the network's density output into sigma (since
- * 0.2). */
+/** Activation turning the network's density output into sigma.  @since 0.2 */
 typedef enum nerf_density_activation {
     NERF_DENSITY_RELU = 0, /**< The paper's: ReLU, applied when rendering. */
     NERF_DENSITY_EXP = 1   /**< exp, truncated at exp(15) (hash-grid
@@ -567,16 +572,17 @@ typedef enum nerf_density_activation {
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
     NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
-    NERF_PRESET_FAST = 3       /**< Since 0.2.  Hash-grid encoding and
+    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and
                                     small MLPs (Mueller et al. 2022), one
-                                    network. */
+                                    network.  @since 0.2 */
 } nerf_preset;
 
 /**
- * How a model computes its matrix products (nerf_model_options.matmul;
- * since 0.2).  Either way the weights, their gradients, the optimiser
- * state and checkpoints are fp32: the choice changes the arithmetic of the
+ * How a model computes its matrix products (nerf_model_options.matmul).
+ * Either way the weights, their gradients, the optimiser state and
+ * checkpoints are fp32: the choice changes the arithmetic of the
  * products, never what is stored.
+ * @since 0.2
  */
 typedef enum nerf_matmul {
     NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
@@ -589,7 +595,7 @@ typedef enum nerf_matmul {
                                wide layers (docs/performance.md); results
                                differ from fp32 by the rounding (relative
                                errors of order 1e-3). */
-    NERF_MATMUL_FP32_ONEDNN = 2 /**< Since 0.7: fp32 products, bias and
+    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and
                                ReLU fused into them, through oneDNN's
                                matmul instead of cblas_sgemm.  Needs a
                                libnerf built with oneDNN: ask
@@ -604,13 +610,15 @@ typedef enum nerf_matmul {
                                (as bf16's), not across thread counts.
                                Networks that the fused small-MLP path
                                would run (the fast preset) run through
-                               oneDNN too, which is slower for them. */
+                               oneDNN too, which is slower for them.
+                               @since 0.7 */
 } nerf_matmul;
 
 /**
- * Since 0.3: where a hash-grid model's grids lie (nerf_model_options.space).
+ * Where a hash-grid model's grids lie (nerf_model_options.space).
  * The frequency encoding of the reference networks reads coordinates
  * anywhere and takes BOX (its only value) whatever the scene.
+ * @since 0.3
  */
 typedef enum nerf_space {
     NERF_SPACE_BOX = 0,      /**< The cube [-bound, bound]^3 of world space;
@@ -641,7 +649,8 @@ typedef enum nerf_space {
  *
  * The first call for a oneDNN kind creates small oneDNN primitives to
  * find out (a few milliseconds); later calls return the stored answer.
- * Thread-safe.  Since 0.2 (symbol version NERF_0.2).
+ * Thread-safe.  Symbol version NERF_0.2.
+ * @since 0.2
  */
 NERF_API int nerf_matmul_supported(int kind);
 
@@ -676,8 +685,9 @@ typedef struct nerf_model_options {
     uint32_t reserved0;       /**< Must be 0. */
     uint64_t seed;            /**< Seed of initialisation and training; default 0. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2: the hash-grid model.  Zero-filled by an older caller,
-     * which gives the reference behaviour. */
+    /* The hash-grid model: zero-filled by an older caller, which gives
+     * the reference behaviour.
+     * @since 0.2 */
     uint32_t dir_encoding;    /**< nerf_encoding_kind of the view
                                    direction: FREQUENCY (the default; 0
                                    reads as FREQUENCY) or
@@ -713,7 +723,8 @@ typedef struct nerf_model_options {
                                    nerf_matmul_supported() says 0 makes
                                    nerf_model_create() fail with
                                    NERF_EINVAL.  Saved in checkpoints. */
-    /* Since 0.3.  Zero-filled by an older caller: BOX, as before. */
+    /* Zero-filled by an older caller: BOX, as before.
+     * @since 0.3 */
     uint32_t space;           /**< nerf_space of a hash-grid model; default
                                    BOX.  Saved in checkpoints. */
 } nerf_model_options;
@@ -791,37 +802,37 @@ typedef enum nerf_param {
     NERF_PARAM_DECAY_STEPS = 102,         /**< Default 250000: lr(t) =
                                                lr0 (lr1/lr0)^(t/steps). */
     /** Default 0.9.  Adam's bias corrections go by the step count, but
-     * for a hash table's parameters (since 0.10) by each one's own count
-     * of updates, as Mueller et al.'s: a step leaves the parameters it
-     * did not touch, moments and corrections included, as they were.
-     * A model resumed from a checkpoint of an older libnerf goes on by
-     * the step, as it was trained. */
+     * for a hash table's parameters by each one's own count of updates,
+     * as Mueller et al.'s: a step leaves the parameters it did not touch,
+     * moments and corrections included, as they were.  A model resumed
+     * from a checkpoint of an older libnerf goes on by the step, as it
+     * was trained.
+     * @since 0.10 for the hash tables' own counts */
     NERF_PARAM_ADAM_BETA1 = 103,
     NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999; 0.99 for
                                                hash-grid models. */
     NERF_PARAM_ADAM_EPS = 105,            /**< Default 1e-7 (the paper's);
                                                1e-15 for hash-grid models
                                                (Mueller et al.'s). */
-    /** Since 0.2.  L2 penalty on the network layers (not on a hash
-     * table): weight_decay * w is added to each layer parameter's
-     * gradient.  Default 0; 1e-6 for hash-grid models, as Mueller et al.
-     * train them. */
+    /** L2 penalty on the network layers (not on a hash table):
+     * weight_decay * w is added to each layer parameter's gradient.
+     * Default 0; 1e-6 for hash-grid models, as Mueller et al. train
+     * them.
+     * @since 0.2 */
     NERF_PARAM_WEIGHT_DECAY = 106,
-    /** Since 0.5.  The rate holds at LEARNING_RATE until this step, then
-     * decays exponentially to LEARNING_RATE_FINAL at DECAY_STEPS:
+    /** The rate holds at LEARNING_RATE until this step, then decays
+     * exponentially to LEARNING_RATE_FINAL at DECAY_STEPS:
      * lr(t) = lr0 (lr1/lr0)^((t - start) / (steps - start)) for t > start.
      * Default 0 (the paper's schedule).  nerf_trainer_run_for() sets it
-     * to the step where it fits the schedule to its time budget. */
+     * to the step where it fits the schedule to its time budget.
+     * @since 0.5 */
     NERF_PARAM_DECAY_START = 107,
-    /** Since 0.9.  Over this many last steps up to DECAY_STEPS (the
-     * schedule's end, which nerf_trainer_run_for() fits to its budget)
-     * the model keeps an exponential moving average of its weights
-     * (each step keeps 0.95 of it, as Mueller et al.'s), and the step
-     * that reaches DECAY_STEPS makes that average the weights.  Training
-     * past the end goes on from it.  It holds a second copy of the
-     * weights during those steps, and a checkpoint saved then carries it.
-     * Default 0 (off; the paper's models); 100 for hash-grid models.  A
-     * checkpoint from before 0.9 resumes with 0. */
+    /** Over this many last steps up to DECAY_STEPS the model keeps an
+     * exponential moving average of its weights, which the step that
+     * reaches DECAY_STEPS makes the weights (docs/api-notes.md, "Weight
+     * averaging").  Default 0 (off; the paper's models); 100 for
+     * hash-grid models.  A checkpoint from before 0.9 resumes with 0.
+     * @since 0.9 */
     NERF_PARAM_AVERAGE_STEPS = 108
 } nerf_param;
 
@@ -848,7 +859,7 @@ NERF_API int nerf_model_get_param(const nerf_model *model, int param,
  */
 NERF_API double nerf_model_learning_rate(const nerf_model *model);
 
-/** Since 0.5.  What a model's learning-rate schedule is (nerf_schedule). */
+/** What a model's learning-rate schedule is (nerf_schedule).  @since 0.5 */
 typedef enum nerf_schedule_state {
     /** Set by its parameters alone: a decay over DECAY_STEPS (from
      * DECAY_START), as nerf-train --steps sets it. */
@@ -864,8 +875,9 @@ typedef enum nerf_schedule_state {
 } nerf_schedule_state;
 
 /**
- * Since 0.5.  How a model's schedule came about; saved in checkpoints.
+ * How a model's schedule came about; saved in checkpoints.
  * Versioned: set struct_size (sizeof) before passing it.
+ * @since 0.5
  */
 typedef struct nerf_schedule {
     uint32_t struct_size;    /**< Set by the caller. */
@@ -882,9 +894,10 @@ typedef struct nerf_schedule {
 } nerf_schedule;
 
 /**
- * Since 0.5.  Fill @p out with the model's schedule.
+ * Fill @p out with the model's schedule.
  * @return NERF_OK, or NERF_EINVAL for a NULL argument or a struct_size
  * too small for struct_size and state.
+ * @since 0.5
  */
 NERF_API int nerf_model_schedule(const nerf_model *model, nerf_schedule *out);
 
@@ -927,7 +940,7 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
                              const nerf_hooks *hooks);
 
 /**
- * Since 0.4: save the model like nerf_model_save() but without the Adam
+ * Save the model like nerf_model_save() but without the Adam
  * moments, which hold twice as many floats as the weights: the weights,
  * the options, the step, the occupancy grid and the render settings
  * (nerf_model_render_settings()), all a render or an evaluation needs.
@@ -937,6 +950,7 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
  * weights-only file again.  libnerf before 0.4 refuses the file with
  * NERF_EVERSION.
  * @return as nerf_model_save().
+ * @since 0.4
  */
 NERF_API int nerf_model_export(const nerf_model *model, const char *path);
 
@@ -953,7 +967,7 @@ NERF_API int nerf_model_export(const nerf_model *model, const char *path);
 NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                    const nerf_model_options *opts);
 
-/** Bits of nerf_model_contents() (since 0.4). */
+/** Bits of nerf_model_contents().  @since 0.4 */
 #define NERF_MODEL_HAS_OPTIMIZER 0x1u /**< The Adam moments: training can
                                            resume (every model but one
                                            loaded from a weights-only
@@ -968,12 +982,12 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                            trained the model on
                                            (nerf_model_training_data()),
                                            kept by checkpoints. */
-#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< Since 0.8: the batch a
+#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< The batch a
                                            trainer last trained the model
                                            with
                                            (nerf_model_training_batch()),
-                                           kept by checkpoints. */
-#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Since 0.10: each
+                                           kept by checkpoints.  @since 0.8 */
+#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Each
                                            hash-table parameter's Adam
                                            corrections by its own count of
                                            updates (hash-grid models), kept
@@ -981,24 +995,26 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                            model loaded with the moments
                                            but without them, from an older
                                            libnerf's file, corrects by the
-                                           step, as it was trained. */
-#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Since 0.11: weights
+                                           step, as it was trained.
+                                           @since 0.10 */
+#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Weights
                                            that are NaN or infinite, as a
                                            run that diverged leaves them:
                                            the model can be queried, and
                                            nothing else takes it (see
-                                           nerf_model_load()). */
+                                           nerf_model_load()).  @since 0.11 */
 
 /**
- * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
+ * What @p model holds beyond its weights, NERF_MODEL_HAS_*
  * bits; 0 for NULL.  For a loaded model, which of these its file held.
  * NERF_MODEL_HAS_NONFINITE_WEIGHTS is found by a pass over the weights
  * after they last changed (a training step, a load).
+ * @since 0.4
  */
 NERF_API uint32_t nerf_model_contents(const nerf_model *model);
 
 /**
- * Since 0.4: a one-line description of the data @p model was last trained
+ * A one-line description of the data @p model was last trained
  * on, as its trainer recorded it: image count and size, the files' size
  * when downscaled, the scene's format, NDC, mean colour and bounds ("100
  * images of 100x100 from 800x800 files (blender, mean colour 0.85 0.83
@@ -1007,12 +1023,13 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model);
  * recorded (nerf_model_contents() lacks NERF_MODEL_HAS_DATA_RECORD).
  * nerf_trainer_create() warns when it is given data unlike this record.
  * @return NERF_OK, or NERF_EINVAL (NULL model or buffer, size 0).
+ * @since 0.4
  */
 NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
                                       size_t size);
 
 /**
- * Since 0.8: the batch @p model was last trained with, as its trainer
+ * The batch @p model was last trained with, as its trainer
  * recorded it: nerf_trainer_options.batch_rays into @p rays and
  * batch_samples into @p samples.  Both 0 when nothing is recorded
  * (nerf_model_contents() lacks NERF_MODEL_HAS_BATCH_RECORD: a model never
@@ -1022,12 +1039,13 @@ NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
  * nerf_trainer_create() warns when a model that has taken steps is given
  * another.
  * @return NERF_OK, or NERF_EINVAL (a NULL argument).
+ * @since 0.8
  */
 NERF_API int nerf_model_training_batch(const nerf_model *model,
                                        uint32_t *rays, uint32_t *samples);
 
 /**
- * Since 0.4: record what rendering @p model needs: the sampling fields of
+ * Record what rendering @p model needs: the sampling fields of
  * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
  * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
  * are composited on white (@p white_background 1) or black (0).
@@ -1037,13 +1055,14 @@ NERF_API int nerf_model_training_batch(const nerf_model *model,
  * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
  * would refuse, white_background not 0 or 1); NERF_EVERSION as
  * nerf_sampler_create().
+ * @since 0.4
  */
 NERF_API int nerf_model_set_render_settings(nerf_model *model,
                                             const nerf_sampler_options *sampler,
                                             uint32_t white_background);
 
 /**
- * Since 0.4: the settings to render @p model with.  Either output may be
+ * The settings to render @p model with.  Either output may be
  * NULL; each must be initialised (its struct_size set).  Into @p sampler go
  * the fields nerf_model_set_render_settings() lists; its seed, perturb
  * and hooks are kept.  Into @p renderer goes white_background; its other
@@ -1060,6 +1079,7 @@ NERF_API int nerf_model_set_render_settings(nerf_model *model,
  * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
  * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
  * forged file).
+ * @since 0.4
  */
 NERF_API int nerf_model_render_settings(const nerf_model *model,
                                         nerf_sampler_options *sampler,
@@ -1145,7 +1165,7 @@ NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
  * Create a renderer that draws @p model with the samples of @p sampler.
  * @p opts is copied; NULL means the defaults.
  *
- * Since 0.4, @p sampler may be NULL: the renderer then makes (and owns) a
+ * @p sampler may be NULL: the renderer then makes (and owns) a
  * sampler from the model's render settings (nerf_model_render_settings():
  * those its trainer recorded, else those its shape suggests), and when
  * @p opts is NULL too, it composites on the model's background as well,
@@ -1165,6 +1185,7 @@ NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
  * accepts (a forged file), as nerf_model_render_settings();
  * NERF_EVERSION for an options struct from a newer header with non-zero
  * unknown fields; NERF_ENOMEM.
+ * @since 0.4 for a NULL @p sampler
  */
 NERF_API int nerf_renderer_create(nerf_renderer **out,
                                   const nerf_model *model,
@@ -1241,7 +1262,7 @@ NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
                                            size_t pixel_capacity);
 
 /**
- * Since 0.5: render every pixel of @p camera as nerf_renderer_render_image()
+ * Render every pixel of @p camera as nerf_renderer_render_image()
  * does, with the depth in world units instead of the raw sum(w t).
  *
  * Both depths are those of the expected termination point of the ray
@@ -1273,6 +1294,7 @@ NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
  * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
  * is NULL); NERF_ENOMEM.
  * Not reentrant for one renderer.
+ * @since 0.5
  */
 NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
                                         const nerf_camera *camera,
@@ -1354,7 +1376,7 @@ typedef struct nerf_dataset_options {
                                     and val are empty); a single
                                     transforms.json serves every frame to
                                     every split. */
-    uint32_t forward_facing;   /**< Since 0.4.  COLMAP: 1 places the
+    uint32_t forward_facing;   /**< COLMAP: 1 places the
                                     scene as LLFF places a forward-facing
                                     capture (recentred on the average
                                     pose, the nearest sparse-point depth
@@ -1363,7 +1385,7 @@ typedef struct nerf_dataset_options {
                                     then says NDC.  0 (default):
                                     unbounded.  LLFF scenes are
                                     forward-facing either way; a Blender
-                                    scene with 1 is refused. */
+                                    scene with 1 is refused.  @since 0.4 */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
 
@@ -1527,7 +1549,7 @@ NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
 NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
 
 /**
- * Since 0.3: the scene space a hash-grid model of this dataset should use
+ * The scene space a hash-grid model of this dataset should use
  * (nerf_model_options.space and bound): NDC for forward-facing (LLFF)
  * scenes with bound 1.5 (NDC x and y within [-1.5, 1.5]); UNBOUNDED for
  * scenes that extend far beyond their centre (a COLMAP model, a transforms
@@ -1535,6 +1557,7 @@ NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
  * loader placed the scene's centre in; BOX with bound 1.5 otherwise (the
  * Blender scenes).
  * @return NERF_OK or NERF_EINVAL (NULL pointer).
+ * @since 0.3
  */
 NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
                                 float *bound_out);
@@ -1676,14 +1699,15 @@ NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
  * 12. Trainer
  * ======================================================================== */
 
-/** Since 0.5.  Sparse ranges a nerf_exchange can describe. */
+/** Sparse ranges a nerf_exchange can describe.  @since 0.5 */
 #define NERF_EXCHANGE_MAX_SPARSE 4
 
 /**
- * Since 0.5.  What a trainer tells its gradient and checksum hooks (see
+ * What a trainer tells its gradient and checksum hooks (see
  * nerf_trainer_options.worker_count) besides the numbers they exchange.
  * Versioned: the library sets struct_size; read a field only if
  * struct_size covers it (fields are only appended).
+ * @since 0.5
  */
 typedef struct nerf_exchange {
     uint32_t struct_size;  /**< sizeof the library's struct. */
@@ -1708,7 +1732,7 @@ typedef struct nerf_exchange {
 } nerf_exchange;
 
 /**
- * Since 0.5.  Gradient hook: called by every worker after the step's
+ * Gradient hook: called by every worker after the step's
  * backward pass and before the optimiser, with the model's flat gradient
  * vector @p grads of @p n floats (n = nerf_model_param_count()).  It must
  * leave in @p grads the sum of all workers' vectors, element by element,
@@ -1719,16 +1743,18 @@ typedef struct nerf_exchange {
  * the step, never on a worker thread, and must not call back into the
  * trainer.  Return 0, or nonzero to fail the step (NERF_ERROR, the
  * weights left as before it).
+ * @since 0.5
  */
 typedef int (*nerf_grad_hook)(void *user, float *grads, size_t n,
                               nerf_exchange *x);
 
 /**
- * Since 0.5.  Checksum hook (nerf_trainer_options.checksum_every): on
+ * Checksum hook (nerf_trainer_options.checksum_every): on
  * entry both @p range[0] and @p range[1] hold this worker's checksum of
  * its weights (CRC-32 of the parameters' bytes); the hook must leave in
  * range[0] the smallest and in range[1] the largest over all workers,
  * the same on every worker.  Return 0, or nonzero to fail the step.
+ * @since 0.5
  */
 typedef int (*nerf_checksum_hook)(void *user, uint32_t range[2],
                                   nerf_exchange *x);
@@ -1761,8 +1787,9 @@ typedef struct nerf_trainer_options {
     uint32_t reserved0;       /**< Must be 0. */
     const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2.  Zero-filled by an older caller, which gives the
-     * behaviour from before these fields. */
+    /* Zero-filled by an older caller, which gives the behaviour from
+     * before these fields.
+     * @since 0.2 */
     uint32_t batch_samples;   /**< 0 (default): every step takes batch_rays
                                    rays.  N > 0: a step takes rays, of the
                                    batch_rays it draws, until their samples
@@ -1782,8 +1809,9 @@ typedef struct nerf_trainer_options {
                                     (Mueller et al.).  0 (default): the
                                     background is white_background's.
                                     Images without alpha ignore it. */
-    /* Since 0.5: data-parallel training (docs/distributed.md).  Zero
-     * (an older caller's zero fill) is a trainer alone. */
+    /* Data-parallel training (docs/distributed.md).  Zero (an older
+     * caller's zero fill) is a trainer alone.
+     * @since 0.5 */
     uint32_t worker_rank;     /**< This worker, 0..worker_count - 1. */
     uint32_t worker_count;    /**< 0 or 1 (default): alone.  W > 1: this
                                    trainer is one of W, each with a copy
@@ -1822,8 +1850,9 @@ typedef struct nerf_trainer_options {
                                    with NERF_ERROR if they differ.  0
                                    (default): never. */
     uint32_t reserved1;       /**< Must be 0. */
-    /* Since 0.6.  Zero (an older caller's zero fill): saves by steps
-     * alone, as before. */
+    /* Zero (an older caller's zero fill): saves by steps alone, as
+     * before.
+     * @since 0.6 */
     double checkpoint_seconds; /**< S > 0: nerf_trainer_run() and
                                     nerf_trainer_run_for() also save to
                                     checkpoint_path once S seconds have
@@ -1859,7 +1888,7 @@ typedef struct nerf_train_stats {
     double psnr;           /**< PSNR (dB) of the last pass's colours. */
     double psnr_coarse;    /**< PSNR (dB) of the coarse pass. */
     double learning_rate;  /**< The rate the step used. */
-    /* Since 0.2. */
+    /* @since 0.2 */
     double samples_per_ray; /**< Network evaluations per ray in the step,
                                  all passes: n_coarse (+ n_coarse +
                                  n_fine with a fine pass), or with ray
@@ -1954,7 +1983,7 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
                               nerf_train_stats *stats_out);
 
 /**
- * Since 0.5.  Train for about @p seconds of wall time, the learning rate
+ * Train for about @p seconds of wall time, the learning rate
  * decaying over the steps that time allows, rather than over a step count
  * guessed beforehand.
  *
@@ -2004,6 +2033,7 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds, or
  * for a trainer that is one of several workers (worker_count > 1), each
  * of which would fit the run to its own clock.
+ * @since 0.5
  */
 NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
                                   nerf_train_stats *stats_out);
@@ -2032,8 +2062,8 @@ NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
                                        .jpg in file_path: what a camera
                                        gives, with no mask. */
 
-/** Since 0.11: the sizes and view counts nerf_scene_write() takes (a
- * program's help can quote them: plain integers). */
+/** The sizes and view counts nerf_scene_write() takes (a program's help
+ * can quote them: plain integers).  @since 0.11 */
 #define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
 #define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
 #define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
@@ -2055,23 +2085,25 @@ typedef struct nerf_scene_options {
     uint32_t reserved0;   /**< Must be 0. */
     uint64_t seed;        /**< Placement of the validation views; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    uint32_t capture;     /**< Since 0.3.  How the scene is photographed:
-                               NERF_SCENE_CAPTURE_*; default OBJECT. */
-    uint32_t layout;      /**< Since 0.3.  The files it is written as:
+    uint32_t capture;     /**< How the scene is photographed:
+                               NERF_SCENE_CAPTURE_*; default OBJECT.
+                               @since 0.3 */
+    uint32_t layout;      /**< The files it is written as:
                                NERF_SCENE_LAYOUT_*; default BLENDER.  The
                                usual pairs: OBJECT and UNBOUNDED in
-                               BLENDER, FORWARD in LLFF. */
-    uint32_t image_format; /**< Since 0.3.  NERF_IMAGE_FORMAT_*: the views'
-                                files; default NERF_IMAGE_FORMAT_PNG. */
-    uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
-                                (default) = 95.  Ignored for PNG. */
-    float k1, k2, p1, p2, k3; /**< Since 0.3.  The lens the views are
+                               BLENDER, FORWARD in LLFF.  @since 0.3 */
+    uint32_t image_format; /**< NERF_IMAGE_FORMAT_*: the views'
+                                files; default NERF_IMAGE_FORMAT_PNG.
+                                @since 0.3 */
+    uint32_t jpeg_quality; /**< JPEG quality 1..100; 0
+                                (default) = 95.  Ignored for PNG.  @since 0.3 */
+    float k1, k2, p1, p2, k3; /**< The lens the views are
                                photographed through (nerf_camera's
                                distortion): each pixel holds what its ray
                                through that lens sees, and the files
                                record the coefficients (the LLFF layout
                                cannot, COLMAP's OPENCV model has no k3).
-                               Default 0: a pinhole camera. */
+                               Default 0: a pinhole camera.  @since 0.3 */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
@@ -2151,7 +2183,7 @@ NERF_API int nerf_scene_write(const char *dir,
  * 14. Meshes
  * ======================================================================== */
 
-/** Since 0.5: how nerf_mesh_extract() colours the vertices. */
+/** How nerf_mesh_extract() colours the vertices.  @since 0.5 */
 typedef enum nerf_mesh_colour {
     NERF_MESH_COLOUR_NONE = 0,  /**< No colours (nerf_mesh_colours() gives
                                      NULL; the files have none). */
@@ -2161,7 +2193,7 @@ typedef enum nerf_mesh_colour {
                                      direction minus the vertex normal. */
 } nerf_mesh_colour;
 
-/** Since 0.5: file formats of nerf_mesh_write(). */
+/** File formats of nerf_mesh_write().  @since 0.5 */
 typedef enum nerf_mesh_format {
     NERF_MESH_FORMAT_AUTO = 0,       /**< By the path's extension: .ply
                                           (binary), .obj; others refused. */
@@ -2173,10 +2205,11 @@ typedef enum nerf_mesh_format {
 } nerf_mesh_format;
 
 /**
- * Since 0.5: settings of nerf_mesh_extract() and nerf_density_grid_write().
+ * Settings of nerf_mesh_extract() and nerf_density_grid_write().
  * The density is sampled on a grid over a box and, for a mesh, cut at the
  * threshold by marching cubes, one layer of cells at a time (memory holds
  * two planes of samples, not the whole grid).
+ * @since 0.5
  */
 typedef struct nerf_mesh_options {
     uint32_t struct_size;   /**< Set by nerf_mesh_options_init(). */
@@ -2213,9 +2246,10 @@ typedef struct nerf_mesh_options {
 } nerf_mesh_options;
 
 /**
- * Since 0.5: fill @p opts with the defaults and record @p struct_size (or
+ * Fill @p opts with the defaults and record @p struct_size (or
  * use NERF_MESH_OPTIONS_INIT).
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
                                     size_t struct_size);
@@ -2223,7 +2257,7 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
 #define NERF_MESH_OPTIONS_INIT(o) nerf_mesh_options_init((o), sizeof *(o))
 
 /**
- * Since 0.5: extract the surface where @p model's density crosses
+ * Extract the surface where @p model's density crosses
  * opts->threshold, with marching cubes over the grid the options lay over
  * their box.  The density is that of the model's fine network when it has
  * one.  Where the surface stays inside the box the mesh is closed (every
@@ -2246,34 +2280,36 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
  * Reads the model only (as nerf_model_query()): several calls may run on
  * one model at once while nothing trains it.  Memory beyond the mesh is
  * two planes of samples and one layer of edge indices, not the grid.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_extract(nerf_mesh **out, const nerf_model *model,
                                const nerf_mesh_options *opts);
 
-/** Since 0.5: release a mesh.  NULL is a no-op. */
+/** Release a mesh.  NULL is a no-op.  @since 0.5 */
 NERF_API void nerf_mesh_destroy(nerf_mesh *mesh);
 
-/** Since 0.5: vertices of @p mesh (0 for NULL). */
+/** Vertices of @p mesh (0 for NULL).  @since 0.5 */
 NERF_API size_t nerf_mesh_vertex_count(const nerf_mesh *mesh);
-/** Since 0.5: triangles of @p mesh (0 for NULL). */
+/** Triangles of @p mesh (0 for NULL).  @since 0.5 */
 NERF_API size_t nerf_mesh_face_count(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 floats, x y z; NULL for an empty mesh. */
+/** vertex_count x 3 floats, x y z; NULL for an empty mesh.  @since 0.5 */
 NERF_API const float *nerf_mesh_vertices(const nerf_mesh *mesh);
-/** Since 0.5: face_count x 3 vertex indices; NULL for an empty mesh. */
+/** face_count x 3 vertex indices; NULL for an empty mesh.  @since 0.5 */
 NERF_API const uint32_t *nerf_mesh_faces(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 unit normals, or NULL. */
+/** vertex_count x 3 unit normals, or NULL.  @since 0.5 */
 NERF_API const float *nerf_mesh_normals(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 bytes r g b, or NULL (colour NONE). */
+/** vertex_count x 3 bytes r g b, or NULL (colour NONE).  @since 0.5 */
 NERF_API const uint8_t *nerf_mesh_colours(const nerf_mesh *mesh);
 
 /**
- * Since 0.5: write @p mesh to @p path in nerf_mesh_format @p format,
+ * Write @p mesh to @p path in nerf_mesh_format @p format,
  * through a temporary file renamed over @p path.  PLY files carry
  * vertices (float x y z, float nx ny nz, uchar red green blue when the
  * mesh has them) and faces (uchar count, uint indices).
  * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format, AUTO with
  * an extension other than .ply or .obj); NERF_EIO naming @p path;
  * NERF_ENOMEM.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
                              int format);
@@ -2282,14 +2318,15 @@ NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
  * 15. Point clouds
  * ======================================================================== */
 
-/** Since 0.5: default nerf_points_options.opacity_threshold. */
+/** Default nerf_points_options.opacity_threshold.  @since 0.5 */
 #define NERF_POINTS_DEFAULT_OPACITY 0.9f
-/** Since 0.5: default nerf_points_options.max_points. */
+/** Default nerf_points_options.max_points.  @since 0.5 */
 #define NERF_POINTS_DEFAULT_MAX 1000000u
 
 /**
- * Since 0.5: how nerf_points_from_views() turns rendered views into
+ * How nerf_points_from_views() turns rendered views into
  * points.  Versioned: fill with nerf_points_options_init().
+ * @since 0.5
  */
 typedef struct nerf_points_options {
     uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
@@ -2318,8 +2355,9 @@ typedef struct nerf_points_options {
 } nerf_points_options;
 
 /**
- * Since 0.5: fill @p opts with defaults and record @p struct_size.
+ * Fill @p opts with defaults and record @p struct_size.
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * @since 0.5
  */
 NERF_API int nerf_points_options_init(nerf_points_options *opts,
                                       size_t struct_size);
@@ -2327,7 +2365,7 @@ NERF_API int nerf_points_options_init(nerf_points_options *opts,
 #define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
 
 /**
- * Since 0.5: a point cloud from the expected depth of rendered views.
+ * A point cloud from the expected depth of rendered views.
  *
  * Each view of @p cameras (scaled down by the stride: width and height
  * divided by it, rounded up, focal lengths and principal point divided by
@@ -2361,6 +2399,7 @@ NERF_API int nerf_points_options_init(nerf_points_options *opts,
  * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
  * n_cameras 0, an invalid camera, options out of range);
  * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ * @since 0.5
  */
 NERF_API int nerf_points_from_views(nerf_points **out,
                                     nerf_renderer *renderer,
@@ -2368,38 +2407,40 @@ NERF_API int nerf_points_from_views(nerf_points **out,
                                     size_t n_cameras,
                                     const nerf_points_options *opts);
 
-/** Since 0.5: the number of points; 0 for NULL. */
+/** The number of points; 0 for NULL.  @since 0.5 */
 NERF_API size_t nerf_points_count(const nerf_points *points);
 
 /**
- * Since 0.5: the point cloud's arrays, valid until nerf_points_destroy():
+ * The point cloud's arrays, valid until nerf_points_destroy():
  * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
  * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
  * estimated).  Any output may be NULL.  With no points they are NULL.
  * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
+ * @since 0.5
  */
 NERF_API int nerf_points_arrays(const nerf_points *points,
                                 const float **positions,
                                 const uint8_t **colours,
                                 const float **normals);
 
-/** Since 0.5: formats of nerf_points_write(). */
+/** Formats of nerf_points_write().  @since 0.5 */
 typedef enum nerf_points_format {
     NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
     NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
 } nerf_points_format;
 
 /**
- * Since 0.5: write @p points to @p path as a PLY file with one "vertex"
+ * Write @p points to @p path as a PLY file with one "vertex"
  * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
  * and uchar red, green, blue, through a temporary file renamed into place.
  * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
  * (the file cannot be written, named); NERF_ENOMEM.
+ * @since 0.5
  */
 NERF_API int nerf_points_write(const nerf_points *points, const char *path,
                                int format);
 
-/** Since 0.5: release a point cloud.  NULL is a no-op. */
+/** Release a point cloud.  NULL is a no-op.  @since 0.5 */
 NERF_API void nerf_points_destroy(nerf_points *points);
 
 /* ===========================================================================
@@ -2407,7 +2448,7 @@ NERF_API void nerf_points_destroy(nerf_points *points);
  * ======================================================================== */
 
 /**
- * Since 0.5: sample @p model's density on the grid of @p opts over its box
+ * Sample @p model's density on the grid of @p opts over its box
  * and write it to @p path as a float32 .npy of shape (nz, ny, nx): C order,
  * element [k][j][i] the density at x = x0 + (i + 0.5) (x1 - x0) / nx (and
  * so on): samples at the cell centres.  Beside it goes a JSON sidecar,
@@ -2420,6 +2461,7 @@ NERF_API void nerf_points_destroy(nerf_points *points);
  * box, colour, threads, progress and hooks of @p opts (NULL: defaults).
  * @return NERF_OK; NERF_EINVAL as nerf_mesh_extract() and for a NULL
  * path; NERF_EIO naming the file; NERF_ECANCELLED; NERF_ENOMEM.
+ * @since 0.5
  */
 NERF_API int nerf_density_grid_write(const nerf_model *model,
                                      const char *path,
@@ -2460,7 +2502,7 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
                                  uint32_t *height_out, float **rgba_out);
 
 /**
- * Since 0.3: read a PNG or a JPEG file, told apart by its first bytes
+ * Read a PNG or a JPEG file, told apart by its first bytes
  * (not its name), as the dataset loaders do.  PNGs are read as by
  * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
  * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
@@ -2477,6 +2519,7 @@ NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
  * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
  * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
  * path.  Reentrant.
+ * @since 0.3
  */
 NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
                              uint32_t *height_out, float **rgba_out);
@@ -2518,13 +2561,14 @@ NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
 NERF_API void nerf_free(void *ptr);
 
 /**
- * Since 0.5: write @p data, an array of @p ndim (1..4) dimensions of the
+ * Write @p data, an array of @p ndim (1..4) dimensions of the
  * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
  * dtype '<f4', the header NumPy itself writes), through a temporary file
  * renamed into place.  numpy.load() reads it back.
  * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
  * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
  * Reentrant.
+ * @since 0.5
  */
 NERF_API int nerf_npy_write_float(const char *path, const float *data,
                                   const size_t *shape, uint32_t ndim);
