@@ -318,23 +318,14 @@ typedef struct nerf_mesh nerf_mesh;
  * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
  * set.
  *
- * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
- * acting on normalised image coordinates in OpenCV's axes (x right, y
- * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
- * at
- *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
- *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
- * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
- * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
- * through the undistorted point, direction R (x, -y, -1), found by
- * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
- * A pixel that no point distorts onto (beyond the fold of a strong barrel
- * lens, where r_d stops growing with r) gets the ray of the point whose
- * distortion comes closest to it.  Images are never resampled.  COLMAP's
- * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
- * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
- * All zero (the default, and what a caller built against a header without
- * them gets) is a pinhole camera, with the rays above bit for bit.
+ * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model
+ * on normalised image coordinates: each pixel's ray goes through the
+ * point the lens shows at that pixel, and images are never resampled
+ * (docs/formats.md, "Lens distortion").  COLMAP's SIMPLE_RADIAL, RADIAL
+ * and OPENCV models and instant-ngp's k1, k2, p1, p2 (k3) map onto these
+ * fields directly.  All zero (the default, and what a caller built
+ * against a header without them gets) is a pinhole camera, with the rays
+ * above bit for bit.
  *
  * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
  * the fields.  The defaults (identity pose, all intrinsics 0) are not a
@@ -453,18 +444,12 @@ typedef struct nerf_sampler_options {
                                hierarchical sampling as above.  N in
                                1..65536: march through the model's
                                occupancy grid (hash-grid models only) in
-                               steps of a world distance of the grid's
-                               diagonal / N, from max(t_near, entry into
-                               the bound) to min(t_far, exit), skipping
-                               empty cells and stopping a ray once its
-                               transmittance falls below 1e-4.  n_fine,
-                               lindisp and paper_bins are then unused.
-                               With ndc the warped rays are marched
-                               (the model's space must be NDC); an
-                               UNBOUNDED model's samples are spaced
-                               evenly in contracted space beyond its
-                               central cube (docs/formats.md, "Scene
-                               spaces").  NERF_PRESET_FAST sets 1024
+                               steps of the grid's diagonal / N,
+                               skipping empty cells; n_fine, lindisp
+                               and paper_bins are then unused, and with
+                               ndc the model's space must be NDC
+                               (docs/api-notes.md, "Ray marching").
+                               NERF_PRESET_FAST sets 1024
                                (instant-ngp's). */
     uint32_t max_samples; /**< With march_steps: at most this many samples
                                per ray, 1..65536; default 1024. */
@@ -514,16 +499,11 @@ typedef struct nerf_renderer_options {
                                     use nor results depend on it. */
     uint32_t threads;          /**< Worker threads for image and ray
                                     rendering, 0..1024.  0 (the default):
-                                    the cores the process may run on (its
-                                    CPU affinity) divided by OpenBLAS's
-                                    own thread count (each worker's matrix
-                                    products already use that many; more
-                                    workers would oversubscribe the cores),
-                                    at least 1; all cores with another
-                                    BLAS, and (since 0.6.1) for a model
-                                    whose products need no BLAS (the fast
-                                    preset's fp32 network on x86-64).
-                                    Results do not depend on it. */
+                                    as many as the cores take without
+                                    oversubscribing them, at least 1
+                                    (docs/threading.md, "How many worker
+                                    threads").  Results do not depend on
+                                    it. */
     uint32_t reserved0;        /**< Must be 0. */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
                                     defaults. */
@@ -591,26 +571,18 @@ typedef enum nerf_matmul {
                                in fp32; bias and ReLU fused into the
                                product.  Through oneDNN, on CPUs with
                                AVX512-BF16: ask nerf_matmul_supported()
-                               first.  Several times the fp32 rate on
-                               wide layers (docs/performance.md); results
-                               differ from fp32 by the rounding (relative
-                               errors of order 1e-3). */
-    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and
-                               ReLU fused into them, through oneDNN's
-                               matmul instead of cblas_sgemm.  Needs a
-                               libnerf built with oneDNN: ask
-                               nerf_matmul_supported() first.  Faster
-                               than cblas on the reference preset's
-                               256-wide layers on AVX-512 CPUs
+                               first.  Faster than fp32 on wide layers
                                (docs/performance.md); results differ
-                               from NERF_MATMUL_FP32 by the order of the
-                               sums only.  Images do not depend on the
-                               thread count; a training step is
-                               deterministic for a given thread count
-                               (as bf16's), not across thread counts.
-                               Networks that the fused small-MLP path
-                               would run (the fast preset) run through
-                               oneDNN too, which is slower for them.
+                               from fp32 by the rounding (relative
+                               errors of order 1e-3). */
+    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and ReLU fused
+                               into them, through oneDNN's matmul instead
+                               of cblas_sgemm.  Needs a libnerf built
+                               with oneDNN: ask nerf_matmul_supported()
+                               first.  Results differ from FP32 by the
+                               order of the sums only.  When it pays,
+                               and its determinism: docs/api-notes.md,
+                               "fp32 products through oneDNN".
                                @since 0.7 */
 } nerf_matmul;
 
@@ -648,7 +620,8 @@ typedef enum nerf_space {
  * DNNL_MAX_CPU_ISA can hide it).  Unknown kinds give 0.
  *
  * The first call for a oneDNN kind creates small oneDNN primitives to
- * find out (a few milliseconds); later calls return the stored answer.
+ * find out (its cost: docs/performance.md); later calls return the stored
+ * answer.
  * Thread-safe.  Symbol version NERF_0.2.
  * @since 0.2
  */
@@ -1070,12 +1043,8 @@ NERF_API int nerf_model_set_render_settings(nerf_model *model,
  *
  * A model without recorded settings (nerf_model_contents() lacks
  * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
- * a file of libnerf before 0.4) gets those its shape suggests: the sample
- * counts of the preset whose networks it has (the reference ones
- * otherwise; all in one pass without a fine network), ray marching for a
- * hash-grid model; t in [2, 6] on white for a BOX model (Blender scenes),
- * NDC depths [0, 1] on black for an NDC one, and [0.05, 10^4] x bound on
- * black for an UNBOUNDED one.
+ * a file of libnerf before 0.4) gets those its shape suggests
+ * (docs/api-notes.md, "Render settings a model suggests").
  * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
  * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
  * forged file).
@@ -1265,18 +1234,12 @@ NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
  * Render every pixel of @p camera as nerf_renderer_render_image()
  * does, with the depth in world units instead of the raw sum(w t).
  *
- * Both depths are those of the expected termination point of the ray
- * given that it stops in the scene: with weights w_i at depths t_i along
- * the camera's unnormalised ray d (whose camera-space z is -1), the point
- * o + s d with s = sum(w t) / sum(w), i.e. divided by the opacity.  The
- * raw, undivided value is distance x opacity (exactly so: both are 0 where
- * the opacity is 0).
- *
- * For an NDC sampler (forward-facing scenes), t is an NDC depth; s is the
- * world-space ray parameter of the point that the expected NDC depth
- * sum(w t) / sum(w) maps back to, on the same ray (the NDC warp keeps
- * rays straight), so both outputs are world units there too.  An expected
- * NDC depth of 1 or more (the point at infinity) gives +inf.
+ * Both depths are those of the point o + s d where the ray is expected to
+ * stop, given that it stops in the scene: s = sum(w t) / sum(w), the raw
+ * depth divided by the opacity, along the camera's unnormalised ray d.
+ * With an NDC sampler they are world units too, and an expected NDC depth
+ * of 1 or more (the point at infinity) gives +inf (docs/api-notes.md,
+ * "Depth in world units").
  *
  * @param rgb_out        height x width x 3 floats, as
  *                       nerf_renderer_render_image(); may be NULL.
@@ -1401,62 +1364,15 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
 
 /**
  * Load one split of the scene in the folder @p dir.  The layout is
- * detected from the files present, in this order:
- *
- *  - transforms_<split>.json, or a single transforms.json (instant-ngp's:
- *    its frames are split as LLFF scenes are, every llff_holdout-th frame
- *    from the first held out for test and val): Blender.  Fields:
- *    camera_angle_x (focal = 0.5 W / tan(0.5 camera_angle_x)) or
- *    instant-ngp's fl_x, fl_y, cx, cy, w, h and lens distortion k1, k2,
- *    p1, p2, k3 (nerf_camera's model; default 0), at top level or per
- *    frame (per frame wins, field by field; fy defaults to fx, the
- *    principal point to the centre); aabb_scale, a power of two 1..128
- *    (above 1 the scene is unbounded: nerf_dataset_space());
- *    frames[].transform_matrix, a 4 x 4 camera-to-world matrix as a list
- *    of rows; frames[].file_path relative to @p dir; when it has no
- *    extension, ".png" is added, or if no such file exists the first of
- *    ".jpg", ".jpeg", ".JPG", ".JPEG" that does.  Images are of one size.
- *    Ray bounds: near 2, far 6 (unbounded: near 0.05, far 1e4 times the
- *    central cube).
- *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
- *    array must be '<f8', C order, N x 17; images are the N .png, .jpg or
- *    .jpeg files (any case) of the image folder sorted by name.  Rotations are reordered from
- *    [down, right, back] to [right, up, back], positions and bounds are
- *    scaled so that the smallest bound is 1/0.75, and poses are recentred
- *    on their average pose.  Focal = the file's focal x image width / the
- *    file's width, for both axes; principal point at the centre.  Rays are
- *    meant for NDC (nerf_dataset_is_ndc() is 1; bounds are 0 and 1).
- *  - sparse/0/ or sparse/ holding COLMAP's cameras and images files
- *    (.bin preferred to .txt; points3D optional): COLMAP.  Camera models
- *    SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV, intrinsics
- *    per image; photos (PNG or JPEG) from images/ (or images_K/ as for
- *    LLFF) under the model's names, sorted by name and split every
- *    llff_holdout-th.
- *    Poses are turned from COLMAP's world-to-camera quaternions and
- *    OpenCV axes into camera-to-world OpenGL ones, then moved so that the
- *    sparse points' per-axis median is the origin, the cameras' mean up
- *    vector is +z and the farthest camera is at distance 1; near and far
- *    come from the 1st and 99th percentiles of the points' depths in each
- *    image (docs/formats.md, "COLMAP models").  Not NDC, unless
- *    forward_facing is set: then the poses are placed as LLFF's are, from
- *    per-image bounds at the 0.1st and 99.9th percentiles of the depths
- *    (as LLFF's own preparation from COLMAP computes them), and each image
- *    keeps its intrinsics and lens.
- *
- * Images are PNG or JPEG files, told apart by their first bytes and read
- * as nerf_image_read() reads them (JPEGs turned upright by their Exif
- * orientation; docs/formats.md, "Images"), and stored as float RGB in
- * [0, 1], composited as the options say.  Every image the scene names
- * is checked, whatever its split: those the load does not store (other
- * splits, frames passed over by skip) by their headers, for what their
- * own load would refuse before decoding them (not a regular file, not a
- * PNG or JPEG, a header that does not decode), a size other than the
- * stored images' and, for transforms files, their frame's fields.  A
- * Blender frame of another split whose image is missing is only logged
- * (WARN): a split may ship a subset of its frames, as lego's val split
- * does, and its own load decides (skip_missing).  An images_K/ folder of
- * LLFF or COLMAP photos must hold the photos of the poses' size divided
- * by K.
+ * detected from the files present, in this order: transforms_<split>.json
+ * or a single transforms.json (Blender and instant-ngp scenes);
+ * poses_bounds.npy (LLFF: NDC rays, nerf_dataset_is_ndc() 1); sparse/0/
+ * or sparse/ holding COLMAP's cameras and images files (COLMAP).
+ * Images are PNG or JPEG files read as nerf_image_read() reads them,
+ * stored as float RGB in [0, 1] and composited as the options say; every
+ * image the scene names is checked, whatever its split.  How each layout
+ * is read, placed, bounded and split, and what is checked:
+ * docs/api-notes.md, "Dataset layouts"; the files: docs/formats.md.
  * The loader logs (level INFO, through the hooks) the format, image count
  * and size, focal length, bounds and scene scale.
  *
@@ -1565,11 +1481,9 @@ NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
 /**
  * Camera @p index of @p n_views along the reference implementation's
  * spiral render path of a forward-facing scene (LLFF, or COLMAP loaded
- * with forward_facing): two turns around the average pose
- * with radii the 90th percentile of the absolute camera positions, the
- * depth moving at half the angular rate, always looking at a focus point
- * placed between the nearest and the farthest bounds (by the reference's
- * disparity weighting).  The path depends on all the scene's poses, not
+ * with forward_facing): two turns around the average pose, looking at a
+ * focus point between the nearest and farthest bounds (docs/api-notes.md,
+ * "The spiral path").  The path depends on all the scene's poses, not
  * just the loaded split.  Intrinsics and size are those of the dataset's
  * images, without their lens distortion (renders are pinhole images).
  * The reference renders 120 views.
@@ -1640,20 +1554,13 @@ NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
 
 /**
  * Load a camera path (a sequence of poses to render) from the file
- * @p path, in one of two forms (docs/formats.md has the details):
- *
- *  - A NumPy .npy file (recognised by its magic bytes, or by a ".npy"
- *    name): camera-to-world matrices in the nerf_camera convention, of
- *    shape (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16) (the last two being
- *    the same matrices flattened row by row), dtype '<f4' or '<f8', C
- *    order.  The bottom row of 4 x 4 matrices must be [0, 0, 0, 1].  The
- *    file holds no intrinsics: the options must give width, height and
- *    focal or fov_x.
- *  - Anything else is read as a transforms-style JSON file, as Blender and
- *    instant-ngp write them and nerf_dataset_load() reads them:
- *    frames[].transform_matrix, and camera_angle_x or fl_x (fl_y,
- *    camera_angle_y, cx, cy, w, h optional), at top level or per frame.
- *    frames[].file_path is ignored: no image is read.
+ * @p path, in one of two forms (docs/formats.md, "Camera paths", has the
+ * details): a NumPy .npy file (told by its magic bytes or a ".npy" name)
+ * of camera-to-world matrices in the nerf_camera convention, shape
+ * (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16), dtype '<f4' or '<f8', with no
+ * intrinsics (the options must give width, height and focal or fov_x);
+ * anything else is read as a transforms-style JSON file, as
+ * nerf_dataset_load() reads them, without reading any image.
  *
  * Every matrix must be finite, representable as float, and have an
  * invertible rotation part.  Files hold at most 100000 poses.  The
@@ -1817,23 +1724,14 @@ typedef struct nerf_trainer_options {
                                    trainer is one of W, each with a copy
                                    of the same model (same seed, or the
                                    same checkpoint), dataset, sampler
-                                   and options but its rank.  Every
-                                   worker draws the step's batch as one
-                                   trainer alone would (batch_rays rays,
-                                   keyed by the step), and worker r
-                                   trains on its contiguous share, rays
-                                   [n r / W, n (r + 1) / W) of the n
-                                   the step takes: with batch_samples,
-                                   n is where the whole batch's samples
-                                   reach the budget, which every worker
-                                   finds by counting the samples of all
-                                   rays (a marching sampler: a march of
-                                   the batch without the network).  The
-                                   loss is weighed by n, and grad_hook
-                                   sums the workers' gradients, so the
-                                   workers take the step one trainer
-                                   would take on the whole batch, up to
-                                   the order of the sums.  Needs
+                                   and options but its rank.  Worker r
+                                   trains on its contiguous share of
+                                   each step's rays and grad_hook sums
+                                   the workers' gradients, so that they
+                                   take the step one trainer would, up
+                                   to the order of the sums
+                                   (docs/api-notes.md, "Workers of a
+                                   data-parallel run").  Needs
                                    grad_hook; nerf_trainer_run_for() is
                                    refused (its clock differs between
                                    workers). */
@@ -1911,24 +1809,16 @@ typedef struct nerf_train_stats {
  * continues bit for bit as the uninterrupted run would.
  *
  * With a marching sampler (march_steps > 0) the trainer also keeps the
- * model's occupancy grid current: every 16 steps from step 0 it samples
- * the model's density in every cell (for the first 256 steps), then
- * every 32 steps in the occupied cells and a random sixteenth of the
- * others (each drawn with probability 1/16), keyed by the model's seed
- * and the grid's update count, both saved in checkpoints.  (Before
- * 0.10.6 the later updates also came every 16 steps.)
+ * model's occupancy grid current, on a schedule keyed by the model's seed
+ * and saved in checkpoints (docs/api-notes.md, "Occupancy grid updates").
  *
  * A checkpoint_path is tried at once: a temporary file is created beside
  * it and removed, so that a path that cannot be written fails here, not
  * at the first save.
  *
- * The model records the data it is trained on (image count and size,
- * scene kind, NDC, mean colour, bounds), and its checkpoints carry the
- * record: when a model whose record differs from @p dataset is given
- * (lego's checkpoint resumed on fern), a NERF_LOG_WARN through the hooks
- * names what differs and both datasets; training goes on, and the record
- * becomes this dataset's.  A model without a record (new, or loaded from
- * a checkpoint written before libnerf 0.4) gives no warning.
+ * The model records the data it is trained on; given a model whose record
+ * differs from @p dataset, the trainer logs a NERF_LOG_WARN naming what
+ * differs and trains on (docs/api-notes.md, "The training-data record").
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid, weights
@@ -1987,38 +1877,18 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * decaying over the steps that time allows, rather than over a step count
  * guessed beforehand.
  *
- * A model whose schedule is not FITTED (see nerf_model_schedule()) starts by
- * measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for a quarter
- * of @p seconds, takes the step rate over the last third of that time (steps
- * get faster as a marching sampler's occupancy grid learns where the scene is,
- * so the latest rate is the best guess of the rest; time spent saving
- * checkpoints is left out), and fixes the run's length: the steps taken plus
- * that rate times the time left, less the share of it that timed saves
- * (checkpoint_seconds) will take at the last save's duration and, since 0.7.1,
- * less the save that ends the run.  It sets NERF_PARAM_DECAY_START to the
- * current step and NERF_PARAM_DECAY_STEPS to that length, records the fit in
- * the model (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
- * trains to the length.  Since 0.6.2, when half of @p seconds has passed the
- * same call fits the length once more, to the rate over the quarter of the
- * budget before (steps are often still getting faster at the first fit); since
- * 0.7.1 again at three quarters and nine tenths of @p seconds, each to the rate
- * over the quarter of the time before it or since the fit before, whichever is
- * shorter (so steps that turn slower late in a run shorten it to the time
- * left).  Since 0.8 a run that reaches its length before the next of these
- * fits it again then, to the rate since the fit before (steps that got
- * faster than measured, as a marching sampler's do for minutes, ended short
- * budgets at half their time).  At each of these fits
- * NERF_PARAM_DECAY_STEPS and the recorded length move and the decay's start
- * stays, so the learning rate moves by a few percent (more at a fit that
- * finds the run at its length, where the rate had decayed to the final
- * one).  From each fit on, the run is a plain schedule: a model saved after
- * it, loaded and given to nerf_trainer_run_for() or nerf_trainer_run()
- * continues bit for bit to its recorded length, and two runs that fixed the
- * same lengths at the same steps train the same weights.  A FITTED model trains
- * on to its recorded length without measuring or fitting again; so a model
- * saved between two fits and resumed ends at the length fitted last before the
- * save, where the unbroken run would have moved it (each fit depends on the
- * clock as the first does).
+ * A model whose schedule is not FITTED (see nerf_model_schedule()) starts
+ * by measuring its step rate, the rate held at NERF_PARAM_LEARNING_RATE,
+ * then fixes the run's length to fit the budget: it sets
+ * NERF_PARAM_DECAY_START to the current step and NERF_PARAM_DECAY_STEPS to
+ * that length and records the fit in the model (state FITTED, saved in
+ * checkpoints, logged at NERF_LOG_INFO).  Later in the budget the same
+ * call fits the length again to the latest rate, moving DECAY_STEPS only.
+ * From each fit on the run is a plain schedule: a model saved after it
+ * continues bit for bit to its recorded length under nerf_trainer_run_for()
+ * or nerf_trainer_run(), without measuring or fitting again.  When each
+ * fit happens, and what it takes into account: docs/api-notes.md,
+ * "Time-budgeted training".
  *
  * The run ends at the fitted length (NERF_OK).  Should steps turn slower
  * than measured, it ends when @p seconds and a tenth have passed
@@ -2157,20 +2027,14 @@ NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
 
 /**
  * Write the built-in scene to the folder @p dir (created if missing) in the
- * capture and layout the options say.  The scene is a few coloured solids
- * with smooth density edges inside a sphere of radius 1.6 about the
- * origin (z up), rendered by numerically exact volume rendering.  The
- * OBJECT capture (the default) is a Blender-format dataset:
- * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
- * test/, from cameras at distance 4 (use near 2, far 6, as for the Blender
- * scenes).  The FORWARD and UNBOUNDED captures add a ground (the
- * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
- * sky, hills and a sun), so every pixel is opaque and depths reach 40;
- * they are what scenes of forward-facing and all-round photos are like.
- * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
- * JPEG (RGB, composited on white for OBJECT) for the views.  With a lens
+ * capture and layout the options say: a few coloured solids about the
+ * origin (z up), rendered by numerically exact volume rendering, alone on
+ * a transparent background (OBJECT, the default: a Blender-format dataset
+ * from cameras at distance 4; use near 2, far 6) or on a ground before a
+ * far backdrop, every pixel opaque (FORWARD, UNBOUNDED).  With a lens
  * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
- * sees (nerf_camera's model).  Same options, same bytes.
+ * sees.  Same options, same bytes.  The scene: docs/api-notes.md, "The
+ * built-in scene"; its files: docs/formats.md, "The built-in scene".
  * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
  * capture or layout, a layout that does not fit the capture or is not
  * supported yet); NERF_EIO (cannot create or write a file, named in the
@@ -2374,21 +2238,13 @@ NERF_API int nerf_points_options_init(nerf_points_options *opts,
  * gives one point at o + s d (the expected termination point), coloured
  * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
  *
- * Normals: from the points of the pixel's right and lower neighbours in
- * the same view (the left or upper one at the image's last column or row):
- * the cross product of the differences to them, normalised and oriented
- * toward the camera.  A point gets the normal (0, 0, 0), meaning none,
- * when such a neighbour is missing (no point there) or lies across a depth
- * discontinuity: its distance from the camera differs from the point's by
- * more than 5% x stride of the point's distance.
- *
- * Thinning: when the views give more than max_points points, the points,
- * taken in ray order (views in order, pixels row by row), are thinned
- * evenly: while collecting, every other point is dropped whenever the
- * count would pass 2 max_points (so memory stays bounded), and the
- * remaining n > max_points points are reduced to the points of index
- * floor(k n / max_points), k = 0 .. max_points - 1.  The result depends
- * only on the inputs, not on threads or chunking.
+ * Each point gets a normal from its neighbours in the same view, oriented
+ * toward the camera, or (0, 0, 0) (none) where a neighbour is missing or
+ * lies across a depth discontinuity.  Beyond max_points, the points are
+ * thinned evenly in ray order (views in order, pixels row by row), with
+ * memory bounded by 2 max_points points (docs/api-notes.md, "Point cloud
+ * normals and thinning").  The result depends only on the inputs, not on
+ * threads or chunking.
  *
  * The renderer's own progress callback is not called during this call.
  *
