@@ -92,17 +92,19 @@ typedef enum nerf_status {
     NERF_ENOMEM = -3,       /**< Out of memory. */
     NERF_EIO = -4,          /**< A file could not be opened, read or written. */
     NERF_EFORMAT = -5,      /**< A file or buffer is malformed or corrupted. */
-    NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the call. */
+    NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the
+                                 call. */
     NERF_EVERSION = -7,     /**< Unsupported struct or file version. */
     /* Before 0.4 both of the next two were NERF_EIO (and a file that is
      * not a checkpoint NERF_EFORMAT). */
-    NERF_ENOENT = -8,       /**< No such file or folder: a path to read
-                                 does not exist.  @since 0.4 */
-    NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the
-                                 kind asked for: a folder in no known
-                                 dataset layout, a file that is not a
-                                 libnerf checkpoint, a folder where a file
-                                 is expected or a file where a folder is.
+    NERF_ENOENT = -8,       /**< No such file or folder: a path to read does not
+                                 exist.
+                                 @since 0.4 */
+    NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the kind
+                                 asked for: a folder in no known dataset layout,
+                                 a file that is not a libnerf checkpoint, a
+                                 folder where a file is expected or a file where
+                                 a folder is.
                                  @since 0.4 */
 } nerf_status;
 
@@ -198,7 +200,8 @@ NERF_API void nerf_log_stderr(int level, const char *msg, void *user);
  * and the BLAS allocate internally does not go through these hooks.
  */
 typedef struct nerf_hooks {
-    uint32_t struct_size;   /**< sizeof(nerf_hooks), set by nerf_hooks_init(). */
+    uint32_t struct_size;   /**< sizeof(nerf_hooks), set by
+                                 nerf_hooks_init(). */
     int32_t log_level;      /**< Threshold for log_cb; default NERF_LOG_INFO. */
     void *(*alloc)(size_t size, void *user);  /**< NULL: malloc. */
     void (*free)(void *ptr, void *user);      /**< NULL: free. */
@@ -234,8 +237,8 @@ typedef enum nerf_progress_kind {
     NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
                                    psnr are those of the last step. */
     NERF_PROGRESS_GEOMETRY = 3 /**< nerf_mesh_extract() and
-                                   nerf_density_grid_write(): done and
-                                   total count planes of grid samples.
+                                   nerf_density_grid_write(): done and total
+                                   count planes of grid samples.
                                    @since 0.5 */
 } nerf_progress_kind;
 
@@ -371,8 +374,9 @@ NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
  *                       their length scales distances when compositing.
  * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
  * (sizes, non-positive or non-finite focal, non-finite pose, distortion
- * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
- * newer header with non-zero unknown fields.
+ * not finite or beyond +-1000) or a pixel range beyond width x height;
+ * NERF_EVERSION for a camera struct from a newer header with non-zero
+ * unknown fields.
  * Reentrant.
  */
 NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
@@ -517,7 +521,8 @@ typedef struct nerf_renderer_options {
 NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
                                         size_t struct_size);
 /** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
+#define NERF_RENDERER_OPTIONS_INIT(o) \
+    nerf_renderer_options_init((o), sizeof *(o))
 
 /* ===========================================================================
  * 8. Model
@@ -526,15 +531,15 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
-    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash
-                                       grid (positions only; its tables
-                                       are trained).  The model then also
-                                       owns an occupancy grid (128^3
-                                       cells over the bound) for
-                                       ray-marching samplers.  @since 0.2 */
-    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real
-                                       spherical harmonics (directions
-                                       only).  @since 0.2 */
+    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
+                                       only; its tables are trained).  The model
+                                       then also owns an occupancy grid (128^3
+                                       cells over the bound) for ray-marching
+                                       samplers.
+                                       @since 0.2 */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
+                                       (directions only).
+                                       @since 0.2 */
 } nerf_encoding_kind;
 
 /** Activation turning the network's density output into sigma.  @since 0.2 */
@@ -552,9 +557,9 @@ typedef enum nerf_density_activation {
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
     NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
-    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and
-                                    small MLPs (Mueller et al. 2022), one
-                                    network.  @since 0.2 */
+    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and small MLPs (Mueller
+                                    et al. 2022), one network.
+                                    @since 0.2 */
 } nerf_preset;
 
 /**
@@ -575,14 +580,14 @@ typedef enum nerf_matmul {
                                (docs/performance.md); results differ
                                from fp32 by the rounding (relative
                                errors of order 1e-3). */
-    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and ReLU fused
-                               into them, through oneDNN's matmul instead
-                               of cblas_sgemm.  Needs a libnerf built
-                               with oneDNN: ask nerf_matmul_supported()
-                               first.  Results differ from FP32 by the
-                               order of the sums only.  When it pays,
-                               and its determinism: docs/api-notes.md,
-                               "fp32 products through oneDNN".
+    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and ReLU fused into
+                               them, through oneDNN's matmul instead of
+                               cblas_sgemm.  Needs a libnerf built with oneDNN:
+                               ask nerf_matmul_supported() first.  Results
+                               differ from FP32 by the order of the sums
+                               only.  When it pays, and its determinism:
+                               docs/api-notes.md, "fp32 products through
+                               oneDNN".
                                @since 0.7 */
 } nerf_matmul;
 
@@ -640,7 +645,8 @@ typedef enum nerf_network {
 typedef struct nerf_model_options {
     uint32_t struct_size;     /**< Set by nerf_model_options_init(). */
     uint32_t encoding;        /**< nerf_encoding_kind; default FREQUENCY. */
-    uint32_t pos_frequencies; /**< L for positions; default 10, 0 = raw input only. */
+    uint32_t pos_frequencies; /**< L for positions; default 10, 0 = raw
+                                   input only. */
     uint32_t dir_frequencies; /**< L for directions; default 4. */
     uint32_t encoding_flags;  /**< NERF_ENCODING_*; default INCLUDE_INPUT
                                    (the reference form; the paper's form is
@@ -656,7 +662,8 @@ typedef struct nerf_model_options {
     uint32_t use_viewdirs;    /**< 1: colour depends on direction; default 1. */
     uint32_t use_fine;        /**< 1: a fine network too; default 1. */
     uint32_t reserved0;       /**< Must be 0. */
-    uint64_t seed;            /**< Seed of initialisation and training; default 0. */
+    uint64_t seed;            /**< Seed of initialisation and training;
+                                   default 0. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
     /* The hash-grid model: zero-filled by an older caller, which gives
      * the reference behaviour.
@@ -955,27 +962,26 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                            trained the model on
                                            (nerf_model_training_data()),
                                            kept by checkpoints. */
-#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< The batch a
-                                           trainer last trained the model
-                                           with
-                                           (nerf_model_training_batch()),
-                                           kept by checkpoints.  @since 0.8 */
-#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Each
-                                           hash-table parameter's Adam
-                                           corrections by its own count of
-                                           updates (hash-grid models), kept
-                                           by checkpoints.  A hash-grid
-                                           model loaded with the moments
-                                           but without them, from an older
-                                           libnerf's file, corrects by the
-                                           step, as it was trained.
+#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< The batch a trainer last trained
+                                           the model with
+                                           (nerf_model_training_batch()), kept
+                                           by checkpoints.
+                                           @since 0.8 */
+#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Each hash-table parameter's
+                                           Adam corrections by its own count of
+                                           updates (hash-grid models), kept by
+                                           checkpoints.  A hash-grid model
+                                           loaded with the moments but without
+                                           them, from an older libnerf's file,
+                                           corrects by the step, as it was
+                                           trained.
                                            @since 0.10 */
-#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Weights
-                                           that are NaN or infinite, as a
-                                           run that diverged leaves them:
-                                           the model can be queried, and
-                                           nothing else takes it (see
-                                           nerf_model_load()).  @since 0.11 */
+#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Weights that are NaN or
+                                           infinite, as a run that diverged
+                                           leaves them: the model can be
+                                           queried, and nothing else takes it
+                                           (see nerf_model_load()).
+                                           @since 0.11 */
 
 /**
  * What @p model holds beyond its weights, NERF_MODEL_HAS_*
@@ -1299,7 +1305,8 @@ typedef enum nerf_split {
 
 /** The layout a dataset was loaded from, as nerf_dataset_get_format() says. */
 typedef enum nerf_dataset_format {
-    NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or transforms.json. */
+    NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or
+                                   transforms.json. */
     NERF_DATASET_LLFF = 2,    /**< poses_bounds.npy and images folders. */
     NERF_DATASET_COLMAP = 3   /**< A COLMAP sparse model (sparse/0/ or
                                    sparse/) beside images folders. */
@@ -1339,16 +1346,15 @@ typedef struct nerf_dataset_options {
                                     and val are empty); a single
                                     transforms.json serves every frame to
                                     every split. */
-    uint32_t forward_facing;   /**< COLMAP: 1 places the
-                                    scene as LLFF places a forward-facing
-                                    capture (recentred on the average
-                                    pose, the nearest sparse-point depth
-                                    at 1/0.75) for NDC rays, with the
-                                    spiral path; nerf_dataset_space()
-                                    then says NDC.  0 (default):
-                                    unbounded.  LLFF scenes are
-                                    forward-facing either way; a Blender
-                                    scene with 1 is refused.  @since 0.4 */
+    uint32_t forward_facing;   /**< COLMAP: 1 places the scene as LLFF places a
+                                    forward-facing capture (recentred on the
+                                    average pose, the nearest sparse-point depth
+                                    at 1/0.75) for NDC rays, with the spiral
+                                    path; nerf_dataset_space() then says NDC.  0
+                                    (default): unbounded.  LLFF scenes are
+                                    forward-facing either way; a Blender scene
+                                    with 1 is refused.
+                                    @since 0.4 */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
 
@@ -1379,28 +1385,26 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * @param opts NULL for the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
  * larger than the images, an LLFF or transforms.json split left empty by
- * llff_holdout, forward_facing on a Blender scene);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOENT (no such folder, or a file or image of the scene missing);
- * NERF_EUNRECOGNISED (a file, or a folder in no known layout, or
- * something other than a regular file, a folder or a FIFO say, where a
- * file or image of the scene belongs); NERF_EIO
- * (a file or image unreadable); NERF_EFORMAT
- * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
- * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
- * infinite values, entries beyond 1e6, a degenerate rotation, a focal
- * under 1e-3 pixels, a distortion coefficient beyond 1000, an aabb_scale
- * that is not a power of two in 1..128, near >= far (docs/formats.md,
- * "Camera sanity"; the
- * message names the frame and its file_path), npy of the wrong
- * dtype, order or shape, a corrupt image or one that is neither PNG nor
- * JPEG, a bad Exif orientation, images of different sizes, image
- * count not matching the poses, no frames left, a forward-facing COLMAP
- * model without sparse points in front of its cameras, an images_K/
- * folder whose photos are not K times smaller than the poses say, an
- * image header claiming more pixels than its file holds); NERF_ENOMEM.
- * Messages name the file and the problem.  On failure *out is NULL.
- * Reentrant: separate loads may run on separate threads.
+ * llff_holdout, forward_facing on a Blender scene); NERF_EVERSION (options
+ * from a newer header setting unknown fields); NERF_ENOENT (no such folder,
+ * or a file or image of the scene missing); NERF_EUNRECOGNISED (a file, or a
+ * folder in no known layout, or something other than a regular file, a
+ * folder or a FIFO say, where a file or image of the scene belongs);
+ * NERF_EIO (a file or image unreadable); NERF_EFORMAT (malformed JSON,
+ * malformed or truncated COLMAP file, unsupported camera model, zero-length
+ * quaternion, missing field, matrix of the wrong shape, NaN or infinite
+ * values, entries beyond 1e6, a degenerate rotation, a focal under 1e-3
+ * pixels, a distortion coefficient beyond 1000, an aabb_scale that is not a
+ * power of two in 1..128, near >= far (docs/formats.md, "Camera sanity"; the
+ * message names the frame and its file_path), npy of the wrong dtype, order
+ * or shape, a corrupt image or one that is neither PNG nor JPEG, a bad Exif
+ * orientation, images of different sizes, image count not matching the
+ * poses, no frames left, a forward-facing COLMAP model without sparse points
+ * in front of its cameras, an images_K/ folder whose photos are not K times
+ * smaller than the poses say, an image header claiming more pixels than its
+ * file holds); NERF_ENOMEM.  Messages name the file and the problem.
+ * On failure *out is NULL.  Reentrant: separate loads may run on
+ * separate threads.
  */
 NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
                                const nerf_dataset_options *opts);
@@ -1958,22 +1962,23 @@ typedef struct nerf_scene_options {
     uint32_t capture;     /**< How the scene is photographed:
                                NERF_SCENE_CAPTURE_*; default OBJECT.
                                @since 0.3 */
-    uint32_t layout;      /**< The files it is written as:
-                               NERF_SCENE_LAYOUT_*; default BLENDER.  The
-                               usual pairs: OBJECT and UNBOUNDED in
-                               BLENDER, FORWARD in LLFF.  @since 0.3 */
-    uint32_t image_format; /**< NERF_IMAGE_FORMAT_*: the views'
-                                files; default NERF_IMAGE_FORMAT_PNG.
+    uint32_t layout;      /**< The files it is written as: NERF_SCENE_LAYOUT_*;
+                               default BLENDER.  The usual pairs: OBJECT and
+                               UNBOUNDED in BLENDER, FORWARD in LLFF.
+                               @since 0.3 */
+    uint32_t image_format; /**< NERF_IMAGE_FORMAT_*: the views' files; default
+                                NERF_IMAGE_FORMAT_PNG.
                                 @since 0.3 */
-    uint32_t jpeg_quality; /**< JPEG quality 1..100; 0
-                                (default) = 95.  Ignored for PNG.  @since 0.3 */
-    float k1, k2, p1, p2, k3; /**< The lens the views are
-                               photographed through (nerf_camera's
-                               distortion): each pixel holds what its ray
-                               through that lens sees, and the files
-                               record the coefficients (the LLFF layout
-                               cannot, COLMAP's OPENCV model has no k3).
-                               Default 0: a pinhole camera.  @since 0.3 */
+    uint32_t jpeg_quality; /**< JPEG quality 1..100; 0 (default) = 95.  Ignored
+                                for PNG.
+                                @since 0.3 */
+    float k1, k2, p1, p2, k3; /**< The lens the views are photographed through
+                               (nerf_camera's distortion): each pixel holds what
+                               its ray through that lens sees, and the files
+                               record the coefficients (the LLFF layout cannot,
+                               COLMAP's OPENCV model has no k3).  Default 0: a
+                               pinhole camera.
+                               @since 0.3 */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
