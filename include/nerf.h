@@ -6,6 +6,29 @@
  * rules every declaration follows and docs/threading.md for the threading
  * contract.
  *
+ * Contents, in the order of the sections below (search for "N. Title"):
+ *   (the @file comment)  Conventions in brief
+ *    1. Status codes and errors
+ *    2. Version
+ *    3. Logging and allocation hooks
+ *    4. Progress reports      (callbacks of renderers, trainers, geometry)
+ *    5. Handles               (the eight opaque handle types)
+ *    6. Cameras               (nerf_camera, used by several handles)
+ *    7. Sampler and renderer settings  (their options structs; a model
+ *                             records them, so they come before it)
+ *    8. Model
+ *    9. Sampler
+ *   10. Renderer              (images, depth, rays)
+ *   11. Datasets and camera paths
+ *   12. Trainer
+ *   13. Built-in scene        (nerf_scene_write)
+ *   14. Meshes
+ *   15. Point clouds
+ *   16. Density grids
+ *   17. Utilities: images, arrays and metrics
+ * A type is declared before the first call that takes it, which is why
+ * sections 6 and 7 come ahead of the handles that use them.
+ *
  * Copyright (c) 2026 the libnerf authors.  MIT licence, see LICENSE.
  */
 #ifndef NERF_H
@@ -57,9 +80,9 @@ extern "C" {
  *  - The library never prints to stdout, never exits and never aborts.
  */
 
-/* ------------------------------------------------------------------------ */
-/* Status codes and errors                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 1. Status codes and errors
+ * ======================================================================== */
 
 /** Status codes.  Values are fixed forever; new codes get new numbers. */
 typedef enum nerf_status {
@@ -69,17 +92,20 @@ typedef enum nerf_status {
     NERF_ENOMEM = -3,       /**< Out of memory. */
     NERF_EIO = -4,          /**< A file could not be opened, read or written. */
     NERF_EFORMAT = -5,      /**< A file or buffer is malformed or corrupted. */
-    NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the call. */
+    NERF_ECANCELLED = -6,   /**< A callback or nerf_*_cancel() stopped the
+                                 call. */
     NERF_EVERSION = -7,     /**< Unsupported struct or file version. */
-    /* Since 0.4.  Before, both were NERF_EIO (and a file that is not a
-     * checkpoint NERF_EFORMAT). */
-    NERF_ENOENT = -8,       /**< No such file or folder: a path to read
-                                 does not exist. */
-    NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the
-                                 kind asked for: a folder in no known
-                                 dataset layout, a file that is not a
-                                 libnerf checkpoint, a folder where a file
-                                 is expected or a file where a folder is. */
+    /* Before 0.4 both of the next two were NERF_EIO (and a file that is
+     * not a checkpoint NERF_EFORMAT). */
+    NERF_ENOENT = -8,       /**< No such file or folder: a path to read does not
+                                 exist.
+                                 @since 0.4 */
+    NERF_EUNRECOGNISED = -9 /**< The file or folder exists but is not the kind
+                                 asked for: a folder in no known dataset layout,
+                                 a file that is not a libnerf checkpoint, a
+                                 folder where a file is expected or a file where
+                                 a folder is.
+                                 @since 0.4 */
 } nerf_status;
 
 /**
@@ -103,9 +129,9 @@ NERF_API const char *nerf_last_error(void);
 /** Forget the calling thread's last error message. Thread-safe. */
 NERF_API void nerf_clear_error(void);
 
-/* ------------------------------------------------------------------------ */
-/* Version                                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 2. Version
+ * ======================================================================== */
 
 /**
  * The library's version as NERF_VERSION_NUMBER encodes it
@@ -126,9 +152,9 @@ NERF_API const char *nerf_version_string(void);
  */
 NERF_API const char *nerf_build_info(void);
 
-/* ------------------------------------------------------------------------ */
-/* Logging and allocation hooks                                             */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 3. Logging and allocation hooks
+ * ======================================================================== */
 
 /** Log levels; a message is delivered when its level <= the threshold. */
 typedef enum nerf_log_level {
@@ -174,7 +200,8 @@ NERF_API void nerf_log_stderr(int level, const char *msg, void *user);
  * and the BLAS allocate internally does not go through these hooks.
  */
 typedef struct nerf_hooks {
-    uint32_t struct_size;   /**< sizeof(nerf_hooks), set by nerf_hooks_init(). */
+    uint32_t struct_size;   /**< sizeof(nerf_hooks), set by
+                                 nerf_hooks_init(). */
     int32_t log_level;      /**< Threshold for log_cb; default NERF_LOG_INFO. */
     void *(*alloc)(size_t size, void *user);  /**< NULL: malloc. */
     void (*free)(void *ptr, void *user);      /**< NULL: free. */
@@ -200,10 +227,54 @@ NERF_API int nerf_hooks_init(nerf_hooks *hooks, size_t struct_size);
  */
 #define NERF_HOOKS_INIT(h) nerf_hooks_init((h), sizeof *(h))
 
-/* ------------------------------------------------------------------------ */
-/* Handles                                                                  */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 4. Progress reports
+ * ======================================================================== */
 
+/** What a nerf_progress report is about. */
+typedef enum nerf_progress_kind {
+    NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
+    NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
+                                   psnr are those of the last step. */
+    NERF_PROGRESS_GEOMETRY = 3 /**< nerf_mesh_extract() and
+                                   nerf_density_grid_write(): done and total
+                                   count planes of grid samples.
+                                   @since 0.5 */
+} nerf_progress_kind;
+
+/**
+ * A progress report, passed by pointer to a nerf_progress_cb.  Versioned:
+ * read a field only if struct_size covers it (fields are only appended).
+ */
+typedef struct nerf_progress {
+    uint32_t struct_size; /**< sizeof the library's struct. */
+    uint32_t kind;        /**< nerf_progress_kind. */
+    uint64_t done;        /**< Units of work finished so far. */
+    uint64_t total;       /**< Units of work of the whole call. */
+    double elapsed;       /**< Seconds since the call started. */
+    double loss;          /**< NERF_PROGRESS_TRAIN: loss of the last step;
+                               otherwise 0. */
+    double psnr;          /**< NERF_PROGRESS_TRAIN: PSNR (dB) of the last
+                               step's fine colours; otherwise 0. */
+} nerf_progress;
+
+/**
+ * Progress callback.  It runs on the thread that made the call, never on a
+ * worker thread, and must not call back into the handle that reports.
+ * Return 0 to continue, nonzero to cancel: the call then returns
+ * NERF_ECANCELLED.  @p p is valid only during the callback.
+ */
+typedef int (*nerf_progress_cb)(const nerf_progress *p, void *user);
+
+/* ===========================================================================
+ * 5. Handles
+ * ======================================================================== */
+
+/*
+ * Every handle is opaque: made by its *_create() or *_load() call (or
+ * nerf_points_from_views(), nerf_mesh_extract()), released by its
+ * *_destroy().  Its calls are in its own section below.
+ */
 typedef struct nerf_model nerf_model;       /**< Scene networks and weights. */
 typedef struct nerf_sampler nerf_sampler;   /**< Sample placement along rays. */
 typedef struct nerf_renderer nerf_renderer; /**< Compositing and images. */
@@ -211,26 +282,267 @@ typedef struct nerf_dataset nerf_dataset;   /**< Images and cameras. */
 typedef struct nerf_trainer nerf_trainer;   /**< Optimisation loop state. */
 typedef struct nerf_camera_path nerf_camera_path; /**< Cameras from a file. */
 
-/* ------------------------------------------------------------------------ */
-/* Model                                                                    */
-/* ------------------------------------------------------------------------ */
+/**
+ * A point cloud: read-only arrays owned by the handle.
+ * @since 0.5
+ */
+typedef struct nerf_points nerf_points;
+
+/**
+ * A triangle mesh extracted from a model (nerf_mesh_extract()).
+ * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
+ * number of threads may read one mesh and write it at the same time.
+ * @since 0.5
+ */
+typedef struct nerf_mesh nerf_mesh;
+
+/* ===========================================================================
+ * 6. Cameras
+ * ======================================================================== */
+
+/**
+ * Flags for nerf_camera.flags.
+ *
+ * By default the ray of pixel (column i, row j) passes through the pixel's
+ * centre, (i + 0.5, j + 0.5).  NERF_CAMERA_PIXEL_CORNER uses (i, j), as the
+ * reference implementation does; set it to reproduce its rays exactly.
+ */
+#define NERF_CAMERA_PIXEL_CORNER 0x1u
+
+/**
+ * A camera in the OpenGL/Blender convention: in camera space x points
+ * right, y up, and the camera looks down -z.  A pinhole camera unless its
+ * distortion coefficients are set.
+ *
+ * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
+ * c2w[.][3] (the camera centre) and the unnormalised direction
+ * R ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), R being the left 3x3
+ * of c2w: its camera-space z component is -1, so t along the ray is depth
+ * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
+ * set.
+ *
+ * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model
+ * on normalised image coordinates: each pixel's ray goes through the
+ * point the lens shows at that pixel, and images are never resampled
+ * (docs/formats.md, "Lens distortion").  COLMAP's SIMPLE_RADIAL, RADIAL
+ * and OPENCV models and instant-ngp's k1, k2, p1, p2 (k3) map onto these
+ * fields directly.  All zero (the default, and what a caller built
+ * against a header without them gets) is a pinhole camera, with the rays
+ * above bit for bit.
+ *
+ * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
+ * the fields.  The defaults (identity pose, all intrinsics 0) are not a
+ * usable camera: width, height, fx and fy must be set.
+ */
+typedef struct nerf_camera {
+    uint32_t struct_size; /**< Set by nerf_camera_init(). */
+    uint32_t flags;       /**< NERF_CAMERA_*; default 0. */
+    uint32_t width;       /**< Image width in pixels, 1..65536. */
+    uint32_t height;      /**< Image height in pixels, 1..65536. */
+    float c2w[12];        /**< Camera-to-world 3x4, row-major: columns are
+                               the camera's right, up and back axes and its
+                               centre, in world units.  Default [I | 0]. */
+    float fx, fy;         /**< Focal lengths in pixels, > 0.  For a
+                               horizontal field of view a:
+                               fx = 0.5 width / tan(0.5 a). */
+    float cx, cy;         /**< Principal point in pixels from the top-left
+                               image corner; usually width/2, height/2. */
+    /* Lens distortion: zero-filled by an older caller, a pinhole camera.
+     * @since 0.3 */
+    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
+                               within +-1000; default 0. */
+    float p1, p2;         /**< Tangential distortion; finite, within
+                               +-1000; default 0. */
+    float k3;             /**< Radial distortion, r^6 term; finite, within
+                               +-1000; default 0. */
+} nerf_camera;
+
+/**
+ * Fill @p camera with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
+
+/**
+ * Compute the rays of pixels first .. first + n - 1 of @p camera, pixels
+ * being numbered row by row (index = row * width + column).
+ *
+ * @param origins_out    n x 3 floats, world units.
+ * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
+ *                       their length scales distances when compositing.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
+ * (sizes, non-positive or non-finite focal, non-finite pose, distortion
+ * not finite or beyond +-1000) or a pixel range beyond width x height;
+ * NERF_EVERSION for a camera struct from a newer header with non-zero
+ * unknown fields.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
+                              size_t n, float *origins_out,
+                              float *directions_out);
+
+/**
+ * Set the pose of @p camera (its c2w; nothing else) to look from @p eye
+ * at @p target, with @p up (world space) pointing up in the image: the
+ * camera's -z axis points at the target, its x axis is up x z normalised.
+ * @return NERF_OK; NERF_EINVAL for NULL pointers, an uninitialised
+ * struct, eye equal to target, or up parallel to the viewing direction.
+ * Reentrant.
+ */
+NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
+                                 const float target[3], const float up[3]);
+
+/* ===========================================================================
+ * 7. Sampler and renderer settings
+ * ======================================================================== */
+
+/**
+ * Settings of a sampler, fixed at creation.  The defaults are the
+ * reference configuration for Blender scenes: 64 + 128 samples for t in
+ * [2, 6], linear in depth, jittered in training.
+ *
+ * Forward-facing (LLFF) scenes: set ndc = 1, t_near = 0 and t_far = 1.
+ * Rays are then warped to normalised device coordinates with the near plane
+ * at world depth 1 (the frustum given by ndc_focal, ndc_width, ndc_height),
+ * and t_near and t_far are NDC depths in [0, 1]: 0 is the near plane, 1
+ * infinity.
+ */
+typedef struct nerf_sampler_options {
+    uint32_t struct_size; /**< Set by nerf_sampler_options_init(). */
+    uint32_t n_coarse;    /**< Stratified samples per ray, 2..4096;
+                               default 64. */
+    uint32_t n_fine;      /**< Hierarchical samples per ray, 0..4096
+                               (0: coarse pass only; needs n_coarse >= 3
+                               otherwise); default 128. */
+    uint32_t perturb;     /**< 1: jitter the stratified samples and draw
+                               the hierarchical ones at random in training
+                               (evaluation is never random); default 1. */
+    uint32_t lindisp;     /**< 1: sample linearly in disparity (1/depth)
+                               instead of depth; needs t_near > 0;
+                               default 0. */
+    uint32_t paper_bins;  /**< 1: stratified samples as the paper's eq. 2
+                               (one uniform draw in each of n_coarse equal
+                               bins; bin centres in evaluation) instead of
+                               the reference implementation's evenly spaced
+                               values with both ends included; default 0. */
+    uint32_t ndc;         /**< 1: warp rays to NDC first; default 0. */
+    uint32_t reserved0;   /**< Must be 0. */
+    float t_near;         /**< Start of the sampled range of t; default 2. */
+    float t_far;          /**< End of the sampled range, > t_near; default 6. */
+    float ndc_focal;      /**< NDC frustum: focal length in pixels of the
+                               training images; one focal serves both axes,
+                               as in the reference.  0 (the default) takes
+                               the rendered camera's fx, width and height
+                               instead; then only image rendering works. */
+    uint32_t ndc_width;   /**< NDC frustum: image width in pixels. */
+    uint32_t ndc_height;  /**< NDC frustum: image height in pixels. */
+    uint32_t reserved1;   /**< Must be 0. */
+    uint64_t seed;        /**< Key of the random streams; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    /* Ray marching: zero-filled by an older caller, which gives
+     * stratified and hierarchical sampling.
+     * @since 0.2 */
+    uint32_t march_steps; /**< 0 (the default): stratified and
+                               hierarchical sampling as above.  N in
+                               1..65536: march through the model's
+                               occupancy grid (hash-grid models only) in
+                               steps of the grid's diagonal / N,
+                               skipping empty cells; n_fine, lindisp
+                               and paper_bins are then unused, and with
+                               ndc the model's space must be NDC
+                               (docs/api-notes.md, "Ray marching").
+                               NERF_PRESET_FAST sets 1024
+                               (instant-ngp's). */
+    uint32_t max_samples; /**< With march_steps: at most this many samples
+                               per ray, 1..65536; default 1024. */
+} nerf_sampler_options;
+
+/**
+ * Fill @p opts with the reference sampler settings and record
+ * @p struct_size (or use NERF_SAMPLER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
+                                       size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
+
+/**
+ * Set the sample counts of a nerf_preset in an initialised @p opts; other
+ * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
+ * NERF_PRESET_TINY: 32 + 64.  NERF_PRESET_FAST: ray marching, march_steps
+ * 1024 and max_samples 1024 (n_coarse 128 and n_fine 0 for a caller that
+ * turns marching off); the other presets set march_steps 0.
+ * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
+ * NERF_EVERSION as nerf_sampler_create().
+ */
+NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
+                                         int preset);
+
+/** Sentinel for nerf_renderer_options.raw_noise_std. */
+#define NERF_NOISE_AUTO (-1.0f)
+
+/** Settings of a renderer, fixed at creation. */
+typedef struct nerf_renderer_options {
+    uint32_t struct_size;      /**< Set by nerf_renderer_options_init(). */
+    uint32_t white_background; /**< 1: composite onto white (Blender
+                                    scenes): rgb += 1 - opacity; default 0
+                                    (black). */
+    float raw_noise_std;       /**< Standard deviation of the Gaussian
+                                    noise added to raw density before the
+                                    ReLU, in training only.  Default
+                                    NERF_NOISE_AUTO: 1 when the sampler
+                                    uses NDC (forward-facing scenes, as the
+                                    reference), else 0. */
+    uint32_t chunk_rays;       /**< Rays per unit of work handed to a
+                                    thread; progress is reported after each
+                                    chunk.  Rounded up to a multiple of 64;
+                                    1..2^20; default 512.  Neither memory
+                                    use nor results depend on it. */
+    uint32_t threads;          /**< Worker threads for image and ray
+                                    rendering, 0..1024.  0 (the default):
+                                    as many as the cores take without
+                                    oversubscribing them, at least 1
+                                    (docs/threading.md, "How many worker
+                                    threads").  Results do not depend on
+                                    it. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
+                                    defaults. */
+} nerf_renderer_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size (or use
+ * NERF_RENDERER_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
+                                        size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_RENDERER_OPTIONS_INIT(o) \
+    nerf_renderer_options_init((o), sizeof *(o))
+
+/* ===========================================================================
+ * 8. Model
+ * ======================================================================== */
 
 /** Kinds of input encoding. */
 typedef enum nerf_encoding_kind {
     NERF_ENCODING_FREQUENCY = 1,  /**< Sinusoidal positional encoding. */
-    NERF_ENCODING_HASHGRID = 2,   /**< Since 0.2.  Multiresolution hash
-                                       grid (positions only; its tables
-                                       are trained).  The model then also
-                                       owns an occupancy grid (128^3
-                                       cells over the bound) for
-                                       ray-marching samplers. */
-    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Since 0.2.  Real
-                                       spherical harmonics (directions
-                                       only). */
+    NERF_ENCODING_HASHGRID = 2,   /**< Multiresolution hash grid (positions
+                                       only; its tables are trained).  The model
+                                       then also owns an occupancy grid (128^3
+                                       cells over the bound) for ray-marching
+                                       samplers.
+                                       @since 0.2 */
+    NERF_ENCODING_SPHERICAL_HARMONICS = 3 /**< Real spherical harmonics
+                                       (directions only).
+                                       @since 0.2 */
 } nerf_encoding_kind;
 
-/** Activation turning the network's density output into sigma (since
- * 0.2). */
+/** Activation turning the network's density output into sigma.  @since 0.2 */
 typedef enum nerf_density_activation {
     NERF_DENSITY_RELU = 0, /**< The paper's: ReLU, applied when rendering. */
     NERF_DENSITY_EXP = 1   /**< exp, truncated at exp(15) (hash-grid
@@ -245,16 +557,17 @@ typedef enum nerf_density_activation {
 typedef enum nerf_preset {
     NERF_PRESET_REFERENCE = 1, /**< The paper's networks (the default). */
     NERF_PRESET_TINY = 2,      /**< Small and fast, for trials and tests. */
-    NERF_PRESET_FAST = 3       /**< Since 0.2.  Hash-grid encoding and
-                                    small MLPs (Mueller et al. 2022), one
-                                    network. */
+    NERF_PRESET_FAST = 3       /**< Hash-grid encoding and small MLPs (Mueller
+                                    et al. 2022), one network.
+                                    @since 0.2 */
 } nerf_preset;
 
 /**
- * How a model computes its matrix products (nerf_model_options.matmul;
- * since 0.2).  Either way the weights, their gradients, the optimiser
- * state and checkpoints are fp32: the choice changes the arithmetic of the
+ * How a model computes its matrix products (nerf_model_options.matmul).
+ * Either way the weights, their gradients, the optimiser state and
+ * checkpoints are fp32: the choice changes the arithmetic of the
  * products, never what is stored.
+ * @since 0.2
  */
 typedef enum nerf_matmul {
     NERF_MATMUL_FP32 = 0, /**< fp32 through cblas_sgemm (the default). */
@@ -263,32 +576,26 @@ typedef enum nerf_matmul {
                                in fp32; bias and ReLU fused into the
                                product.  Through oneDNN, on CPUs with
                                AVX512-BF16: ask nerf_matmul_supported()
-                               first.  Several times the fp32 rate on
-                               wide layers (docs/performance.md); results
-                               differ from fp32 by the rounding (relative
-                               errors of order 1e-3). */
-    NERF_MATMUL_FP32_ONEDNN = 2 /**< Since 0.7: fp32 products, bias and
-                               ReLU fused into them, through oneDNN's
-                               matmul instead of cblas_sgemm.  Needs a
-                               libnerf built with oneDNN: ask
-                               nerf_matmul_supported() first.  Faster
-                               than cblas on the reference preset's
-                               256-wide layers on AVX-512 CPUs
+                               first.  Faster than fp32 on wide layers
                                (docs/performance.md); results differ
-                               from NERF_MATMUL_FP32 by the order of the
-                               sums only.  Images do not depend on the
-                               thread count; a training step is
-                               deterministic for a given thread count
-                               (as bf16's), not across thread counts.
-                               Networks that the fused small-MLP path
-                               would run (the fast preset) run through
-                               oneDNN too, which is slower for them. */
+                               from fp32 by the rounding (relative
+                               errors of order 1e-3). */
+    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and ReLU fused into
+                               them, through oneDNN's matmul instead of
+                               cblas_sgemm.  Needs a libnerf built with oneDNN:
+                               ask nerf_matmul_supported() first.  Results
+                               differ from FP32 by the order of the sums
+                               only.  When it pays, and its determinism:
+                               docs/api-notes.md, "fp32 products through
+                               oneDNN".
+                               @since 0.7 */
 } nerf_matmul;
 
 /**
- * Since 0.3: where a hash-grid model's grids lie (nerf_model_options.space).
+ * Where a hash-grid model's grids lie (nerf_model_options.space).
  * The frequency encoding of the reference networks reads coordinates
  * anywhere and takes BOX (its only value) whatever the scene.
+ * @since 0.3
  */
 typedef enum nerf_space {
     NERF_SPACE_BOX = 0,      /**< The cube [-bound, bound]^3 of world space;
@@ -318,8 +625,10 @@ typedef enum nerf_space {
  * DNNL_MAX_CPU_ISA can hide it).  Unknown kinds give 0.
  *
  * The first call for a oneDNN kind creates small oneDNN primitives to
- * find out (a few milliseconds); later calls return the stored answer.
- * Thread-safe.  Since 0.2 (symbol version NERF_0.2).
+ * find out (its cost: docs/performance.md); later calls return the stored
+ * answer.
+ * Thread-safe.  Symbol version NERF_0.2.
+ * @since 0.2
  */
 NERF_API int nerf_matmul_supported(int kind);
 
@@ -336,7 +645,8 @@ typedef enum nerf_network {
 typedef struct nerf_model_options {
     uint32_t struct_size;     /**< Set by nerf_model_options_init(). */
     uint32_t encoding;        /**< nerf_encoding_kind; default FREQUENCY. */
-    uint32_t pos_frequencies; /**< L for positions; default 10, 0 = raw input only. */
+    uint32_t pos_frequencies; /**< L for positions; default 10, 0 = raw
+                                   input only. */
     uint32_t dir_frequencies; /**< L for directions; default 4. */
     uint32_t encoding_flags;  /**< NERF_ENCODING_*; default INCLUDE_INPUT
                                    (the reference form; the paper's form is
@@ -352,10 +662,12 @@ typedef struct nerf_model_options {
     uint32_t use_viewdirs;    /**< 1: colour depends on direction; default 1. */
     uint32_t use_fine;        /**< 1: a fine network too; default 1. */
     uint32_t reserved0;       /**< Must be 0. */
-    uint64_t seed;            /**< Seed of initialisation and training; default 0. */
+    uint64_t seed;            /**< Seed of initialisation and training;
+                                   default 0. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2: the hash-grid model.  Zero-filled by an older caller,
-     * which gives the reference behaviour. */
+    /* The hash-grid model: zero-filled by an older caller, which gives
+     * the reference behaviour.
+     * @since 0.2 */
     uint32_t dir_encoding;    /**< nerf_encoding_kind of the view
                                    direction: FREQUENCY (the default; 0
                                    reads as FREQUENCY) or
@@ -391,7 +703,8 @@ typedef struct nerf_model_options {
                                    nerf_matmul_supported() says 0 makes
                                    nerf_model_create() fail with
                                    NERF_EINVAL.  Saved in checkpoints. */
-    /* Since 0.3.  Zero-filled by an older caller: BOX, as before. */
+    /* Zero-filled by an older caller: BOX, as before.
+     * @since 0.3 */
     uint32_t space;           /**< nerf_space of a hash-grid model; default
                                    BOX.  Saved in checkpoints. */
 } nerf_model_options;
@@ -469,37 +782,37 @@ typedef enum nerf_param {
     NERF_PARAM_DECAY_STEPS = 102,         /**< Default 250000: lr(t) =
                                                lr0 (lr1/lr0)^(t/steps). */
     /** Default 0.9.  Adam's bias corrections go by the step count, but
-     * for a hash table's parameters (since 0.10) by each one's own count
-     * of updates, as Mueller et al.'s: a step leaves the parameters it
-     * did not touch, moments and corrections included, as they were.
-     * A model resumed from a checkpoint of an older libnerf goes on by
-     * the step, as it was trained. */
+     * for a hash table's parameters by each one's own count of updates,
+     * as Mueller et al.'s: a step leaves the parameters it did not touch,
+     * moments and corrections included, as they were.  A model resumed
+     * from a checkpoint of an older libnerf goes on by the step, as it
+     * was trained.
+     * @since 0.10 for the hash tables' own counts */
     NERF_PARAM_ADAM_BETA1 = 103,
     NERF_PARAM_ADAM_BETA2 = 104,          /**< Default 0.999; 0.99 for
                                                hash-grid models. */
     NERF_PARAM_ADAM_EPS = 105,            /**< Default 1e-7 (the paper's);
                                                1e-15 for hash-grid models
                                                (Mueller et al.'s). */
-    /** Since 0.2.  L2 penalty on the network layers (not on a hash
-     * table): weight_decay * w is added to each layer parameter's
-     * gradient.  Default 0; 1e-6 for hash-grid models, as Mueller et al.
-     * train them. */
+    /** L2 penalty on the network layers (not on a hash table):
+     * weight_decay * w is added to each layer parameter's gradient.
+     * Default 0; 1e-6 for hash-grid models, as Mueller et al. train
+     * them.
+     * @since 0.2 */
     NERF_PARAM_WEIGHT_DECAY = 106,
-    /** Since 0.5.  The rate holds at LEARNING_RATE until this step, then
-     * decays exponentially to LEARNING_RATE_FINAL at DECAY_STEPS:
+    /** The rate holds at LEARNING_RATE until this step, then decays
+     * exponentially to LEARNING_RATE_FINAL at DECAY_STEPS:
      * lr(t) = lr0 (lr1/lr0)^((t - start) / (steps - start)) for t > start.
      * Default 0 (the paper's schedule).  nerf_trainer_run_for() sets it
-     * to the step where it fits the schedule to its time budget. */
+     * to the step where it fits the schedule to its time budget.
+     * @since 0.5 */
     NERF_PARAM_DECAY_START = 107,
-    /** Since 0.9.  Over this many last steps up to DECAY_STEPS (the
-     * schedule's end, which nerf_trainer_run_for() fits to its budget)
-     * the model keeps an exponential moving average of its weights
-     * (each step keeps 0.95 of it, as Mueller et al.'s), and the step
-     * that reaches DECAY_STEPS makes that average the weights.  Training
-     * past the end goes on from it.  It holds a second copy of the
-     * weights during those steps, and a checkpoint saved then carries it.
-     * Default 0 (off; the paper's models); 100 for hash-grid models.  A
-     * checkpoint from before 0.9 resumes with 0. */
+    /** Over this many last steps up to DECAY_STEPS the model keeps an
+     * exponential moving average of its weights, which the step that
+     * reaches DECAY_STEPS makes the weights (docs/api-notes.md, "Weight
+     * averaging").  Default 0 (off; the paper's models); 100 for
+     * hash-grid models.  A checkpoint from before 0.9 resumes with 0.
+     * @since 0.9 */
     NERF_PARAM_AVERAGE_STEPS = 108
 } nerf_param;
 
@@ -526,7 +839,7 @@ NERF_API int nerf_model_get_param(const nerf_model *model, int param,
  */
 NERF_API double nerf_model_learning_rate(const nerf_model *model);
 
-/** Since 0.5.  What a model's learning-rate schedule is (nerf_schedule). */
+/** What a model's learning-rate schedule is (nerf_schedule).  @since 0.5 */
 typedef enum nerf_schedule_state {
     /** Set by its parameters alone: a decay over DECAY_STEPS (from
      * DECAY_START), as nerf-train --steps sets it. */
@@ -542,8 +855,9 @@ typedef enum nerf_schedule_state {
 } nerf_schedule_state;
 
 /**
- * Since 0.5.  How a model's schedule came about; saved in checkpoints.
+ * How a model's schedule came about; saved in checkpoints.
  * Versioned: set struct_size (sizeof) before passing it.
+ * @since 0.5
  */
 typedef struct nerf_schedule {
     uint32_t struct_size;    /**< Set by the caller. */
@@ -560,9 +874,10 @@ typedef struct nerf_schedule {
 } nerf_schedule;
 
 /**
- * Since 0.5.  Fill @p out with the model's schedule.
+ * Fill @p out with the model's schedule.
  * @return NERF_OK, or NERF_EINVAL for a NULL argument or a struct_size
  * too small for struct_size and state.
+ * @since 0.5
  */
 NERF_API int nerf_model_schedule(const nerf_model *model, nerf_schedule *out);
 
@@ -605,7 +920,7 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
                              const nerf_hooks *hooks);
 
 /**
- * Since 0.4: save the model like nerf_model_save() but without the Adam
+ * Save the model like nerf_model_save() but without the Adam
  * moments, which hold twice as many floats as the weights: the weights,
  * the options, the step, the occupancy grid and the render settings
  * (nerf_model_render_settings()), all a render or an evaluation needs.
@@ -615,81 +930,9 @@ NERF_API int nerf_model_load(nerf_model **out, const char *path,
  * weights-only file again.  libnerf before 0.4 refuses the file with
  * NERF_EVERSION.
  * @return as nerf_model_save().
+ * @since 0.4
  */
 NERF_API int nerf_model_export(const nerf_model *model, const char *path);
-
-/** Bits of nerf_model_contents() (since 0.4). */
-#define NERF_MODEL_HAS_OPTIMIZER 0x1u /**< The Adam moments: training can
-                                           resume (every model but one
-                                           loaded from a weights-only
-                                           export). */
-#define NERF_MODEL_HAS_OCCUPANCY 0x2u /**< An occupancy grid that training
-                                           has updated (hash-grid models). */
-#define NERF_MODEL_HAS_RENDER_SETTINGS 0x4u /**< Render settings recorded
-                                           by a trainer or
-                                           nerf_model_set_render_settings(),
-                                           kept by checkpoints. */
-#define NERF_MODEL_HAS_DATA_RECORD 0x8u /**< What data a trainer last
-                                           trained the model on
-                                           (nerf_model_training_data()),
-                                           kept by checkpoints. */
-#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< Since 0.8: the batch a
-                                           trainer last trained the model
-                                           with
-                                           (nerf_model_training_batch()),
-                                           kept by checkpoints. */
-#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Since 0.10: each
-                                           hash-table parameter's Adam
-                                           corrections by its own count of
-                                           updates (hash-grid models), kept
-                                           by checkpoints.  A hash-grid
-                                           model loaded with the moments
-                                           but without them, from an older
-                                           libnerf's file, corrects by the
-                                           step, as it was trained. */
-#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Since 0.11: weights
-                                           that are NaN or infinite, as a
-                                           run that diverged leaves them:
-                                           the model can be queried, and
-                                           nothing else takes it (see
-                                           nerf_model_load()). */
-
-/**
- * Since 0.4: what @p model holds beyond its weights, NERF_MODEL_HAS_*
- * bits; 0 for NULL.  For a loaded model, which of these its file held.
- * NERF_MODEL_HAS_NONFINITE_WEIGHTS is found by a pass over the weights
- * after they last changed (a training step, a load).
- */
-NERF_API uint32_t nerf_model_contents(const nerf_model *model);
-
-/**
- * Since 0.4: a one-line description of the data @p model was last trained
- * on, as its trainer recorded it: image count and size, the files' size
- * when downscaled, the scene's format, NDC, mean colour and bounds ("100
- * images of 100x100 from 800x800 files (blender, mean colour 0.85 0.83
- * 0.80, near 2 far 6)"), into @p buf (at most @p size bytes with the
- * terminating NUL; truncated to fit).  An empty string when nothing is
- * recorded (nerf_model_contents() lacks NERF_MODEL_HAS_DATA_RECORD).
- * nerf_trainer_create() warns when it is given data unlike this record.
- * @return NERF_OK, or NERF_EINVAL (NULL model or buffer, size 0).
- */
-NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
-                                      size_t size);
-
-/**
- * Since 0.8: the batch @p model was last trained with, as its trainer
- * recorded it: nerf_trainer_options.batch_rays into @p rays and
- * batch_samples into @p samples.  Both 0 when nothing is recorded
- * (nerf_model_contents() lacks NERF_MODEL_HAS_BATCH_RECORD: a model never
- * trained, or a checkpoint of libnerf before 0.8).  A run resumed from a
- * checkpoint goes on bit for bit as the unbroken run only with the batch
- * it began with, so a caller that resumes takes this one;
- * nerf_trainer_create() warns when a model that has taken steps is given
- * another.
- * @return NERF_OK, or NERF_EINVAL (a NULL argument).
- */
-NERF_API int nerf_model_training_batch(const nerf_model *model,
-                                       uint32_t *rays, uint32_t *samples);
 
 /**
  * Create a model with @p opts and fill its weights from a NumPy .npz file
@@ -704,437 +947,122 @@ NERF_API int nerf_model_training_batch(const nerf_model *model,
 NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                    const nerf_model_options *opts);
 
-/* ------------------------------------------------------------------------ */
-/* Built-in scene                                                           */
-/* ------------------------------------------------------------------------ */
-
-/** Values of nerf_scene_options.image_format. */
-#define NERF_IMAGE_FORMAT_PNG 0u  /**< PNGs (RGBA for the object capture). */
-#define NERF_IMAGE_FORMAT_JPEG 1u /**< RGB JPEGs composited on white, named
-                                       .jpg in file_path: what a camera
-                                       gives, with no mask. */
-
-/** Since 0.11: the sizes and view counts nerf_scene_write() takes (a
- * program's help can quote them: plain integers). */
-#define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
-#define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
-#define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
-
-/** What nerf_scene_write() produces. */
-typedef struct nerf_scene_options {
-    uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
-    uint32_t width;       /**< Image width in pixels, NERF_SCENE_MIN_SIDE..
-                               NERF_SCENE_MAX_SIDE (8..4096); default 100. */
-    uint32_t height;      /**< Image height in pixels, as width; default
-                               100. */
-    uint32_t n_train;     /**< Training views, 1..NERF_SCENE_MAX_VIEWS
-                               (10000); default 100. */
-    uint32_t n_val;       /**< Validation views, 0..NERF_SCENE_MAX_VIEWS;
-                               default 8. */
-    uint32_t n_test;      /**< Test views (a circle at 30 degrees),
-                               0..NERF_SCENE_MAX_VIEWS; default 16. */
-    uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
-    uint32_t reserved0;   /**< Must be 0. */
-    uint64_t seed;        /**< Placement of the validation views; default 0. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    uint32_t capture;     /**< Since 0.3.  How the scene is photographed:
-                               NERF_SCENE_CAPTURE_*; default OBJECT. */
-    uint32_t layout;      /**< Since 0.3.  The files it is written as:
-                               NERF_SCENE_LAYOUT_*; default BLENDER.  The
-                               usual pairs: OBJECT and UNBOUNDED in
-                               BLENDER, FORWARD in LLFF. */
-    uint32_t image_format; /**< Since 0.3.  NERF_IMAGE_FORMAT_*: the views'
-                                files; default NERF_IMAGE_FORMAT_PNG. */
-    uint32_t jpeg_quality; /**< Since 0.3.  JPEG quality 1..100; 0
-                                (default) = 95.  Ignored for PNG. */
-    float k1, k2, p1, p2, k3; /**< Since 0.3.  The lens the views are
-                               photographed through (nerf_camera's
-                               distortion): each pixel holds what its ray
-                               through that lens sees, and the files
-                               record the coefficients (the LLFF layout
-                               cannot, COLMAP's OPENCV model has no k3).
-                               Default 0: a pinhole camera. */
-} nerf_scene_options;
-
-/** Captures of the built-in scene (nerf_scene_options.capture). */
-#define NERF_SCENE_CAPTURE_OBJECT 0u    /**< The solids alone on a
-    transparent background, from a hemisphere of views at distance 4. */
-#define NERF_SCENE_CAPTURE_FORWARD 1u   /**< A forward-facing capture, as
-    LLFF's: the solids on a ground before a backdrop 40 units away, seen
-    from a jittered grid of cameras 3.2 units in front of them on one side,
-    all looking the same way (within a degree), spread over 0.8 x 0.6
-    units; horizontal field of view 1 radian.  Opaque. */
-#define NERF_SCENE_CAPTURE_UNBOUNDED 2u /**< An all-round capture with a far
-    background: the solids on a ground within a backdrop 40 units away,
-    from rings of cameras 2.2 to 3 units from them looking at them;
-    horizontal field of view 1 radian.  Opaque. */
-
-/** Layouts of the written scene (nerf_scene_options.layout). */
-#define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}
-    .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
-    opaque captures, whose files also record instant-ngp's aabb_scale 16
-    at top level for UNBOUNDED). */
-#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One instant-ngp style
-    transforms.json holding every view (train, then val, then test, under
-    images/), with fl_x, fl_y, cx, cy, w, h, k1, k2, p1, p2, k3 and
-    aabb_scale at top level (16 for the opaque captures, 2 for OBJECT).
-    Loading it splits it every llff_holdout-th frame, not by the counts
-    written. */
-#define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
-    poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
-    order), n_train + n_test views in all (n_val is not used): a loader
-    holds out every 8th as LLFF has no split files.  Bounds per view are
-    the 0.1 and 99.9 percentiles of its pixels' depths along the optical
-    axis, as LLFF's imgs2poses takes them from the sparse points. */
-#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< A COLMAP model as COLMAP's
-    text files: images/ (RGB PNGs, composited onto white for OBJECT, named
-    00000.png ... over the train, val and test views in that order) and
-    sparse/0/ cameras.txt, images.txt, points3D.txt: one PINHOLE camera,
-    every view's pose in COLMAP's convention, and sparse points where
-    pixels' rays of opacity above 0.95 end in a few views, each with a
-    track of the views whose ray through its projection ends there too. */
-#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< The same as COLMAP's binary
-    files (cameras.bin, images.bin, points3D.bin). */
+/** Bits of nerf_model_contents().  @since 0.4 */
+#define NERF_MODEL_HAS_OPTIMIZER 0x1u /**< The Adam moments: training can
+                                           resume (every model but one
+                                           loaded from a weights-only
+                                           export). */
+#define NERF_MODEL_HAS_OCCUPANCY 0x2u /**< An occupancy grid that training
+                                           has updated (hash-grid models). */
+#define NERF_MODEL_HAS_RENDER_SETTINGS 0x4u /**< Render settings recorded
+                                           by a trainer or
+                                           nerf_model_set_render_settings(),
+                                           kept by checkpoints. */
+#define NERF_MODEL_HAS_DATA_RECORD 0x8u /**< What data a trainer last
+                                           trained the model on
+                                           (nerf_model_training_data()),
+                                           kept by checkpoints. */
+#define NERF_MODEL_HAS_BATCH_RECORD 0x10u /**< The batch a trainer last trained
+                                           the model with
+                                           (nerf_model_training_batch()), kept
+                                           by checkpoints.
+                                           @since 0.8 */
+#define NERF_MODEL_HAS_ADAM_CORRECTIONS 0x20u /**< Each hash-table parameter's
+                                           Adam corrections by its own count of
+                                           updates (hash-grid models), kept by
+                                           checkpoints.  A hash-grid model
+                                           loaded with the moments but without
+                                           them, from an older libnerf's file,
+                                           corrects by the step, as it was
+                                           trained.
+                                           @since 0.10 */
+#define NERF_MODEL_HAS_NONFINITE_WEIGHTS 0x40u /**< Weights that are NaN or
+                                           infinite, as a run that diverged
+                                           leaves them: the model can be
+                                           queried, and nothing else takes it
+                                           (see nerf_model_load()).
+                                           @since 0.11 */
 
 /**
- * Fill @p opts with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * What @p model holds beyond its weights, NERF_MODEL_HAS_*
+ * bits; 0 for NULL.  For a loaded model, which of these its file held.
+ * NERF_MODEL_HAS_NONFINITE_WEIGHTS is found by a pass over the weights
+ * after they last changed (a training step, a load).
+ * @since 0.4
  */
-NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
-                                     size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
+NERF_API uint32_t nerf_model_contents(const nerf_model *model);
 
 /**
- * Write the built-in scene to the folder @p dir (created if missing) in the
- * capture and layout the options say.  The scene is a few coloured solids
- * with smooth density edges inside a sphere of radius 1.6 about the
- * origin (z up), rendered by numerically exact volume rendering.  The
- * OBJECT capture (the default) is a Blender-format dataset:
- * transforms_{train,val,test}.json and RGBA PNGs under train/, val/ and
- * test/, from cameras at distance 4 (use near 2, far 6, as for the Blender
- * scenes).  The FORWARD and UNBOUNDED captures add a ground (the
- * half-space z < -0.75, a soft checker) and a backdrop (beyond radius 40:
- * sky, hills and a sun), so every pixel is opaque and depths reach 40;
- * they are what scenes of forward-facing and all-round photos are like.
- * The layout (NERF_SCENE_LAYOUT_*) decides the files, image_format PNG or
- * JPEG (RGB, composited on white for OBJECT) for the views.  With a lens
- * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
- * sees (nerf_camera's model).  Same options, same bytes.
- * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
- * capture or layout, a layout that does not fit the capture or is not
- * supported yet); NERF_EIO (cannot create or write a file, named in the
- * message); NERF_ENOMEM.
+ * A one-line description of the data @p model was last trained
+ * on, as its trainer recorded it: image count and size, the files' size
+ * when downscaled, the scene's format, NDC, mean colour and bounds ("100
+ * images of 100x100 from 800x800 files (blender, mean colour 0.85 0.83
+ * 0.80, near 2 far 6)"), into @p buf (at most @p size bytes with the
+ * terminating NUL; truncated to fit).  An empty string when nothing is
+ * recorded (nerf_model_contents() lacks NERF_MODEL_HAS_DATA_RECORD).
+ * nerf_trainer_create() warns when it is given data unlike this record.
+ * @return NERF_OK, or NERF_EINVAL (NULL model or buffer, size 0).
+ * @since 0.4
  */
-NERF_API int nerf_scene_write(const char *dir,
-                              const nerf_scene_options *opts);
-
-/* ------------------------------------------------------------------------ */
-/* Cameras, sampling and rendering                                          */
-/* ------------------------------------------------------------------------ */
+NERF_API int nerf_model_training_data(const nerf_model *model, char *buf,
+                                      size_t size);
 
 /**
- * Flags for nerf_camera.flags.
+ * The batch @p model was last trained with, as its trainer
+ * recorded it: nerf_trainer_options.batch_rays into @p rays and
+ * batch_samples into @p samples.  Both 0 when nothing is recorded
+ * (nerf_model_contents() lacks NERF_MODEL_HAS_BATCH_RECORD: a model never
+ * trained, or a checkpoint of libnerf before 0.8).  A run resumed from a
+ * checkpoint goes on bit for bit as the unbroken run only with the batch
+ * it began with, so a caller that resumes takes this one;
+ * nerf_trainer_create() warns when a model that has taken steps is given
+ * another.
+ * @return NERF_OK, or NERF_EINVAL (a NULL argument).
+ * @since 0.8
+ */
+NERF_API int nerf_model_training_batch(const nerf_model *model,
+                                       uint32_t *rays, uint32_t *samples);
+
+/**
+ * Record what rendering @p model needs: the sampling fields of
+ * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
+ * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
+ * are composited on white (@p white_background 1) or black (0).
+ * nerf_trainer_create() records those it trains with, and checkpoints keep
+ * them (docs/formats.md), so that nerf_model_render_settings() gives them
+ * back to a caller who knows nothing of the scene.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
+ * would refuse, white_background not 0 or 1); NERF_EVERSION as
+ * nerf_sampler_create().
+ * @since 0.4
+ */
+NERF_API int nerf_model_set_render_settings(nerf_model *model,
+                                            const nerf_sampler_options *sampler,
+                                            uint32_t white_background);
+
+/**
+ * The settings to render @p model with.  Either output may be
+ * NULL; each must be initialised (its struct_size set).  Into @p sampler go
+ * the fields nerf_model_set_render_settings() lists; its seed, perturb
+ * and hooks are kept.  Into @p renderer goes white_background; its other
+ * fields are kept.
  *
- * By default the ray of pixel (column i, row j) passes through the pixel's
- * centre, (i + 0.5, j + 0.5).  NERF_CAMERA_PIXEL_CORNER uses (i, j), as the
- * reference implementation does; set it to reproduce its rays exactly.
+ * A model without recorded settings (nerf_model_contents() lacks
+ * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
+ * a file of libnerf before 0.4) gets those its shape suggests
+ * (docs/api-notes.md, "Render settings a model suggests").
+ * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
+ * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
+ * forged file).
+ * @since 0.4
  */
-#define NERF_CAMERA_PIXEL_CORNER 0x1u
+NERF_API int nerf_model_render_settings(const nerf_model *model,
+                                        nerf_sampler_options *sampler,
+                                        nerf_renderer_options *renderer);
 
-/**
- * A camera in the OpenGL/Blender convention: in camera space x points
- * right, y up, and the camera looks down -z.  A pinhole camera unless its
- * distortion coefficients are set.
- *
- * The ray of pixel (i, j) (column, row; row 0 at the top) has origin
- * c2w[.][3] (the camera centre) and the unnormalised direction
- * R ((i + 0.5 - cx) / fx, -(j + 0.5 - cy) / fy, -1), R being the left 3x3
- * of c2w: its camera-space z component is -1, so t along the ray is depth
- * along the optical axis.  Without the 0.5 when NERF_CAMERA_PIXEL_CORNER is
- * set.
- *
- * Lens distortion (k1, k2, p1, p2, k3) is OpenCV's (Brown-Conrady) model,
- * acting on normalised image coordinates in OpenCV's axes (x right, y
- * DOWN, z forward): an undistorted point (x, y), r^2 = x^2 + y^2, is seen
- * at
- *   x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),
- *   y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y,
- * i.e. at pixel (cx + fx x_d, cy + fy y_d).  Pixel (i, j) records
- * x_d = (i + 0.5 - cx) / fx, y_d = (j + 0.5 - cy) / fy; its ray goes
- * through the undistorted point, direction R (x, -y, -1), found by
- * Newton's method (to 1e-9 in normalised units, at most 20 iterations).
- * A pixel that no point distorts onto (beyond the fold of a strong barrel
- * lens, where r_d stops growing with r) gets the ray of the point whose
- * distortion comes closest to it.  Images are never resampled.  COLMAP's
- * SIMPLE_RADIAL (k1), RADIAL (k1, k2) and OPENCV (k1, k2, p1, p2) models
- * and instant-ngp's k1, k2, p1, p2 (k3) map onto these fields directly.
- * All zero (the default, and what a caller built against a header without
- * them gets) is a pinhole camera, with the rays above bit for bit.
- *
- * Versioned: fill with nerf_camera_init() (or NERF_CAMERA_INIT), then set
- * the fields.  The defaults (identity pose, all intrinsics 0) are not a
- * usable camera: width, height, fx and fy must be set.
- */
-typedef struct nerf_camera {
-    uint32_t struct_size; /**< Set by nerf_camera_init(). */
-    uint32_t flags;       /**< NERF_CAMERA_*; default 0. */
-    uint32_t width;       /**< Image width in pixels, 1..65536. */
-    uint32_t height;      /**< Image height in pixels, 1..65536. */
-    float c2w[12];        /**< Camera-to-world 3x4, row-major: columns are
-                               the camera's right, up and back axes and its
-                               centre, in world units.  Default [I | 0]. */
-    float fx, fy;         /**< Focal lengths in pixels, > 0.  For a
-                               horizontal field of view a:
-                               fx = 0.5 width / tan(0.5 a). */
-    float cx, cy;         /**< Principal point in pixels from the top-left
-                               image corner; usually width/2, height/2. */
-    /* Since 0.3.  Zero-filled by an older caller: a pinhole camera. */
-    float k1, k2;         /**< Radial distortion (r^2, r^4 terms); finite,
-                               within +-1000; default 0. */
-    float p1, p2;         /**< Tangential distortion; finite, within
-                               +-1000; default 0. */
-    float k3;             /**< Radial distortion, r^6 term; finite, within
-                               +-1000; default 0. */
-} nerf_camera;
-
-/**
- * Fill @p camera with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_camera_init(nerf_camera *camera, size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_CAMERA_INIT(c) nerf_camera_init((c), sizeof *(c))
-
-/**
- * Compute the rays of pixels first .. first + n - 1 of @p camera, pixels
- * being numbered row by row (index = row * width + column).
- *
- * @param origins_out    n x 3 floats, world units.
- * @param directions_out n x 3 floats, unnormalised (see nerf_camera):
- *                       their length scales distances when compositing.
- * @return NERF_OK; NERF_EINVAL for NULL pointers, an invalid camera
- * (sizes, non-positive or non-finite focal, non-finite pose, distortion
- * not finite or beyond +-1000) or a pixel range beyond width x height; NERF_EVERSION for a camera struct from a
- * newer header with non-zero unknown fields.
- * Reentrant.
- */
-NERF_API int nerf_camera_rays(const nerf_camera *camera, size_t first,
-                              size_t n, float *origins_out,
-                              float *directions_out);
-
-/**
- * Set the pose of @p camera (its c2w; nothing else) to look from @p eye
- * at @p target, with @p up (world space) pointing up in the image: the
- * camera's -z axis points at the target, its x axis is up x z normalised.
- * @return NERF_OK; NERF_EINVAL for NULL pointers, an uninitialised
- * struct, eye equal to target, or up parallel to the viewing direction.
- * Reentrant.
- */
-NERF_API int nerf_camera_look_at(nerf_camera *camera, const float eye[3],
-                                 const float target[3], const float up[3]);
-
-/**
- * Flags for nerf_camera_path_options.flags.  Without them the options'
- * size and intrinsics, when set, win over the file's; with them the file's
- * win where it has any, and the options serve as the fallback.
- */
-#define NERF_CAMERA_PATH_FILE_SIZE 0x1u /**< A frame whose file gives w and
-                                             h keeps that size; width and
-                                             height serve only frames
-                                             without one. */
-#define NERF_CAMERA_PATH_FILE_INTRINSICS 0x2u /**< A frame whose file gives
-                                                   fl_x or camera_angle_x
-                                                   keeps the file's
-                                                   intrinsics; focal or
-                                                   fov_x serve only frames
-                                                   without them (and every
-                                                   .npy pose). */
-
-/**
- * How nerf_camera_path_load() turns a file of poses into cameras.  The
- * defaults take everything from the file, which works for a
- * transforms-style JSON that gives its image size (w, h); a .npy file
- * carries poses only and needs width, height and focal or fov_x.
- */
-typedef struct nerf_camera_path_options {
-    uint32_t struct_size; /**< Set by nerf_camera_path_options_init(). */
-    uint32_t width;       /**< Image width in pixels, 1..65536, or 0 (the
-                               default) for the file's w.  Set width and
-                               height together or leave both 0.  When the
-                               file gives w and h, its intrinsics are
-                               scaled by width / w and height / h (the
-                               field of view is kept). */
-    uint32_t height;      /**< Image height in pixels, 1..65536, or 0 for
-                               the file's h. */
-    uint32_t flags;       /**< NERF_CAMERA_PATH_*; default 0. */
-    float focal;          /**< > 0: fx = fy = focal, in pixels of the
-                               rendered image, principal point at the
-                               centre, replacing the file's intrinsics
-                               (see NERF_CAMERA_PATH_FILE_INTRINSICS);
-                               default 0 (none). */
-    float fov_x;          /**< Horizontal field of view in degrees, in
-                               (0, 180): as focal with focal =
-                               0.5 width / tan(0.5 fov_x); default 0
-                               (none).  At most one of focal and fov_x may
-                               be set. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-} nerf_camera_path_options;
-
-/**
- * Fill @p opts with defaults and record @p struct_size.
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
-                                           size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
-    nerf_camera_path_options_init((o), sizeof *(o))
-
-/**
- * Load a camera path (a sequence of poses to render) from the file
- * @p path, in one of two forms (docs/formats.md has the details):
- *
- *  - A NumPy .npy file (recognised by its magic bytes, or by a ".npy"
- *    name): camera-to-world matrices in the nerf_camera convention, of
- *    shape (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16) (the last two being
- *    the same matrices flattened row by row), dtype '<f4' or '<f8', C
- *    order.  The bottom row of 4 x 4 matrices must be [0, 0, 0, 1].  The
- *    file holds no intrinsics: the options must give width, height and
- *    focal or fov_x.
- *  - Anything else is read as a transforms-style JSON file, as Blender and
- *    instant-ngp write them and nerf_dataset_load() reads them:
- *    frames[].transform_matrix, and camera_angle_x or fl_x (fl_y,
- *    camera_angle_y, cx, cy, w, h optional), at top level or per frame.
- *    frames[].file_path is ignored: no image is read.
- *
- * Every matrix must be finite, representable as float, and have an
- * invertible rotation part.  Files hold at most 100000 poses.  The
- * cameras have flags 0 (rays through pixel centres).
- *
- * @param out  receives the path; release it with nerf_camera_path_destroy().
- *             NULL on failure.
- * @param opts NULL for the defaults.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
- * for a file that gives none, no focal or fov_x for a .npy file);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a regular file: a
- * folder, a FIFO, a device, refused without blocking);
- * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
- * or malformed file, npy dtype, order or shape not listed above, no
- * frames or more than 100000, missing field, NaN or infinite values,
- * bottom row not [0, 0, 0, 1], entries beyond 1e6, degenerate rotation,
- * focal under 1e-3 pixels: docs/formats.md, "Camera sanity"; w or h not a
- * positive whole number); NERF_ENOMEM.  Messages name the file, the frame
- * (with its file_path when it has one) and the problem.
- * Reentrant: separate loads may run on separate threads.
- */
-NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
-                                   const nerf_camera_path_options *opts);
-
-/** Release a camera path.  NULL is a no-op. */
-NERF_API void nerf_camera_path_destroy(nerf_camera_path *camera_path);
-
-/** Number of cameras (at least 1); 0 for NULL. */
-NERF_API uint32_t nerf_camera_path_count(const nerf_camera_path *camera_path);
-
-/**
- * Camera @p index of the path, in file order.
- * @param out initialised with nerf_camera_init(); as many bytes as its
- *            struct_size are written.
- * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
- * uninitialised struct).  Reentrant.
- */
-NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
-                                     uint32_t index, nerf_camera *out);
-
-/**
- * Settings of a sampler, fixed at creation.  The defaults are the
- * reference configuration for Blender scenes: 64 + 128 samples for t in
- * [2, 6], linear in depth, jittered in training.
- *
- * Forward-facing (LLFF) scenes: set ndc = 1, t_near = 0 and t_far = 1.
- * Rays are then warped to normalised device coordinates with the near plane
- * at world depth 1 (the frustum given by ndc_focal, ndc_width, ndc_height),
- * and t_near and t_far are NDC depths in [0, 1]: 0 is the near plane, 1
- * infinity.
- */
-typedef struct nerf_sampler_options {
-    uint32_t struct_size; /**< Set by nerf_sampler_options_init(). */
-    uint32_t n_coarse;    /**< Stratified samples per ray, 2..4096;
-                               default 64. */
-    uint32_t n_fine;      /**< Hierarchical samples per ray, 0..4096
-                               (0: coarse pass only; needs n_coarse >= 3
-                               otherwise); default 128. */
-    uint32_t perturb;     /**< 1: jitter the stratified samples and draw
-                               the hierarchical ones at random in training
-                               (evaluation is never random); default 1. */
-    uint32_t lindisp;     /**< 1: sample linearly in disparity (1/depth)
-                               instead of depth; needs t_near > 0;
-                               default 0. */
-    uint32_t paper_bins;  /**< 1: stratified samples as the paper's eq. 2
-                               (one uniform draw in each of n_coarse equal
-                               bins; bin centres in evaluation) instead of
-                               the reference implementation's evenly spaced
-                               values with both ends included; default 0. */
-    uint32_t ndc;         /**< 1: warp rays to NDC first; default 0. */
-    uint32_t reserved0;   /**< Must be 0. */
-    float t_near;         /**< Start of the sampled range of t; default 2. */
-    float t_far;          /**< End of the sampled range, > t_near; default 6. */
-    float ndc_focal;      /**< NDC frustum: focal length in pixels of the
-                               training images; one focal serves both axes,
-                               as in the reference.  0 (the default) takes
-                               the rendered camera's fx, width and height
-                               instead; then only image rendering works. */
-    uint32_t ndc_width;   /**< NDC frustum: image width in pixels. */
-    uint32_t ndc_height;  /**< NDC frustum: image height in pixels. */
-    uint32_t reserved1;   /**< Must be 0. */
-    uint64_t seed;        /**< Key of the random streams; default 0. */
-    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2: ray marching.  Zero-filled by an older caller, which
-     * gives stratified and hierarchical sampling. */
-    uint32_t march_steps; /**< 0 (the default): stratified and
-                               hierarchical sampling as above.  N in
-                               1..65536: march through the model's
-                               occupancy grid (hash-grid models only) in
-                               steps of a world distance of the grid's
-                               diagonal / N, from max(t_near, entry into
-                               the bound) to min(t_far, exit), skipping
-                               empty cells and stopping a ray once its
-                               transmittance falls below 1e-4.  n_fine,
-                               lindisp and paper_bins are then unused.
-                               With ndc the warped rays are marched
-                               (the model's space must be NDC); an
-                               UNBOUNDED model's samples are spaced
-                               evenly in contracted space beyond its
-                               central cube (docs/formats.md, "Scene
-                               spaces").  NERF_PRESET_FAST sets 1024
-                               (instant-ngp's). */
-    uint32_t max_samples; /**< With march_steps: at most this many samples
-                               per ray, 1..65536; default 1024. */
-} nerf_sampler_options;
-
-/**
- * Fill @p opts with the reference sampler settings and record
- * @p struct_size (or use NERF_SAMPLER_OPTIONS_INIT).
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
-                                       size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_SAMPLER_OPTIONS_INIT(o) nerf_sampler_options_init((o), sizeof *(o))
-
-/**
- * Set the sample counts of a nerf_preset in an initialised @p opts; other
- * fields are kept.  NERF_PRESET_REFERENCE: 64 + 128 (the paper's).
- * NERF_PRESET_TINY: 32 + 64.  NERF_PRESET_FAST: ray marching, march_steps
- * 1024 and max_samples 1024 (n_coarse 128 and n_fine 0 for a caller that
- * turns marching off); the other presets set march_steps 0.
- * @return NERF_OK; NERF_EINVAL for an unknown preset or a bad struct;
- * NERF_EVERSION as nerf_sampler_create().
- */
-NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
-                                         int preset);
+/* ===========================================================================
+ * 9. Sampler
+ * ======================================================================== */
 
 /**
  * Create a sampler.  @p opts is copied; NULL means the defaults.
@@ -1204,92 +1132,15 @@ NERF_API int nerf_sampler_sample_fine(const nerf_sampler *sampler,
                                       const float *weights, const float *u,
                                       float *t_out);
 
-/** What a nerf_progress report is about. */
-typedef enum nerf_progress_kind {
-    NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
-    NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
-                                   psnr are those of the last step. */
-    NERF_PROGRESS_GEOMETRY = 3 /**< Since 0.5.  nerf_mesh_extract() and
-                                   nerf_density_grid_write(): done and
-                                   total count planes of grid samples. */
-} nerf_progress_kind;
-
-/**
- * A progress report, passed by pointer to a nerf_progress_cb.  Versioned:
- * read a field only if struct_size covers it (fields are only appended).
- */
-typedef struct nerf_progress {
-    uint32_t struct_size; /**< sizeof the library's struct. */
-    uint32_t kind;        /**< nerf_progress_kind. */
-    uint64_t done;        /**< Units of work finished so far. */
-    uint64_t total;       /**< Units of work of the whole call. */
-    double elapsed;       /**< Seconds since the call started. */
-    double loss;          /**< NERF_PROGRESS_TRAIN: loss of the last step;
-                               otherwise 0. */
-    double psnr;          /**< NERF_PROGRESS_TRAIN: PSNR (dB) of the last
-                               step's fine colours; otherwise 0. */
-} nerf_progress;
-
-/**
- * Progress callback.  It runs on the thread that made the call, never on a
- * worker thread, and must not call back into the handle that reports.
- * Return 0 to continue, nonzero to cancel: the call then returns
- * NERF_ECANCELLED.  @p p is valid only during the callback.
- */
-typedef int (*nerf_progress_cb)(const nerf_progress *p, void *user);
-
-/** Sentinel for nerf_renderer_options.raw_noise_std. */
-#define NERF_NOISE_AUTO (-1.0f)
-
-/** Settings of a renderer, fixed at creation. */
-typedef struct nerf_renderer_options {
-    uint32_t struct_size;      /**< Set by nerf_renderer_options_init(). */
-    uint32_t white_background; /**< 1: composite onto white (Blender
-                                    scenes): rgb += 1 - opacity; default 0
-                                    (black). */
-    float raw_noise_std;       /**< Standard deviation of the Gaussian
-                                    noise added to raw density before the
-                                    ReLU, in training only.  Default
-                                    NERF_NOISE_AUTO: 1 when the sampler
-                                    uses NDC (forward-facing scenes, as the
-                                    reference), else 0. */
-    uint32_t chunk_rays;       /**< Rays per unit of work handed to a
-                                    thread; progress is reported after each
-                                    chunk.  Rounded up to a multiple of 64;
-                                    1..2^20; default 512.  Neither memory
-                                    use nor results depend on it. */
-    uint32_t threads;          /**< Worker threads for image and ray
-                                    rendering, 0..1024.  0 (the default):
-                                    the cores the process may run on (its
-                                    CPU affinity) divided by OpenBLAS's
-                                    own thread count (each worker's matrix
-                                    products already use that many; more
-                                    workers would oversubscribe the cores),
-                                    at least 1; all cores with another
-                                    BLAS, and (since 0.6.1) for a model
-                                    whose products need no BLAS (the fast
-                                    preset's fp32 network on x86-64).
-                                    Results do not depend on it. */
-    uint32_t reserved0;        /**< Must be 0. */
-    const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
-                                    defaults. */
-} nerf_renderer_options;
-
-/**
- * Fill @p opts with defaults and record @p struct_size (or use
- * NERF_RENDERER_OPTIONS_INIT).
- * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
- */
-NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
-                                        size_t struct_size);
-/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_RENDERER_OPTIONS_INIT(o) nerf_renderer_options_init((o), sizeof *(o))
+/* ===========================================================================
+ * 10. Renderer
+ * ======================================================================== */
 
 /**
  * Create a renderer that draws @p model with the samples of @p sampler.
  * @p opts is copied; NULL means the defaults.
  *
- * Since 0.4, @p sampler may be NULL: the renderer then makes (and owns) a
+ * @p sampler may be NULL: the renderer then makes (and owns) a
  * sampler from the model's render settings (nerf_model_render_settings():
  * those its trainer recorded, else those its shape suggests), and when
  * @p opts is NULL too, it composites on the model's background as well,
@@ -1309,6 +1160,7 @@ NERF_API int nerf_renderer_options_init(nerf_renderer_options *opts,
  * accepts (a forged file), as nerf_model_render_settings();
  * NERF_EVERSION for an options struct from a newer header with non-zero
  * unknown fields; NERF_ENOMEM.
+ * @since 0.4 for a NULL @p sampler
  */
 NERF_API int nerf_renderer_create(nerf_renderer **out,
                                   const nerf_model *model,
@@ -1336,45 +1188,6 @@ NERF_API int nerf_renderer_set_progress(nerf_renderer *renderer,
  * is running has no effect.  NULL is a no-op.
  */
 NERF_API void nerf_renderer_cancel(nerf_renderer *renderer);
-
-/**
- * Since 0.4: record what rendering @p model needs: the sampling fields of
- * @p sampler (counts, marching, t_near and t_far, ndc and its frustum,
- * lindisp, paper_bins; not seed, perturb or hooks) and whether renders
- * are composited on white (@p white_background 1) or black (0).
- * nerf_trainer_create() records those it trains with, and checkpoints keep
- * them (docs/formats.md), so that nerf_model_render_settings() gives them
- * back to a caller who knows nothing of the scene.
- * @return NERF_OK; NERF_EINVAL (NULL argument, options nerf_sampler_create()
- * would refuse, white_background not 0 or 1); NERF_EVERSION as
- * nerf_sampler_create().
- */
-NERF_API int nerf_model_set_render_settings(nerf_model *model,
-                                            const nerf_sampler_options *sampler,
-                                            uint32_t white_background);
-
-/**
- * Since 0.4: the settings to render @p model with.  Either output may be
- * NULL; each must be initialised (its struct_size set).  Into @p sampler go
- * the fields nerf_model_set_render_settings() lists; its seed, perturb
- * and hooks are kept.  Into @p renderer goes white_background; its other
- * fields are kept.
- *
- * A model without recorded settings (nerf_model_contents() lacks
- * NERF_MODEL_HAS_RENDER_SETTINGS: created and never trained, or loaded from
- * a file of libnerf before 0.4) gets those its shape suggests: the sample
- * counts of the preset whose networks it has (the reference ones
- * otherwise; all in one pass without a fine network), ray marching for a
- * hash-grid model; t in [2, 6] on white for a BOX model (Blender scenes),
- * NDC depths [0, 1] on black for an NDC one, and [0.05, 10^4] x bound on
- * black for an UNBOUNDED one.
- * @return NERF_OK; NERF_EINVAL (NULL model, both outputs NULL, bad
- * struct); NERF_EFORMAT (recorded settings that no sampler accepts: a
- * forged file).
- */
-NERF_API int nerf_model_render_settings(const nerf_model *model,
-                                        nerf_sampler_options *sampler,
-                                        nerf_renderer_options *renderer);
 
 /**
  * Render every pixel of @p camera (evaluation: no randomness) into the
@@ -1424,6 +1237,42 @@ NERF_API int nerf_renderer_render_image_u8(nerf_renderer *renderer,
                                            size_t pixel_capacity);
 
 /**
+ * Render every pixel of @p camera as nerf_renderer_render_image()
+ * does, with the depth in world units instead of the raw sum(w t).
+ *
+ * Both depths are those of the point o + s d where the ray is expected to
+ * stop, given that it stops in the scene: s = sum(w t) / sum(w), the raw
+ * depth divided by the opacity, along the camera's unnormalised ray d.
+ * With an NDC sampler they are world units too, and an expected NDC depth
+ * of 1 or more (the point at infinity) gives +inf (docs/api-notes.md,
+ * "Depth in world units").
+ *
+ * @param rgb_out        height x width x 3 floats, as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param distance_out   height x width floats: s |d|, the distance in
+ *                       world units from the camera centre (the ray's
+ *                       origin) to the point, along the ray; 0 where the
+ *                       opacity is 0.  May be NULL.
+ * @param zdepth_out     height x width floats: s, the point's depth along
+ *                       the camera's optical axis (minus its camera-space
+ *                       z), in world units; 0 where the opacity is 0.  May
+ *                       be NULL.
+ * @param opacity_out    height x width floats, sum(w), as
+ *                       nerf_renderer_render_image(); may be NULL.
+ * @param pixel_capacity pixels each non-NULL buffer can hold.
+ * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
+ * is NULL); NERF_ENOMEM.
+ * Not reentrant for one renderer.
+ * @since 0.5
+ */
+NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
+                                        const nerf_camera *camera,
+                                        float *rgb_out, float *distance_out,
+                                        float *zdepth_out,
+                                        float *opacity_out,
+                                        size_t pixel_capacity);
+
+/**
  * Render a caller's batch of rays (evaluation: no randomness), chunked and
  * threaded as images are.
  *
@@ -1443,134 +1292,9 @@ NERF_API int nerf_renderer_render_rays(nerf_renderer *renderer,
                                        float *rgb_out, float *depth_out,
                                        float *opacity_out);
 
-/* ------------------------------------------------------------------------ */
-/* Images and metrics                                                       */
-/* ------------------------------------------------------------------------ */
-
-/** Largest width or height, in pixels, that the image functions accept. */
-#define NERF_IMAGE_MAX_SIDE 16384
-
-/**
- * Read a PNG file of any colour type (gray, gray+alpha, RGB, RGBA,
- * palette) and bit depth (1 to 16) into RGBA floats in [0, 1].
- *
- * @param rgba_out receives width x height x 4 floats, row-major from the
- *        top-left pixel, channels interleaved, straight (not premultiplied)
- *        alpha; opaque files get alpha 1.  Allocated by libnerf with the
- *        default allocator: release it with nerf_free().  Set to NULL on
- *        failure.
- *
- * 8-bit samples are returned as stored (v / 255).  16-bit samples go
- * through libpng's linear format: v / 65535 when the file has no gAMA or
- * sRGB chunk (the usual case), converted to linear light when it has one;
- * libpng premultiplies those by alpha, so the colour of a fully
- * transparent 16-bit pixel reads as 0.
- *
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
- * device, refused without blocking); NERF_EIO (the file cannot be opened
- * or read); NERF_EFORMAT (not a PNG, truncated, corrupted, a side larger
- * than NERF_IMAGE_MAX_SIDE, or a header claiming more pixels than the
- * file can hold: refused before anything is allocated for them);
- * NERF_ENOMEM.  Messages start with the path.  Reentrant.
- */
-NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
-                                 uint32_t *height_out, float **rgba_out);
-
-/**
- * Since 0.3: read a PNG or a JPEG file, told apart by its first bytes
- * (not its name), as the dataset loaders do.  PNGs are read as by
- * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
- * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
- * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
- * width and height are those of the upright picture, swapped for 5 to 8).
- *
- * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
- * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
- * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
- * device, refused without blocking); NERF_EIO (the file cannot be opened
- * or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
- * corrupted data (JPEG decoder warnings about the data count as errors),
- * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
- * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
- * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
- * path.  Reentrant.
- */
-NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
-                             uint32_t *height_out, float **rgba_out);
-
-/**
- * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
- * and rounded to the nearest of 256 levels (NaN gives 0).  Use channels 1
- * for depth or opacity maps (scale them into [0, 1] first).
- *
- * @param channels 1 (gray), 3 (RGB) or 4 (RGBA).
- * @param pixels   width x height x channels floats, row-major from the
- *                 top-left pixel, channels interleaved.
- *
- * The file is written to a temporary name beside @p path, flushed and
- * renamed, so an existing file at @p path is only ever replaced by a
- * complete image.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, zero size or a side above
- * NERF_IMAGE_MAX_SIDE, bad channel count); NERF_EIO; NERF_ENOMEM.
- * Reentrant.
- */
-NERF_API int nerf_image_write_png(const char *path, uint32_t width,
-                                  uint32_t height, uint32_t channels,
-                                  const float *pixels);
-
-/**
- * As nerf_image_write_png(), from 8-bit samples written as they are.
- * @param pixels width x height x channels bytes, row-major, interleaved.
- * @return as nerf_image_write_png().
- */
-NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
-                                   uint32_t height, uint32_t channels,
-                                   const uint8_t *pixels);
-
-/**
- * Release a buffer that a libnerf function allocated for the caller (such
- * as the pixels of nerf_image_read_png()).  NULL is a no-op.  Never pass
- * it memory from anywhere else, nor buffers owned by a handle.
- */
-NERF_API void nerf_free(void *ptr);
-
-/**
- * Peak signal-to-noise ratio of two images with values in [0, 1]:
- * -10 log10(MSE), the mean taken over all @p count samples (every channel
- * of every pixel).  Identical images give +infinity (IEEE HUGE_VAL), not a
- * cap.
- * @param a, b  @p count floats each, in any layout (the same for both).
- * @param out   receives the PSNR in decibels.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, count 0, NaN or infinite
- * values).  Reentrant.
- */
-NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
-                       double *out);
-
-/**
- * Structural similarity (Wang et al. 2004) as the reference NeRF
- * evaluation computes it: an 11 x 11 Gaussian window with sigma 1.5,
- * K1 = 0.01, K2 = 0.03, data range 1; local means, variances and
- * covariance by separable filtering over 'valid' positions only (no
- * padding: (width - 10) x (height - 10) windows), population (not sample)
- * variances; the SSIM map is averaged over those positions and over the
- * channels, each channel computed on its own.  Computed in double
- * precision; memory used is O(width), whatever the height.
- *
- * @param a, b      width x height x channels floats in [0, 1], row-major,
- *                  channels interleaved.
- * @param channels  1..4 (3 for RGB).
- * @param out       receives the mean SSIM, 1 for identical images.
- * @return NERF_OK; NERF_EINVAL (NULL pointer, width or height below 11,
- * bad channel count, NaN or infinite values); NERF_ENOMEM.  Reentrant.
- */
-NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
-                       uint32_t height, uint32_t channels, double *out);
-
-/* ------------------------------------------------------------------------ */
-/* Datasets                                                                 */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 11. Datasets and camera paths
+ * ======================================================================== */
 
 /** Which part of a scene to load. */
 typedef enum nerf_split {
@@ -1581,7 +1305,8 @@ typedef enum nerf_split {
 
 /** The layout a dataset was loaded from, as nerf_dataset_get_format() says. */
 typedef enum nerf_dataset_format {
-    NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or transforms.json. */
+    NERF_DATASET_BLENDER = 1, /**< transforms_<split>.json or
+                                   transforms.json. */
     NERF_DATASET_LLFF = 2,    /**< poses_bounds.npy and images folders. */
     NERF_DATASET_COLMAP = 3   /**< A COLMAP sparse model (sparse/0/ or
                                    sparse/) beside images folders. */
@@ -1621,16 +1346,15 @@ typedef struct nerf_dataset_options {
                                     and val are empty); a single
                                     transforms.json serves every frame to
                                     every split. */
-    uint32_t forward_facing;   /**< Since 0.4.  COLMAP: 1 places the
-                                    scene as LLFF places a forward-facing
-                                    capture (recentred on the average
-                                    pose, the nearest sparse-point depth
-                                    at 1/0.75) for NDC rays, with the
-                                    spiral path; nerf_dataset_space()
-                                    then says NDC.  0 (default):
-                                    unbounded.  LLFF scenes are
-                                    forward-facing either way; a Blender
-                                    scene with 1 is refused. */
+    uint32_t forward_facing;   /**< COLMAP: 1 places the scene as LLFF places a
+                                    forward-facing capture (recentred on the
+                                    average pose, the nearest sparse-point depth
+                                    at 1/0.75) for NDC rays, with the spiral
+                                    path; nerf_dataset_space() then says NDC.  0
+                                    (default): unbounded.  LLFF scenes are
+                                    forward-facing either way; a Blender scene
+                                    with 1 is refused.
+                                    @since 0.4 */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
 } nerf_dataset_options;
 
@@ -1646,90 +1370,41 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
 
 /**
  * Load one split of the scene in the folder @p dir.  The layout is
- * detected from the files present, in this order:
- *
- *  - transforms_<split>.json, or a single transforms.json (instant-ngp's:
- *    its frames are split as LLFF scenes are, every llff_holdout-th frame
- *    from the first held out for test and val): Blender.  Fields:
- *    camera_angle_x (focal = 0.5 W / tan(0.5 camera_angle_x)) or
- *    instant-ngp's fl_x, fl_y, cx, cy, w, h and lens distortion k1, k2,
- *    p1, p2, k3 (nerf_camera's model; default 0), at top level or per
- *    frame (per frame wins, field by field; fy defaults to fx, the
- *    principal point to the centre); aabb_scale, a power of two 1..128
- *    (above 1 the scene is unbounded: nerf_dataset_space());
- *    frames[].transform_matrix, a 4 x 4 camera-to-world matrix as a list
- *    of rows; frames[].file_path relative to @p dir; when it has no
- *    extension, ".png" is added, or if no such file exists the first of
- *    ".jpg", ".jpeg", ".JPG", ".JPEG" that does.  Images are of one size.
- *    Ray bounds: near 2, far 6 (unbounded: near 0.05, far 1e4 times the
- *    central cube).
- *  - poses_bounds.npy: LLFF, as the reference NeRF code prepares it.  The
- *    array must be '<f8', C order, N x 17; images are the N .png, .jpg or
- *    .jpeg files (any case) of the image folder sorted by name.  Rotations are reordered from
- *    [down, right, back] to [right, up, back], positions and bounds are
- *    scaled so that the smallest bound is 1/0.75, and poses are recentred
- *    on their average pose.  Focal = the file's focal x image width / the
- *    file's width, for both axes; principal point at the centre.  Rays are
- *    meant for NDC (nerf_dataset_is_ndc() is 1; bounds are 0 and 1).
- *  - sparse/0/ or sparse/ holding COLMAP's cameras and images files
- *    (.bin preferred to .txt; points3D optional): COLMAP.  Camera models
- *    SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV, intrinsics
- *    per image; photos (PNG or JPEG) from images/ (or images_K/ as for
- *    LLFF) under the model's names, sorted by name and split every
- *    llff_holdout-th.
- *    Poses are turned from COLMAP's world-to-camera quaternions and
- *    OpenCV axes into camera-to-world OpenGL ones, then moved so that the
- *    sparse points' per-axis median is the origin, the cameras' mean up
- *    vector is +z and the farthest camera is at distance 1; near and far
- *    come from the 1st and 99th percentiles of the points' depths in each
- *    image (docs/formats.md, "COLMAP models").  Not NDC, unless
- *    forward_facing is set: then the poses are placed as LLFF's are, from
- *    per-image bounds at the 0.1st and 99.9th percentiles of the depths
- *    (as LLFF's own preparation from COLMAP computes them), and each image
- *    keeps its intrinsics and lens.
- *
- * Images are PNG or JPEG files, told apart by their first bytes and read
- * as nerf_image_read() reads them (JPEGs turned upright by their Exif
- * orientation; docs/formats.md, "Images"), and stored as float RGB in
- * [0, 1], composited as the options say.  Every image the scene names
- * is checked, whatever its split: those the load does not store (other
- * splits, frames passed over by skip) by their headers, for what their
- * own load would refuse before decoding them (not a regular file, not a
- * PNG or JPEG, a header that does not decode), a size other than the
- * stored images' and, for transforms files, their frame's fields.  A
- * Blender frame of another split whose image is missing is only logged
- * (WARN): a split may ship a subset of its frames, as lego's val split
- * does, and its own load decides (skip_missing).  An images_K/ folder of
- * LLFF or COLMAP photos must hold the photos of the poses' size divided
- * by K.
+ * detected from the files present, in this order: transforms_<split>.json
+ * or a single transforms.json (Blender and instant-ngp scenes);
+ * poses_bounds.npy (LLFF: NDC rays, nerf_dataset_is_ndc() 1); sparse/0/
+ * or sparse/ holding COLMAP's cameras and images files (COLMAP).
+ * Images are PNG or JPEG files read as nerf_image_read() reads them,
+ * stored as float RGB in [0, 1] and composited as the options say; every
+ * image the scene names is checked, whatever its split.  How each layout
+ * is read, placed, bounded and split, and what is checked:
+ * docs/api-notes.md, "Dataset layouts"; the files: docs/formats.md.
  * The loader logs (level INFO, through the hooks) the format, image count
  * and size, focal length, bounds and scene scale.
  *
  * @param opts NULL for the defaults.
  * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, a downscale
  * larger than the images, an LLFF or transforms.json split left empty by
- * llff_holdout, forward_facing on a Blender scene);
- * NERF_EVERSION (options from a newer header setting unknown fields);
- * NERF_ENOENT (no such folder, or a file or image of the scene missing);
- * NERF_EUNRECOGNISED (a file, or a folder in no known layout, or
- * something other than a regular file, a folder or a FIFO say, where a
- * file or image of the scene belongs); NERF_EIO
- * (a file or image unreadable); NERF_EFORMAT
- * (malformed JSON, malformed or truncated COLMAP file, unsupported camera
- * model, zero-length quaternion, missing field, matrix of the wrong shape, NaN or
- * infinite values, entries beyond 1e6, a degenerate rotation, a focal
- * under 1e-3 pixels, a distortion coefficient beyond 1000, an aabb_scale
- * that is not a power of two in 1..128, near >= far (docs/formats.md,
- * "Camera sanity"; the
- * message names the frame and its file_path), npy of the wrong
- * dtype, order or shape, a corrupt image or one that is neither PNG nor
- * JPEG, a bad Exif orientation, images of different sizes, image
- * count not matching the poses, no frames left, a forward-facing COLMAP
- * model without sparse points in front of its cameras, an images_K/
- * folder whose photos are not K times smaller than the poses say, an
- * image header claiming more pixels than its file holds); NERF_ENOMEM.
- * Messages name the file and the problem.  On failure *out is NULL.
- * Reentrant: separate loads may run on separate threads.
+ * llff_holdout, forward_facing on a Blender scene); NERF_EVERSION (options
+ * from a newer header setting unknown fields); NERF_ENOENT (no such folder,
+ * or a file or image of the scene missing); NERF_EUNRECOGNISED (a file, or a
+ * folder in no known layout, or something other than a regular file, a
+ * folder or a FIFO say, where a file or image of the scene belongs);
+ * NERF_EIO (a file or image unreadable); NERF_EFORMAT (malformed JSON,
+ * malformed or truncated COLMAP file, unsupported camera model, zero-length
+ * quaternion, missing field, matrix of the wrong shape, NaN or infinite
+ * values, entries beyond 1e6, a degenerate rotation, a focal under 1e-3
+ * pixels, a distortion coefficient beyond 1000, an aabb_scale that is not a
+ * power of two in 1..128, near >= far (docs/formats.md, "Camera sanity"; the
+ * message names the frame and its file_path), npy of the wrong dtype, order
+ * or shape, a corrupt image or one that is neither PNG nor JPEG, a bad Exif
+ * orientation, images of different sizes, image count not matching the
+ * poses, no frames left, a forward-facing COLMAP model without sparse points
+ * in front of its cameras, an images_K/ folder whose photos are not K times
+ * smaller than the poses say, an image header claiming more pixels than its
+ * file holds); NERF_ENOMEM.  Messages name the file and the problem.
+ * On failure *out is NULL.  Reentrant: separate loads may run on
+ * separate threads.
  */
 NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
                                const nerf_dataset_options *opts);
@@ -1794,7 +1469,7 @@ NERF_API int nerf_dataset_bounds(const nerf_dataset *ds, float *near_out,
 NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
 
 /**
- * Since 0.3: the scene space a hash-grid model of this dataset should use
+ * The scene space a hash-grid model of this dataset should use
  * (nerf_model_options.space and bound): NDC for forward-facing (LLFF)
  * scenes with bound 1.5 (NDC x and y within [-1.5, 1.5]); UNBOUNDED for
  * scenes that extend far beyond their centre (a COLMAP model, a transforms
@@ -1802,6 +1477,7 @@ NERF_API int nerf_dataset_is_ndc(const nerf_dataset *ds);
  * loader placed the scene's centre in; BOX with bound 1.5 otherwise (the
  * Blender scenes).
  * @return NERF_OK or NERF_EINVAL (NULL pointer).
+ * @since 0.3
  */
 NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
                                 float *bound_out);
@@ -1809,11 +1485,9 @@ NERF_API int nerf_dataset_space(const nerf_dataset *ds, uint32_t *space_out,
 /**
  * Camera @p index of @p n_views along the reference implementation's
  * spiral render path of a forward-facing scene (LLFF, or COLMAP loaded
- * with forward_facing): two turns around the average pose
- * with radii the 90th percentile of the absolute camera positions, the
- * depth moving at half the angular rate, always looking at a focus point
- * placed between the nearest and the farthest bounds (by the reference's
- * disparity weighting).  The path depends on all the scene's poses, not
+ * with forward_facing): two turns around the average pose, looking at a
+ * focus point between the nearest and farthest bounds (docs/api-notes.md,
+ * "The spiral path").  The path depends on all the scene's poses, not
  * just the loaded split.  Intrinsics and size are those of the dataset's
  * images, without their lens distortion (renders are pinhole images).
  * The reference renders 120 views.
@@ -1825,18 +1499,126 @@ NERF_API int nerf_dataset_spiral_camera(const nerf_dataset *ds,
                                         uint32_t index, uint32_t n_views,
                                         nerf_camera *out);
 
-/* ------------------------------------------------------------------------ */
-/* Training                                                                 */
-/* ------------------------------------------------------------------------ */
+/**
+ * Flags for nerf_camera_path_options.flags.  Without them the options'
+ * size and intrinsics, when set, win over the file's; with them the file's
+ * win where it has any, and the options serve as the fallback.
+ */
+#define NERF_CAMERA_PATH_FILE_SIZE 0x1u /**< A frame whose file gives w and
+                                             h keeps that size; width and
+                                             height serve only frames
+                                             without one. */
+#define NERF_CAMERA_PATH_FILE_INTRINSICS 0x2u /**< A frame whose file gives
+                                                   fl_x or camera_angle_x
+                                                   keeps the file's
+                                                   intrinsics; focal or
+                                                   fov_x serve only frames
+                                                   without them (and every
+                                                   .npy pose). */
 
-/** Since 0.5.  Sparse ranges a nerf_exchange can describe. */
+/**
+ * How nerf_camera_path_load() turns a file of poses into cameras.  The
+ * defaults take everything from the file, which works for a
+ * transforms-style JSON that gives its image size (w, h); a .npy file
+ * carries poses only and needs width, height and focal or fov_x.
+ */
+typedef struct nerf_camera_path_options {
+    uint32_t struct_size; /**< Set by nerf_camera_path_options_init(). */
+    uint32_t width;       /**< Image width in pixels, 1..65536, or 0 (the
+                               default) for the file's w.  Set width and
+                               height together or leave both 0.  When the
+                               file gives w and h, its intrinsics are
+                               scaled by width / w and height / h (the
+                               field of view is kept). */
+    uint32_t height;      /**< Image height in pixels, 1..65536, or 0 for
+                               the file's h. */
+    uint32_t flags;       /**< NERF_CAMERA_PATH_*; default 0. */
+    float focal;          /**< > 0: fx = fy = focal, in pixels of the
+                               rendered image, principal point at the
+                               centre, replacing the file's intrinsics
+                               (see NERF_CAMERA_PATH_FILE_INTRINSICS);
+                               default 0 (none). */
+    float fov_x;          /**< Horizontal field of view in degrees, in
+                               (0, 180): as focal with focal =
+                               0.5 width / tan(0.5 fov_x); default 0
+                               (none).  At most one of focal and fov_x may
+                               be set. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_camera_path_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ */
+NERF_API int nerf_camera_path_options_init(nerf_camera_path_options *opts,
+                                           size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_CAMERA_PATH_OPTIONS_INIT(o) \
+    nerf_camera_path_options_init((o), sizeof *(o))
+
+/**
+ * Load a camera path (a sequence of poses to render) from the file
+ * @p path, in one of two forms (docs/formats.md, "Camera paths", has the
+ * details): a NumPy .npy file (told by its magic bytes or a ".npy" name)
+ * of camera-to-world matrices in the nerf_camera convention, shape
+ * (N, 3, 4), (N, 4, 4), (N, 12) or (N, 16), dtype '<f4' or '<f8', with no
+ * intrinsics (the options must give width, height and focal or fov_x);
+ * anything else is read as a transforms-style JSON file, as
+ * nerf_dataset_load() reads them, without reading any image.
+ *
+ * Every matrix must be finite, representable as float, and have an
+ * invertible rotation part.  Files hold at most 100000 poses.  The
+ * cameras have flags 0 (rays through pixel centres).
+ *
+ * @param out  receives the path; release it with nerf_camera_path_destroy().
+ *             NULL on failure.
+ * @param opts NULL for the defaults.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, bad options, no image size
+ * for a file that gives none, no focal or fov_x for a .npy file);
+ * NERF_EVERSION (options from a newer header setting unknown fields);
+ * NERF_ENOENT (no such file); NERF_EUNRECOGNISED (not a regular file: a
+ * folder, a FIFO, a device, refused without blocking);
+ * NERF_EIO (the file cannot be opened or read); NERF_EFORMAT (truncated
+ * or malformed file, npy dtype, order or shape not listed above, no
+ * frames or more than 100000, missing field, NaN or infinite values,
+ * bottom row not [0, 0, 0, 1], entries beyond 1e6, degenerate rotation,
+ * focal under 1e-3 pixels: docs/formats.md, "Camera sanity"; w or h not a
+ * positive whole number); NERF_ENOMEM.  Messages name the file, the frame
+ * (with its file_path when it has one) and the problem.
+ * Reentrant: separate loads may run on separate threads.
+ */
+NERF_API int nerf_camera_path_load(nerf_camera_path **out, const char *path,
+                                   const nerf_camera_path_options *opts);
+
+/** Release a camera path.  NULL is a no-op. */
+NERF_API void nerf_camera_path_destroy(nerf_camera_path *camera_path);
+
+/** Number of cameras (at least 1); 0 for NULL. */
+NERF_API uint32_t nerf_camera_path_count(const nerf_camera_path *camera_path);
+
+/**
+ * Camera @p index of the path, in file order.
+ * @param out initialised with nerf_camera_init(); as many bytes as its
+ *            struct_size are written.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range,
+ * uninitialised struct).  Reentrant.
+ */
+NERF_API int nerf_camera_path_camera(const nerf_camera_path *camera_path,
+                                     uint32_t index, nerf_camera *out);
+
+/* ===========================================================================
+ * 12. Trainer
+ * ======================================================================== */
+
+/** Sparse ranges a nerf_exchange can describe.  @since 0.5 */
 #define NERF_EXCHANGE_MAX_SPARSE 4
 
 /**
- * Since 0.5.  What a trainer tells its gradient and checksum hooks (see
+ * What a trainer tells its gradient and checksum hooks (see
  * nerf_trainer_options.worker_count) besides the numbers they exchange.
  * Versioned: the library sets struct_size; read a field only if
  * struct_size covers it (fields are only appended).
+ * @since 0.5
  */
 typedef struct nerf_exchange {
     uint32_t struct_size;  /**< sizeof the library's struct. */
@@ -1861,7 +1643,7 @@ typedef struct nerf_exchange {
 } nerf_exchange;
 
 /**
- * Since 0.5.  Gradient hook: called by every worker after the step's
+ * Gradient hook: called by every worker after the step's
  * backward pass and before the optimiser, with the model's flat gradient
  * vector @p grads of @p n floats (n = nerf_model_param_count()).  It must
  * leave in @p grads the sum of all workers' vectors, element by element,
@@ -1872,16 +1654,18 @@ typedef struct nerf_exchange {
  * the step, never on a worker thread, and must not call back into the
  * trainer.  Return 0, or nonzero to fail the step (NERF_ERROR, the
  * weights left as before it).
+ * @since 0.5
  */
 typedef int (*nerf_grad_hook)(void *user, float *grads, size_t n,
                               nerf_exchange *x);
 
 /**
- * Since 0.5.  Checksum hook (nerf_trainer_options.checksum_every): on
+ * Checksum hook (nerf_trainer_options.checksum_every): on
  * entry both @p range[0] and @p range[1] hold this worker's checksum of
  * its weights (CRC-32 of the parameters' bytes); the hook must leave in
  * range[0] the smallest and in range[1] the largest over all workers,
  * the same on every worker.  Return 0, or nonzero to fail the step.
+ * @since 0.5
  */
 typedef int (*nerf_checksum_hook)(void *user, uint32_t range[2],
                                   nerf_exchange *x);
@@ -1914,8 +1698,9 @@ typedef struct nerf_trainer_options {
     uint32_t reserved0;       /**< Must be 0. */
     const char *checkpoint_path; /**< Copied; NULL (default): no saves. */
     const nerf_hooks *hooks;  /**< Allocation and logging; NULL = defaults. */
-    /* Since 0.2.  Zero-filled by an older caller, which gives the
-     * behaviour from before these fields. */
+    /* Zero-filled by an older caller, which gives the behaviour from
+     * before these fields.
+     * @since 0.2 */
     uint32_t batch_samples;   /**< 0 (default): every step takes batch_rays
                                    rays.  N > 0: a step takes rays, of the
                                    batch_rays it draws, until their samples
@@ -1935,30 +1720,22 @@ typedef struct nerf_trainer_options {
                                     (Mueller et al.).  0 (default): the
                                     background is white_background's.
                                     Images without alpha ignore it. */
-    /* Since 0.5: data-parallel training (docs/distributed.md).  Zero
-     * (an older caller's zero fill) is a trainer alone. */
+    /* Data-parallel training (docs/distributed.md).  Zero (an older
+     * caller's zero fill) is a trainer alone.
+     * @since 0.5 */
     uint32_t worker_rank;     /**< This worker, 0..worker_count - 1. */
     uint32_t worker_count;    /**< 0 or 1 (default): alone.  W > 1: this
                                    trainer is one of W, each with a copy
                                    of the same model (same seed, or the
                                    same checkpoint), dataset, sampler
-                                   and options but its rank.  Every
-                                   worker draws the step's batch as one
-                                   trainer alone would (batch_rays rays,
-                                   keyed by the step), and worker r
-                                   trains on its contiguous share, rays
-                                   [n r / W, n (r + 1) / W) of the n
-                                   the step takes: with batch_samples,
-                                   n is where the whole batch's samples
-                                   reach the budget, which every worker
-                                   finds by counting the samples of all
-                                   rays (a marching sampler: a march of
-                                   the batch without the network).  The
-                                   loss is weighed by n, and grad_hook
-                                   sums the workers' gradients, so the
-                                   workers take the step one trainer
-                                   would take on the whole batch, up to
-                                   the order of the sums.  Needs
+                                   and options but its rank.  Worker r
+                                   trains on its contiguous share of
+                                   each step's rays and grad_hook sums
+                                   the workers' gradients, so that they
+                                   take the step one trainer would, up
+                                   to the order of the sums
+                                   (docs/api-notes.md, "Workers of a
+                                   data-parallel run").  Needs
                                    grad_hook; nerf_trainer_run_for() is
                                    refused (its clock differs between
                                    workers). */
@@ -1975,8 +1752,9 @@ typedef struct nerf_trainer_options {
                                    with NERF_ERROR if they differ.  0
                                    (default): never. */
     uint32_t reserved1;       /**< Must be 0. */
-    /* Since 0.6.  Zero (an older caller's zero fill): saves by steps
-     * alone, as before. */
+    /* Zero (an older caller's zero fill): saves by steps alone, as
+     * before.
+     * @since 0.6 */
     double checkpoint_seconds; /**< S > 0: nerf_trainer_run() and
                                     nerf_trainer_run_for() also save to
                                     checkpoint_path once S seconds have
@@ -2012,7 +1790,7 @@ typedef struct nerf_train_stats {
     double psnr;           /**< PSNR (dB) of the last pass's colours. */
     double psnr_coarse;    /**< PSNR (dB) of the coarse pass. */
     double learning_rate;  /**< The rate the step used. */
-    /* Since 0.2. */
+    /* @since 0.2 */
     double samples_per_ray; /**< Network evaluations per ray in the step,
                                  all passes: n_coarse (+ n_coarse +
                                  n_fine with a fine pass), or with ray
@@ -2035,24 +1813,16 @@ typedef struct nerf_train_stats {
  * continues bit for bit as the uninterrupted run would.
  *
  * With a marching sampler (march_steps > 0) the trainer also keeps the
- * model's occupancy grid current: every 16 steps from step 0 it samples
- * the model's density in every cell (for the first 256 steps), then
- * every 32 steps in the occupied cells and a random sixteenth of the
- * others (each drawn with probability 1/16), keyed by the model's seed
- * and the grid's update count, both saved in checkpoints.  (Before
- * 0.10.6 the later updates also came every 16 steps.)
+ * model's occupancy grid current, on a schedule keyed by the model's seed
+ * and saved in checkpoints (docs/api-notes.md, "Occupancy grid updates").
  *
  * A checkpoint_path is tried at once: a temporary file is created beside
  * it and removed, so that a path that cannot be written fails here, not
  * at the first save.
  *
- * The model records the data it is trained on (image count and size,
- * scene kind, NDC, mean colour, bounds), and its checkpoints carry the
- * record: when a model whose record differs from @p dataset is given
- * (lego's checkpoint resumed on fern), a NERF_LOG_WARN through the hooks
- * names what differs and both datasets; training goes on, and the record
- * becomes this dataset's.  A model without a record (new, or loaded from
- * a checkpoint written before libnerf 0.4) gives no warning.
+ * The model records the data it is trained on; given a model whose record
+ * differs from @p dataset, the trainer logs a NERF_LOG_WARN naming what
+ * differs and trains on (docs/api-notes.md, "The training-data record").
  *
  * @return NERF_OK; NERF_EINVAL (NULL argument, bad options, empty dataset,
  * a marching sampler with a model that has no occupancy grid, weights
@@ -2107,42 +1877,22 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
                               nerf_train_stats *stats_out);
 
 /**
- * Since 0.5.  Train for about @p seconds of wall time, the learning rate
+ * Train for about @p seconds of wall time, the learning rate
  * decaying over the steps that time allows, rather than over a step count
  * guessed beforehand.
  *
- * A model whose schedule is not FITTED (see nerf_model_schedule()) starts by
- * measuring: the rate held at NERF_PARAM_LEARNING_RATE, it trains for a quarter
- * of @p seconds, takes the step rate over the last third of that time (steps
- * get faster as a marching sampler's occupancy grid learns where the scene is,
- * so the latest rate is the best guess of the rest; time spent saving
- * checkpoints is left out), and fixes the run's length: the steps taken plus
- * that rate times the time left, less the share of it that timed saves
- * (checkpoint_seconds) will take at the last save's duration and, since 0.7.1,
- * less the save that ends the run.  It sets NERF_PARAM_DECAY_START to the
- * current step and NERF_PARAM_DECAY_STEPS to that length, records the fit in
- * the model (state FITTED, saved in checkpoints, logged at NERF_LOG_INFO), and
- * trains to the length.  Since 0.6.2, when half of @p seconds has passed the
- * same call fits the length once more, to the rate over the quarter of the
- * budget before (steps are often still getting faster at the first fit); since
- * 0.7.1 again at three quarters and nine tenths of @p seconds, each to the rate
- * over the quarter of the time before it or since the fit before, whichever is
- * shorter (so steps that turn slower late in a run shorten it to the time
- * left).  Since 0.8 a run that reaches its length before the next of these
- * fits it again then, to the rate since the fit before (steps that got
- * faster than measured, as a marching sampler's do for minutes, ended short
- * budgets at half their time).  At each of these fits
- * NERF_PARAM_DECAY_STEPS and the recorded length move and the decay's start
- * stays, so the learning rate moves by a few percent (more at a fit that
- * finds the run at its length, where the rate had decayed to the final
- * one).  From each fit on, the run is a plain schedule: a model saved after
- * it, loaded and given to nerf_trainer_run_for() or nerf_trainer_run()
- * continues bit for bit to its recorded length, and two runs that fixed the
- * same lengths at the same steps train the same weights.  A FITTED model trains
- * on to its recorded length without measuring or fitting again; so a model
- * saved between two fits and resumed ends at the length fitted last before the
- * save, where the unbroken run would have moved it (each fit depends on the
- * clock as the first does).
+ * A model whose schedule is not FITTED (see nerf_model_schedule()) starts
+ * by measuring its step rate, the rate held at NERF_PARAM_LEARNING_RATE,
+ * then fixes the run's length to fit the budget: it sets
+ * NERF_PARAM_DECAY_START to the current step and NERF_PARAM_DECAY_STEPS to
+ * that length and records the fit in the model (state FITTED, saved in
+ * checkpoints, logged at NERF_LOG_INFO).  Later in the budget the same
+ * call fits the length again to the latest rate, moving DECAY_STEPS only.
+ * From each fit on the run is a plain schedule: a model saved after it
+ * continues bit for bit to its recorded length under nerf_trainer_run_for()
+ * or nerf_trainer_run(), without measuring or fitting again.  When each
+ * fit happens, and what it takes into account: docs/api-notes.md,
+ * "Time-budgeted training".
  *
  * The run ends at the fitted length (NERF_OK).  Should steps turn slower
  * than measured, it ends when @p seconds and a tenth have passed
@@ -2157,6 +1907,7 @@ NERF_API int nerf_trainer_run(nerf_trainer *trainer, uint64_t n_steps,
  * @return as nerf_trainer_run(); NERF_EINVAL for a bad @p seconds, or
  * for a trainer that is one of several workers (worker_count > 1), each
  * of which would fit the run to its own clock.
+ * @since 0.5
  */
 NERF_API int nerf_trainer_run_for(nerf_trainer *trainer, double seconds,
                                   nerf_train_stats *stats_out);
@@ -2175,200 +1926,133 @@ NERF_API int nerf_trainer_set_progress(nerf_trainer *trainer,
  */
 NERF_API void nerf_trainer_cancel(nerf_trainer *trainer);
 
-/* ------------------------------------------------------------------------ */
-/* Point clouds and depth (Since 0.5)                                       */
-/* ------------------------------------------------------------------------ */
+/* ===========================================================================
+ * 13. Built-in scene
+ * ======================================================================== */
+
+/** Values of nerf_scene_options.image_format. */
+#define NERF_IMAGE_FORMAT_PNG 0u  /**< PNGs (RGBA for the object capture). */
+#define NERF_IMAGE_FORMAT_JPEG 1u /**< RGB JPEGs composited on white, named
+                                       .jpg in file_path: what a camera
+                                       gives, with no mask. */
+
+/** The sizes and view counts nerf_scene_write() takes (a program's help
+ * can quote them: plain integers).  @since 0.11 */
+#define NERF_SCENE_MIN_SIDE 8     /**< Smallest image width or height. */
+#define NERF_SCENE_MAX_SIDE 4096  /**< Largest image width or height. */
+#define NERF_SCENE_MAX_VIEWS 10000 /**< Most views of a split. */
+
+/** What nerf_scene_write() produces. */
+typedef struct nerf_scene_options {
+    uint32_t struct_size; /**< Set by nerf_scene_options_init(). */
+    uint32_t width;       /**< Image width in pixels, NERF_SCENE_MIN_SIDE..
+                               NERF_SCENE_MAX_SIDE (8..4096); default 100. */
+    uint32_t height;      /**< Image height in pixels, as width; default
+                               100. */
+    uint32_t n_train;     /**< Training views, 1..NERF_SCENE_MAX_VIEWS
+                               (10000); default 100. */
+    uint32_t n_val;       /**< Validation views, 0..NERF_SCENE_MAX_VIEWS;
+                               default 8. */
+    uint32_t n_test;      /**< Test views (a circle at 30 degrees),
+                               0..NERF_SCENE_MAX_VIEWS; default 16. */
+    uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
+    uint32_t reserved0;   /**< Must be 0. */
+    uint64_t seed;        /**< Placement of the validation views; default 0. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+    uint32_t capture;     /**< How the scene is photographed:
+                               NERF_SCENE_CAPTURE_*; default OBJECT.
+                               @since 0.3 */
+    uint32_t layout;      /**< The files it is written as: NERF_SCENE_LAYOUT_*;
+                               default BLENDER.  The usual pairs: OBJECT and
+                               UNBOUNDED in BLENDER, FORWARD in LLFF.
+                               @since 0.3 */
+    uint32_t image_format; /**< NERF_IMAGE_FORMAT_*: the views' files; default
+                                NERF_IMAGE_FORMAT_PNG.
+                                @since 0.3 */
+    uint32_t jpeg_quality; /**< JPEG quality 1..100; 0 (default) = 95.  Ignored
+                                for PNG.
+                                @since 0.3 */
+    float k1, k2, p1, p2, k3; /**< The lens the views are photographed through
+                               (nerf_camera's distortion): each pixel holds what
+                               its ray through that lens sees, and the files
+                               record the coefficients (the LLFF layout cannot,
+                               COLMAP's OPENCV model has no k3).  Default 0: a
+                               pinhole camera.
+                               @since 0.3 */
+} nerf_scene_options;
+
+/** Captures of the built-in scene (nerf_scene_options.capture). */
+#define NERF_SCENE_CAPTURE_OBJECT 0u    /**< The solids alone on a
+    transparent background, from a hemisphere of views at distance 4. */
+#define NERF_SCENE_CAPTURE_FORWARD 1u   /**< A forward-facing capture, as
+    LLFF's: the solids on a ground before a backdrop 40 units away, seen
+    from a jittered grid of cameras 3.2 units in front of them on one side,
+    all looking the same way (within a degree), spread over 0.8 x 0.6
+    units; horizontal field of view 1 radian.  Opaque. */
+#define NERF_SCENE_CAPTURE_UNBOUNDED 2u /**< An all-round capture with a far
+    background: the solids on a ground within a backdrop 40 units away,
+    from rings of cameras 2.2 to 3 units from them looking at them;
+    horizontal field of view 1 radian.  Opaque. */
+
+/** Layouts of the written scene (nerf_scene_options.layout). */
+#define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}
+    .json and PNGs under train/, val/, test/ (RGBA for OBJECT, RGB for the
+    opaque captures, whose files also record instant-ngp's aabb_scale 16
+    at top level for UNBOUNDED). */
+#define NERF_SCENE_LAYOUT_TRANSFORMS 1u    /**< One instant-ngp style
+    transforms.json holding every view (train, then val, then test, under
+    images/), with fl_x, fl_y, cx, cy, w, h, k1, k2, p1, p2, k3 and
+    aabb_scale at top level (16 for the opaque captures, 2 for OBJECT).
+    Loading it splits it every llff_holdout-th frame, not by the counts
+    written. */
+#define NERF_SCENE_LAYOUT_LLFF 2u          /**< FORWARD only:
+    poses_bounds.npy and images/ (RGB PNGs, their names sorted in capture
+    order), n_train + n_test views in all (n_val is not used): a loader
+    holds out every 8th as LLFF has no split files.  Bounds per view are
+    the 0.1 and 99.9 percentiles of its pixels' depths along the optical
+    axis, as LLFF's imgs2poses takes them from the sparse points. */
+#define NERF_SCENE_LAYOUT_COLMAP_TEXT 3u   /**< A COLMAP model as COLMAP's
+    text files: images/ (RGB PNGs, composited onto white for OBJECT, named
+    00000.png ... over the train, val and test views in that order) and
+    sparse/0/ cameras.txt, images.txt, points3D.txt: one PINHOLE camera,
+    every view's pose in COLMAP's convention, and sparse points where
+    pixels' rays of opacity above 0.95 end in a few views, each with a
+    track of the views whose ray through its projection ends there too. */
+#define NERF_SCENE_LAYOUT_COLMAP_BINARY 4u /**< The same as COLMAP's binary
+    files (cameras.bin, images.bin, points3D.bin). */
 
 /**
- * Since 0.5: render every pixel of @p camera as nerf_renderer_render_image()
- * does, with the depth in world units instead of the raw sum(w t).
- *
- * Both depths are those of the expected termination point of the ray
- * given that it stops in the scene: with weights w_i at depths t_i along
- * the camera's unnormalised ray d (whose camera-space z is -1), the point
- * o + s d with s = sum(w t) / sum(w), i.e. divided by the opacity.  The
- * raw, undivided value is distance x opacity (exactly so: both are 0 where
- * the opacity is 0).
- *
- * For an NDC sampler (forward-facing scenes), t is an NDC depth; s is the
- * world-space ray parameter of the point that the expected NDC depth
- * sum(w t) / sum(w) maps back to, on the same ray (the NDC warp keeps
- * rays straight), so both outputs are world units there too.  An expected
- * NDC depth of 1 or more (the point at infinity) gives +inf.
- *
- * @param rgb_out        height x width x 3 floats, as
- *                       nerf_renderer_render_image(); may be NULL.
- * @param distance_out   height x width floats: s |d|, the distance in
- *                       world units from the camera centre (the ray's
- *                       origin) to the point, along the ray; 0 where the
- *                       opacity is 0.  May be NULL.
- * @param zdepth_out     height x width floats: s, the point's depth along
- *                       the camera's optical axis (minus its camera-space
- *                       z), in world units; 0 where the opacity is 0.  May
- *                       be NULL.
- * @param opacity_out    height x width floats, sum(w), as
- *                       nerf_renderer_render_image(); may be NULL.
- * @param pixel_capacity pixels each non-NULL buffer can hold.
- * @return as nerf_renderer_render_image() (NERF_EINVAL when every output
- * is NULL); NERF_ENOMEM.
- * Not reentrant for one renderer.
- */
-NERF_API int nerf_renderer_render_depth(nerf_renderer *renderer,
-                                        const nerf_camera *camera,
-                                        float *rgb_out, float *distance_out,
-                                        float *zdepth_out,
-                                        float *opacity_out,
-                                        size_t pixel_capacity);
-
-/**
- * Since 0.5: write @p data, an array of @p ndim (1..4) dimensions of the
- * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
- * dtype '<f4', the header NumPy itself writes), through a temporary file
- * renamed into place.  numpy.load() reads it back.
- * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
- * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
- * Reentrant.
- */
-NERF_API int nerf_npy_write_float(const char *path, const float *data,
-                                  const size_t *shape, uint32_t ndim);
-
-/**
- * Since 0.5: a point cloud: read-only arrays owned by the handle.
- */
-typedef struct nerf_points nerf_points;
-
-/** Since 0.5: default nerf_points_options.opacity_threshold. */
-#define NERF_POINTS_DEFAULT_OPACITY 0.9f
-/** Since 0.5: default nerf_points_options.max_points. */
-#define NERF_POINTS_DEFAULT_MAX 1000000u
-
-/**
- * Since 0.5: how nerf_points_from_views() turns rendered views into
- * points.  Versioned: fill with nerf_points_options_init().
- */
-typedef struct nerf_points_options {
-    uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
-    float opacity_threshold;   /**< A ray gives a point when its opacity is
-                                    >= this, in [0, 1]; default
-                                    NERF_POINTS_DEFAULT_OPACITY (0.9).  0
-                                    keeps every ray but those of opacity 0
-                                    (which have no depth). */
-    uint64_t max_points;       /**< At most this many points, >= 1; default
-                                    NERF_POINTS_DEFAULT_MAX (10^6).  Beyond
-                                    it the points are thinned evenly in ray
-                                    order (see nerf_points_from_views()). */
-    uint32_t stride;           /**< Render each view at 1/stride of its
-                                    resolution over the same field of view
-                                    (one ray per stride x stride pixels),
-                                    1..1024; default 1. */
-    uint32_t reserved0;        /**< Must be 0. */
-    const nerf_hooks *hooks;   /**< Allocation and logging of the point
-                                    cloud; NULL = defaults. */
-    nerf_progress_cb progress; /**< NULL, or called on the calling thread
-                                    after every chunk of rays (kind
-                                    NERF_PROGRESS_RENDER; done and total
-                                    count the rays of all views); nonzero
-                                    cancels: NERF_ECANCELLED. */
-    void *progress_user;       /**< Passed to progress. */
-} nerf_points_options;
-
-/**
- * Since 0.5: fill @p opts with defaults and record @p struct_size.
+ * Fill @p opts with defaults and record @p struct_size.
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
  */
-NERF_API int nerf_points_options_init(nerf_points_options *opts,
-                                      size_t struct_size);
+NERF_API int nerf_scene_options_init(nerf_scene_options *opts,
+                                     size_t struct_size);
 /** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
-#define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
+#define NERF_SCENE_OPTIONS_INIT(o) nerf_scene_options_init((o), sizeof *(o))
 
 /**
- * Since 0.5: a point cloud from the expected depth of rendered views.
- *
- * Each view of @p cameras (scaled down by the stride: width and height
- * divided by it, rounded up, focal lengths and principal point divided by
- * it) is rendered with @p renderer as nerf_renderer_render_depth() does.
- * Every ray whose opacity reaches the threshold and whose depth is finite
- * gives one point at o + s d (the expected termination point), coloured
- * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
- *
- * Normals: from the points of the pixel's right and lower neighbours in
- * the same view (the left or upper one at the image's last column or row):
- * the cross product of the differences to them, normalised and oriented
- * toward the camera.  A point gets the normal (0, 0, 0), meaning none,
- * when such a neighbour is missing (no point there) or lies across a depth
- * discontinuity: its distance from the camera differs from the point's by
- * more than 5% x stride of the point's distance.
- *
- * Thinning: when the views give more than max_points points, the points,
- * taken in ray order (views in order, pixels row by row), are thinned
- * evenly: while collecting, every other point is dropped whenever the
- * count would pass 2 max_points (so memory stays bounded), and the
- * remaining n > max_points points are reduced to the points of index
- * floor(k n / max_points), k = 0 .. max_points - 1.  The result depends
- * only on the inputs, not on threads or chunking.
- *
- * The renderer's own progress callback is not called during this call.
- *
- * @param out      the new point cloud (*out is NULL on failure).
- * @param renderer any renderer; its threads render the views.
- * @param cameras  @p n_cameras cameras, each initialised (struct_size set).
- * @param opts     NULL for the defaults.
- * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
- * n_cameras 0, an invalid camera, options out of range);
- * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ * Write the built-in scene to the folder @p dir (created if missing) in the
+ * capture and layout the options say: a few coloured solids about the
+ * origin (z up), rendered by numerically exact volume rendering, alone on
+ * a transparent background (OBJECT, the default: a Blender-format dataset
+ * from cameras at distance 4; use near 2, far 6) or on a ground before a
+ * far backdrop, every pixel opaque (FORWARD, UNBOUNDED).  With a lens
+ * (k1 .. k3 not all 0) every pixel holds what its ray through the lens
+ * sees.  Same options, same bytes.  The scene: docs/api-notes.md, "The
+ * built-in scene"; its files: docs/formats.md, "The built-in scene".
+ * @return NERF_OK; NERF_EINVAL (bad options: sizes, counts, an unknown
+ * capture or layout, a layout that does not fit the capture or is not
+ * supported yet); NERF_EIO (cannot create or write a file, named in the
+ * message); NERF_ENOMEM.
  */
-NERF_API int nerf_points_from_views(nerf_points **out,
-                                    nerf_renderer *renderer,
-                                    const nerf_camera *cameras,
-                                    size_t n_cameras,
-                                    const nerf_points_options *opts);
+NERF_API int nerf_scene_write(const char *dir,
+                              const nerf_scene_options *opts);
 
-/** Since 0.5: the number of points; 0 for NULL. */
-NERF_API size_t nerf_points_count(const nerf_points *points);
+/* ===========================================================================
+ * 14. Meshes
+ * ======================================================================== */
 
-/**
- * Since 0.5: the point cloud's arrays, valid until nerf_points_destroy():
- * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
- * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
- * estimated).  Any output may be NULL.  With no points they are NULL.
- * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
- */
-NERF_API int nerf_points_arrays(const nerf_points *points,
-                                const float **positions,
-                                const uint8_t **colours,
-                                const float **normals);
-
-/** Since 0.5: formats of nerf_points_write(). */
-typedef enum nerf_points_format {
-    NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
-    NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
-} nerf_points_format;
-
-/**
- * Since 0.5: write @p points to @p path as a PLY file with one "vertex"
- * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
- * and uchar red, green, blue, through a temporary file renamed into place.
- * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
- * (the file cannot be written, named); NERF_ENOMEM.
- */
-NERF_API int nerf_points_write(const nerf_points *points, const char *path,
-                               int format);
-
-/** Since 0.5: release a point cloud.  NULL is a no-op. */
-NERF_API void nerf_points_destroy(nerf_points *points);
-
-/* ======================================================================
- * Geometry (since 0.5): meshes and density grids
- * ====================================================================== */
-
-/**
- * Since 0.5: a triangle mesh extracted from a model (nerf_mesh_extract()).
- * Read-only arrays, valid until nerf_mesh_destroy().  Immutable: any
- * number of threads may read one mesh and write it at the same time.
- */
-typedef struct nerf_mesh nerf_mesh;
-
-/** Since 0.5: how nerf_mesh_extract() colours the vertices. */
+/** How nerf_mesh_extract() colours the vertices.  @since 0.5 */
 typedef enum nerf_mesh_colour {
     NERF_MESH_COLOUR_NONE = 0,  /**< No colours (nerf_mesh_colours() gives
                                      NULL; the files have none). */
@@ -2378,7 +2062,7 @@ typedef enum nerf_mesh_colour {
                                      direction minus the vertex normal. */
 } nerf_mesh_colour;
 
-/** Since 0.5: file formats of nerf_mesh_write(). */
+/** File formats of nerf_mesh_write().  @since 0.5 */
 typedef enum nerf_mesh_format {
     NERF_MESH_FORMAT_AUTO = 0,       /**< By the path's extension: .ply
                                           (binary), .obj; others refused. */
@@ -2390,10 +2074,11 @@ typedef enum nerf_mesh_format {
 } nerf_mesh_format;
 
 /**
- * Since 0.5: settings of nerf_mesh_extract() and nerf_density_grid_write().
+ * Settings of nerf_mesh_extract() and nerf_density_grid_write().
  * The density is sampled on a grid over a box and, for a mesh, cut at the
  * threshold by marching cubes, one layer of cells at a time (memory holds
  * two planes of samples, not the whole grid).
+ * @since 0.5
  */
 typedef struct nerf_mesh_options {
     uint32_t struct_size;   /**< Set by nerf_mesh_options_init(). */
@@ -2430,9 +2115,10 @@ typedef struct nerf_mesh_options {
 } nerf_mesh_options;
 
 /**
- * Since 0.5: fill @p opts with the defaults and record @p struct_size (or
+ * Fill @p opts with the defaults and record @p struct_size (or
  * use NERF_MESH_OPTIONS_INIT).
  * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
                                     size_t struct_size);
@@ -2440,7 +2126,7 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
 #define NERF_MESH_OPTIONS_INIT(o) nerf_mesh_options_init((o), sizeof *(o))
 
 /**
- * Since 0.5: extract the surface where @p model's density crosses
+ * Extract the surface where @p model's density crosses
  * opts->threshold, with marching cubes over the grid the options lay over
  * their box.  The density is that of the model's fine network when it has
  * one.  Where the surface stays inside the box the mesh is closed (every
@@ -2463,40 +2149,167 @@ NERF_API int nerf_mesh_options_init(nerf_mesh_options *opts,
  * Reads the model only (as nerf_model_query()): several calls may run on
  * one model at once while nothing trains it.  Memory beyond the mesh is
  * two planes of samples and one layer of edge indices, not the grid.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_extract(nerf_mesh **out, const nerf_model *model,
                                const nerf_mesh_options *opts);
 
-/** Since 0.5: release a mesh.  NULL is a no-op. */
+/** Release a mesh.  NULL is a no-op.  @since 0.5 */
 NERF_API void nerf_mesh_destroy(nerf_mesh *mesh);
 
-/** Since 0.5: vertices of @p mesh (0 for NULL). */
+/** Vertices of @p mesh (0 for NULL).  @since 0.5 */
 NERF_API size_t nerf_mesh_vertex_count(const nerf_mesh *mesh);
-/** Since 0.5: triangles of @p mesh (0 for NULL). */
+/** Triangles of @p mesh (0 for NULL).  @since 0.5 */
 NERF_API size_t nerf_mesh_face_count(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 floats, x y z; NULL for an empty mesh. */
+/** vertex_count x 3 floats, x y z; NULL for an empty mesh.  @since 0.5 */
 NERF_API const float *nerf_mesh_vertices(const nerf_mesh *mesh);
-/** Since 0.5: face_count x 3 vertex indices; NULL for an empty mesh. */
+/** face_count x 3 vertex indices; NULL for an empty mesh.  @since 0.5 */
 NERF_API const uint32_t *nerf_mesh_faces(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 unit normals, or NULL. */
+/** vertex_count x 3 unit normals, or NULL.  @since 0.5 */
 NERF_API const float *nerf_mesh_normals(const nerf_mesh *mesh);
-/** Since 0.5: vertex_count x 3 bytes r g b, or NULL (colour NONE). */
+/** vertex_count x 3 bytes r g b, or NULL (colour NONE).  @since 0.5 */
 NERF_API const uint8_t *nerf_mesh_colours(const nerf_mesh *mesh);
 
 /**
- * Since 0.5: write @p mesh to @p path in nerf_mesh_format @p format,
+ * Write @p mesh to @p path in nerf_mesh_format @p format,
  * through a temporary file renamed over @p path.  PLY files carry
  * vertices (float x y z, float nx ny nz, uchar red green blue when the
  * mesh has them) and faces (uchar count, uint indices).
  * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format, AUTO with
  * an extension other than .ply or .obj); NERF_EIO naming @p path;
  * NERF_ENOMEM.
+ * @since 0.5
  */
 NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
                              int format);
 
+/* ===========================================================================
+ * 15. Point clouds
+ * ======================================================================== */
+
+/** Default nerf_points_options.opacity_threshold.  @since 0.5 */
+#define NERF_POINTS_DEFAULT_OPACITY 0.9f
+/** Default nerf_points_options.max_points.  @since 0.5 */
+#define NERF_POINTS_DEFAULT_MAX 1000000u
+
 /**
- * Since 0.5: sample @p model's density on the grid of @p opts over its box
+ * How nerf_points_from_views() turns rendered views into
+ * points.  Versioned: fill with nerf_points_options_init().
+ * @since 0.5
+ */
+typedef struct nerf_points_options {
+    uint32_t struct_size;      /**< Set by nerf_points_options_init(). */
+    float opacity_threshold;   /**< A ray gives a point when its opacity is
+                                    >= this, in [0, 1]; default
+                                    NERF_POINTS_DEFAULT_OPACITY (0.9).  0
+                                    keeps every ray but those of opacity 0
+                                    (which have no depth). */
+    uint64_t max_points;       /**< At most this many points, >= 1; default
+                                    NERF_POINTS_DEFAULT_MAX (10^6).  Beyond
+                                    it the points are thinned evenly in ray
+                                    order (see nerf_points_from_views()). */
+    uint32_t stride;           /**< Render each view at 1/stride of its
+                                    resolution over the same field of view
+                                    (one ray per stride x stride pixels),
+                                    1..1024; default 1. */
+    uint32_t reserved0;        /**< Must be 0. */
+    const nerf_hooks *hooks;   /**< Allocation and logging of the point
+                                    cloud; NULL = defaults. */
+    nerf_progress_cb progress; /**< NULL, or called on the calling thread
+                                    after every chunk of rays (kind
+                                    NERF_PROGRESS_RENDER; done and total
+                                    count the rays of all views); nonzero
+                                    cancels: NERF_ECANCELLED. */
+    void *progress_user;       /**< Passed to progress. */
+} nerf_points_options;
+
+/**
+ * Fill @p opts with defaults and record @p struct_size.
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * @since 0.5
+ */
+NERF_API int nerf_points_options_init(nerf_points_options *opts,
+                                      size_t struct_size);
+/** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
+#define NERF_POINTS_OPTIONS_INIT(o) nerf_points_options_init((o), sizeof *(o))
+
+/**
+ * A point cloud from the expected depth of rendered views.
+ *
+ * Each view of @p cameras (scaled down by the stride: width and height
+ * divided by it, rounded up, focal lengths and principal point divided by
+ * it) is rendered with @p renderer as nerf_renderer_render_depth() does.
+ * Every ray whose opacity reaches the threshold and whose depth is finite
+ * gives one point at o + s d (the expected termination point), coloured
+ * with the ray's rendered colour (round(255 clamp(c, 0, 1))).
+ *
+ * Each point gets a normal from its neighbours in the same view, oriented
+ * toward the camera, or (0, 0, 0) (none) where a neighbour is missing or
+ * lies across a depth discontinuity.  Beyond max_points, the points are
+ * thinned evenly in ray order (views in order, pixels row by row), with
+ * memory bounded by 2 max_points points (docs/api-notes.md, "Point cloud
+ * normals and thinning").  The result depends only on the inputs, not on
+ * threads or chunking.
+ *
+ * The renderer's own progress callback is not called during this call.
+ *
+ * @param out      the new point cloud (*out is NULL on failure).
+ * @param renderer any renderer; its threads render the views.
+ * @param cameras  @p n_cameras cameras, each initialised (struct_size set).
+ * @param opts     NULL for the defaults.
+ * @return NERF_OK (possibly with no points); NERF_EINVAL (NULL arguments,
+ * n_cameras 0, an invalid camera, options out of range);
+ * NERF_EVERSION; NERF_ENOMEM; NERF_ECANCELLED.
+ * @since 0.5
+ */
+NERF_API int nerf_points_from_views(nerf_points **out,
+                                    nerf_renderer *renderer,
+                                    const nerf_camera *cameras,
+                                    size_t n_cameras,
+                                    const nerf_points_options *opts);
+
+/** The number of points; 0 for NULL.  @since 0.5 */
+NERF_API size_t nerf_points_count(const nerf_points *points);
+
+/**
+ * The point cloud's arrays, valid until nerf_points_destroy():
+ * positions count x 3 floats (world units), colours count x 3 bytes (RGB),
+ * normals count x 3 floats (unit length, or (0, 0, 0) where none could be
+ * estimated).  Any output may be NULL.  With no points they are NULL.
+ * @return NERF_OK, or NERF_EINVAL for a NULL point cloud.
+ * @since 0.5
+ */
+NERF_API int nerf_points_arrays(const nerf_points *points,
+                                const float **positions,
+                                const uint8_t **colours,
+                                const float **normals);
+
+/** Formats of nerf_points_write().  @since 0.5 */
+typedef enum nerf_points_format {
+    NERF_POINTS_PLY_BINARY = 0, /**< PLY, binary little-endian. */
+    NERF_POINTS_PLY_ASCII = 1   /**< PLY, ASCII. */
+} nerf_points_format;
+
+/**
+ * Write @p points to @p path as a PLY file with one "vertex"
+ * element of properties float x, y, z, float nx, ny, nz (0 0 0: no normal)
+ * and uchar red, green, blue, through a temporary file renamed into place.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, unknown format); NERF_EIO
+ * (the file cannot be written, named); NERF_ENOMEM.
+ * @since 0.5
+ */
+NERF_API int nerf_points_write(const nerf_points *points, const char *path,
+                               int format);
+
+/** Release a point cloud.  NULL is a no-op.  @since 0.5 */
+NERF_API void nerf_points_destroy(nerf_points *points);
+
+/* ===========================================================================
+ * 16. Density grids
+ * ======================================================================== */
+
+/**
+ * Sample @p model's density on the grid of @p opts over its box
  * and write it to @p path as a float32 .npy of shape (nz, ny, nx): C order,
  * element [k][j][i] the density at x = x0 + (i + 0.5) (x1 - x0) / nx (and
  * so on): samples at the cell centres.  Beside it goes a JSON sidecar,
@@ -2509,10 +2322,150 @@ NERF_API int nerf_mesh_write(const nerf_mesh *mesh, const char *path,
  * box, colour, threads, progress and hooks of @p opts (NULL: defaults).
  * @return NERF_OK; NERF_EINVAL as nerf_mesh_extract() and for a NULL
  * path; NERF_EIO naming the file; NERF_ECANCELLED; NERF_ENOMEM.
+ * @since 0.5
  */
 NERF_API int nerf_density_grid_write(const nerf_model *model,
                                      const char *path,
                                      const nerf_mesh_options *opts);
+
+/* ===========================================================================
+ * 17. Utilities: images, arrays and metrics
+ * ======================================================================== */
+
+/** Largest width or height, in pixels, that the image functions accept. */
+#define NERF_IMAGE_MAX_SIDE 16384
+
+/**
+ * Read a PNG file of any colour type (gray, gray+alpha, RGB, RGBA,
+ * palette) and bit depth (1 to 16) into RGBA floats in [0, 1].
+ *
+ * @param rgba_out receives width x height x 4 floats, row-major from the
+ *        top-left pixel, channels interleaved, straight (not premultiplied)
+ *        alpha; opaque files get alpha 1.  Allocated by libnerf with the
+ *        default allocator: release it with nerf_free().  Set to NULL on
+ *        failure.
+ *
+ * 8-bit samples are returned as stored (v / 255).  16-bit samples go
+ * through libpng's linear format: v / 65535 when the file has no gAMA or
+ * sRGB chunk (the usual case), converted to linear light when it has one;
+ * libpng premultiplies those by alpha, so the colour of a fully
+ * transparent 16-bit pixel reads as 0.
+ *
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (not a PNG, truncated, corrupted, a side larger
+ * than NERF_IMAGE_MAX_SIDE, or a header claiming more pixels than the
+ * file can hold: refused before anything is allocated for them);
+ * NERF_ENOMEM.  Messages start with the path.  Reentrant.
+ */
+NERF_API int nerf_image_read_png(const char *path, uint32_t *width_out,
+                                 uint32_t *height_out, float **rgba_out);
+
+/**
+ * Read a PNG or a JPEG file, told apart by its first bytes
+ * (not its name), as the dataset loaders do.  PNGs are read as by
+ * nerf_image_read_png().  JPEGs (baseline, progressive or arithmetic
+ * coded; YCbCr, RGB or grayscale) give v / 255 of the decoded 8-bit RGB
+ * samples and alpha 1, turned upright by the Exif Orientation tag (1 to 8;
+ * width and height are those of the upright picture, swapped for 5 to 8).
+ *
+ * @param rgba_out as for nerf_image_read_png(); release with nerf_free().
+ * @return NERF_OK; NERF_EINVAL (NULL argument); NERF_ENOENT (no such
+ * file); NERF_EUNRECOGNISED (not a regular file: a folder, a FIFO, a
+ * device, refused without blocking); NERF_EIO (the file cannot be opened
+ * or read); NERF_EFORMAT (neither a PNG nor a JPEG, truncated or
+ * corrupted data (JPEG decoder warnings about the data count as errors),
+ * a CMYK or YCCK JPEG, a malformed Exif block or an Orientation outside 1
+ * to 8, a side larger than NERF_IMAGE_MAX_SIDE, a header claiming more
+ * pixels than the file can hold); NERF_ENOMEM.  Messages start with the
+ * path.  Reentrant.
+ * @since 0.3
+ */
+NERF_API int nerf_image_read(const char *path, uint32_t *width_out,
+                             uint32_t *height_out, float **rgba_out);
+
+/**
+ * Write an 8-bit PNG from float samples: each value is clamped to [0, 1]
+ * and rounded to the nearest of 256 levels (NaN gives 0).  Use channels 1
+ * for depth or opacity maps (scale them into [0, 1] first).
+ *
+ * @param channels 1 (gray), 3 (RGB) or 4 (RGBA).
+ * @param pixels   width x height x channels floats, row-major from the
+ *                 top-left pixel, channels interleaved.
+ *
+ * The file is written to a temporary name beside @p path, flushed and
+ * renamed, so an existing file at @p path is only ever replaced by a
+ * complete image.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, zero size or a side above
+ * NERF_IMAGE_MAX_SIDE, bad channel count); NERF_EIO; NERF_ENOMEM.
+ * Reentrant.
+ */
+NERF_API int nerf_image_write_png(const char *path, uint32_t width,
+                                  uint32_t height, uint32_t channels,
+                                  const float *pixels);
+
+/**
+ * As nerf_image_write_png(), from 8-bit samples written as they are.
+ * @param pixels width x height x channels bytes, row-major, interleaved.
+ * @return as nerf_image_write_png().
+ */
+NERF_API int nerf_image_write_png8(const char *path, uint32_t width,
+                                   uint32_t height, uint32_t channels,
+                                   const uint8_t *pixels);
+
+/**
+ * Release a buffer that a libnerf function allocated for the caller (such
+ * as the pixels of nerf_image_read_png()).  NULL is a no-op.  Never pass
+ * it memory from anywhere else, nor buffers owned by a handle.
+ */
+NERF_API void nerf_free(void *ptr);
+
+/**
+ * Write @p data, an array of @p ndim (1..4) dimensions of the
+ * given @p shape in C order (row-major), as a NumPy .npy file (format 1.0,
+ * dtype '<f4', the header NumPy itself writes), through a temporary file
+ * renamed into place.  numpy.load() reads it back.
+ * @return NERF_OK; NERF_EINVAL (NULL path or shape, NULL data with a
+ * non-empty shape, ndim out of range); NERF_EIO (named path); NERF_ENOMEM.
+ * Reentrant.
+ * @since 0.5
+ */
+NERF_API int nerf_npy_write_float(const char *path, const float *data,
+                                  const size_t *shape, uint32_t ndim);
+
+/**
+ * Peak signal-to-noise ratio of two images with values in [0, 1]:
+ * -10 log10(MSE), the mean taken over all @p count samples (every channel
+ * of every pixel).  Identical images give +infinity (IEEE HUGE_VAL), not a
+ * cap.
+ * @param a, b  @p count floats each, in any layout (the same for both).
+ * @param out   receives the PSNR in decibels.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, count 0, NaN or infinite
+ * values).  Reentrant.
+ */
+NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
+                       double *out);
+
+/**
+ * Structural similarity (Wang et al. 2004) as the reference NeRF
+ * evaluation computes it: an 11 x 11 Gaussian window with sigma 1.5,
+ * K1 = 0.01, K2 = 0.03, data range 1; local means, variances and
+ * covariance by separable filtering over 'valid' positions only (no
+ * padding: (width - 10) x (height - 10) windows), population (not sample)
+ * variances; the SSIM map is averaged over those positions and over the
+ * channels, each channel computed on its own.  Computed in double
+ * precision; memory used is O(width), whatever the height.
+ *
+ * @param a, b      width x height x channels floats in [0, 1], row-major,
+ *                  channels interleaved.
+ * @param channels  1..4 (3 for RGB).
+ * @param out       receives the mean SSIM, 1 for identical images.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, width or height below 11,
+ * bad channel count, NaN or infinite values); NERF_ENOMEM.  Reentrant.
+ */
+NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
+                       uint32_t height, uint32_t channels, double *out);
 
 #ifdef __cplusplus
 }
