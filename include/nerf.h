@@ -625,8 +625,8 @@ typedef enum nerf_space {
  * DNNL_MAX_CPU_ISA can hide it).  Unknown kinds give 0.
  *
  * The first call for a oneDNN kind creates small oneDNN primitives to
- * find out (its cost: docs/performance.md); later calls return the stored
- * answer.
+ * find out, which is slower than an ordinary query; later calls return
+ * the stored answer.
  * Thread-safe.  Symbol version NERF_0.2.
  * @since 0.2
  */
