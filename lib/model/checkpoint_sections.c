@@ -306,42 +306,35 @@ static void write_adam_v(nerf__buf *b, const nerf__ckpt_save *s)
     put_floats(b, s->m->adam_v, s->m->n_params);
 }
 
-/* The lengths were checked against the options (NERF__CKPT_PER_PARAM). */
+/* The lengths were checked against the options (NERF__CKPT_PER_PARAM); a
+ * weights-only file has no moments. */
+static int read_array(float *x, size_t n, const unsigned char *b)
+{
+    if (b != NULL) {
+        get_floats(b, x, n);
+    }
+    return NERF_OK;
+}
+
 static int read_params(const char *path, nerf_model *m,
                        const unsigned char *b, uint64_t len,
                        const nerf__ckpt_view *v)
 {
-    (void)path;
-    (void)len;
-    (void)v;
-    get_floats(b, m->params, m->n_params);
-    return NERF_OK;
+    return read_array(m->params, m->n_params, b);
 }
 
 static int read_adam_m(const char *path, nerf_model *m,
                        const unsigned char *b, uint64_t len,
                        const nerf__ckpt_view *v)
 {
-    (void)path;
-    (void)len;
-    (void)v;
-    if (b != NULL) {
-        get_floats(b, m->adam_m, m->n_params);
-    }
-    return NERF_OK;
+    return read_array(m->adam_m, m->n_params, b);
 }
 
 static int read_adam_v(const char *path, nerf_model *m,
                        const unsigned char *b, uint64_t len,
                        const nerf__ckpt_view *v)
 {
-    (void)path;
-    (void)len;
-    (void)v;
-    if (b != NULL) {
-        get_floats(b, m->adam_v, m->n_params);
-    }
-    return NERF_OK;
+    return read_array(m->adam_v, m->n_params, b);
 }
 
 /* A weights-only file trains no further: it is marked by an empty section,
