@@ -177,13 +177,13 @@ class Checker:
         self.h = header
         self.mirrors = struct_mirrors()
 
-    def agree(self, t, py, where):
+    def agree(self, t, py):
         """Why ctypes type py does not mirror C type t (None: it does)."""
         kind = t[0]
         if kind == "name":
             name = t[1]
             if name in self.h.callbacks:
-                return self.agree(("ptr", self.h.callbacks[name]), py, where)
+                return self.agree(("ptr", self.h.callbacks[name]), py)
             if name in self.h.enums:
                 name = "int"
             if name == "void":
@@ -202,7 +202,7 @@ class Checker:
                 return "%r for an array" % (py,)
             if py._length_ != t[2]:
                 return "%d elements for %d" % (py._length_, t[2])
-            return self.agree(t[1], py._type_, where)
+            return self.agree(t[1], py._type_)
         if kind == "ptr":
             inner = t[1]
             if inner[0] == "func":
@@ -213,9 +213,9 @@ class Checker:
                 if len(py._argtypes_) != len(args):
                     return "%d arguments for %d" % (len(py._argtypes_),
                                                     len(args))
-                why = self.agree(ret, py._restype_, where)
-                for i, (a, p) in enumerate(zip(args, py._argtypes_)):
-                    why = why or self.agree(a, p, where + " argument %d" % i)
+                why = self.agree(ret, py._restype_)
+                for a, p in zip(args, py._argtypes_):
+                    why = why or self.agree(a, p)
                 return why
             if inner == ("name", "char"):
                 return None if py is ctypes.c_char_p else \
@@ -230,7 +230,7 @@ class Checker:
             if not hasattr(py, "_type_") or py is ctypes.c_char_p or \
                     py is ctypes.c_void_p:
                 return "%r for a pointer to %s" % (py, inner)
-            return self.agree(inner, py._type_, where)
+            return self.agree(inner, py._type_)
         return "C type %r not understood" % (t,)
 
 
@@ -261,11 +261,11 @@ class HeaderTest(unittest.TestCase):
                 problems.append("%s: %d arguments in the binding, %d in C"
                                 % (name, len(argtypes), len(args)))
                 continue
-            why = self.c.agree(ret, restype, name)
+            why = self.c.agree(ret, restype)
             if why:
                 problems.append("%s: returns %s" % (name, why))
             for i, (a, p) in enumerate(zip(args, argtypes)):
-                why = self.c.agree(a, p, name)
+                why = self.c.agree(a, p)
                 if why:
                     problems.append("%s: argument %d: %s" % (name, i + 1, why))
         extra = set(_capi._PROTOTYPES) - set(self.h.functions)
@@ -286,7 +286,7 @@ class HeaderTest(unittest.TestCase):
                     name, [f for f, _ in py_fields], [f for f, _ in fields]))
                 continue
             for (field, t), (_, py) in zip(fields, py_fields):
-                why = self.c.agree(t, py, name + "." + field)
+                why = self.c.agree(t, py)
                 if why:
                     problems.append("%s.%s: %s" % (name, field, why))
         self.assertEqual(problems, [])
