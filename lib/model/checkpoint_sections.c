@@ -123,8 +123,8 @@ static void write_options(nerf__buf *b, const nerf__ckpt_save *s)
 
 /* The first of the options sections: every field not in the file keeps
  * nerf_model_options_init()'s value. */
-static int read_options(const char *path, const nerf__ckpt_section *k,
-                        const unsigned char *b, nerf_model_options *o)
+static int read_options1(const char *path, const nerf__ckpt_section *k,
+                         const unsigned char *b, nerf_model_options *o)
 {
     (void)path;
     (void)k;
@@ -698,7 +698,7 @@ const nerf__ckpt_section nerf__ckpt_sections[NERF__CKPT_N_SECTIONS] = {
     [NERF__CKPT_OPTIONS] = {
         .tag = TAG_REQUIRED | 1u, .name = "options",
         .flags = NERF__CKPT_CORE | NERF__CKPT_FIXED, .size = OPTIONS_SIZE,
-        .write = write_options, .read_options = read_options},
+        .write = write_options, .read_options = read_options1},
     [NERF__CKPT_TRAINING] = {
         .tag = TAG_REQUIRED | 2u, .name = "training state",
         .flags = NERF__CKPT_CORE | NERF__CKPT_FIXED, .size = TRAINING_SIZE,
