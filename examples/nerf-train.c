@@ -143,23 +143,6 @@ static void on_signal(int sig)
     interrupted = sig;
 }
 
-/* Without --checkpoint-every, MODEL is saved every this many seconds of
- * training (the trainer's checkpoint_seconds): a save of the fast preset
- * writes a large file and takes seconds, so one every 500 steps, a few
- * seconds of training apart, would take a large share of a run's time
- * (docs/perf-log/2026-11-25-lego-ten-minutes-by-the-clock.md). */
-#define SAVE_SECONDS 120.0
-
-/*
- * The steps of its grid's diagonal a marching model renders in unless
- * --render-march-steps says otherwise; it trains in the fast preset's
- * 1024.  Rendered in 1280, lego's thirty-minute models scored higher
- * than in 1024 for a little more time a frame, and nearly as high as in
- * 2048 for much less; a model trained in 1280 as well scored no higher
- * (docs/performance.md, "An 800x800 frame"): the gain is the render's.
- */
-#define RENDER_MARCH 1280
-
 /* The ranges of the options that have no library bound to take. */
 #define STEPS_MAX (UINT64_C(1) << 40)
 #define BATCH_MAX (1u << 20)
@@ -217,7 +200,7 @@ typedef struct args {
     int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
     int space;     /* nerf_space; -1: the dataset's */
     int64_t coarse, fine; /* samples a ray; -1: the preset's */
-    int64_t render_march; /* --render-march-steps; 0: RENDER_MARCH */
+    int64_t render_march; /* --render-march-steps; 0: the library's */
 } args;
 
 /* The options parse() knows, to suggest for a mistyped one. */
@@ -389,9 +372,10 @@ static int parse(int argc, char **argv, args *a)
         return -1;
     }
     if (a->lr == 0.0) {
-        a->lr = a->preset == NERF_PRESET_TINY   ? 5e-3
-                : a->preset == NERF_PRESET_FAST ? 1e-2
-                                                : 5e-4;
+        nerf_model_options preset;
+        NERF_MODEL_OPTIONS_INIT(&preset);
+        nerf_model_options_preset(&preset, a->preset);
+        a->lr = preset.learning_rate;
     }
     if (a->lr_final == 0.0) {
         a->lr_final = a->lr / 10;
@@ -489,22 +473,18 @@ static int resume_model(const args *a, const nerf_hooks *hooks,
     return NERF_OK;
 }
 
-/*
- * Without --matmul: the fastest fp32 products for the preset.  oneDNN's
- * trains the reference and tiny presets faster than cblas where it has
- * its AVX-512 kernels (docs/performance.md, "The reference and tiny
- * presets"); the fast preset's narrow layers run fastest on
- * the library's own fused kernels, which only the cblas setting uses.
- */
-static uint32_t default_matmul(int preset)
+/* Without --matmul the library picks the fastest fp32 products for the
+ * network (NERF_MATMUL_FP32_FASTEST); oneDNN's is said, since it is not
+ * the library's default. */
+static void say_matmul(const args *a, const nerf_model *m)
 {
-    if (preset != NERF_PRESET_FAST &&
-        nerf_matmul_supported(NERF_MATMUL_FP32_ONEDNN)) {
+    nerf_model_options mo;
+    NERF_MODEL_OPTIONS_INIT(&mo);
+    nerf_model_get_options(m, &mo);
+    if (a->matmul < 0 && mo.matmul == NERF_MATMUL_FP32_ONEDNN) {
         fprintf(stderr, PROG ": fp32 products through oneDNN (--matmul "
                 "fp32 for cblas)\n");
-        return NERF_MATMUL_FP32_ONEDNN;
     }
-    return NERF_MATMUL_FP32;
 }
 
 static int create_model(const args *a, const nerf_hooks *hooks,
@@ -515,9 +495,10 @@ static int create_model(const args *a, const nerf_hooks *hooks,
     nerf_model_options_preset(&mo, a->preset);
     mo.seed = a->seed;
     mo.hooks = hooks;
-    mo.matmul =
-        a->matmul < 0 ? default_matmul(a->preset) : (uint32_t)a->matmul;
-    if (a->preset == NERF_PRESET_FAST && mo.matmul != NERF_MATMUL_FP32) {
+    mo.matmul = a->matmul < 0 ? NERF_MATMUL_FP32_FASTEST : (uint32_t)a->matmul;
+    mo.learning_rate = a->lr;
+    if (a->preset == NERF_PRESET_FAST && a->matmul >= 0 &&
+        mo.matmul != NERF_MATMUL_FP32) {
         /* Asked for, so taken; but said, since it costs the user. */
         fprintf(stderr, PROG ": %s products through oneDNN: the fast "
                 "preset trains faster on its own fp32 kernels (--matmul "
@@ -534,11 +515,9 @@ static int create_model(const args *a, const nerf_hooks *hooks,
     }
     int rc = nerf_model_create(m, &mo);
     if (rc == NERF_OK) {
+        say_matmul(a, *m);
         /* The paper's schedule by default: a tenfold exponential decay
          * over the run. */
-        rc = nerf_model_set_param(*m, NERF_PARAM_LEARNING_RATE, a->lr);
-    }
-    if (rc == NERF_OK) {
         rc = nerf_model_set_param(*m, NERF_PARAM_LEARNING_RATE_FINAL,
                                   a->lr_final);
     }
@@ -627,41 +606,45 @@ static void report_budget(const nerf_model *m, int rc)
     }
 }
 
-/* 64 samples a ray of the fast preset's 2048: a lego ray takes about 40
- * once the grid is carved. */
-#define FAST_SAMPLES 131072u
-
 /*
- * Rays and samples a step, as given, else as the resumed model was trained
- * (a run goes on bit for bit only at its batch), else the preset's: the
- * fast preset's per-step work beside the rays (Adam over the whole table,
- * a share of the grid refresh) pays better over 2048, which reached a
- * higher test PSNR than 1024 in ten minutes of lego on three machines
- * (docs/perf-log/2026-11-25-lego-ten-minutes-by-the-clock.md).  Those
- * 2048 rays take at most FAST_SAMPLES
- * samples: while the occupancy grid is still uncarved a ray marches
- * hundreds, and the cap keeps the first steps as cheap as the later ones,
- * so that the grid, refreshed every 16 steps at first, is carved
- * sooner.  A checkpoint of nerf-train before 0.8 records no batch, and
- * was trained at its default of 1024 unless told otherwise.
+ * The library's trainer settings for the model (nerf_trainer_options_for():
+ * the batch it was trained at, else its preset's; no crop and a random
+ * background for a hash-grid model; the finer march it records; timed
+ * saves), then what the options change.  A --batch of its own is taken
+ * whole, as before 0.9, unless --batch-samples caps it or the model
+ * records a cap.
  */
-static void choose_batch(const args *a, const nerf_model *m, int resumed,
-                         nerf_trainer_options *to)
+static int trainer_options(const args *a, const nerf_model *m,
+                           nerf_trainer_options *to)
 {
+    to->checkpoint_path = a->out;
+    to->checkpoint_every = a->every == UINT64_MAX ? 0 : (uint32_t)a->every;
+    int rc = nerf_trainer_options_for(to, m);
+    if (rc != NERF_OK) {
+        return rc;
+    }
     uint32_t rays = 0, samples = 0;
     nerf_model_training_batch(m, &rays, &samples);
-    if (rays == 0) {
-        const int fast = !resumed && setup_model_preset(m) == NERF_PRESET_FAST;
-        rays = fast ? 2048 : 1024;
-        /* A --batch of its own is taken whole, as before 0.9. */
-        samples = fast && !a->batch_given ? FAST_SAMPLES : 0;
-    } else if (D.rank == 0 && !a->batch_given) {
+    if (a->every != UINT64_MAX) {
+        to->checkpoint_seconds = 0.0; /* saves by steps alone, as asked */
+    }
+    if (a->batch_given) {
+        to->batch_rays = (uint32_t)a->batch;
+        to->batch_samples = rays ? samples : 0;
+    } else if (rays != 0 && D.rank == 0) {
         fprintf(stderr, PROG ": %u rays a step, as %s was trained\n",
                 (unsigned)rays, a->out);
     }
-    to->batch_rays = a->batch_given ? (uint32_t)a->batch : rays;
-    to->batch_samples =
-        a->batch_samples_given ? (uint32_t)a->batch_samples : samples;
+    if (a->batch_samples_given) {
+        to->batch_samples = (uint32_t)a->batch_samples;
+    }
+    if (a->random_bg >= 0) {
+        to->random_background = a->random_bg;
+    }
+    if (a->render_march > 0) {
+        to->render_march_steps = (uint32_t)a->render_march;
+    }
+    return NERF_OK;
 }
 
 static int run(int argc, char **argv)
@@ -699,8 +682,7 @@ static int run(int argc, char **argv)
     if (rc == NERF_OK && m == NULL) {
         rc = create_model(&a, &hooks, ds, &m);
     }
-    const int64_t march = rc == NERF_OK ? setup_train_march(m) : -1;
-    if (rc == NERF_OK && a.render_march > 0 && march < 0) {
+    if (rc == NERF_OK && a.render_march > 0 && !setup_marches(m)) {
         cli_usage_error(PROG, "--render-march-steps sets the steps a model "
                         "of the fast preset is rendered in; %s samples in "
                         "bins, without marching", resumed ? a.out
@@ -714,47 +696,24 @@ static int run(int argc, char **argv)
         sampler_choice c = SAMPLER_AS_RECORDED;
         c.n_coarse = resumed ? -1 : a.coarse;
         c.n_fine = resumed ? -1 : a.fine;
-        c.march_steps = march;
         c.seed = a.seed;
+        c.training = 1;
         rc = setup_sampler(&s, m, ds, &c);
     }
     if (rc == NERF_OK) {
         nerf_trainer_options to;
         NERF_TRAINER_OPTIONS_INIT(&to);
-        choose_batch(&a, m, resumed, &to);
-        to.checkpoint_every = a.every == UINT64_MAX ? 0 : (uint32_t)a.every;
-        to.checkpoint_seconds = a.every == UINT64_MAX ? SAVE_SECONDS : 0.0;
-        nerf_model_options mo;
-        NERF_MODEL_OPTIONS_INIT(&mo);
-        nerf_model_get_options(m, &mo);
-        if (mo.encoding == NERF_ENCODING_HASHGRID) {
-            /* Mueller et al. train without the reference's central crop,
-             * and marching needs none: during a crop the grid keeps the
-             * untrained rim occupied.  On the built-in scene a run with
-             * crop steps scored a lower test PSNR than one without. */
-            to.precrop_steps = 0;
-            /* As Mueller et al.: with a background the images do not
-             * show, the density must go to zero wherever the images are
-             * transparent, which is also what lets marching skip it. */
-            to.random_background = 1;
-        }
-        if (a.random_bg >= 0) {
-            to.random_background = a.random_bg;
-        }
-        to.checkpoint_path = a.out;
+        rc = trainer_options(&a, m, &to);
         to.hooks = &hooks;
         dist_trainer_options(&D, &to);
         /* Made only now, when nothing but the trainer can fail, and
          * before its check of MODEL, which needs the folder. */
-        rc = out_make_parent(a.out, PROG) == 0 ? NERF_OK : REPORTED;
+        if (rc == NERF_OK) {
+            rc = out_make_parent(a.out, PROG) == 0 ? NERF_OK : REPORTED;
+        }
         if (rc == NERF_OK) {
             rc = nerf_trainer_create(&t, m, ds, s, &to);
         }
-    }
-    if (rc == NERF_OK && march > 0) {
-        /* After the trainer, which records the march it trains in. */
-        rc = setup_render_march(m, a.render_march > 0 ? a.render_march
-                                                      : RENDER_MARCH);
     }
     if (rc != NERF_OK) {
         if (rc != SETUP_USAGE && rc != REPORTED) {

@@ -3,8 +3,11 @@
  * libnerf's built-in scene, trains a small NeRF on it, reports the PSNR on
  * held-out views and renders an orbit around the scene.
  *
- *   tutorial OUT_DIR [STEPS [FRAMES]]
+ *   tutorial OUT_DIR [STEPS [FRAMES [PRESET]]]
  *
+ * PRESET is tiny (the default), fast or reference; the run is the one
+ * `nerf-train --preset PRESET --steps STEPS` makes on OUT_DIR/scene, bit
+ * for bit.
  * Everything it writes goes to OUT_DIR: scene/, model.nerf and
  * orbit_NNN.png.
  */
@@ -62,15 +65,21 @@ static int orbit_camera(unsigned i, unsigned n, float focal, nerf_camera *cam)
 
 int main(int argc, char **argv)
 {
-    if (argc < 2 || argc > 4) {
-        fprintf(stderr, "usage: tutorial OUT_DIR [STEPS [FRAMES]]\n");
+    if (argc < 2 || argc > 5) {
+        fprintf(stderr, "usage: tutorial OUT_DIR [STEPS [FRAMES [PRESET]]]\n");
         return 2;
     }
     const char *out = argv[1];
     unsigned long steps = argc > 2 ? strtoul(argv[2], NULL, 10) : 1000;
     unsigned frames = argc > 3 ? (unsigned)strtoul(argv[3], NULL, 10) : 12;
-    if (steps == 0 || frames == 0) {
-        fprintf(stderr, "tutorial: STEPS and FRAMES must be at least 1\n");
+    const char *name = argc > 4 ? argv[4] : "tiny";
+    const int preset = strcmp(name, "tiny") == 0        ? NERF_PRESET_TINY
+                       : strcmp(name, "fast") == 0      ? NERF_PRESET_FAST
+                       : strcmp(name, "reference") == 0 ? NERF_PRESET_REFERENCE
+                                                        : -1;
+    if (steps == 0 || frames == 0 || preset < 0) {
+        fprintf(stderr, "tutorial: STEPS and FRAMES must be at least 1, "
+                "PRESET tiny, fast or reference\n");
         return 2;
     }
     if (mkdir(out, 0777) != 0 && errno != EEXIST) {
@@ -107,28 +116,32 @@ int main(int argc, char **argv)
     dopt.split = NERF_SPLIT_TEST;
     CHECK(nerf_dataset_load(&test, scene_dir, &dopt));
 
-    /* 2. The model: the tiny preset, with a learning rate suited to it
-     * that decays tenfold over the run. */
+    /* 2. The model: a preset's network and learning rate, placed in the
+     * dataset's scene (which matters to the fast preset's grids), with the
+     * fastest fp32 products this machine has.  The learning rate decays
+     * tenfold over the run. */
     nerf_model_options mopt;
     NERF_MODEL_OPTIONS_INIT(&mopt);
-    CHECK(nerf_model_options_preset(&mopt, NERF_PRESET_TINY));
+    CHECK(nerf_model_options_preset(&mopt, preset));
+    CHECK(nerf_model_options_for_dataset(&mopt, train));
+    mopt.matmul = NERF_MATMUL_FP32_FASTEST;
     CHECK(nerf_model_create(&model, &mopt));
-    CHECK(nerf_model_set_param(model, NERF_PARAM_LEARNING_RATE, 5e-3));
-    CHECK(nerf_model_set_param(model, NERF_PARAM_LEARNING_RATE_FINAL, 5e-4));
     CHECK(nerf_model_set_param(model, NERF_PARAM_DECAY_STEPS, (double)steps));
 
-    /* 3. The sampler: the tiny preset's sample counts, between the
-     * dataset's near and far bounds. */
+    /* 3. The sampler: the model's sampling (the preset's sample counts, or
+     * its march through the occupancy grid) between the dataset's near
+     * and far bounds. */
     nerf_sampler_options sopt;
     NERF_SAMPLER_OPTIONS_INIT(&sopt);
-    CHECK(nerf_sampler_options_preset(&sopt, NERF_PRESET_TINY));
-    CHECK(nerf_dataset_bounds(train, &sopt.t_near, &sopt.t_far));
+    CHECK(nerf_sampler_options_for(&sopt, model, train,
+                                   NERF_SAMPLER_FOR_TRAINING));
     CHECK(nerf_sampler_create(&sampler, &sopt));
 
-    /* 4. Training: batches of random rays across all training images. */
+    /* 4. Training: batches of random rays across all training images, as
+     * many as the model's preset takes. */
     nerf_trainer_options topt;
     NERF_TRAINER_OPTIONS_INIT(&topt);
-    topt.batch_rays = 256;
+    CHECK(nerf_trainer_options_for(&topt, model));
     CHECK(nerf_trainer_create(&trainer, model, train, sampler, &topt));
     CHECK(nerf_trainer_set_progress(trainer, on_progress, NULL));
     CHECK(nerf_trainer_run(trainer, steps, NULL));
@@ -136,10 +149,19 @@ int main(int argc, char **argv)
     CHECK(nerf_model_save(model, path));
     printf("saved %s\n", path);
 
-    /* 5. Evaluation: render each test view and compare it with its image. */
+    /* 5. Evaluation: render each test view, as the model records it is
+     * rendered (the scene's background; a fast model's finer march), and
+     * compare it with its image. */
+    nerf_trainer_destroy(trainer); /* before the sampler it uses */
+    trainer = NULL;
+    nerf_sampler_destroy(sampler);
+    sampler = NULL;
+    CHECK(nerf_sampler_options_for(&sopt, model, test,
+                                   NERF_SAMPLER_FOR_RENDERING));
+    CHECK(nerf_sampler_create(&sampler, &sopt));
     nerf_renderer_options ropt;
     NERF_RENDERER_OPTIONS_INIT(&ropt);
-    ropt.white_background = 1; /* the scene's images are composited on white */
+    CHECK(nerf_model_render_settings(model, NULL, &ropt));
     CHECK(nerf_renderer_create(&renderer, model, sampler, &ropt));
     double psnr_sum = 0.0;
     for (uint32_t i = 0; i < nerf_dataset_count(test); i++) {

@@ -5,9 +5,11 @@ It writes libnerf's built-in scene, trains a small NeRF on it, reports the
 PSNR on held-out views and renders an orbit around the scene, as
 examples/tutorial.c does in C:
 
-    python3 examples/tutorial.py OUT_DIR [STEPS [FRAMES]]
+    python3 examples/tutorial.py OUT_DIR [STEPS [FRAMES [PRESET]]]
 
-Everything it writes goes to OUT_DIR: scene/, model.nerf and
+PRESET is tiny (the default), fast or reference; the run is the one
+`nerf-train --preset PRESET --steps STEPS` makes on OUT_DIR/scene, bit for
+bit.  Everything it writes goes to OUT_DIR: scene/, model.nerf and
 orbit_NNN.png.
 """
 
@@ -39,7 +41,7 @@ def orbit_camera(i, n, focal):
     return cam.look_at(eye, target=(0, 0, 0), up=(0, 0, 1))
 
 
-def run(out, steps, frames):
+def run(out, steps, frames, preset):
     os.makedirs(out, exist_ok=True)
     scene_dir = os.path.join(out, "scene")
 
@@ -49,26 +51,30 @@ def run(out, steps, frames):
     train = nerf.Dataset(scene_dir, "train")
     test = nerf.Dataset(scene_dir, "test")
 
-    # 2. The model: the tiny preset, with a learning rate suited to it
-    # that decays tenfold over the run.
-    model = nerf.Model(preset="tiny")
-    model.set_param("learning_rate", 5e-3)
-    model.set_param("learning_rate_final", 5e-4)
+    # 2. The model: a preset's network and learning rate, placed in the
+    # dataset's scene (which matters to the fast preset's grids), with the
+    # fastest fp32 products this machine has.  The learning rate decays
+    # tenfold over the run.
+    model = nerf.Model.for_dataset(train, preset, matmul="fp32-fastest")
     model.set_param("decay_steps", steps)
 
-    # 3. The sampler: the tiny preset's sample counts, between the
-    # dataset's near and far bounds.
-    sampler = nerf.Sampler.for_dataset(train, preset="tiny")
+    # 3. The sampler: the model's sampling (the preset's sample counts, or
+    # its march through the occupancy grid) between the dataset's near and
+    # far bounds.
+    sampler = nerf.Sampler.for_model(model, train, training=True)
 
-    # 4. Training: batches of random rays across all training images.
-    trainer = nerf.Trainer(model, train, sampler, batch_rays=256)
+    # 4. Training: batches of random rays across all training images, as
+    # many as the model's preset takes.
+    trainer = nerf.Trainer.for_model(model, train, sampler)
     trainer.run(steps, progress=on_progress)
     path = os.path.join(out, "model.nerf")
     model.save(path)
     print("saved %s" % path)
 
-    # 5. Evaluation: render each test view and compare it with its image.
-    renderer = nerf.Renderer(model, sampler, white_background=1)
+    # 5. Evaluation: render each test view, as the model records it is
+    # rendered (the scene's background; a fast model's finer march), and
+    # compare it with its image.
+    renderer = nerf.Renderer(model, nerf.Sampler.for_model(model, test))
     total = 0.0
     for i in range(len(test)):
         rgb = renderer.render_image(test.camera(i), depth=False,
@@ -86,17 +92,19 @@ def run(out, steps, frames):
 
 
 def main(argv):
-    if not 2 <= len(argv) <= 4:
-        print("usage: tutorial.py OUT_DIR [STEPS [FRAMES]]", file=sys.stderr)
+    if not 2 <= len(argv) <= 5:
+        print("usage: tutorial.py OUT_DIR [STEPS [FRAMES [PRESET]]]",
+              file=sys.stderr)
         return 2
     steps = int(argv[2]) if len(argv) > 2 else 1000
     frames = int(argv[3]) if len(argv) > 3 else 12
-    if steps < 1 or frames < 1:
-        print("tutorial.py: STEPS and FRAMES must be at least 1",
-              file=sys.stderr)
+    preset = argv[4] if len(argv) > 4 else "tiny"
+    if steps < 1 or frames < 1 or preset not in ("tiny", "fast", "reference"):
+        print("tutorial.py: STEPS and FRAMES must be at least 1, PRESET "
+              "tiny, fast or reference", file=sys.stderr)
         return 2
     try:
-        run(argv[1], steps, frames)
+        run(argv[1], steps, frames, preset)
     except nerf.NerfError as e:
         # The library's message says what failed: the file, the field.
         print("tutorial.py: %s" % e, file=sys.stderr)

@@ -481,6 +481,19 @@ NERF_API int nerf_sampler_options_init(nerf_sampler_options *opts,
 NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
                                          int preset);
 
+/**
+ * Make a marching @p opts march in @p steps steps of the grid's diagonal,
+ * scaling max_samples by the same factor (within 1..65536) so that a ray
+ * is marched as far as before: a finer march for rendering, or the
+ * training march back from a recorded finer one.  Options that do not
+ * march (march_steps 0) are left as they are.
+ * @return NERF_OK; NERF_EINVAL for a bad struct or @p steps outside
+ * 1..65536.
+ * @since 0.12
+ */
+NERF_API int nerf_sampler_options_set_march(nerf_sampler_options *opts,
+                                            uint32_t steps);
+
 /** Sentinel for nerf_renderer_options.raw_noise_std. */
 #define NERF_NOISE_AUTO (-1.0f)
 
@@ -580,7 +593,7 @@ typedef enum nerf_matmul {
                                (docs/performance.md); results differ
                                from fp32 by the rounding (relative
                                errors of order 1e-3). */
-    NERF_MATMUL_FP32_ONEDNN = 2 /**< fp32 products, bias and ReLU fused into
+    NERF_MATMUL_FP32_ONEDNN = 2, /**< fp32 products, bias and ReLU fused into
                                them, through oneDNN's matmul instead of
                                cblas_sgemm.  Needs a libnerf built with oneDNN:
                                ask nerf_matmul_supported() first.  Results
@@ -589,6 +602,16 @@ typedef enum nerf_matmul {
                                docs/api-notes.md, "fp32 products through
                                oneDNN".
                                @since 0.7 */
+    NERF_MATMUL_FP32_FASTEST = 3 /**< Whichever fp32 kind trains the model
+                               fastest here, chosen by nerf_model_create():
+                               FP32_ONEDNN for a frequency-encoded model
+                               where nerf_matmul_supported() says it is
+                               available, else FP32 (a hash-grid model's
+                               narrow layers run fastest on libnerf's own
+                               kernels, which FP32 uses).  The model
+                               records and reports the kind chosen, never
+                               this one.  nerf-train's default.
+                               @since 0.12 */
 } nerf_matmul;
 
 /**
@@ -707,6 +730,17 @@ typedef struct nerf_model_options {
      * @since 0.3 */
     uint32_t space;           /**< nerf_space of a hash-grid model; default
                                    BOX.  Saved in checkpoints. */
+    /* Zero-filled by an older caller: the learning rate of the model's
+     * kind, as before.
+     * @since 0.12 */
+    uint32_t reserved2;       /**< Must be 0. */
+    double learning_rate;     /**< The schedule's first learning rate
+                                   (NERF_PARAM_LEARNING_RATE), its last a
+                                   tenth of it, in (0, 1].  0 (default):
+                                   the model kind's, 5e-4 (the paper's)
+                                   for frequency encodings and 1e-2 for
+                                   hash grids.  nerf_model_options_preset()
+                                   sets its preset's. */
 } nerf_model_options;
 
 /**
@@ -721,7 +755,10 @@ NERF_API int nerf_model_options_init(nerf_model_options *opts,
 
 /**
  * Overwrite the structural fields of an initialised @p opts with a named
- * preset; seed, hooks and matmul are kept.
+ * preset, and its learning rate (since 0.12: 5e-4 for
+ * NERF_PRESET_REFERENCE, 5e-3 for NERF_PRESET_TINY, 1e-2 for
+ * NERF_PRESET_FAST, those nerf-train trains them with); seed, hooks and
+ * matmul are kept.
  * @return NERF_OK, or NERF_EINVAL for an unknown preset or bad struct.
  */
 NERF_API int nerf_model_options_preset(nerf_model_options *opts,
@@ -776,9 +813,13 @@ NERF_API int nerf_model_query(const nerf_model *model, int network, size_t n,
 
 /** Training hyperparameters, set with nerf_model_set_param(). */
 typedef enum nerf_param {
-    NERF_PARAM_LEARNING_RATE = 100,       /**< Initial rate; default 5e-4. */
+    NERF_PARAM_LEARNING_RATE = 100,       /**< Initial rate; default
+                                               nerf_model_options'
+                                               learning_rate, else 5e-4
+                                               (1e-2 for hash grids). */
     NERF_PARAM_LEARNING_RATE_FINAL = 101, /**< Rate reached after
-                                               DECAY_STEPS; default 5e-5. */
+                                               DECAY_STEPS; default a
+                                               tenth of the initial. */
     NERF_PARAM_DECAY_STEPS = 102,         /**< Default 250000: lr(t) =
                                                lr0 (lr1/lr0)^(t/steps). */
     /** Default 0.9.  Adam's bias corrections go by the step count, but
@@ -1767,6 +1808,22 @@ typedef struct nerf_trainer_options {
                                     never what is trained.  Needs
                                     checkpoint_path; 0 (default): no
                                     timed saves. */
+    /* Zero (an older caller's zero fill): the model records the march it
+     * trains in, as before.
+     * @since 0.12 */
+    uint32_t render_march_steps; /**< With a marching sampler: the march
+                                    the model records for rendering
+                                    (nerf_model_render_settings()), in
+                                    1..65536 steps of the grid's diagonal,
+                                    its max_samples scaled as by
+                                    nerf_sampler_options_set_march(); a
+                                    finer march than training's renders
+                                    sharper for a little more time a
+                                    frame (docs/api-notes.md, "A run as
+                                    nerf-train sets it up").  0 (default):
+                                    the sampler's own.  Ignored without
+                                    marching. */
+    uint32_t reserved2;       /**< Must be 0. */
 } nerf_trainer_options;
 
 /**
@@ -1777,6 +1834,76 @@ NERF_API int nerf_trainer_options_init(nerf_trainer_options *opts,
                                        size_t struct_size);
 /** A run-time call, not a constant initializer: see NERF_HOOKS_INIT. */
 #define NERF_TRAINER_OPTIONS_INIT(o) nerf_trainer_options_init((o), sizeof *(o))
+
+/*
+ * A run as nerf-train sets it up.  The library's defaults are the
+ * reference implementation's; what nerf-train chooses beyond them for a
+ * preset, a model and a dataset comes from these three calls, so that a
+ * caller who makes them (after nerf_model_options_preset(), which sets the
+ * preset's learning rate) trains exactly what nerf-train trains, bit for
+ * bit: docs/api-notes.md, "A run as nerf-train sets it up".
+ */
+
+/**
+ * Place a hash-grid model in @p dataset's scene: space and bound from
+ * nerf_dataset_space() (a box for Blender scenes, NDC for forward-facing
+ * ones, a contracted space for all-round captures with a far background).
+ * Options of another encoding are left as they are: they read
+ * coordinates anywhere.
+ * @return NERF_OK; NERF_EINVAL for a NULL argument or a bad struct.
+ * @since 0.12
+ */
+NERF_API int nerf_model_options_for_dataset(nerf_model_options *opts,
+                                            const nerf_dataset *dataset);
+
+/** Uses for nerf_sampler_options_for().  @since 0.12 */
+typedef enum nerf_sampler_use {
+    NERF_SAMPLER_FOR_RENDERING = 0, /**< The march the model records. */
+    NERF_SAMPLER_FOR_TRAINING = 1   /**< A marching model trains in the
+                                         fast preset's march, whatever
+                                         finer one it records for
+                                         rendering, so that a resumed run
+                                         goes on as it began. */
+} nerf_sampler_use;
+
+/**
+ * Sampling settings for @p model on @p dataset, written into the
+ * sampling fields of an initialised @p opts (seed, perturb and hooks are
+ * kept).  The model says how: the settings its trainer recorded, or those
+ * its shape suggests (nerf_model_render_settings()), with the march @p use
+ * asks for.  The dataset says where: its near and far bounds (an unbounded
+ * model keeps its own far reach), its NDC setting and, for NDC, the frustum
+ * of its first camera, so that renders at other sizes see the same warped
+ * scene.
+ * @param model NULL: keep @p opts' own counts and march (from
+ *              nerf_sampler_options_preset(), say).
+ * @param dataset NULL: the model's recorded bounds.
+ * @param use a nerf_sampler_use.
+ * @return NERF_OK; NERF_EINVAL for bad arguments; NERF_EFORMAT as
+ * nerf_model_render_settings().
+ * @since 0.12
+ */
+NERF_API int nerf_sampler_options_for(nerf_sampler_options *opts,
+                                      const nerf_model *model,
+                                      const nerf_dataset *dataset, int use);
+
+/**
+ * nerf-train's trainer settings for @p model, written into an initialised
+ * @p opts (other fields are kept):
+ *  - rays a step: those the model was trained with
+ *    (nerf_model_training_batch()), else 2048 rays of at most 131072
+ *    samples for a new hash-grid model, else 1024 rays;
+ *  - a hash-grid model trains without the central crop and against a
+ *    random background (Mueller et al.), and records a march of 1280
+ *    steps for rendering (render_march_steps);
+ *  - with a checkpoint_path already set and no checkpoint_every, a save
+ *    every 120 seconds (checkpoint_seconds).
+ * Why each: docs/api-notes.md, "A run as nerf-train sets it up".
+ * @return NERF_OK; NERF_EINVAL for a NULL argument or a bad struct.
+ * @since 0.12
+ */
+NERF_API int nerf_trainer_options_for(nerf_trainer_options *opts,
+                                      const nerf_model *model);
 
 /**
  * Figures of one training step.  Versioned: set struct_size (sizeof) before

@@ -30,45 +30,30 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
                       int space, const char *program);
 
 /* What a program's flags change of a model's sampling: each count when
- * not negative, the bounds when far > near; and the seed. */
+ * not negative, the bounds when far > near; the seed; and whether it is
+ * for training (nerf_sampler_use). */
 typedef struct sampler_choice {
     int64_t n_coarse, n_fine, march_steps;
     float near, far;
     uint64_t seed;
+    int training;
 } sampler_choice;
 
-/* Nothing changed: the model's own sampling, seed 0. */
-#define SAMPLER_AS_RECORDED {-1, -1, -1, 0.0f, 0.0f, 0}
+/* Nothing changed: the model's own sampling for rendering, seed 0. */
+#define SAMPLER_AS_RECORDED {-1, -1, -1, 0.0f, 0.0f, 0, 0}
 
 /*
  * A sampler for rendering or training model on dataset (which may be
- * NULL).  Sampling follows the settings the model records, from its
- * training or, for a new model or a file from before libnerf 0.4, guessed
- * from its shape (nerf_model_render_settings(): the preset's counts, or
- * marching for a hash-grid model), changed as the choice c says.  A march of
- * other steps than the recorded one scales the cap on a ray's samples
- * with it; a march asked of a model that cannot march is the renderer's
- * to refuse.  Bounds and NDC follow the dataset when there is one (an
- * unbounded model keeps its far reach), else the model's settings.
+ * NULL): the library's for them (nerf_sampler_options_for()), changed as
+ * the choice c says.  A march of other steps than the model's scales the
+ * cap on a ray's samples with it; a march asked of a model that cannot
+ * march is the renderer's to refuse.
  */
 int setup_sampler(nerf_sampler **out, const nerf_model *model,
                   const nerf_dataset *dataset, const sampler_choice *c);
 
-/*
- * The march nerf-train trains a marching model in, fresh or resumed: the
- * fast preset's, whatever march the model records for rendering
- * (setup_render_march()), so that a resumed run goes on as it began.  -1
- * for a model that does not march (sampler_choice's "as recorded").
- */
-int64_t setup_train_march(const nerf_model *model);
-
-/*
- * Record that a marching model renders in `steps` (1..65536) of its
- * grid's diagonal, its cap on a ray's samples scaled with them, as
- * nerf-eval --march-steps renders.  A model that does not march is left
- * as it is.
- */
-int setup_render_march(nerf_model *model, int64_t steps);
+/* 1 if model is sampled by marching through its occupancy grid. */
+int setup_marches(const nerf_model *model);
 
 /* Renders of a dataset's scene are composited as its images were: on white
  * for Blender scenes (and when there is no dataset), on black for LLFF. */

@@ -62,6 +62,15 @@ int nerf__options_read(void *dst, size_t own_size, const void *src,
     return NERF_OK;
 }
 
+void nerf__options_write(void *dst, const void *src, size_t own_size)
+{
+    uint32_t size;
+    memcpy(&size, dst, sizeof size);
+    size_t n = size < own_size ? size : own_size;
+    memcpy((char *)dst + sizeof size, (const char *)src + sizeof size,
+           n - sizeof size);
+}
+
 int nerf__options_open(void *dst, size_t own_size, const void *src,
                        const char *name, int (*check)(const void *opts),
                        const nerf_hooks *const *hooks, nerf__env *env)

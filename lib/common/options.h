@@ -28,6 +28,14 @@ int nerf__options_read(void *dst, size_t own_size, const void *src,
                        const char *name);
 
 /*
+ * The other way, after nerf__options_read(): copy src (own_size bytes)
+ * back into the caller's struct dst, only as many bytes as its
+ * struct_size covers, which stays as it was.  For the calls that fill a
+ * caller's options (presets and the like).
+ */
+void nerf__options_write(void *dst, const void *src, size_t own_size);
+
+/*
  * What every nerf_*_create() does first with its options, in this order:
  * overlay the caller's struct src (NULL: keep the defaults in dst), check
  * the result (check may be NULL), and take the environment from the hooks

@@ -93,6 +93,7 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     switch (preset) {
     case NERF_PRESET_REFERENCE:
         model_defaults(&o);
+        o.learning_rate = 5e-4;
         break;
     case NERF_PRESET_TINY:
         model_defaults(&o);
@@ -100,9 +101,13 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
         o.width = 64;
         o.skip_layer = 2;
         o.view_width = 32;
+        /* The small network learns at ten times the paper's rate: at
+         * 5e-4 it takes several times the steps to the same PSNR. */
+        o.learning_rate = 5e-3;
         break;
     case NERF_PRESET_FAST:
         fast_options(&o);
+        o.learning_rate = 1e-2;
         break;
     default:
         return nerf__error(NERF_EINVAL, "nerf_model_options_preset: unknown "
@@ -111,9 +116,7 @@ NERF_API int nerf_model_options_preset(nerf_model_options *opts, int preset)
     o.seed = seed;
     o.hooks = hooks;
     o.matmul = matmul;
-    size_t n = opts->struct_size < sizeof o ? opts->struct_size : sizeof o;
-    memcpy((char *)opts + sizeof o.struct_size,
-           (const char *)&o + sizeof o.struct_size, n - sizeof o.struct_size);
+    nerf__options_write(opts, &o, sizeof o);
     return NERF_OK;
 }
 
@@ -202,7 +205,7 @@ static const char *check_fast_fields(const nerf_model_options *o)
     if (o->density_activation > NERF_DENSITY_EXP) {
         return "density_activation is not a known nerf_density_activation";
     }
-    if (o->matmul > NERF_MATMUL_FP32_ONEDNN) {
+    if (o->matmul > NERF_MATMUL_FP32_FASTEST) {
         return "matmul is not a known nerf_matmul";
     }
     if (o->space > NERF_SPACE_UNBOUNDED) {
@@ -242,14 +245,17 @@ int nerf__model_check_options(const nerf_model_options *o)
         what = "use_viewdirs and use_fine must be 0 or 1";
     } else if (o->use_viewdirs && (o->view_width < 1 || o->view_width > 4096)) {
         what = "view_width must be 1..4096";
-    } else if (o->reserved0 != 0) {
-        what = "reserved0 must be 0";
+    } else if (o->reserved0 != 0 || o->reserved2 != 0) {
+        what = o->reserved0 ? "reserved0 must be 0" : "reserved2 must be 0";
+    } else if (!(o->learning_rate == 0.0 ||
+                 (o->learning_rate > 0.0 && o->learning_rate <= 1.0))) {
+        what = "learning_rate must be 0 (the model kind's) or in (0, 1]";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_model_options: %s", what);
     }
     const char *why;
-    if (o->matmul != NERF_MATMUL_FP32 &&
+    if (o->matmul != NERF_MATMUL_FP32 && o->matmul != NERF_MATMUL_FP32_FASTEST &&
         !nerf__onednn_supported(o->matmul, &why)) {
         return nerf__error(NERF_EINVAL, "nerf_model_options: matmul = %s, "
                            "but those products are not available: %s",
@@ -353,6 +359,20 @@ static uint32_t products_of(uint32_t matmul, const nerf__env *env)
     return NERF_MATMUL_FP32;
 }
 
+/* NERF_MATMUL_FP32_FASTEST made concrete: oneDNN's fp32 trains the
+ * frequency-encoded networks faster than cblas where it has its AVX-512
+ * kernels (docs/performance.md, "The reference and tiny presets"); the
+ * hash-grid networks' narrow layers run fastest on the fused kernels,
+ * which only FP32 uses. */
+static uint32_t fastest_fp32(const nerf_model_options *o)
+{
+    const char *why = NULL;
+    return o->encoding != NERF_ENCODING_HASHGRID &&
+                   nerf__onednn_supported(NERF_MATMUL_FP32_ONEDNN, &why)
+               ? NERF_MATMUL_FP32_ONEDNN
+               : NERF_MATMUL_FP32;
+}
+
 void nerf__model_weights_changed(nerf_model *m)
 {
     nerf__onednn_weights_changed(m->onednn);
@@ -369,6 +389,9 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
     m->env = *env;
     m->opts = *opts;
     m->opts.hooks = NULL;
+    if (m->opts.matmul == NERF_MATMUL_FP32_FASTEST) {
+        m->opts.matmul = fastest_fp32(opts);
+    }
     atomic_init(&m->finite, 0); /* not known yet */
     m->n_nets = opts->use_fine ? 2 : 1;
     size_t offset = 0;
@@ -386,6 +409,13 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         m->adam = (nerf__adam){5e-4, 5e-5, 250000.0, 0.9, 0.999, 1e-7, 0.0,
                                0.0, 0.0};
     }
+    if (opts->learning_rate > 0.0) {
+        m->adam.lr = opts->learning_rate;
+        m->adam.lr_final = opts->learning_rate / 10;
+    }
+    /* A rate asked for at creation is the schedule's from then on, a
+     * parameter like any other: the options do not keep it. */
+    m->opts.learning_rate = 0.0;
     float **arrays[4] = {&m->params, &m->grads, &m->adam_m, &m->adam_v};
     for (int i = 0; i < 4; i++) {
         *arrays[i] = nerf__calloc(env, m->n_params, sizeof(float));
@@ -408,7 +438,7 @@ int nerf__model_alloc(nerf_model **out, const nerf_model_options *opts,
         }
         m->corrected = true;
     }
-    const uint32_t matmul = products_of(opts->matmul, env);
+    const uint32_t matmul = products_of(m->opts.matmul, env);
     if (matmul != NERF_MATMUL_FP32) {
         int rc = onednn_setup(m, matmul);
         if (rc != NERF_OK) {

@@ -163,11 +163,7 @@ NERF_API int nerf_model_render_settings(const nerf_model *model,
             return rc;
         }
         copy_render_fields(&o, &want);
-        size_t n = sampler->struct_size < sizeof o ? sampler->struct_size
-                                                   : sizeof o;
-        memcpy((char *)sampler + sizeof o.struct_size,
-               (const char *)&o + sizeof o.struct_size,
-               n - sizeof o.struct_size);
+        nerf__options_write(sampler, &o, sizeof o);
     }
     return renderer != NULL ? set_renderer(renderer, white) : NERF_OK;
 }

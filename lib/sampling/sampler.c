@@ -67,10 +67,34 @@ NERF_API int nerf_sampler_options_preset(nerf_sampler_options *opts,
         return nerf__error(NERF_EINVAL, "nerf_sampler_options_preset: "
                            "unknown preset %d", preset);
     }
-    /* Write back only the bytes the caller's struct has. */
-    size_t n = opts->struct_size < sizeof o ? opts->struct_size : sizeof o;
-    memcpy((char *)opts + sizeof o.struct_size,
-           (const char *)&o + sizeof o.struct_size, n - sizeof o.struct_size);
+    nerf__options_write(opts, &o, sizeof o);
+    return NERF_OK;
+}
+
+NERF_API int nerf_sampler_options_set_march(nerf_sampler_options *opts,
+                                            uint32_t steps)
+{
+    nerf_sampler_options o;
+    sampler_defaults(&o);
+    int rc = nerf__options_read(&o, sizeof o, opts, "nerf_sampler_options");
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    if (steps < 1 || steps > MAX_MARCH_STEPS) {
+        return nerf__error(NERF_EINVAL, "nerf_sampler_options_set_march: "
+                           "steps must be 1..65536, not %u", (unsigned)steps);
+    }
+    if (o.march_steps == 0) {
+        return NERF_OK;
+    }
+    /* The cap on a ray's samples is a distance in steps: a finer march
+     * must take more of them to reach as far. */
+    const double cap = (double)o.max_samples * steps / o.march_steps;
+    o.max_samples = cap < 1.0                 ? 1u
+                    : cap > MAX_MARCH_SAMPLES ? MAX_MARCH_SAMPLES
+                                              : (uint32_t)cap;
+    o.march_steps = steps;
+    nerf__options_write(opts, &o, sizeof o);
     return NERF_OK;
 }
 

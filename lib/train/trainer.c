@@ -68,6 +68,10 @@ static int check_options(const void *opts)
         what = "checkpoint_seconds must be a finite time >= 0";
     } else if (o->checkpoint_seconds > 0.0 && o->checkpoint_path == NULL) {
         what = "checkpoint_seconds needs a checkpoint_path";
+    } else if (o->render_march_steps > 65536) {
+        what = "render_march_steps must be 0..65536";
+    } else if (o->reserved2 != 0) {
+        what = "reserved2 must be 0";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);
@@ -176,6 +180,11 @@ static void record_render_settings(nerf_trainer *t)
         so.ndc_focal = t->setup.ndc_focal;
         so.ndc_width = (uint32_t)t->setup.ndc_width;
         so.ndc_height = (uint32_t)t->setup.ndc_height;
+    }
+    if (t->opts.render_march_steps > 0) {
+        /* Checked in range by check_options(); options that do not march
+         * are left as they are. */
+        nerf_sampler_options_set_march(&so, t->opts.render_march_steps);
     }
     if (nerf_model_set_render_settings(t->model, &so, t->white ? 1u : 0u) !=
         NERF_OK) {

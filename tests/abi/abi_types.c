@@ -15,6 +15,7 @@ nerf_density_activation nerf_abi_density_activation;
 nerf_preset nerf_abi_preset;
 nerf_matmul nerf_abi_matmul;
 nerf_space nerf_abi_space;
+nerf_sampler_use nerf_abi_sampler_use;
 nerf_network nerf_abi_network;
 nerf_param nerf_abi_param;
 nerf_progress_kind nerf_abi_progress_kind;

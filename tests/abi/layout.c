@@ -53,7 +53,10 @@ FROZEN(nerf_model_options, density_activation, 104);
 /* matmul took the place of reserved1, which had to be 0 (fp32). */
 FROZEN(nerf_model_options, matmul, 108);
 FROZEN(nerf_model_options, space, 112);
-SIZE(nerf_model_options, 120);
+/* Appended in 0.12: reserved2 took the padding before learning_rate. */
+FROZEN(nerf_model_options, reserved2, 116);
+FROZEN(nerf_model_options, learning_rate, 120);
+SIZE(nerf_model_options, 128);
 
 FROZEN(nerf_scene_options, struct_size, 0);
 FROZEN(nerf_scene_options, width, 4);
@@ -200,7 +203,10 @@ FROZEN(nerf_trainer_options, checksum_every, 88);
 FROZEN(nerf_trainer_options, reserved1, 92);
 /* Appended in 0.6. */
 FROZEN(nerf_trainer_options, checkpoint_seconds, 96);
-SIZE(nerf_trainer_options, 104);
+/* Appended in 0.12. */
+FROZEN(nerf_trainer_options, render_march_steps, 104);
+FROZEN(nerf_trainer_options, reserved2, 108);
+SIZE(nerf_trainer_options, 112);
 
 /* New in 0.5. */
 FROZEN(nerf_exchange, struct_size, 0);

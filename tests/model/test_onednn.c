@@ -167,7 +167,7 @@ TEST(options)
     nerf_model_options_preset(&o, NERF_PRESET_TINY);
     nerf_model *m = NULL;
 
-    o.matmul = 3;
+    o.matmul = NERF_MATMUL_FP32_FASTEST + 1;
     CHECK_EQ_INT(nerf_model_create(&m, &o), NERF_EINVAL);
     CHECK(m == NULL);
     CHECK(strstr(nerf_last_error(), "matmul") != NULL);

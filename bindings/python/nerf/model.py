@@ -38,8 +38,10 @@ ENCODING_SCALE_PI = 0x2
 MATMUL_FP32 = 0
 MATMUL_BF16 = 1
 MATMUL_FP32_ONEDNN = 2
+MATMUL_FP32_FASTEST = 3
 MATMULS = {"fp32": MATMUL_FP32, "bf16": MATMUL_BF16,
-           "fp32-onednn": MATMUL_FP32_ONEDNN}
+           "fp32-onednn": MATMUL_FP32_ONEDNN,
+           "fp32-fastest": MATMUL_FP32_FASTEST}
 
 # nerf_space: where a hash-grid model's grids lie.
 SPACE_BOX = 0
@@ -122,13 +124,18 @@ def matmul_supported(matmul: Union[str, int]) -> bool:
 
 
 def model_options(preset: Union[str, int, None] = None, seed: int = 0,
-                  **fields: Any) -> ModelOptions:
-    """Options from the library's defaults, a preset, then ``fields``
+                  dataset: Any = None, **fields: Any) -> ModelOptions:
+    """Options from the library's defaults, a preset (its network and
+    learning rate), a hash-grid model placed in ``dataset``'s scene
+    (``nerf_model_options_for_dataset``) when one is given, then ``fields``
     (``matmul`` and ``space`` may be given by name: ``matmul="bf16"``,
     ``space="ndc"``)."""
     opts = ModelOptions()
     if preset is not None:
         lib.nerf_model_options_preset(ctypes.byref(opts), preset_key(preset))
+    if dataset is not None:
+        with dataset._using() as dp:
+            lib.nerf_model_options_for_dataset(ctypes.byref(opts), dp)
     opts.seed = seed
     if "matmul" in fields:
         fields["matmul"] = matmul_key(fields["matmul"])
@@ -152,8 +159,8 @@ class Model(_handle.Handle):
 
     def __init__(self, preset: Union[str, int, None] = None, seed: int = 0,
                  *, log: LogFn = None, log_level: Optional[int] = None,
-                 **options: Any) -> None:
-        opts = model_options(preset, seed, **options)
+                 dataset: Any = None, **options: Any) -> None:
+        opts = model_options(preset, seed, dataset, **options)
         hooks = _handle.make_hooks(log, log_level)
         if hooks is not None:
             opts.hooks = ctypes.pointer(hooks[0])
@@ -178,13 +185,13 @@ class Model(_handle.Handle):
                     log_level: Optional[int] = None,
                     **options: Any) -> "Model":
         """As :meth:`create`, with a hash-grid model's grids placed as
-        ``dataset`` wants them (``Dataset.space``: NDC for forward-facing
-        scenes, a contracted space for unbounded ones); ``options``
-        override ``space`` and ``bound`` too."""
-        if model_options(preset, seed).encoding == ENCODING_HASHGRID:
-            space, bound = dataset.space
-            options = dict(dict(space=space, bound=bound), **options)
-        return cls(preset, seed, log=log, log_level=log_level, **options)
+        ``dataset`` wants them (``nerf_model_options_for_dataset``: NDC for
+        forward-facing scenes, a contracted space for unbounded ones);
+        ``options`` override ``space`` and ``bound`` too.  With
+        ``matmul="fp32-fastest"`` and a :meth:`nerf.Trainer.for_model`
+        trainer, this is the model ``nerf-train`` makes."""
+        return cls(preset, seed, log=log, log_level=log_level,
+                   dataset=dataset, **options)
 
     @classmethod
     def _wrap(cls, res: _handle._Resource) -> "Model":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 from typing import Any, Callable, NamedTuple, Optional, Union
 
@@ -10,10 +11,15 @@ from ._capi import PointsP, RendererP, SamplerP, lib
 from .model import Model, preset_key
 from .structs import (POINTS_PLY_ASCII, POINTS_PLY_BINARY, Camera,
                       PointsOptions, Progress, RendererOptions,
-                      SamplerOptions, c_size_t, c_uint64, integer)
+                      SamplerOptions, c_size_t, c_uint32, c_uint64,
+                      integer)
 
 #: Flag of the sampling calls: random placement as in training.
 SAMPLE_TRAINING = 0x1
+
+# nerf_sampler_use: what nerf_sampler_options_for() sets a sampler up for.
+SAMPLER_FOR_RENDERING = 0
+SAMPLER_FOR_TRAINING = 1
 #: Sentinel of ``raw_noise_std``: chosen from the sampler (1 with NDC).
 NOISE_AUTO = -1.0
 #: Flag of ``Camera.flags``: rays through pixel corners, as the reference.
@@ -59,18 +65,54 @@ class Sampler(_handle.Handle):
     @classmethod
     def for_dataset(cls, dataset: Any, preset: Union[str, int, None] = None,
                     seed: int = 0, **options: Any) -> "Sampler":
-        """A sampler for rendering or training on ``dataset``: its bounds,
-        its NDC setting and, for NDC scenes, the frustum of its first
-        camera, so renders at other sizes see the same warped scene.
+        """A sampler for rendering or training on ``dataset``: ``preset``'s
+        counts, the dataset's bounds, its NDC setting and, for NDC scenes,
+        the frustum of its first camera, so renders at other sizes see the
+        same warped scene (``nerf_sampler_options_for`` without a model).
         ``options`` override any of these."""
-        near, far = dataset.bounds
-        fields = dict(t_near=near, t_far=far, ndc=int(dataset.is_ndc))
-        if dataset.is_ndc:
-            cam = dataset.camera(0)
-            fields.update(ndc_focal=cam.fx, ndc_width=cam.width,
-                          ndc_height=cam.height)
+        return cls._for(None, dataset, SAMPLER_FOR_RENDERING, preset, seed,
+                        options)
+
+    @classmethod
+    def for_model(cls, model: Model, dataset: Any = None, *,
+                  training: bool = False, seed: int = 0,
+                  march_steps: Optional[int] = None,
+                  **options: Any) -> "Sampler":
+        """The sampler ``nerf-train`` (``training=True``) or ``nerf-render``
+        uses for ``model`` on ``dataset`` (``nerf_sampler_options_for``):
+        the model's recorded sampling, or its preset's, with a marching
+        model trained in the preset's march and rendered in the finer one
+        it records; the dataset's bounds and NDC frustum (None: the
+        model's).  ``march_steps``: another march for a marching model,
+        its cap on a ray's samples scaled to reach as far
+        (``nerf_sampler_options_set_march``, as ``nerf-render
+        --march-steps``).  ``options`` override any field."""
+        if not isinstance(model, Model):
+            raise TypeError("model must be a nerf.Model")
+        use = SAMPLER_FOR_TRAINING if training else SAMPLER_FOR_RENDERING
+        return cls._for(model, dataset, use, None, seed, options,
+                        march_steps)
+
+    @classmethod
+    def _for(cls, model: Optional[Model], dataset: Any, use: int,
+             preset: Union[str, int, None], seed: int, options: dict,
+             march_steps: Optional[int] = None) -> "Sampler":
+        opts = SamplerOptions()
+        if preset is not None:
+            lib.nerf_sampler_options_preset(ctypes.byref(opts),
+                                            preset_key(preset))
+        with contextlib.ExitStack() as stack:
+            mp = stack.enter_context(model._using()) if model else None
+            dp = stack.enter_context(dataset._using()) if dataset else None
+            lib.nerf_sampler_options_for(ctypes.byref(opts), mp, dp, use)
+        if march_steps is not None:
+            lib.nerf_sampler_options_set_march(
+                ctypes.byref(opts),
+                integer(march_steps, "march_steps", c_uint32))
+        fields = opts.to_dict()
+        del fields["seed"]  # the argument's
         fields.update(options)
-        return cls(preset, seed, **fields)
+        return cls(None, seed, **fields)
 
     @property
     def options(self) -> SamplerOptions:

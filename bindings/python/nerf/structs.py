@@ -233,6 +233,9 @@ class ModelOptions(_Versioned):
         ("matmul", c_uint32),
         # Appended in libnerf 0.3: nerf_space (0 = BOX).
         ("space", c_uint32),
+        # Appended in libnerf 0.12: 0 = the model kind's rate.
+        ("reserved2", c_uint32),
+        ("learning_rate", c_double),
     ]
 
 
@@ -325,7 +328,7 @@ class DensityActivation(Named):
 
 class Matmul(Named):
     """``nerf_matmul``."""
-    _names = {0: "fp32", 1: "bf16", 2: "fp32-onednn"}
+    _names = {0: "fp32", 1: "bf16", 2: "fp32-onednn", 3: "fp32-fastest"}
 
 
 class Space(Named):
@@ -611,9 +614,12 @@ class TrainerOptions(_Versioned):
         ("reserved1", c_uint32),
         # Appended in libnerf 0.6.
         ("checkpoint_seconds", c_double),
+        # Appended in libnerf 0.12.
+        ("render_march_steps", c_uint32),
+        ("reserved2", c_uint32),
     ]
     _private_ = ("struct_size", "hooks", "grad_hook", "checksum_hook",
-                 "hook_user", "reserved1")
+                 "hook_user", "reserved1", "reserved2")
 
     def _get(self, name: str) -> Any:
         value = getattr(self, name)

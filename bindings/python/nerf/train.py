@@ -64,6 +64,37 @@ class Trainer(_handle.ProgressHandle):
         with self._using() as ptr:
             lib.nerf_trainer_set_progress(ptr, self._slot.thunk, None)
 
+    @classmethod
+    def for_model(cls, model: Model, dataset: Dataset,
+                  sampler: Optional[Sampler] = None, *, seed: int = 0,
+                  progress: ProgressFn = None, log: LogFn = None,
+                  log_level: Optional[int] = None,
+                  **options: Any) -> "Trainer":
+        """The trainer ``nerf-train`` makes for ``model`` on ``dataset``:
+        the sampler of :meth:`nerf.Sampler.for_model` with
+        ``training=True`` (when none is given) and the options of
+        ``nerf_trainer_options_for`` (the batch the model was trained at
+        or its preset's; no crop and a random background for a hash-grid
+        model, with the finer march it records; with a
+        ``checkpoint_path`` and no ``checkpoint_every``, a save every two
+        minutes).  ``options`` override any field.  With a model from
+        :meth:`nerf.Model.for_dataset` (``matmul="fp32-fastest"``) whose
+        ``NERF_PARAM_DECAY_STEPS`` is the run's length, the checkpoint it
+        writes is ``nerf-train``'s, bit for bit."""
+        if sampler is None:
+            sampler = Sampler.for_model(model, dataset, training=True,
+                                        seed=seed)
+        opts = TrainerOptions()
+        opts.update(**{k: options.pop(k) for k in
+                       ("checkpoint_path", "checkpoint_every")
+                       if k in options})
+        with model._using() as mp:
+            lib.nerf_trainer_options_for(ctypes.byref(opts), mp)
+        fields = opts.to_dict()
+        fields.update(options)
+        return cls(model, dataset, sampler, progress=progress, log=log,
+                   log_level=log_level, **fields)
+
     def step(self) -> TrainStats:
         """Take one optimisation step and return its figures
         (``nerf_trainer_step``).  A non-finite loss raises

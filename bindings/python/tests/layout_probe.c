@@ -86,6 +86,8 @@ static void structs(void)
     FIELD(nerf_model_options, density_activation);
     FIELD(nerf_model_options, matmul);
     FIELD(nerf_model_options, space);
+    FIELD(nerf_model_options, reserved2);
+    FIELD(nerf_model_options, learning_rate);
     end_struct();
 
     BEGIN(nerf_scene_options);
@@ -227,6 +229,8 @@ static void structs(void)
     FIELD(nerf_trainer_options, checksum_every);
     FIELD(nerf_trainer_options, reserved1);
     FIELD(nerf_trainer_options, checkpoint_seconds);
+    FIELD(nerf_trainer_options, render_march_steps);
+    FIELD(nerf_trainer_options, reserved2);
     end_struct();
 
     BEGIN(nerf_exchange);

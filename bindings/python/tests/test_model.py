@@ -58,7 +58,7 @@ class Create(TestCase):
 
     def test_options_struct(self):
         opts = nerf.ModelOptions(depth=3, seed=9)
-        self.assertEqual(opts.struct_size, 120)
+        self.assertEqual(opts.struct_size, 128)
         d = opts.to_dict()
         self.assertEqual((d["depth"], d["seed"]), (3, 9))
         self.assertNotIn("struct_size", d)
@@ -72,8 +72,9 @@ class Create(TestCase):
 class Params(TestCase):
     def test_set_get(self):
         with nerf.Model(preset="tiny") as m:
-            self.assertAlmostEqual(m.get_param("learning_rate"), 5e-4)
-            self.assertAlmostEqual(m.learning_rate, 5e-4)
+            # The tiny preset's rate (nerf_model_options_preset).
+            self.assertAlmostEqual(m.get_param("learning_rate"), 5e-3)
+            self.assertAlmostEqual(m.learning_rate, 5e-3)
             m.set_param("learning_rate", 1e-3)
             m.set_param(nerf.PARAM_LEARNING_RATE_FINAL, 1e-4)
             m.set_param("decay_steps", 100)
