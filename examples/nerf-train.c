@@ -197,7 +197,7 @@ typedef struct args {
     int lr_given; /* 1: --lr, 2: --lr-final */
     int batch_given, batch_samples_given;
     int random_bg; /* -1: as the preset's model */
-    int matmul;    /* nerf_matmul; -1: not given (default_matmul()) */
+    int matmul;    /* nerf_matmul; -1: not given (the fastest fp32) */
     int space;     /* nerf_space; -1: the dataset's */
     int64_t coarse, fine; /* samples a ray; -1: the preset's */
     int64_t render_march; /* --render-march-steps; 0: the library's */
