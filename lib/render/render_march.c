@@ -54,6 +54,12 @@ void nerf__march_state_bind(nerf__march_state *st,
     nerf__opacity_cut_init(&st->cut, model_env);
 }
 
+void nerf__batch_set_march_test(nerf__batch *b, const nerf__march_test *t)
+{
+    static const nerf__march_test none = {0};
+    b->marching.test = t ? *t : none;
+}
+
 /* The per-sample arrays for n samples (gradients too with keep). */
 static int reserve_packed(nerf__batch *b, size_t n, bool keep)
 {
@@ -131,7 +137,6 @@ void nerf__render_march_options(const nerf__render_setup *s,
     nerf__march_defaults(mo, g);
     mo->step = nerf__march_step(g->lo, g->hi, so->march_steps);
     mo->max_samples = so->max_samples;
-    mo->skip_empty = !s->march_everywhere;
     /* Ray first_ray + k draws its offset from the stream (seed, ray), as
      * every other per-ray draw; the trainer's rays are numbered across
      * steps, so each step draws afresh. */
@@ -140,6 +145,14 @@ void nerf__render_march_options(const nerf__render_setup *s,
     mo->iteration = 0;
     const nerf__space *space = nerf__model_space(s->model);
     mo->contract = space->kind == NERF__SPACE_CONTRACT ? space->inner : 0.0f;
+}
+
+/* The marcher's settings for a batch of b: the setup's, and a test's. */
+static void march_options(const nerf__batch *b, const nerf__render_setup *s,
+                          const nerf__occupancy *g, nerf__march_options *mo)
+{
+    nerf__render_march_options(s, g, mo);
+    mo->skip_empty = !b->marching.test.everywhere;
 }
 
 /* What the loops over rays and samples below read; each writes only the
@@ -238,7 +251,7 @@ static int forward(nerf__batch *b, const nerf__render_setup *s,
     }
     rc = nerf__model_forward(m, 0, &b->ws[0], total, st->points,
                              sample_directions(b, s, j), st->rgb, st->sigma);
-    if (rc == NERF_OK && s->march_zero_empty) {
+    if (rc == NERF_OK && st->test.zero_empty) {
         nerf__occupancy_zero_empty(nerf__model_grid(m), total, st->points,
                                    st->sigma);
     }
@@ -310,7 +323,7 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, st->points);
     rc = nerf__opacity_cut_run(
         &st->cut, m, ms, st->points,
-        s->march_zero_empty ? nerf__model_grid(m) : NULL,
+        st->test.zero_empty ? nerf__model_grid(m) : NULL,
         NERF__COMPOSITE_EPS_DEFAULT, st->ray_count, ws->enc_pos);
     if (rc != NERF_OK) {
         return rc;
@@ -349,7 +362,7 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
     nerf__march_samples *ms = &st->samples;
     const nerf__occupancy *g = nerf__model_grid(s->model);
     nerf__march_options mo;
-    nerf__render_march_options(s, g, &mo);
+    march_options(b, s, g, &mo);
     int rc = nerf__march_run(g, &mo, all, ms);
     /* The rays kept: a prefix, so their draws are the same as without a
      * budget. */
@@ -460,7 +473,7 @@ static int evaluate_used(nerf__batch *b, const nerf__render_setup *s,
     ws->params_unchanged = same_params;
     rc = nerf__model_head(m, 0, ws, total, st->points, st->sigma);
     if (rc == NERF_OK) {
-        if (s->march_zero_empty) {
+        if (st->test.zero_empty) {
             nerf__occupancy_zero_empty(nerf__model_grid(m), total,
                                        st->points, st->sigma);
         }
@@ -512,7 +525,7 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         return rc;
     }
     nerf__march_options mo;
-    nerf__render_march_options(s, g, &mo);
+    march_options(b, s, g, &mo);
     march_job j = {.b = b, .viewdir = st->active_view,
                    .max_samples = mo.max_samples, .mo = &mo};
     size_t n_active = n;

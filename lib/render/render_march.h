@@ -23,6 +23,18 @@
 struct nerf__batch;
 
 /*
+ * For tests that compare skipping with references, not a setting of the
+ * setup: place samples in empty cells too (everywhere), and give the
+ * samples in empty cells density 0 (zero_empty), which is what skipping
+ * them amounts to.  All false unless a test sets them, through
+ * nerf__batch_set_march_test() or nerf__renderer_set_march_test().
+ */
+typedef struct nerf__march_test {
+    bool everywhere;
+    bool zero_empty;
+} nerf__march_test;
+
+/*
  * The marching engine's part of a batch.  Buffers grow on demand and are
  * reused.  After a batch that took this engine the fields up to `private`
  * describe it.
@@ -40,6 +52,7 @@ typedef struct nerf__march_state {
     float *d_rgb, *d_sigma;         /* [samples.total, 3 / 1] */
     nerf__opacity_cut cut;          /* a training batch's */
     /* private */
+    nerf__march_test test;
     float bg[3];                    /* white, for white_background */
     size_t cap_packed, cap_rays;
     bool cap_packed_keep;
@@ -62,6 +75,11 @@ void nerf__march_state_release(nerf__march_state *ms, const nerf__env *env);
 void nerf__march_state_bind(nerf__march_state *ms,
                             const nerf__env *model_env);
 
+/* Tests: b marches with *t from now on, until its release (NULL: as
+ * outside tests). */
+void nerf__batch_set_march_test(struct nerf__batch *b,
+                                const nerf__march_test *t);
+
 /*
  * The engine, which nerf__render_batch() and its backward hand over to
  * when the sampler marches.  The rays have been checked.
@@ -76,10 +94,10 @@ int nerf__render_march_backward(struct nerf__batch *b, nerf_model *m,
 
 /*
  * What the engine hands the marcher for setup s: its settings for the
- * sampler and grid g (training jitters, and skips empty cells unless
- * march_everywhere), and the n_rays rays with the sampler's bounds and
- * s's ray numbering.  Exposed so that a benchmark replays a step's march
- * with the step's own settings.
+ * sampler and grid g (training jitters, and empty cells are skipped
+ * unless a test says otherwise), and the n_rays rays with the sampler's
+ * bounds and s's ray numbering.  Exposed so that a benchmark replays a
+ * step's march with the step's own settings.
  */
 void nerf__render_march_options(const nerf__render_setup *s,
                                 const nerf__occupancy *g,

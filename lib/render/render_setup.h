@@ -39,10 +39,6 @@ typedef struct nerf__render_setup {
     const float *noise[NERF__PASSES];
     /* Keep activations, samples and weights for the backward pass. */
     bool keep;
-    /* Marching only, for tests that compare skipping with references:
-     * place samples in empty cells too, and (zero_empty) give the samples
-     * in empty cells density 0, which is what skipping them amounts to. */
-    bool march_everywhere, march_zero_empty;
     /* Training with nerf_trainer_options.batch_samples: take the first
      * rays of the batch whose samples reach this many (at least one ray;
      * 0: all).  The batch's n_rays says how many were taken. */

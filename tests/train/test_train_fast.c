@@ -204,10 +204,11 @@ TEST(skipping_is_rendering_empty_cells_as_empty)
     float *all = malloc(n * sizeof(float));
     nerf_renderer *r = make_renderer(trained, sampler);
     double p_skip = fixture_renderer_psnr(r, fx.test, skip);
-    r->march_everywhere = true;
-    r->march_zero_empty = true;
+    nerf__march_test test = {.everywhere = true, .zero_empty = true};
+    CHECK_OK(nerf__renderer_set_march_test(r, &test));
     fixture_renderer_psnr(r, fx.test, zero);
-    r->march_zero_empty = false;
+    test.zero_empty = false;
+    CHECK_OK(nerf__renderer_set_march_test(r, &test));
     double p_all = fixture_renderer_psnr(r, fx.test, all);
     double mean_zero, mean_all;
     double worst_zero = diff(skip, zero, n, &mean_zero);
@@ -266,7 +267,8 @@ TEST(no_sample_in_an_empty_cell)
     out[0].rgb = rgb;
     size_t marched[2] = {0, 0};
     for (int everywhere = 0; everywhere < 2; everywhere++) {
-        s.march_everywhere = everywhere != 0;
+        nerf__march_test test = {.everywhere = everywhere != 0};
+        nerf__batch_set_march_test(&b, &test);
         CHECK_OK(nerf__render_batch(&b, &s, RAYS, o, d, out));
         marched[everywhere] = b.marching.samples.total;
         size_t empty = 0;
