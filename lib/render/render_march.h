@@ -67,12 +67,12 @@ typedef struct nerf__march_state {
     float *active_o, *active_d, *active_view;
 } nerf__march_state;
 
-void nerf__march_state_init(nerf__march_state *ms, const nerf__env *env);
-/* Free what ms holds (env: the batch's allocator, which made it). */
-void nerf__march_state_release(nerf__march_state *ms, const nerf__env *env);
+void nerf__march_state_init(nerf__march_state *st, const nerf__env *env);
+/* Free what st holds (env: the batch's allocator, which made it). */
+void nerf__march_state_release(nerf__march_state *st, const nerf__env *env);
 /* Start the model-bound scratch (the opacity cut's) afresh with the
  * allocator of another model. */
-void nerf__march_state_bind(nerf__march_state *ms,
+void nerf__march_state_bind(nerf__march_state *st,
                             const nerf__env *model_env);
 
 /* Tests: b marches with *t from now on, until its release (NULL: as

@@ -80,7 +80,7 @@ int nerf__renderer_run(nerf_renderer *r, size_t n, nerf__chunk_fn fn,
 void nerf__renderer_eval_setup(const nerf_renderer *r,
                                nerf__render_setup *s);
 
-/* Tests: every batch the renderer renders with marches with *t (NULL: as
+/* Tests: the renderer's workers march with *t from now on (NULL: as
  * outside tests); see nerf__march_test. */
 int nerf__renderer_set_march_test(nerf_renderer *r,
                                   const nerf__march_test *t);
