@@ -22,15 +22,18 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
 {
     nerf_model *m = t->model;
     nerf__batch *b = &t->batch;
+    /* What the step's marching engine left: its packed samples. */
+    nerf__march_state *mb = &b->marching;
+    const nerf__march_samples *bs = &mb->samples;
     const nerf__network *net = &m->nets[0];
     nerf__occupancy *g = m->grid;
     memset(bd, 0, sizeof *bd);
-    if (!b->marched || !b->kept || b->march.total == 0 || g == NULL ||
+    if (!b->marched || !b->kept || bs->total == 0 || g == NULL ||
         net->pos_enc.kind != NERF_ENCODING_HASHGRID || !net->use_viewdirs ||
         net->dir_enc.kind != NERF_ENCODING_SPHERICAL_HARMONICS) {
         return -1;
     }
-    const size_t n = b->march.total, B = b->n_rays;
+    const size_t n = bs->total, B = b->n_rays;
     const uint64_t step = m->step; /* the Adam rounds below advance it */
     bd->rays = B;
     bd->samples = n;
@@ -64,8 +67,8 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
      * it in its total and in each ray's first sample. */
     bool same = ms.total == b->n_evaluated && ms.n_rays == B;
     for (size_t k = 0; same && k < B; k++) {
-        same = b->march.offsets[k + 1] == b->march.offsets[k] ||
-               ms.t[ms.offsets[k]] == b->march.t[b->march.offsets[k]];
+        same = bs->offsets[k + 1] == bs->offsets[k] ||
+               ms.t[ms.offsets[k]] == bs->t[bs->offsets[k]];
     }
     for (size_t i = 0; i < n * net->pos_width; i++) {
         d_enc[i] = 1e-3f * (float)(i % 7);
@@ -122,16 +125,16 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
         a = c;
         /* The encodings as the network runs them, on their own. */
         nerf__encoding_forward(&net->pos_enc, m->params + net->pos_params, n,
-                               b->march_points, enc, net->pos_width);
+                               mb->points, enc, net->pos_width);
         c = now();
         bd->hash_fw += c - a;
         a = c;
-        nerf__encoding_backward(&net->pos_enc, n, b->march_points, d_enc,
+        nerf__encoding_backward(&net->pos_enc, n, mb->points, d_enc,
                                 net->pos_width, m->grads + net->pos_params);
         c = now();
         bd->hash_bw += c - a;
         a = c;
-        nerf__encoding_forward(&net->dir_enc, NULL, n, b->m_dirs, sh,
+        nerf__encoding_forward(&net->dir_enc, NULL, n, mb->dirs, sh,
                                net->dir_width);
         c = now();
         bd->sh_fw += c - a;
@@ -147,24 +150,24 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
         c = now();
         bd->zero_grad += c - a;
         a = c;
-        rc = nerf__model_forward(m, 0, &b->ws[0], n, b->march_points,
-                                 b->m_dirs, b->m_rgb, b->m_sigma);
+        rc = nerf__model_forward(m, 0, &b->ws[0], n, mb->points,
+                                 mb->dirs, mb->rgb, mb->sigma);
         if (rc != NERF_OK) {
             goto done;
         }
         c = now();
         bd->net_fw += c - a;
         a = c;
-        nerf__composite_packed(&b->packed, &po);
+        nerf__composite_packed(&mb->packed, &po);
         c = now();
         bd->composite_fw += c - a;
         a = c;
-        nerf__composite_packed_backward(&b->packed, t->d_rgb[0], NULL, NULL,
-                                        b->m_d_rgb, b->m_d_sigma);
+        nerf__composite_packed_backward(&mb->packed, t->d_rgb[0], NULL, NULL,
+                                        mb->d_rgb, mb->d_sigma);
         c = now();
         bd->composite_bw += c - a;
         a = c;
-        nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+        nerf__model_backward(m, 0, &b->ws[0], mb->d_rgb, mb->d_sigma);
         c = now();
         bd->net_bw += c - a;
         if (round == 0) {

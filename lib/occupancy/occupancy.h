@@ -230,7 +230,7 @@ static inline bool nerf__occupancy_occupied(const nerf__occupancy *g,
 
 /* sigma[i] = 0 for each of the n points (points: [n, 3]) in a cell g
  * marks empty: what a march that skips those cells would have given them
- * (rendering's and training's march_zero_empty). */
+ * (the marching render's test setting zero_empty). */
 void nerf__occupancy_zero_empty(const nerf__occupancy *g, size_t n,
                                 const float *points, float *sigma);
 

@@ -1,18 +1,16 @@
-/* A batch of rays through sampling, both networks and compositing. */
+/*
+ * A render batch: the part both engines share, and the choice of engine
+ * (render_stratified.c, render_march.c).
+ */
 #include "render_batch.h"
 
-#include <math.h>
 #include <string.h>
-
-#include "composite.h"
-#include "ndc.h"
-#include "parallel.h"
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env)
 {
     memset(b, 0, sizeof *b);
     b->env = *env;
-    nerf__march_samples_init(&b->march, env);
+    nerf__march_state_init(&b->marching, env);
 }
 
 void nerf__batch_release(nerf__batch *b)
@@ -20,9 +18,9 @@ void nerf__batch_release(nerf__batch *b)
     for (int p = 0; p < NERF__PASSES; p++) {
         nerf__workspace_release(&b->ws_env, &b->ws[p]);
     }
-    nerf__render_march_release(b);
-    nerf__opacity_cut_release(&b->cut);
-    nerf__free(&b->env, b->block);
+    nerf__stratified_release(&b->stratified, &b->env);
+    nerf__march_state_release(&b->marching, &b->env);
+    nerf__free(&b->env, b->ray_block);
     nerf__env env = b->env;
     nerf__batch_init(b, &env);
 }
@@ -57,277 +55,42 @@ int nerf__render_check_pair(const nerf_model *m, const nerf_sampler *s,
     return NERF_OK;
 }
 
-/* Size the per-ray and per-sample arrays; workspaces are sized later. */
-static int reserve(nerf__batch *b, size_t n, uint32_t n_c, uint32_t n_f,
-                   bool keep)
+/* The per-ray arrays: the rays sampled, their view directions and
+ * lengths. */
+static int reserve_rays(nerf__batch *b, size_t n)
 {
-    if (b->block && n <= b->cap_rays && n_c <= b->cap_c && n_f <= b->cap_f &&
-        (b->cap_keep || !keep)) {
+    if (b->ray_block && n <= b->cap_rays) {
         return NERF_OK;
     }
-    const size_t s0 = n_c, s1 = (size_t)n_c + n_f;
     /* Guard the products below: n is bounded by the callers, but a size
      * computation must never wrap. */
-    if (n > ((size_t)1 << 30) / (s1 * 4 + 16)) {
-        return nerf__error(NERF_EINVAL, "render batch of %zu rays x %zu "
-                           "samples is too large", n, s1);
+    if (n > ((size_t)1 << 30) / 16) {
+        return nerf__error(NERF_EINVAL, "render batch of %zu rays is too "
+                           "large", n);
     }
-    float **slots[] = {
-        &b->ray_o, &b->ray_d, &b->viewdir, &b->dir_norm,
-        &b->t[0], &b->t[1], &b->weights[0], &b->weights[1],
-        &b->rgb[0], &b->rgb[1], &b->sigma[0], &b->sigma[1],
-        &b->points, &b->dirs, &b->scratch, &b->d_rgb, &b->d_sigma,
-    };
-    size_t bytes[] = {
-        3 * n, 3 * n, 3 * n, n,
-        n * s0, n * s1, n * s0, n * s1,
-        3 * n * s0, 3 * n * s1, n * s0, n * s1,
-        3 * n * s1, 3 * n * s1, n * nerf__sample_fine_scratch(n_c, n_f),
-        keep ? 3 * n * s1 : 0, keep ? n * s1 : 0,
-    };
+    float **slots[] = {&b->ray_o, &b->ray_d, &b->viewdir, &b->dir_norm};
+    const size_t f = sizeof(float);
+    const size_t bytes[] = {3 * n * f, 3 * n * f, 3 * n * f, n * f};
     const size_t count = sizeof bytes / sizeof bytes[0];
-    for (size_t i = 0; i < count; i++) {
-        bytes[i] *= sizeof(float);
-    }
     unsigned char *block = nerf__alloc(&b->env,
                                        nerf__carve_size(bytes, count));
     if (block == NULL) {
         return NERF_ENOMEM;
     }
-    nerf__free(&b->env, b->block);
-    b->block = block;
+    nerf__free(&b->env, b->ray_block);
+    b->ray_block = block;
     for (size_t i = 0; i < count; i++) {
         *slots[i] = nerf__carve(&block, bytes[i]);
     }
     b->cap_rays = n;
-    b->cap_c = n_c;
-    b->cap_f = n_f;
-    b->cap_keep = keep;
     return NERF_OK;
 }
 
-/*
- * Every loop below works ray by ray, each ray writing only its own rows, so
- * they run over the thread pool in ranges of rays; a job carries the batch,
- * the setup and the pass.
- */
-typedef struct batch_job {
-    nerf__batch *b;
-    const nerf__render_setup *s;
-    const float *o, *d; /* the caller's rays */
-    int pass;
-    bool random, with_dirs;
-    const nerf__space *space; /* the model's */
-    const nerf__pass_out *out;
-    const float *d_rgb, *d_depth, *d_opacity;
-} batch_job;
-
-/* View directions (unit, before any warp), the rays actually sampled, and
- * their lengths. */
-static void prepare_rays(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const nerf__render_setup *s = j->s;
-    for (size_t k = begin; k < end; k++) {
-        const float *dk = j->d + 3 * k;
-        float len = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
-        for (int c = 0; c < 3; c++) {
-            b->viewdir[3 * k + c] = dk[c] / len;
-        }
-    }
-    const size_t n = end - begin;
-    if (s->sampler->opts.ndc) {
-        /* The reference puts the NDC near plane at world depth 1. */
-        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f, n,
-                       j->o + 3 * begin, j->d + 3 * begin,
-                       b->ray_o + 3 * begin, b->ray_d + 3 * begin);
-    } else {
-        memcpy(b->ray_o + 3 * begin, j->o + 3 * begin, 3 * n * sizeof(float));
-        memcpy(b->ray_d + 3 * begin, j->d + 3 * begin, 3 * n * sizeof(float));
-    }
-    for (size_t k = begin; k < end; k++) {
-        const float *dk = b->ray_d + 3 * k;
-        b->dir_norm[k] = sqrtf(dk[0] * dk[0] + dk[1] * dk[1] + dk[2] * dk[2]);
-    }
-}
-
-static void sample_coarse(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    const nerf__render_setup *s = j->s;
-    const nerf_sampler_options *so = &s->sampler->opts;
-    const uint32_t n_c = so->n_coarse;
-    for (size_t k = begin; k < end; k++) {
-        nerf__rng rng = nerf__ray_rng(so->seed, NERF__STREAM_STRATIFIED,
-                                      s->first_ray + k);
-        nerf__sample_stratified(so, j->random,
-                                s->u_coarse ? s->u_coarse + k * n_c : NULL,
-                                &rng, j->b->t[0] + k * n_c);
-    }
-}
-
-static void sample_fine(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const nerf__render_setup *s = j->s;
-    const nerf_sampler_options *so = &s->sampler->opts;
-    const uint32_t n_c = so->n_coarse, n_f = so->n_fine;
-    const size_t scratch = nerf__sample_fine_scratch(n_c, n_f);
-    for (size_t k = begin; k < end; k++) {
-        nerf__rng rng = nerf__ray_rng(so->seed, NERF__STREAM_HIERARCHICAL,
-                                      s->first_ray + k);
-        nerf__sample_fine_ray(n_c, n_f, b->t[0] + k * n_c,
-                              b->weights[0] + k * n_c, j->random,
-                              s->u_fine ? s->u_fine + k * n_f : NULL, &rng,
-                              b->scratch + k * scratch,
-                              b->t[1] + k * (n_c + n_f));
-    }
-}
-
-/* Network inputs of one pass: o + d t and the ray's view direction. */
-static void fill_points(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const uint32_t m = b->n_samples[j->pass];
-    const float *t = b->t[j->pass];
-    const bool with_dirs = j->with_dirs;
-    /* An unbounded model works on contracted points; the others take the
-     * points as they are. */
-    const bool contract = j->space->kind == NERF__SPACE_CONTRACT;
-    for (size_t k = begin; k < end; k++) {
-        const float *o = b->ray_o + 3 * k, *d = b->ray_d + 3 * k;
-        for (uint32_t i = 0; i < m; i++) {
-            size_t at = k * m + i;
-            float ti = t[at];
-            for (int c = 0; c < 3; c++) {
-                b->points[3 * at + c] = o[c] + d[c] * ti;
-            }
-            if (contract) {
-                nerf__space_to_domain(j->space, b->points + 3 * at,
-                                      b->points + 3 * at);
-            }
-            if (with_dirs) {
-                memcpy(b->dirs + 3 * at, b->viewdir + 3 * k, 3 * sizeof(float));
-            }
-        }
-    }
-}
-
-static int run_network(nerf__batch *b, const nerf__render_setup *s, int pass,
-                       size_t count)
+int nerf__batch_begin(nerf__batch *b, const nerf__render_setup *s,
+                      size_t n_rays)
 {
     const nerf_model *m = s->model;
-    const int net = b->net[pass];
-    const float *dirs = nerf__model_uses_viewdirs(m) ? b->dirs : NULL;
-    if (s->keep) {
-        /* The model sizes the workspace and keeps every activation. */
-        return nerf__model_forward(m, net, &b->ws[pass], count, b->points,
-                                   dirs, b->rgb[pass], b->sigma[pass]);
-    }
-    /* Evaluation needs no activations after the pass: one lean workspace
-     * serves both passes. */
-    return nerf__model_evaluate(m, net, &b->ws[0], count, b->points, dirs,
-                                b->rgb[pass], b->sigma[pass]);
-}
-
-static bool has_noise(const nerf__render_setup *s, int pass)
-{
-    return s->noise[pass] || (s->training && s->noise_std > 0.0f);
-}
-
-static void add_noise(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const nerf__render_setup *s = j->s;
-    const int pass = j->pass;
-    const uint32_t m = b->n_samples[pass];
-    float *sigma = b->sigma[pass];
-    if (s->noise[pass]) {
-        for (size_t i = begin * m; i < end * m; i++) {
-            sigma[i] += s->noise[pass][i];
-        }
-        return;
-    }
-    const uint32_t purpose = pass == 0 ? NERF__STREAM_NOISE_COARSE
-                                       : NERF__STREAM_NOISE_FINE;
-    for (size_t k = begin; k < end; k++) {
-        nerf__rng rng = nerf__ray_rng(s->sampler->opts.seed, purpose,
-                                      s->first_ray + k);
-        for (uint32_t i = 0; i < m; i++) {
-            sigma[k * m + i] += (float)nerf__rng_normal(&rng) * s->noise_std;
-        }
-    }
-}
-
-/* The background ray k is finished on (NULL: black). */
-static const float *ray_background(const nerf__batch *b, size_t k)
-{
-    static const float white[3] = {1.0f, 1.0f, 1.0f};
-    return b->ray_bg ? b->ray_bg + 3 * k : b->white ? white : NULL;
-}
-
-static void composite_pass(void *ctx, size_t begin, size_t end)
-{
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const int pass = j->pass;
-    const nerf__pass_out *out = j->out;
-    const uint32_t m = b->n_samples[pass];
-    for (size_t k = begin; k < end; k++) {
-        nerf__ray_out r;
-        size_t at = k * m;
-        nerf__composite_ray_bg(m, b->t[pass] + at, b->dir_norm[k],
-                               b->rgb[pass] + 3 * at, b->sigma[pass] + at,
-                               ray_background(b, k), b->weights[pass] + at,
-                               &r);
-        if (out == NULL) {
-            continue;
-        }
-        if (out->rgb) {
-            memcpy(out->rgb + 3 * k, r.rgb, sizeof r.rgb);
-        }
-        if (out->depth) {
-            out->depth[k] = r.depth;
-        }
-        if (out->disparity) {
-            out->disparity[k] = r.disparity;
-        }
-        if (out->opacity) {
-            out->opacity[k] = r.opacity;
-        }
-    }
-}
-
-int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
-                       size_t n_rays, const float *origins,
-                       const float *directions,
-                       const nerf__pass_out out[NERF__PASSES])
-{
-    const nerf_model *m = s->model;
-    const nerf_sampler_options *so = &s->sampler->opts;
-    const bool march = nerf__sampler_marches(s->sampler);
-    /* Marching needs only the per-ray arrays of the block. */
-    const uint32_t n_c = march ? 0 : so->n_coarse;
-    const uint32_t n_f = march ? 0 : so->n_fine;
-    b->kept = false;
-    b->marched = false;
-    b->n_rays = 0;
-    b->n_evaluated = 0;
-    if (march && nerf__model_grid(m) == NULL) {
-        return nerf__error(NERF_EINVAL, "render: the sampler marches through "
-                           "an occupancy grid, which this model has not");
-    }
-    if (!march && s->sample_budget > 0) {
-        /* Every ray has the same count: the budget is a number of rays. */
-        const size_t per_ray = n_c + (n_f > 0 ? (size_t)n_c + n_f : 0);
-        const size_t fit = (s->sample_budget + per_ray - 1) / per_ray;
-        n_rays = fit < n_rays ? fit : n_rays;
-    }
-    int rc = reserve(b, n_rays, n_c, n_f, s->keep);
+    int rc = reserve_rays(b, n_rays);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -337,76 +100,29 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
         for (int p = 0; p < NERF__PASSES; p++) {
             nerf__workspace_release(&b->ws_env, &b->ws[p]);
         }
-        nerf__opacity_cut_release(&b->cut);
         b->ws_env = *nerf__model_env(m);
-        nerf__opacity_cut_init(&b->cut, &b->ws_env);
+        nerf__march_state_bind(&b->marching, &b->ws_env);
         b->model = m;
     }
     b->n_rays = n_rays;
     b->white = s->white_background;
     b->ray_bg = s->background;
-    if (march) {
-        b->n_pass = 1;
-        b->n_samples[0] = b->n_samples[1] = 0;
-        b->net[0] = b->net[1] = 0;
-        b->marched = true;
-        return nerf__render_march(b, s, n_rays, origins, directions, out);
-    }
-    b->n_pass = n_f > 0 ? 2 : 1;
-    b->n_samples[0] = n_c;
-    b->n_samples[1] = n_c + n_f;
-    b->net[0] = 0;
-    int fine = nerf__model_network(m, NERF_NETWORK_FINE);
-    b->net[1] = fine >= 0 ? fine : 0;
-    if (n_rays == 0) {
-        return NERF_OK;
-    }
-    batch_job j = {.b = b, .s = s, .o = origins, .d = directions,
-                   .random = s->training && so->perturb,
-                   .with_dirs = nerf__model_uses_viewdirs(m),
-                   .space = nerf__model_space(m)};
-    /* Rough operations per ray of each loop, to decide whether it is worth
-     * waking the pool. */
-    nerf__parallel_for(n_rays, 32, prepare_rays, &j);
-    nerf__parallel_for(n_rays, 8 * n_c, sample_coarse, &j);
-    for (uint32_t pass = 0; pass < b->n_pass; pass++) {
-        const uint32_t samples = b->n_samples[pass];
-        j.pass = (int)pass;
-        j.out = out ? &out[pass] : NULL;
-        if (pass == 1) {
-            nerf__parallel_for(n_rays, 128 * (n_c + n_f), sample_fine, &j);
-        }
-        nerf__parallel_for(n_rays, 6 * samples, fill_points, &j);
-        rc = run_network(b, s, (int)pass, n_rays * samples);
-        if (rc != NERF_OK) {
-            return rc;
-        }
-        if (has_noise(s, (int)pass)) {
-            nerf__parallel_for(n_rays, 40 * samples, add_noise, &j);
-        }
-        nerf__parallel_for(n_rays, 40 * samples, composite_pass, &j);
-        b->n_evaluated += n_rays * samples;
-    }
-    b->kept = s->keep;
     return NERF_OK;
 }
 
-static void composite_backward(void *ctx, size_t begin, size_t end)
+int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
+                       size_t n_rays, const float *origins,
+                       const float *directions,
+                       const nerf__pass_out out[NERF__PASSES])
 {
-    const batch_job *j = ctx;
-    nerf__batch *b = j->b;
-    const int pass = j->pass;
-    const uint32_t s = b->n_samples[pass];
-    for (size_t k = begin; k < end; k++) {
-        size_t at = k * s;
-        nerf__composite_ray_backward_bg(
-            s, b->t[pass] + at, b->dir_norm[k], b->rgb[pass] + 3 * at,
-            b->sigma[pass] + at, ray_background(b, k),
-            j->d_rgb ? j->d_rgb + 3 * k : NULL,
-            j->d_depth ? j->d_depth[k] : 0.0f,
-            j->d_opacity ? j->d_opacity[k] : 0.0f, b->d_rgb + 3 * at,
-            b->d_sigma + at);
+    b->kept = false;
+    b->marched = false;
+    b->n_rays = 0;
+    b->n_evaluated = 0;
+    if (nerf__sampler_marches(s->sampler)) {
+        return nerf__render_march(b, s, n_rays, origins, directions, out);
     }
+    return nerf__render_stratified(b, s, n_rays, origins, directions, out);
 }
 
 int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
@@ -423,22 +139,5 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
                                            d_depth ? d_depth[0] : NULL,
                                            d_opacity ? d_opacity[0] : NULL);
     }
-    for (uint32_t pass = 0; pass < b->n_pass; pass++) {
-        const float *gr = d_rgb ? d_rgb[pass] : NULL;
-        const float *gd = d_depth ? d_depth[pass] : NULL;
-        const float *go = d_opacity ? d_opacity[pass] : NULL;
-        if (gr == NULL && gd == NULL && go == NULL) {
-            continue;
-        }
-        batch_job j = {.b = b, .pass = (int)pass, .d_rgb = gr, .d_depth = gd,
-                       .d_opacity = go};
-        nerf__parallel_for(b->n_rays, 60 * b->n_samples[pass],
-                           composite_backward, &j);
-        int rc = nerf__model_backward(m, b->net[pass], &b->ws[pass],
-                                      b->d_rgb, b->d_sigma);
-        if (rc != NERF_OK) {
-            return rc;
-        }
-    }
-    return NERF_OK;
+    return nerf__render_stratified_backward(b, m, d_rgb, d_depth, d_opacity);
 }

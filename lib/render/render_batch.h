@@ -1,12 +1,15 @@
 /*
- * One batch of rays through the whole method: sampling, the coarse
- * network, compositing, hierarchical sampling, the fine network and
- * compositing again.  The image renderer calls it on blocks of pixels; the
- * trainer calls it on its batch of random rays with `keep` set, then calls
- * nerf__render_batch_backward() with the loss gradients of its outputs.
+ * One batch of rays through the whole method.  The image renderer calls it
+ * on blocks of pixels; the trainer calls it on its batch of random rays
+ * with `keep` set, then calls nerf__render_batch_backward() with the loss
+ * gradients of its outputs.
  *
- * With a marching sampler (march_steps > 0) the batch takes the fast path
- * instead (render_march.c): one pass of samples marched through the
+ * Two engines do the work, each with its own part of the batch beside the
+ * part they share.  The stratified one (render_stratified.h) is the
+ * reference's method: sampling, the coarse network, compositing,
+ * hierarchical sampling, the fine network and compositing again.  With a
+ * marching sampler (march_steps > 0) the batch takes the marching one
+ * instead (render_march.h): one pass of samples marched through the
  * model's occupancy grid, packed (a variable number per ray), the network
  * on the packed samples, and compositing with early termination.  With
  * `keep` (training) every ray is marched in full at once, a density pass
@@ -22,110 +25,43 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "composite_packed.h"
-#include "march.h"
 #include "model.h"
-#include "opacity_cut.h"
+#include "render_march.h"
+#include "render_setup.h"
+#include "render_stratified.h"
 #include "sampler.h"
 
-/* Pass 0 is the coarse pass, pass 1 the fine one (absent when n_fine = 0). */
-#define NERF__PASSES 2
-
-typedef struct nerf__render_setup {
-    const nerf_model *model;
-    const nerf_sampler *sampler;
-    /* Training: jittered and random samples (when the sampler's perturb is
-     * set) and Gaussian noise of std noise_std on raw density.  Otherwise
-     * everything is deterministic. */
-    bool training;
-    float noise_std;
-    bool white_background;
-    /* The NDC frustum, used when the sampler has ndc set. */
-    float ndc_focal, ndc_width, ndc_height;
-    /* Ray k draws from the streams of ray first_ray + k. */
-    uint64_t first_ray;
-    /* Draws supplied by the caller instead of the generator's (each may be
-     * NULL): uniforms for the stratified jitter [n_rays, n_coarse] and the
-     * hierarchical samples [n_rays, n_fine], and the values added to raw
-     * density [n_rays, samples of the pass] (already scaled, used even if
-     * noise_std is 0). */
-    const float *u_coarse;
-    const float *u_fine;
-    const float *noise[NERF__PASSES];
-    /* Keep activations, samples and weights for the backward pass. */
-    bool keep;
-    /* Marching only, for tests that compare skipping with references:
-     * place samples in empty cells too, and (zero_empty) give the samples
-     * in empty cells density 0, which is what skipping them amounts to. */
-    bool march_everywhere, march_zero_empty;
-    /* Training with nerf_trainer_options.batch_samples: take the first
-     * rays of the batch whose samples reach this many (at least one ray;
-     * 0: all).  The batch's n_rays says how many were taken. */
-    size_t sample_budget;
-    /* Training with nerf_trainer_options.random_background: ray k is
-     * finished on the colour background + 3 k (both paths, forward and
-     * backward) instead of white_background's.  It must stay unchanged
-     * until the backward.  NULL: white_background. */
-    const float *background;
-} nerf__render_setup;
-
-/* Outputs of one pass; any pointer may be NULL. */
-typedef struct nerf__pass_out {
-    float *rgb;       /* [n_rays, 3] */
-    float *depth;     /* [n_rays] */
-    float *disparity; /* [n_rays] */
-    float *opacity;   /* [n_rays] */
-} nerf__pass_out;
-
 /*
- * Scratch and state of one batch.  Buffers grow on demand and are reused,
- * so a caller that keeps one batch per worker allocates only on its first
- * call.  After nerf__render_batch() the fields below describe the batch
- * (t and weights stay valid until the next call).
+ * Scratch and state of one batch: a part both engines share and each
+ * engine's own.  Buffers grow on demand and are reused, so a caller that
+ * keeps one batch per worker allocates only on its first call.  After
+ * nerf__render_batch() the fields up to `private` describe the batch, and
+ * so does the part of the engine it took (marched says which).
  */
 typedef struct nerf__batch {
     nerf__env env;
     size_t n_rays;                  /* as asked, or fewer (sample_budget) */
     uint32_t n_pass;
-    uint32_t n_samples[NERF__PASSES];
+    uint32_t n_samples[NERF__PASSES]; /* per ray; 0 when marched */
     int net[NERF__PASSES];          /* network index of each pass */
-    float *t[NERF__PASSES];         /* [n_rays, n_samples] */
-    float *weights[NERF__PASSES];   /* [n_rays, n_samples] */
-    float *rgb[NERF__PASSES];       /* [n_rays * n_samples, 3] */
-    float *sigma[NERF__PASSES];     /* [n_rays * n_samples], noise added */
     float *dir_norm;                /* [n_rays], |d| of the sampled rays */
     /* Network evaluations of the last batch, all passes and pieces (with
      * marching and keep, the density pass's: every marched sample). */
     size_t n_evaluated;
-    /* Marching: the packed samples of the last batch (with keep, each
-     * ray's up to where it turns opaque; otherwise the last piece's), and
-     * their points. */
-    nerf__march_samples march;
-    float *march_points;            /* [march.total, 3] */
-    /* private */
+    bool marched;                   /* the last batch took marching */
+    bool kept;                      /* and kept its state for a backward */
+    /* The network's workspace of each pass (marching: ws[0] alone). */
+    nerf__workspace ws[NERF__PASSES];
+    nerf__stratified_state stratified; /* render_stratified.h */
+    nerf__march_state marching;        /* render_march.h */
+    /* private, both engines */
     const nerf_model *model;
-    bool white, kept;
+    nerf__env ws_env;               /* the model's, the workspaces' */
+    bool white;
     const float *ray_bg;            /* setup's background */
     size_t cap_rays;
-    uint32_t cap_c, cap_f;
-    bool cap_keep;
-    void *block;
-    float *ray_o, *ray_d, *viewdir, *points, *dirs, *scratch;
-    float *d_rgb, *d_sigma;
-    nerf__env ws_env;
-    nerf__workspace ws[NERF__PASSES];
-    /* private, marching (render_march.c) */
-    bool marched;                   /* the last batch took this path */
-    nerf__packed_batch packed;      /* what the backward composites */
-    float bg[3];
-    size_t cap_packed, cap_march_rays;
-    bool cap_packed_keep;
-    void *packed_block, *march_block;
-    float *m_dirs, *m_rgb, *m_sigma, *m_d_rgb, *m_d_sigma;
-    nerf__composite_state *m_state;      /* [n_rays] */
-    uint32_t *m_first, *m_count, *m_active, *m_act_first; /* [n_rays] */
-    float *m_o, *m_d, *m_view;           /* [n_rays, 3], rays going */
-    nerf__opacity_cut cut;               /* a training batch's */
+    void *ray_block;
+    float *ray_o, *ray_d, *viewdir; /* [n_rays, 3] */
 } nerf__batch;
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env);
@@ -159,32 +95,11 @@ int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,
                                 const float *const d_opacity[NERF__PASSES]);
 
 /*
- * The marching path (render_march.c), which nerf__render_batch() and its
- * backward hand over to when the sampler marches; only pass 0 is used.
- * The rays have been checked and b sized for n_rays per-ray values.
+ * For the engines: size the per-ray arrays for n_rays rays, bind b to s's
+ * model, and record the batch's rays and background.
  */
-int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
-                       size_t n_rays, const float *origins,
-                       const float *directions,
-                       const nerf__pass_out out[NERF__PASSES]);
-int nerf__render_march_backward(nerf__batch *b, nerf_model *m,
-                                const float *d_rgb, const float *d_depth,
-                                const float *d_opacity);
-void nerf__render_march_release(nerf__batch *b);
-
-/*
- * What the marching path hands the marcher for setup s: its settings for
- * the sampler and grid g (training jitters, and skips empty cells unless
- * march_everywhere), and the n_rays rays with the sampler's bounds and
- * s's ray numbering.  Exposed so that a benchmark replays a step's march
- * with the step's own settings.
- */
-void nerf__render_march_options(const nerf__render_setup *s,
-                                const nerf__occupancy *g,
-                                nerf__march_options *mo);
-nerf__march_rays nerf__render_march_rays(const nerf__render_setup *s,
-                                         size_t n_rays, const float *origins,
-                                         const float *directions);
+int nerf__batch_begin(nerf__batch *b, const nerf__render_setup *s,
+                      size_t n_rays);
 
 /* Check, at renderer or trainer creation, that the sampler can work with
  * the model (a marching sampler needs the model's occupancy grid). */

@@ -1,16 +1,14 @@
 /*
- * The fast path of a render batch: samples marched through the model's
- * occupancy grid (march.h), the network on the packed samples, and
- * compositing with early termination (composite_packed.h).  See
+ * The marching engine of a render batch (render_march.h).  See
  * render_batch.h for when each of its two forms runs.
  */
+#include "render_march.h"
+
 #include <math.h>
 #include <string.h>
 
 #include "headroom.h"
 #include "ndc.h"
-#include "occupancy.h"
-#include "opacity_cut.h"
 #include "parallel.h"
 #include "render_batch.h"
 
@@ -34,22 +32,40 @@
 #define PIECE_MIN 4u
 #define PIECE_MAX 8u
 
-void nerf__render_march_release(nerf__batch *b)
+void nerf__march_state_init(nerf__march_state *st, const nerf__env *env)
 {
-    nerf__march_samples_release(&b->march);
-    nerf__free(&b->env, b->packed_block);
-    nerf__free(&b->env, b->march_block);
-    b->packed_block = b->march_block = NULL;
-    b->cap_packed = b->cap_march_rays = 0;
-    b->march_points = b->m_dirs = b->m_rgb = b->m_sigma = NULL;
-    b->m_d_rgb = b->m_d_sigma = NULL;
+    memset(st, 0, sizeof *st);
+    nerf__march_samples_init(&st->samples, env);
+}
+
+void nerf__march_state_release(nerf__march_state *st, const nerf__env *env)
+{
+    nerf__march_samples_release(&st->samples);
+    nerf__opacity_cut_release(&st->cut);
+    nerf__free(env, st->packed_block);
+    nerf__free(env, st->ray_block);
+    nerf__march_state_init(st, env);
+}
+
+void nerf__march_state_bind(nerf__march_state *st,
+                            const nerf__env *model_env)
+{
+    nerf__opacity_cut_release(&st->cut);
+    nerf__opacity_cut_init(&st->cut, model_env);
+}
+
+void nerf__batch_set_march_test(nerf__batch *b, const nerf__march_test *t)
+{
+    static const nerf__march_test none = {0};
+    b->marching.test = t ? *t : none;
 }
 
 /* The per-sample arrays for n samples (gradients too with keep). */
 static int reserve_packed(nerf__batch *b, size_t n, bool keep)
 {
-    if (b->packed_block && n <= b->cap_packed &&
-        (b->cap_packed_keep || !keep)) {
+    nerf__march_state *st = &b->marching;
+    if (st->packed_block && n <= st->cap_packed &&
+        (st->cap_packed_keep || !keep)) {
         return NERF_OK;
     }
     size_t cap = nerf__with_headroom(n);
@@ -57,8 +73,8 @@ static int reserve_packed(nerf__batch *b, size_t n, bool keep)
         return nerf__error(NERF_EINVAL, "render batch of %zu marched samples "
                            "is too large", n);
     }
-    float **slots[] = {&b->march_points, &b->m_dirs, &b->m_rgb, &b->m_sigma,
-                       &b->m_d_rgb, &b->m_d_sigma};
+    float **slots[] = {&st->points, &st->dirs, &st->rgb, &st->sigma,
+                       &st->d_rgb, &st->d_sigma};
     const size_t f = sizeof(float);
     const size_t bytes[] = {3 * cap * f, 3 * cap * f, 3 * cap * f, cap * f,
                             keep ? 3 * cap * f : 0, keep ? cap * f : 0};
@@ -68,20 +84,21 @@ static int reserve_packed(nerf__batch *b, size_t n, bool keep)
     if (block == NULL) {
         return NERF_ENOMEM;
     }
-    nerf__free(&b->env, b->packed_block);
-    b->packed_block = block;
+    nerf__free(&b->env, st->packed_block);
+    st->packed_block = block;
     for (size_t i = 0; i < count; i++) {
         *slots[i] = nerf__carve(&block, bytes[i]);
     }
-    b->cap_packed = cap;
-    b->cap_packed_keep = keep;
+    st->cap_packed = cap;
+    st->cap_packed_keep = keep;
     return NERF_OK;
 }
 
 /* The per-ray state of a render in pieces. */
 static int reserve_rays(nerf__batch *b, size_t n)
 {
-    if (b->march_block && n <= b->cap_march_rays) {
+    nerf__march_state *st = &b->marching;
+    if (st->ray_block && n <= st->cap_rays) {
         return NERF_OK;
     }
     const size_t bytes[] = {
@@ -94,21 +111,21 @@ static int reserve_rays(nerf__batch *b, size_t n)
     if (p == NULL) {
         return NERF_ENOMEM;
     }
-    nerf__free(&b->env, b->march_block);
-    b->march_block = p;
+    nerf__free(&b->env, st->ray_block);
+    st->ray_block = p;
     void *at[N_ARRAYS];
     for (size_t i = 0; i < N_ARRAYS; i++) {
         at[i] = nerf__carve(&p, bytes[i]);
     }
-    b->m_state = at[0];
-    b->m_first = at[1];
-    b->m_count = at[2];
-    b->m_active = at[3];
-    b->m_act_first = at[4];
-    b->m_o = at[5];
-    b->m_d = at[6];
-    b->m_view = at[7];
-    b->cap_march_rays = n;
+    st->ray_state = at[0];
+    st->ray_first = at[1];
+    st->ray_count = at[2];
+    st->active = at[3];
+    st->active_first = at[4];
+    st->active_o = at[5];
+    st->active_d = at[6];
+    st->active_view = at[7];
+    st->cap_rays = n;
     return NERF_OK;
 }
 
@@ -120,7 +137,6 @@ void nerf__render_march_options(const nerf__render_setup *s,
     nerf__march_defaults(mo, g);
     mo->step = nerf__march_step(g->lo, g->hi, so->march_steps);
     mo->max_samples = so->max_samples;
-    mo->skip_empty = !s->march_everywhere;
     /* Ray first_ray + k draws its offset from the stream (seed, ray), as
      * every other per-ray draw; the trainer's rays are numbered across
      * steps, so each step draws afresh. */
@@ -129,6 +145,14 @@ void nerf__render_march_options(const nerf__render_setup *s,
     mo->iteration = 0;
     const nerf__space *space = nerf__model_space(s->model);
     mo->contract = space->kind == NERF__SPACE_CONTRACT ? space->inner : 0.0f;
+}
+
+/* The marcher's settings for a batch of b: the setup's, and a test's. */
+static void march_options(const nerf__batch *b, const nerf__render_setup *s,
+                          const nerf__occupancy *g, nerf__march_options *mo)
+{
+    nerf__render_march_options(s, g, mo);
+    mo->skip_empty = !b->marching.test.everywhere;
 }
 
 /* What the loops over rays and samples below read; each writes only the
@@ -162,12 +186,12 @@ static void view_dirs(void *ctx, size_t begin, size_t end)
 static void sample_dirs(void *ctx, size_t begin, size_t end)
 {
     const march_job *j = ctx;
-    nerf__batch *b = j->b;
-    const size_t *off = b->march.offsets;
+    nerf__march_state *st = &j->b->marching;
+    const size_t *off = st->samples.offsets;
     for (size_t k = begin; k < end; k++) {
         const float *v = j->viewdir + 3 * k;
         for (size_t i = off[k]; i < off[k + 1]; i++) {
-            memcpy(b->m_dirs + 3 * i, v, 3 * sizeof(float));
+            memcpy(st->dirs + 3 * i, v, 3 * sizeof(float));
         }
     }
 }
@@ -189,13 +213,14 @@ static int reserve_workspace(nerf__batch *b, const nerf_model *m, size_t n,
 static int place_samples(nerf__batch *b, const nerf__render_setup *s,
                          const march_job *j, bool keep)
 {
-    const size_t total = b->march.total;
+    nerf__march_state *st = &b->marching;
+    const size_t total = st->samples.total;
     int rc = reserve_packed(b, total, keep);
     if (rc != NERF_OK || total == 0) {
         return rc;
     }
-    nerf__march_points(j->mo, j->rays, b->march.offsets, b->march.t,
-                       b->march_points);
+    nerf__march_points(j->mo, j->rays, st->samples.offsets, st->samples.t,
+                       st->points);
     return reserve_workspace(b, s->model, total, keep);
 }
 
@@ -208,9 +233,9 @@ static const float *sample_directions(nerf__batch *b,
         return NULL;
     }
     const size_t n = j->rays->n;
-    nerf__parallel_for(n, 6 * (b->march.total / n + 1), sample_dirs,
-                       (void *)j);
-    return b->m_dirs;
+    nerf__parallel_for(n, 6 * (b->marching.samples.total / n + 1),
+                       sample_dirs, (void *)j);
+    return b->marching.dirs;
 }
 
 /* Training's forward over the batch's packed samples, activations kept. */
@@ -218,17 +243,17 @@ static int forward(nerf__batch *b, const nerf__render_setup *s,
                    const march_job *j)
 {
     const nerf_model *m = s->model;
-    const size_t total = b->march.total;
+    nerf__march_state *st = &b->marching;
+    const size_t total = st->samples.total;
     int rc = place_samples(b, s, j, true);
     if (rc != NERF_OK || total == 0) {
         return rc;
     }
-    rc = nerf__model_forward(m, 0, &b->ws[0], total, b->march_points,
-                             sample_directions(b, s, j), b->m_rgb,
-                             b->m_sigma);
-    if (rc == NERF_OK && s->march_zero_empty) {
-        nerf__occupancy_zero_empty(nerf__model_grid(m), total,
-                                   b->march_points, b->m_sigma);
+    rc = nerf__model_forward(m, 0, &b->ws[0], total, st->points,
+                             sample_directions(b, s, j), st->rgb, st->sigma);
+    if (rc == NERF_OK && st->test.zero_empty) {
+        nerf__occupancy_zero_empty(nerf__model_grid(m), total, st->points,
+                                   st->sigma);
     }
     return rc;
 }
@@ -277,7 +302,8 @@ static void move_rows(float *rows, size_t width, size_t to, size_t from,
 static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
                             const march_job *j)
 {
-    nerf__march_samples *ms = &b->march;
+    nerf__march_state *st = &b->marching;
+    nerf__march_samples *ms = &st->samples;
     const size_t total = ms->total, n = j->rays->n;
     const nerf_model *m = s->model;
     nerf__workspace *ws = &b->ws[0];
@@ -294,11 +320,11 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     if (rc != NERF_OK) {
         return rc;
     }
-    nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, b->march_points);
+    nerf__march_points(j->mo, j->rays, ms->offsets, ms->t, st->points);
     rc = nerf__opacity_cut_run(
-        &b->cut, m, ms, b->march_points,
-        s->march_zero_empty ? nerf__model_grid(m) : NULL,
-        NERF__COMPOSITE_EPS_DEFAULT, b->m_count, ws->enc_pos);
+        &st->cut, m, ms, st->points,
+        st->test.zero_empty ? nerf__model_grid(m) : NULL,
+        NERF__COMPOSITE_EPS_DEFAULT, st->ray_count, ws->enc_pos);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -308,14 +334,14 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
     const size_t E = m->nets[0].pos_width;
     size_t w = 0;
     for (size_t k = 0; k < n; k++) {
-        const size_t at = ms->offsets[k], used = b->m_count[k];
+        const size_t at = ms->offsets[k], used = st->ray_count[k];
         if (at != w) {
             move_rows(ms->t, 1, w, at, used);
             move_rows(ms->dt, 1, w, at, used);
             move_rows(ws->enc_pos, E, w, at, used);
         }
         if (ws->pos) {
-            memcpy(ws->pos + 3 * w, b->march_points + 3 * at,
+            memcpy(ws->pos + 3 * w, st->points + 3 * at,
                    3 * used * sizeof(float));
         }
         ms->offsets[k] = w;
@@ -332,16 +358,18 @@ static int cut_where_opaque(nerf__batch *b, const nerf__render_setup *s,
 static int march_whole(nerf__batch *b, const nerf__render_setup *s,
                        const nerf__march_rays *all, const nerf__pass_out *out)
 {
+    nerf__march_state *st = &b->marching;
+    nerf__march_samples *ms = &st->samples;
     const nerf__occupancy *g = nerf__model_grid(s->model);
     nerf__march_options mo;
-    nerf__render_march_options(s, g, &mo);
-    int rc = nerf__march_run(g, &mo, all, &b->march);
+    march_options(b, s, g, &mo);
+    int rc = nerf__march_run(g, &mo, all, ms);
     /* The rays kept: a prefix, so their draws are the same as without a
      * budget. */
     nerf__march_rays kept = *all;
     const nerf__march_rays *rays = &kept;
     if (rc == NERF_OK && s->sample_budget > 0) {
-        kept.n = cut_to_budget(&b->march, s->sample_budget);
+        kept.n = cut_to_budget(ms, s->sample_budget);
         b->n_rays = kept.n;
     }
     march_job j = {.b = b, .rays = rays, .viewdir = b->viewdir, .mo = &mo};
@@ -354,10 +382,10 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
     if (rc != NERF_OK) {
         return rc;
     }
-    b->packed = (nerf__packed_batch){
-        .n_rays = rays->n, .offsets = b->march.offsets, .t = b->march.t,
-        .dt = b->march.dt, .rgb = b->m_rgb, .sigma = b->m_sigma,
-        .bg = b->ray_bg ? b->ray_bg : b->white ? b->bg : NULL,
+    st->packed = (nerf__packed_batch){
+        .n_rays = rays->n, .offsets = ms->offsets, .t = ms->t, .dt = ms->dt,
+        .rgb = st->rgb, .sigma = st->sigma,
+        .bg = b->ray_bg ? b->ray_bg : b->white ? st->bg : NULL,
         .bg_stride = b->ray_bg ? 3 : 0,
         .eps = NERF__COMPOSITE_EPS_DEFAULT};
     nerf__packed_out po = {0};
@@ -366,19 +394,19 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
         po.depth = out->depth;
         po.opacity = out->opacity;
     }
-    nerf__composite_packed(&b->packed, &po);
+    nerf__composite_packed(&st->packed, &po);
     if (out && out->disparity) {
         /* Rarely wanted; composite again for the depth and opacity the
          * caller may not have asked for. */
         for (size_t k = 0; k < rays->n; k++) {
-            const size_t at = b->march.offsets[k];
-            nerf__composite_state st;
-            nerf__composite_state_init(&st);
+            const size_t at = ms->offsets[k];
+            nerf__composite_state cs;
+            nerf__composite_state_init(&cs);
             nerf__composite_packed_ray(
-                &st, (uint32_t)(b->march.offsets[k + 1] - at),
-                b->march.t + at, b->march.dt + at, b->m_rgb + 3 * at,
-                b->m_sigma + at, b->packed.eps, NULL);
-            out->disparity[k] = disparity_of(st.depth, st.opacity);
+                &cs, (uint32_t)(ms->offsets[k + 1] - at), ms->t + at,
+                ms->dt + at, st->rgb + 3 * at, st->sigma + at,
+                st->packed.eps, NULL);
+            out->disparity[k] = disparity_of(cs.depth, cs.opacity);
         }
     }
     return NERF_OK;
@@ -394,24 +422,25 @@ static int march_whole(nerf__batch *b, const nerf__render_setup *s,
  */
 static void keep_used(nerf__batch *b, const march_job *j, uint32_t head_width)
 {
-    nerf__march_samples *ms = &b->march;
+    nerf__march_state *st = &b->marching;
+    nerf__march_samples *ms = &st->samples;
     float *head = b->ws[0].head;
     const size_t n_rays = j->rays->n;
     size_t w = 0;
     for (size_t i = 0; i < n_rays; i++) {
-        const uint32_t k = b->m_active[i];
+        const uint32_t k = st->active[i];
         const size_t at = ms->offsets[i];
         uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
-        const uint32_t room = j->max_samples - b->m_count[k];
+        const uint32_t room = j->max_samples - st->ray_count[k];
         n = n < room ? n : room;
-        float trans = b->m_state[k].trans;
+        float trans = st->ray_state[k].trans;
         const uint32_t used = nerf__composite_packed_ray_used(
-            n, ms->dt + at, b->m_sigma + at, NERF__COMPOSITE_EPS_DEFAULT,
+            n, ms->dt + at, st->sigma + at, NERF__COMPOSITE_EPS_DEFAULT,
             &trans);
         if (at != w) {
             move_rows(ms->t, 1, w, at, used);
             move_rows(ms->dt, 1, w, at, used);
-            move_rows(b->m_sigma, 1, w, at, used);
+            move_rows(st->sigma, 1, w, at, used);
             move_rows(head, head_width, w, at, used);
         }
         ms->offsets[i] = w;
@@ -433,7 +462,8 @@ static int evaluate_used(nerf__batch *b, const nerf__render_setup *s,
                          const march_job *j, bool same_params)
 {
     const nerf_model *m = s->model;
-    const size_t total = b->march.total;
+    nerf__march_state *st = &b->marching;
+    const size_t total = st->samples.total;
     int rc = place_samples(b, s, j, false);
     if (rc != NERF_OK || total == 0) {
         return rc;
@@ -441,17 +471,17 @@ static int evaluate_used(nerf__batch *b, const nerf__render_setup *s,
     b->n_evaluated += total;
     nerf__workspace *ws = &b->ws[0];
     ws->params_unchanged = same_params;
-    rc = nerf__model_head(m, 0, ws, total, b->march_points, b->m_sigma);
+    rc = nerf__model_head(m, 0, ws, total, st->points, st->sigma);
     if (rc == NERF_OK) {
-        if (s->march_zero_empty) {
+        if (st->test.zero_empty) {
             nerf__occupancy_zero_empty(nerf__model_grid(m), total,
-                                       b->march_points, b->m_sigma);
+                                       st->points, st->sigma);
         }
         keep_used(b, j, nerf__network_head_width(&m->nets[0]));
         /* The weights the head's pass packed still hold. */
         ws->params_unchanged = true;
-        rc = nerf__model_colour(m, 0, ws, b->march.total,
-                                sample_directions(b, s, j), b->m_rgb);
+        rc = nerf__model_colour(m, 0, ws, st->samples.total,
+                                sample_directions(b, s, j), st->rgb);
     }
     ws->params_unchanged = false;
     return rc;
@@ -462,23 +492,23 @@ static int evaluate_used(nerf__batch *b, const nerf__render_setup *s,
 static void composite_round(void *ctx, size_t begin, size_t end)
 {
     const march_job *j = ctx;
-    nerf__batch *b = j->b;
-    const nerf__march_samples *ms = &b->march;
+    nerf__march_state *st = &j->b->marching;
+    const nerf__march_samples *ms = &st->samples;
     for (size_t i = begin; i < end; i++) {
-        const uint32_t k = b->m_active[i];
+        const uint32_t k = st->active[i];
         const size_t at = ms->offsets[i];
         /* keep_used() has cut them to the ray's room. */
         const uint32_t n = (uint32_t)(ms->offsets[i + 1] - at);
-        nerf__composite_state *st = &b->m_state[k];
-        nerf__composite_packed_ray(st, n, ms->t + at, ms->dt + at,
-                                   b->m_rgb + 3 * at, b->m_sigma + at,
+        nerf__composite_state *cs = &st->ray_state[k];
+        nerf__composite_packed_ray(cs, n, ms->t + at, ms->dt + at,
+                                   st->rgb + 3 * at, st->sigma + at,
                                    NERF__COMPOSITE_EPS_DEFAULT, NULL);
-        b->m_count[k] += n;
+        st->ray_count[k] += n;
         const bool done = nerf__composite_state_done(
-                              st, NERF__COMPOSITE_EPS_DEFAULT) ||
+                              cs, NERF__COMPOSITE_EPS_DEFAULT) ||
                           ms->next_step[i] == NERF__MARCH_DONE ||
-                          b->m_count[k] >= j->max_samples;
-        b->m_first[k] = done ? NERF__MARCH_DONE : ms->next_step[i];
+                          st->ray_count[k] >= j->max_samples;
+        st->ray_first[k] = done ? NERF__MARCH_DONE : ms->next_step[i];
     }
 }
 
@@ -487,6 +517,7 @@ static void composite_round(void *ctx, size_t begin, size_t end)
 static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
                         const nerf__march_rays *all, const nerf__pass_out *out)
 {
+    nerf__march_state *st = &b->marching;
     const size_t n = all->n;
     const nerf__occupancy *g = nerf__model_grid(s->model);
     int rc = reserve_rays(b, n);
@@ -494,17 +525,17 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         return rc;
     }
     nerf__march_options mo;
-    nerf__render_march_options(s, g, &mo);
-    march_job j = {.b = b, .viewdir = b->m_view,
+    march_options(b, s, g, &mo);
+    march_job j = {.b = b, .viewdir = st->active_view,
                    .max_samples = mo.max_samples, .mo = &mo};
     size_t n_active = n;
     /* The model does not change between the rounds of a block. */
     bool first_round = true;
     for (size_t k = 0; k < n; k++) {
-        nerf__composite_state_init(&b->m_state[k]);
-        b->m_count[k] = 0;
-        b->m_first[k] = 0;
-        b->m_active[k] = (uint32_t)k;
+        nerf__composite_state_init(&st->ray_state[k]);
+        st->ray_count[k] = 0;
+        st->ray_first[k] = 0;
+        st->active[k] = (uint32_t)k;
     }
     while (n_active > 0) {
         size_t piece = PIECE_BUDGET / n_active;
@@ -513,19 +544,22 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         mo.max_samples = (uint32_t)piece;
         /* The rays going, gathered, with where each resumes. */
         for (size_t i = 0; i < n_active; i++) {
-            const uint32_t k = b->m_active[i];
-            memcpy(b->m_o + 3 * i, all->origins + 3 * k, 3 * sizeof(float));
-            memcpy(b->m_d + 3 * i, all->dirs + 3 * k, 3 * sizeof(float));
-            memcpy(b->m_view + 3 * i, b->viewdir + 3 * k, 3 * sizeof(float));
-            b->m_act_first[i] = b->m_first[k];
+            const uint32_t k = st->active[i];
+            memcpy(st->active_o + 3 * i, all->origins + 3 * k,
+                   3 * sizeof(float));
+            memcpy(st->active_d + 3 * i, all->dirs + 3 * k,
+                   3 * sizeof(float));
+            memcpy(st->active_view + 3 * i, b->viewdir + 3 * k,
+                   3 * sizeof(float));
+            st->active_first[i] = st->ray_first[k];
         }
         nerf__march_rays rays = *all;
         rays.n = n_active;
-        rays.origins = b->m_o;
-        rays.dirs = b->m_d;
-        rays.first_step = b->m_act_first;
+        rays.origins = st->active_o;
+        rays.dirs = st->active_d;
+        rays.first_step = st->active_first;
         j.rays = &rays;
-        rc = nerf__march_run(g, &mo, &rays, &b->march);
+        rc = nerf__march_run(g, &mo, &rays, &st->samples);
         if (rc == NERF_OK) {
             rc = evaluate_used(b, s, &j, !first_round);
             first_round = false;
@@ -536,9 +570,9 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         nerf__parallel_for(n_active, 30 * piece + 30, composite_round, &j);
         size_t going = 0;
         for (size_t i = 0; i < n_active; i++) {
-            const uint32_t k = b->m_active[i];
-            if (b->m_first[k] != NERF__MARCH_DONE) {
-                b->m_active[going++] = k;
+            const uint32_t k = st->active[i];
+            if (st->ray_first[k] != NERF__MARCH_DONE) {
+                st->active[going++] = k;
             }
         }
         n_active = going;
@@ -547,20 +581,20 @@ static int march_pieces(nerf__batch *b, const nerf__render_setup *s,
         return NERF_OK;
     }
     for (size_t k = 0; k < n; k++) {
-        const nerf__composite_state *st = &b->m_state[k];
+        const nerf__composite_state *cs = &st->ray_state[k];
         if (out->rgb) {
             const float *bg = b->ray_bg ? b->ray_bg + 3 * k
-                              : b->white ? b->bg : NULL;
-            nerf__composite_state_rgb(st, bg, out->rgb + 3 * k);
+                              : b->white ? st->bg : NULL;
+            nerf__composite_state_rgb(cs, bg, out->rgb + 3 * k);
         }
         if (out->depth) {
-            out->depth[k] = st->depth;
+            out->depth[k] = cs->depth;
         }
         if (out->opacity) {
-            out->opacity[k] = st->opacity;
+            out->opacity[k] = cs->opacity;
         }
         if (out->disparity) {
-            out->disparity[k] = disparity_of(st->depth, st->opacity);
+            out->disparity[k] = disparity_of(cs->depth, cs->opacity);
         }
     }
     return NERF_OK;
@@ -582,8 +616,21 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
                        const float *directions,
                        const nerf__pass_out out[NERF__PASSES])
 {
-    b->bg[0] = b->bg[1] = b->bg[2] = 1.0f;
-    b->march.n_rays = b->march.total = 0;
+    if (nerf__model_grid(s->model) == NULL) {
+        return nerf__error(NERF_EINVAL, "render: the sampler marches through "
+                           "an occupancy grid, which this model has not");
+    }
+    int rc = nerf__batch_begin(b, s, n_rays);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__march_state *st = &b->marching;
+    b->n_pass = 1;
+    b->n_samples[0] = b->n_samples[1] = 0;
+    b->net[0] = b->net[1] = 0;
+    b->marched = true;
+    st->bg[0] = st->bg[1] = st->bg[2] = 1.0f;
+    st->samples.n_rays = st->samples.total = 0;
     if (n_rays == 0) {
         b->kept = s->keep;
         return NERF_OK;
@@ -602,8 +649,8 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
         rays.dirs = b->ray_d;
     }
     const nerf__pass_out *o = out ? &out[0] : NULL;
-    int rc = s->keep ? march_whole(b, s, &rays, o)
-                     : march_pieces(b, s, &rays, o);
+    rc = s->keep ? march_whole(b, s, &rays, o)
+                 : march_pieces(b, s, &rays, o);
     if (rc == NERF_OK) {
         b->kept = s->keep;
     }
@@ -614,10 +661,11 @@ int nerf__render_march_backward(nerf__batch *b, nerf_model *m,
                                 const float *d_rgb, const float *d_depth,
                                 const float *d_opacity)
 {
-    if (b->march.total == 0 || (!d_rgb && !d_depth && !d_opacity)) {
+    nerf__march_state *st = &b->marching;
+    if (st->samples.total == 0 || (!d_rgb && !d_depth && !d_opacity)) {
         return NERF_OK;
     }
-    nerf__composite_packed_backward(&b->packed, d_rgb, d_depth, d_opacity,
-                                    b->m_d_rgb, b->m_d_sigma);
-    return nerf__model_backward(m, 0, &b->ws[0], b->m_d_rgb, b->m_d_sigma);
+    nerf__composite_packed_backward(&st->packed, d_rgb, d_depth, d_opacity,
+                                    st->d_rgb, st->d_sigma);
+    return nerf__model_backward(m, 0, &b->ws[0], st->d_rgb, st->d_sigma);
 }

@@ -60,7 +60,7 @@ static int report(nerf_renderer *r, size_t done, size_t total, double t0)
     return r->progress(&p, r->progress_user);
 }
 
-static int ensure_workers(nerf_renderer *r, uint32_t count)
+int nerf__renderer_ensure_workers(nerf_renderer *r, uint32_t count)
 {
     if (count <= r->n_workers) {
         return NERF_OK;
@@ -241,7 +241,7 @@ int nerf__renderer_run(nerf_renderer *r, size_t n, nerf__chunk_fn fn,
     if (threads > NERF__MAX_THREADS) {
         threads = NERF__MAX_THREADS;
     }
-    int rc = ensure_workers(r, threads);
+    int rc = nerf__renderer_ensure_workers(r, threads);
     if (rc != NERF_OK) {
         return rc;
     }

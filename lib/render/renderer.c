@@ -192,11 +192,23 @@ void nerf__renderer_eval_setup(const nerf_renderer *r, nerf__render_setup *s)
     s->sampler = r->sampler;
     s->noise_std = r->noise_std;
     s->white_background = r->opts.white_background != 0;
-    s->march_everywhere = r->march_everywhere;
-    s->march_zero_empty = r->march_zero_empty;
     s->ndc_focal = r->sampler->opts.ndc_focal;
     s->ndc_width = (float)r->sampler->opts.ndc_width;
     s->ndc_height = (float)r->sampler->opts.ndc_height;
+}
+
+int nerf__renderer_set_march_test(nerf_renderer *r,
+                                  const nerf__march_test *t)
+{
+    /* Every worker a render will use: nerf__renderer_run() takes at most
+     * this many. */
+    uint32_t n = r->threads < NERF__MAX_THREADS ? r->threads
+                                                : NERF__MAX_THREADS;
+    int rc = nerf__renderer_ensure_workers(r, n);
+    for (uint32_t i = 0; rc == NERF_OK && i < r->n_workers; i++) {
+        nerf__batch_set_march_test(&r->workers[i]->batch, t);
+    }
+    return rc;
 }
 
 typedef struct rays_job {

@@ -48,9 +48,6 @@ struct nerf_renderer {
     void *progress_user;
     nerf__worker **workers;     /* created on demand, kept until destroy */
     uint32_t n_workers;
-    /* Marching samplers, for tests that compare skipping with references
-     * (see nerf__render_setup). */
-    bool march_everywhere, march_zero_empty;
 };
 
 /* Whether nerf_renderer_cancel() (or the progress callback) asked the
@@ -68,6 +65,9 @@ static inline bool nerf__renderer_cancelled(const nerf_renderer *r)
 typedef int (*nerf__chunk_fn)(void *job, nerf__worker *w, size_t first,
                               size_t count);
 
+/* Make sure the renderer has `count` workers (render_pool.c). */
+int nerf__renderer_ensure_workers(nerf_renderer *r, uint32_t count);
+
 /*
  * Run fn over n items in chunks, on the renderer's threads, reporting
  * progress on the calling thread and honouring nerf_renderer_cancel().
@@ -79,5 +79,10 @@ int nerf__renderer_run(nerf_renderer *r, size_t n, nerf__chunk_fn fn,
 /* The evaluation setup of a renderer (no randomness, no noise). */
 void nerf__renderer_eval_setup(const nerf_renderer *r,
                                nerf__render_setup *s);
+
+/* Tests: the renderer's workers march with *t from now on (NULL: as
+ * outside tests); see nerf__march_test. */
+int nerf__renderer_set_march_test(nerf_renderer *r,
+                                  const nerf__march_test *t);
 
 #endif

@@ -114,7 +114,7 @@ static void avoid_kinks(fixture *f)
         CHECK_OK(nerf__render_batch(&f->b, &f->setup, RAYS, f->o, f->d, out));
         const uint32_t m = f->b.n_samples[p];
         for (size_t i = 0; i < (size_t)RAYS * m; i++) {
-            float raw = f->b.sigma[p][i] - f->noise[p][i];
+            float raw = f->b.stratified.sigma[p][i] - f->noise[p][i];
             if (i % m == m - 1 && (i / m) % 3 != 0) {
                 /* Empty beyond the last interval: opacity < 1, so the
                  * background and opacity terms carry gradient. */
@@ -254,7 +254,8 @@ static const float *ray_bg_of(const fixture *f, size_t k)
     static const float white[3] = {1.0f, 1.0f, 1.0f};
     const nerf__batch *b = &f->b;
     if (b->marched) {
-        return b->packed.bg ? b->packed.bg + k * b->packed.bg_stride : NULL;
+        const nerf__packed_batch *pb = &b->marching.packed;
+        return pb->bg ? pb->bg + k * pb->bg_stride : NULL;
     }
     return f->setup.background ? f->setup.background + 3 * k
            : f->setup.white_background ? white
@@ -285,6 +286,9 @@ static double tail_derivative(fixture *f, int net, const float *v,
         return 0.0;
     }
     nerf__workspace *ws = &b->ws[b->marched ? 0 : p];
+    const nerf__stratified_state *sb = &b->stratified;
+    const nerf__march_state *mb = &b->marching;
+    const nerf__march_samples *ms = &mb->samples;
     const size_t N = ws->n;
     const uint32_t V = nw->view_width;
     const bool sig_row = nw->geo_features == 0;
@@ -295,8 +299,8 @@ static double tail_derivative(fixture *f, int net, const float *v,
     const float *vrb = v + (nw->rgb.b - nw->offset);
     const uint32_t sc = nerf__network_sigma_col(nw);
     const size_t srow = nw->head.w + (size_t)sc * nw->head.in;
-    const float *lib_rgb = b->marched ? b->m_rgb : b->rgb[p];
-    const float *lib_sigma = b->marched ? b->m_sigma : b->sigma[p];
+    const float *lib_rgb = b->marched ? mb->rgb : sb->rgb[p];
+    const float *lib_sigma = b->marched ? mb->sigma : sb->sigma[p];
     const float *noise = f->setup.noise[p];
     CHECK(b->marched || noise || !f->setup.training ||
           f->setup.noise_std == 0.0f);
@@ -343,32 +347,32 @@ static double tail_derivative(fixture *f, int net, const float *v,
         fbd out[5];
         size_t at;
         if (b->marched) {
-            at = b->march.offsets[k];
-            const uint32_t n = (uint32_t)(b->march.offsets[k + 1] - at);
+            at = ms->offsets[k];
+            const uint32_t n = (uint32_t)(ms->offsets[k + 1] - at);
             /* Training kept the samples its composite uses: all. */
             float T = 1.0f;
             CHECK_EQ_INT(nerf__composite_packed_ray_used(
-                             n, b->march.dt + at, lib_sigma + at,
-                             b->packed.eps, &T),
+                             n, ms->dt + at, lib_sigma + at,
+                             mb->packed.eps, &T),
                          n);
             CHECK(n <= FB_RAY_MAX);
             fb_ray ray;
             fb_ray_init(&ray);
             for (uint32_t i = 0; i < n; i++) {
-                fb_packed_step(&ray, b->march.t[at + i],
-                               b->march.dt[at + i], rgb + 3 * (at + i),
+                fb_packed_step(&ray, ms->t[at + i],
+                               ms->dt[at + i], rgb + 3 * (at + i),
                                sig[at + i], NULL);
             }
             fb_packed_rgb(&ray, bg, out);
             out[3] = ray.depth;
             out[4] = ray.opacity;
-            fb_packed_backward(n, b->march.t + at, b->march.dt + at,
+            fb_packed_backward(n, ms->t + at, ms->dt + at,
                                rgb_x + 3 * at, sig_x + at, bg, dc, dd, dop,
                                d_rgb + 3 * at, d_sig + at);
         } else {
             const uint32_t n = b->n_samples[p];
             at = k * n;
-            const float *t = b->t[p] + at;
+            const float *t = sb->t[p] + at;
             fb_composite_forward(n, t, b->dir_norm[k], rgb + 3 * at,
                                  sig + at, bg, out, &out[3], &out[4], NULL);
             fb_composite_backward(n, t, b->dir_norm[k], rgb_x + 3 * at,
@@ -390,8 +394,8 @@ static double tail_derivative(fixture *f, int net, const float *v,
         last_pass = last_pass && !f->use_pass[q];
     }
     CHECK(last_pass);
-    const float *lib_d_rgb = b->marched ? b->m_d_rgb : b->d_rgb;
-    const float *lib_d_sigma = b->marched ? b->m_d_sigma : b->d_sigma;
+    const float *lib_d_rgb = b->marched ? mb->d_rgb : sb->d_rgb;
+    const float *lib_d_sigma = b->marched ? mb->d_sigma : sb->d_sigma;
     int wired = 0;
     for (size_t r = 0; r < N; r++) {
         rgb_x[3 * r] = fb_in(lib_rgb[3 * r]);
@@ -408,16 +412,16 @@ static double tail_derivative(fixture *f, int net, const float *v,
         const double dd = f->g_d[p][k], dop = f->g_o[p][k];
         size_t at, n;
         if (b->marched) {
-            at = b->march.offsets[k];
-            n = b->march.offsets[k + 1] - at;
-            fb_packed_backward((uint32_t)n, b->march.t + at,
-                               b->march.dt + at, rgb_x + 3 * at, sig_x + at,
+            at = ms->offsets[k];
+            n = ms->offsets[k + 1] - at;
+            fb_packed_backward((uint32_t)n, ms->t + at,
+                               ms->dt + at, rgb_x + 3 * at, sig_x + at,
                                bg, dc, dd, dop, lib_in_d_rgb + 3 * at,
                                lib_in_d_sig + at);
         } else {
             n = b->n_samples[p];
             at = k * n;
-            fb_composite_backward((uint32_t)n, b->t[p] + at, b->dir_norm[k],
+            fb_composite_backward((uint32_t)n, sb->t[p] + at, b->dir_norm[k],
                                   rgb_x + 3 * at, sig_x + at, bg, dc, dd,
                                   dop, lib_in_d_rgb + 3 * at,
                                   lib_in_d_sig + at);
@@ -590,10 +594,10 @@ TEST(coarse_only_with_noise)
     f.use_pass[0] = 1;
     /* The generator's noise reaches the densities. */
     loss(&f);
-    float noisy = f.b.sigma[0][5];
+    float noisy = f.b.stratified.sigma[0][5];
     f.setup.noise_std = 0.0f;
     loss(&f);
-    CHECK(f.b.sigma[0][5] != noisy);
+    CHECK(f.b.stratified.sigma[0][5] != noisy);
     avoid_kinks(&f);
     for (uint64_t seed = 1; seed <= 3; seed++) {
         check_direction(&f, 0, seed, true);
@@ -687,9 +691,9 @@ TEST(batch_split_reproducible)
     float *t0_all = malloc(sizeof(float) * RAYS * n0);
     float *t_all = malloc(sizeof(float) * RAYS * n1);
     float *s_all = malloc(sizeof(float) * RAYS * n1);
-    memcpy(t0_all, f.b.t[0], sizeof(float) * RAYS * n0);
-    memcpy(t_all, f.b.t[1], sizeof(float) * RAYS * n1);
-    memcpy(s_all, f.b.sigma[0], sizeof(float) * RAYS * n0);
+    memcpy(t0_all, f.b.stratified.t[0], sizeof(float) * RAYS * n0);
+    memcpy(t_all, f.b.stratified.t[1], sizeof(float) * RAYS * n1);
+    memcpy(s_all, f.b.stratified.sigma[0], sizeof(float) * RAYS * n0);
     nerf__pass_out out[2];
     memset(out, 0, sizeof out);
     int differ = 0;
@@ -699,12 +703,12 @@ TEST(batch_split_reproducible)
         CHECK_OK(nerf__render_batch(&f.b, &s, 6, f.o + 18 * half,
                                     f.d + 18 * half, out));
         /* The jittered coarse samples do not depend on the network. */
-        CHECK(memcmp(f.b.t[0], t0_all + 6 * half * n0,
+        CHECK(memcmp(f.b.stratified.t[0], t0_all + 6 * half * n0,
                      sizeof(float) * 6 * n0) == 0);
         /* Densities with their noise, and the fine samples they place. */
-        differ += memcmp(f.b.sigma[0], s_all + 6 * half * n0,
+        differ += memcmp(f.b.stratified.sigma[0], s_all + 6 * half * n0,
                          sizeof(float) * 6 * n0) != 0;
-        differ += memcmp(f.b.t[1], t_all + 6 * half * n1,
+        differ += memcmp(f.b.stratified.t[1], t_all + 6 * half * n1,
                          sizeof(float) * 6 * n1) != 0;
     }
     if (nerf__model_rows_alone(f.m)) {
@@ -861,19 +865,21 @@ TEST(marching_fast_model)
     }
     f.use_pass[0] = 1;
     loss(&f);
+    /* The batch's packed samples, of each call below in turn. */
+    const nerf__march_samples *ms = &f.b.marching.samples;
     CHECK(f.b.marched && f.b.n_pass == 1);
-    CHECK(f.b.march.total > RAYS && f.b.march.total < RAYS * 400);
+    CHECK(ms->total > RAYS && ms->total < RAYS * 400);
     check_direction(&f, 0, 21, true);
     check_direction(&f, 0, 22, false);
     /* Jittered samples are keyed by ray: one batch or two, the same.
      * Training cuts each ray where the densities turn it opaque, which
-     * would make march.t depend on the network's rounding too; these
+     * would make the samples' t depend on the network's rounding too; these
      * densities cut nothing (the premise, asserted), so what is compared
      * is the march alone. */
-    CHECK_EQ_INT(f.b.n_evaluated, f.b.march.total);
-    const size_t total = f.b.march.total;
+    CHECK_EQ_INT(f.b.n_evaluated, ms->total);
+    const size_t total = ms->total;
     float *t_all = malloc(sizeof(float) * total);
-    memcpy(t_all, f.b.march.t, sizeof(float) * total);
+    memcpy(t_all, ms->t, sizeof(float) * total);
     size_t at = 0;
     nerf__pass_out out[2];
     memset(out, 0, sizeof out);
@@ -882,13 +888,13 @@ TEST(marching_fast_model)
         s.first_ray += 6 * half;
         CHECK_OK(nerf__render_batch(&f.b, &s, 6, f.o + 18 * half,
                                     f.d + 18 * half, out));
-        CHECK_EQ_INT(f.b.n_evaluated, f.b.march.total);
-        CHECK(at + f.b.march.total <= total);
-        if (at + f.b.march.total <= total) {
-            CHECK(memcmp(f.b.march.t, t_all + at,
-                         sizeof(float) * f.b.march.total) == 0);
+        CHECK_EQ_INT(f.b.n_evaluated, ms->total);
+        CHECK(at + ms->total <= total);
+        if (at + ms->total <= total) {
+            CHECK(memcmp(ms->t, t_all + at,
+                         sizeof(float) * ms->total) == 0);
         }
-        at += f.b.march.total;
+        at += ms->total;
     }
     CHECK_EQ_INT(at, total);
     free(t_all);

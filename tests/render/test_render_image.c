@@ -591,12 +591,12 @@ TEST(marching_matches_building_blocks)
 
 /*
  * The render of a few rays rebuilt from the public pieces the way the
- * renderer computes a block (render_batch.c): coarse samples of every ray,
- * one model query over all of them in ray order, compositing and fine
- * samples ray by ray, one query over all the fine pass's samples.  The
- * products have the shapes and rows the renderer's have (QUERY_BLOCK,
- * 4096 samples, keeps each query one block), so on any kernel the bits
- * are the same.
+ * renderer computes a block (render_stratified.c): coarse samples of
+ * every ray, one model query over all of them in ray order, compositing
+ * and fine samples ray by ray, one query over all the fine pass's
+ * samples.  The products have the shapes and rows the renderer's have
+ * (QUERY_BLOCK, 4096 samples, keeps each query one block), so on any
+ * kernel the bits are the same.
  */
 TEST(matches_building_blocks)
 {

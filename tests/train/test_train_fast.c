@@ -204,10 +204,11 @@ TEST(skipping_is_rendering_empty_cells_as_empty)
     float *all = malloc(n * sizeof(float));
     nerf_renderer *r = make_renderer(trained, sampler);
     double p_skip = fixture_renderer_psnr(r, fx.test, skip);
-    r->march_everywhere = true;
-    r->march_zero_empty = true;
+    nerf__march_test test = {.everywhere = true, .zero_empty = true};
+    CHECK_OK(nerf__renderer_set_march_test(r, &test));
     fixture_renderer_psnr(r, fx.test, zero);
-    r->march_zero_empty = false;
+    test.zero_empty = false;
+    CHECK_OK(nerf__renderer_set_march_test(r, &test));
     double p_all = fixture_renderer_psnr(r, fx.test, all);
     double mean_zero, mean_all;
     double worst_zero = diff(skip, zero, n, &mean_zero);
@@ -266,13 +267,14 @@ TEST(no_sample_in_an_empty_cell)
     out[0].rgb = rgb;
     size_t marched[2] = {0, 0};
     for (int everywhere = 0; everywhere < 2; everywhere++) {
-        s.march_everywhere = everywhere != 0;
+        nerf__march_test test = {.everywhere = everywhere != 0};
+        nerf__batch_set_march_test(&b, &test);
         CHECK_OK(nerf__render_batch(&b, &s, RAYS, o, d, out));
-        marched[everywhere] = b.march.total;
+        marched[everywhere] = b.marching.samples.total;
         size_t empty = 0;
-        for (size_t i = 0; i < b.march.total; i++) {
+        for (size_t i = 0; i < b.marching.samples.total; i++) {
             empty += !nerf__occupancy_occupied(trained->grid,
-                                               b.march_points + 3 * i);
+                                               b.marching.points + 3 * i);
         }
         if (!everywhere) {
             CHECK_EQ_INT(empty, 0);
@@ -333,7 +335,8 @@ TEST(training_keeps_samples_up_to_opacity)
     st.struct_size = sizeof st;
     CHECK_OK(nerf_trainer_step(t, &st));
     const nerf__batch *b = &t->batch;
-    const nerf__march_samples *ms = &b->march;
+    const nerf__march_state *mb = &b->marching;
+    const nerf__march_samples *ms = &mb->samples;
     const nerf__network *net = &trained->nets[0];
     const size_t n = ms->n_rays, kept = ms->total, E = net->pos_width;
     uint32_t *used = malloc(n * sizeof *used);
@@ -343,8 +346,8 @@ TEST(training_keeps_samples_up_to_opacity)
     size_t short_rays = 0, cut_short = 0, cut = 0;
     if (used && rgb && enc && before && marched && n == (size_t)st.rays) {
         nerf__packed_out po = {.rgb = rgb, .used = used};
-        nerf__composite_packed(&b->packed, &po);
-        const nerf__packed_batch *pb = &b->packed;
+        nerf__composite_packed(&mb->packed, &po);
+        const nerf__packed_batch *pb = &mb->packed;
         for (size_t k = 0; k < n; k++) {
             const size_t at = ms->offsets[k];
             const uint32_t m = (uint32_t)(ms->offsets[k + 1] - at);
@@ -362,11 +365,11 @@ TEST(training_keeps_samples_up_to_opacity)
         /* The encodings the forward took from the density pass are those
          * of the kept samples. */
         nerf__encoding_forward(&net->pos_enc, before + net->pos_params, kept,
-                               b->march_points, enc, E);
+                               mb->points, enc, E);
         const nerf__workspace *ws = &b->ws[0];
         CHECK(memcmp(enc, ws->enc_pos, kept * E * sizeof *enc) == 0);
         CHECK(ws->pos != NULL &&
-              memcmp(ws->pos, b->march_points, 3 * kept * sizeof *enc) == 0);
+              memcmp(ws->pos, mb->points, 3 * kept * sizeof *enc) == 0);
     } else {
         FAILF("no batch to look at");
     }
@@ -375,12 +378,12 @@ TEST(training_keeps_samples_up_to_opacity)
     CHECK(cut > 0);
     printf("  %zu samples marched, %zu evaluated by the density pass in %u "
            "rounds, %zu kept; %zu rays cut\n", b->n_evaluated,
-           b->cut.evaluated, b->cut.rounds, kept, cut);
+           mb->cut.evaluated, mb->cut.rounds, kept, cut);
     /* Some rays were cut, so fewer samples were kept than marched; by how
      * many depends on how opaque training made the model (from 7 to 30%
      * fewer over seeds and kernels), which no fixed share bounds. */
     CHECK(kept < b->n_evaluated);
-    CHECK(b->cut.evaluated >= kept && b->cut.evaluated < b->n_evaluated);
+    CHECK(mb->cut.evaluated >= kept && mb->cut.evaluated < b->n_evaluated);
     free(marched);
     free(used);
     free(rgb);
@@ -421,7 +424,7 @@ TEST(batch_samples_takes_rays_up_to_a_budget)
         memset(&st, 0, sizeof st);
         st.struct_size = sizeof st;
         CHECK_OK(nerf_trainer_step(t, &st));
-        const nerf__march_samples *ms = &t->batch.march;
+        const nerf__march_samples *ms = &t->batch.marching.samples;
         const size_t n = (size_t)st.rays;
         CHECK(n >= 1 && n < RAYS && n == ms->n_rays);
         CHECK(ms->total == ms->offsets[n]);
