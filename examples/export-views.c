@@ -4,12 +4,12 @@
  */
 #include <nerf.h>
 
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/interrupt.h"
 #include "common/options.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
@@ -107,13 +107,6 @@ static const char points_usage[] =
 #define INTERRUPTED 2
 /* A failure already described on stderr. */
 #define REPORTED 1
-
-static volatile sig_atomic_t interrupted;
-
-static void on_signal(int sig)
-{
-    interrupted = sig;
-}
 
 /* The largest --stride: every K-th pixel's ray in each direction. */
 #define STRIDE_MAX 1024
@@ -495,8 +488,7 @@ int export_depth(int argc, char **argv)
         return 2;
     }
     if (rc == NERF_OK) {
-        signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
+        interrupt_catch(1);
         rc = depth_views(&a, &v);
     }
     close_views(&v);
@@ -568,8 +560,7 @@ int export_points(int argc, char **argv)
         po.progress = on_points_progress;
         po.progress_user = &bar;
         progress_begin(&bar, a.program, total);
-        signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
+        interrupt_catch(1);
         rc = nerf_points_from_views(&pts, v.renderer, cams, n, &po);
     }
     if (rc == NERF_OK) {

@@ -2,7 +2,6 @@
 #include <nerf.h>
 
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +9,7 @@
 
 #include "common/cli.h"
 #include "common/dist.h"
+#include "common/interrupt.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/options.h"
@@ -439,14 +439,6 @@ static int load_scene(args *a, const nerf_model *m, const nerf_hooks *hooks,
     return REPORTED;
 }
 
-/* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
-static volatile sig_atomic_t interrupted;
-
-static void on_signal(int sig)
-{
-    interrupted = sig;
-}
-
 /* The renderer's reports, within an image, onto the bar of all views. */
 typedef struct render_progress {
     progress bar;
@@ -852,12 +844,7 @@ static int run(int argc, char **argv)
      * not, are ended by it). */
     dist_barrier(&D);
     if (rc == NERF_OK) {
-        signal(SIGINT, on_signal);
-        /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
-         * caught, it would leave the rank waiting for the dead one. */
-        if (D.size == 1) {
-            signal(SIGTERM, on_signal);
-        }
+        interrupt_catch(D.size == 1);
         rc = render_all(&a, r, ds, cp, near, far);
     }
     if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED &&

@@ -2,7 +2,6 @@
 #include <nerf.h>
 
 #include <math.h>
-#include <signal.h>
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
@@ -10,6 +9,7 @@
 
 #include "common/cli.h"
 #include "common/dist.h"
+#include "common/interrupt.h"
 #include "common/matmul_name.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
@@ -48,19 +48,11 @@ static const char after[] =
     "  nerf-train --data fern --downscale 8 --out fern.nerf --preset fast \\\n"
     "      --steps 4400 --seconds 600\n";
 
-static volatile sig_atomic_t interrupted;
-
 /* The processes of the run: this one alone, or MPI's ranks. */
 static dist D;
 
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED (-1001)
-
-/* The signal that stopped the run (SIGINT, SIGTERM), 0 while none has. */
-static void on_signal(int sig)
-{
-    interrupted = sig;
-}
 
 /* Without --checkpoint-every, MODEL is saved every this many seconds of
  * training (the trainer's checkpoint_seconds): a save of the fast preset
@@ -671,12 +663,7 @@ static int run(int argc, char **argv)
         nerf_sampler_destroy(s);
         return rc == SETUP_USAGE ? 2 : 1;
     }
-    signal(SIGINT, on_signal);
-    /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
-     * caught, it would leave the rank waiting for the dead one. */
-    if (D.size == 1) {
-        signal(SIGTERM, on_signal);
-    }
+    interrupt_catch(D.size == 1);
     plan pl;
     rc = plan_run(&a, m, &pl);
     if (rc != NERF_OK) {
