@@ -72,7 +72,7 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
 
 /* A finer march than the recorded one must reach as far along a ray, so
  * the cap on a ray's samples grows with it.  steps is the programs'
- * --march-steps or --render-march-steps, 1..65536 (cli_march_steps()),
+ * --march-steps or --render-march-steps, 1..65536 (OPT_MARCH_STEPS()),
  * or the fast preset's. */
 static void march_with(nerf_sampler_options *so, int64_t steps)
 {

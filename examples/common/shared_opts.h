@@ -13,6 +13,16 @@
 #include "cli.h"
 #include "opt_table.h"
 
+/* nerf_dataset_options.downscale's largest factor. */
+#define CLI_DOWNSCALE_MAX 256
+
+/* The largest --skip (every K-th view of a split). */
+#define CLI_SKIP_MAX 100000
+
+/* The most steps a march takes across its grid's diagonal: the sampler's
+ * range of march_steps. */
+#define CLI_MARCH_STEPS_MAX 65536
+
 /* nerf_dataset_options.split's names: train, val, test. */
 extern const opt_choice split_choices[];
 
