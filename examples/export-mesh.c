@@ -165,11 +165,7 @@ static int parse(int argc, char **argv, args *a, int mesh)
     const opt_program p = {.name = program, .opts = opts, .column = 18,
                            .about = mesh ? mesh_about : grid_about,
                            .after = mesh ? mesh_after : grid_after};
-    int rc = opt_parse(&p, argc, argv);
-    if (rc != 0) {
-        if (rc == 1) {
-            exit(0);
-        }
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (mesh) {

@@ -91,7 +91,7 @@ static const char points_poses[] =
     "nerf-render --poses reads it; the file must give the\n"
     "image size and intrinsics (default none)";
 
-/* 0, 1 after --help, -1 after a usage error (printed). */
+/* 0, or -1 after a usage error (printed). */
 static int parse(int argc, char **argv, args *a, int points)
 {
     opt opts[16];
@@ -165,9 +165,8 @@ static int parse(int argc, char **argv, args *a, int points)
                            .column = points ? 18 : 17,
                            .about = points ? points_about : depth_about,
                            .after = points ? points_after : depth_after};
-    int rc = opt_parse(&p, argc, argv);
-    if (rc != 0) {
-        return rc;
+    if (opt_parse(&p, argc, argv) != 0) {
+        return -1;
     }
     /* Refused rather than ignored: the user meant something by them. */
     if (a->poses && a->data_options) {
@@ -435,9 +434,8 @@ int export_depth(int argc, char **argv)
     a.skip = 1;
     a.downscale = 1;
     a.png = 1;
-    int p = parse(argc, argv, &a, 0);
-    if (p != 0) {
-        return p > 0 ? 0 : 2;
+    if (parse(argc, argv, &a, 0) != 0) {
+        return 2;
     }
     if (out_ready_folder(a.out, a.program) != 0) {
         return 1;
@@ -483,9 +481,8 @@ int export_points(int argc, char **argv)
     a.max_points = NERF_POINTS_DEFAULT_MAX;
     a.stride = 1;
     a.opacity = NERF_POINTS_DEFAULT_OPACITY;
-    int p = parse(argc, argv, &a, 1);
-    if (p != 0) {
-        return p > 0 ? 0 : 2;
+    if (parse(argc, argv, &a, 1) != 0) {
+        return 2;
     }
     const out_input inputs[3] = {
         {"--model", a.model}, {"--data", a.data}, {"--poses", a.poses}};

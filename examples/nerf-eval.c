@@ -74,11 +74,7 @@ static int parse(int argc, char **argv, args *a)
     };
     const opt_program p = {.name = PROG, .opts = opts, .column = 17,
                            .about = about, .after = after};
-    int rc = opt_parse(&p, argc, argv);
-    if (rc == 1) {
-        exit(0);
-    }
-    return rc;
+    return opt_parse(&p, argc, argv);
 }
 
 /* Render and score every view; per-view figures go into per_view. */

@@ -42,7 +42,7 @@ typedef struct args {
     int json, overwrite;
 } args;
 
-/* 0: parsed; 1: --help printed; 2: a usage error, reported. */
+/* 0: parsed; 2: a usage error, reported. */
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -64,9 +64,8 @@ static int parse(int argc, char **argv, args *a)
     const opt_program p = {.name = PROGRAM, .opts = opts, .column = 17,
                            .about = about, .after = after,
                            .operand = "MODEL", .operand_to = &a->model};
-    int rc = opt_parse(&p, argc, argv);
-    if (rc != 0) {
-        return rc == 1 ? 1 : 2;
+    if (opt_parse(&p, argc, argv) != 0) {
+        return 2;
     }
     if (a->model == NULL && (a->json || a->export_to)) {
         fprintf(stderr, PROGRAM ": --json and --export describe a MODEL; see "
@@ -159,9 +158,8 @@ static int describe(const args *a)
 int main(int argc, char **argv)
 {
     args a;
-    int rc = parse(argc, argv, &a);
-    if (rc != 0) {
-        return rc == 1 ? 0 : 2;
+    if (parse(argc, argv, &a) != 0) {
+        return 2;
     }
     return a.model ? describe(&a) : build_info();
 }

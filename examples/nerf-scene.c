@@ -127,7 +127,7 @@ typedef struct args {
     int val_given, overwrite;
 } args;
 
-/* 0: read; 1: --help printed; -1: a mistake, said. */
+/* 0: read; -1: a mistake, said. */
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -189,9 +189,8 @@ static int parse(int argc, char **argv, args *a)
 int main(int argc, char **argv)
 {
     args a;
-    int rc = parse(argc, argv, &a);
-    if (rc != 0) {
-        return rc == 1 ? 0 : 2;
+    if (parse(argc, argv, &a) != 0) {
+        return 2;
     }
     nerf_scene_options *o = &a.o;
     /* Each capture in its usual layout unless told otherwise. */
@@ -222,7 +221,7 @@ int main(int argc, char **argv)
     if (out_ready_folder(a.out, "nerf-scene") != 0) {
         return 1;
     }
-    rc = nerf_scene_write(a.out, o);
+    int rc = nerf_scene_write(a.out, o);
     if (rc != NERF_OK) {
         cli_report("nerf-scene", rc);
         return 1;

@@ -1,6 +1,7 @@
 #include "opt_table.h"
 
 #include <assert.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "options.h"
@@ -251,7 +252,7 @@ int opt_parse(const opt_program *p, int argc, char **argv)
                 memcpy(opts[j].to, &saved[j], type_size(opts[j].type));
             }
             opt_help(p, stdout);
-            return 1;
+            exit(0);
         }
         const opt *o = find_opt(opts, k);
         if (o == NULL && p->operand && (k[0] != '-' || k[1] == '\0')) {

@@ -131,9 +131,10 @@ typedef struct opt_program {
 /*
  * Reads argv[1..argc-1] into the options' storage, in order, a later
  * option overriding an earlier one; --help or -h prints the help on
- * stdout and stops.  0: read, and the required options are there; 1:
- * --help printed; -1: a mistake, said on stderr in one line (an unknown
- * option names the nearest real one, cli_unknown()).
+ * stdout and exits with status 0, as every program did before the
+ * tables.  0: read, and the required options are there; -1: a mistake,
+ * said on stderr in one line (an unknown option names the nearest real
+ * one, cli_unknown()).
  */
 int opt_parse(const opt_program *p, int argc, char **argv);
 

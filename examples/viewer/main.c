@@ -90,11 +90,7 @@ static int parse(int argc, char **argv, args *a)
     };
     const opt_program p = {.name = PROG, .opts = opts, .column = 18,
                            .about = about, .after = after};
-    int rc = opt_parse(&p, argc, argv);
-    if (rc != 0) {
-        if (rc == 1) {
-            exit(0);
-        }
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (a->overwrite && a->screenshot == NULL) {
