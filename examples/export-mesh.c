@@ -10,6 +10,7 @@
 #include "common/cli.h"
 #include "common/options.h"
 #include "common/opt_table.h"
+#include "common/shared_opts.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/progress.h"
@@ -99,9 +100,7 @@ static int parse(int argc, char **argv, args *a, int mesh)
     }
     opt opts[16];
     size_t n = 0;
-    opts[n++] = (opt){
-        .name = "--model", OPT_TEXT_TO(&a->model), .flags = OPT_REQUIRED,
-        .value = "MODEL", .help = "a checkpoint nerf-train saved (required)"};
+    opts[n++] = (opt){OPT_MODEL(&a->model)};
     opts[n++] = (opt){
         .name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
         .value = mesh ? "FILE" : "FILE.npy",
@@ -155,7 +154,7 @@ static int parse(int argc, char **argv, args *a, int mesh)
         .help = "threads sampling the density (default {default}: all "
                 "cores)"};
     opts[n++] = (opt){
-        .name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        OPT_OVERWRITE(&a->overwrite),
         .help = mesh ? "replace FILE if it exists (default off: an existing\n"
                        "FILE is refused; MODEL never is)"
                      : "replace FILE.npy and its sidecars if they exist\n"

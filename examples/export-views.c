@@ -96,9 +96,7 @@ static int parse(int argc, char **argv, args *a, int points)
 {
     opt opts[16];
     size_t n = 0;
-    opts[n++] = (opt){
-        .name = "--model", OPT_TEXT_TO(&a->model), .flags = OPT_REQUIRED,
-        .value = "MODEL", .help = "the checkpoint nerf-train saved (required)"};
+    opts[n++] = (opt){OPT_MODEL(&a->model)};
     opts[n++] = (opt){
         .name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_ONE_OF,
         .value = "DIR",
@@ -154,7 +152,7 @@ static int parse(int argc, char **argv, args *a, int points)
                           .help = "write the .npy arrays only"};
     }
     opts[n++] = (opt){
-        .name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        OPT_OVERWRITE(&a->overwrite),
         .help = points ? "replace FILE if it exists (default off: an existing\n"
                          "FILE is refused; an input never is replaced)"
                        : "replace the views' files if DIR holds them already\n"

@@ -42,9 +42,7 @@ static int parse(int argc, char **argv, args *a)
     a->skip = 1;
     a->march = -1;
     const opt opts[] = {
-        {.name = "--model", OPT_TEXT_TO(&a->model), .flags = OPT_REQUIRED,
-         .value = "MODEL",
-         .help = "the checkpoint nerf-train saved (required)"},
+        {OPT_MODEL(&a->model)},
         {.name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_REQUIRED,
          .value = "DIR",
          .help = "the scene (required): Blender, transforms.json, LLFF\n"

@@ -13,6 +13,7 @@
 #include "common/model_info.h"
 #include "common/options.h"
 #include "common/opt_table.h"
+#include "common/shared_opts.h"
 #include "common/out_file.h"
 
 /* Fixed, not argv[0]: an installed program's path says nothing. */
@@ -56,7 +57,7 @@ static int parse(int argc, char **argv, args *a)
                  "and evaluating; nerf-train cannot resume from it.  The\n"
                  "description is then FILE's.  FILE is never MODEL\n"
                  "itself (by any path or link)"},
-        {.name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        {OPT_OVERWRITE(&a->overwrite),
          .help = "replace FILE if it exists (default off: an existing\n"
                  "FILE is refused)"},
         {.name = NULL},

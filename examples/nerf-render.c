@@ -93,9 +93,7 @@ static int parse(int argc, char **argv, args *a)
     a->fps = 30;
     a->march = -1;
     const opt opts[] = {
-        {.name = "--model", OPT_TEXT_TO(&a->model), .flags = OPT_REQUIRED,
-         .value = "MODEL",
-         .help = "the checkpoint nerf-train saved (required)"},
+        {OPT_MODEL(&a->model)},
         {.name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
          .value = "DIR", .help = "the folder of the images (required)"},
         {.name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_ONE_OF,
@@ -189,7 +187,7 @@ static int parse(int argc, char **argv, args *a)
          .help = "render only the views whose files are not in DIR\n"
                  "yet: the same command again finishes a render that\n"
                  "was stopped (default off: render every view)"},
-        {.name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        {OPT_OVERWRITE(&a->overwrite),
          .help = "replace the files of views DIR holds already, and an\n"
                  "existing --video FILE (default off: any file this run\n"
                  "would write over is refused before rendering; an\n"

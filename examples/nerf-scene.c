@@ -9,6 +9,7 @@
 #include "common/out_file.h"
 #include "common/options.h"
 #include "common/opt_table.h"
+#include "common/shared_opts.h"
 
 static const char about[] =
     "Write libnerf's built-in scene (a few coloured solids) to DIR, rendered\n"
@@ -175,7 +176,7 @@ static int parse(int argc, char **argv, args *a)
          .help = "photograph through that lens (OpenCV's model, as\n"
                  "nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
                  "may be left out; default none: a pinhole camera)"},
-        {.name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "those of the scene's names (default off: a DIR\n"
                  "that holds anything is refused)"},

@@ -207,7 +207,7 @@ static int parse(int argc, char **argv, args *a)
                  "default off: start afresh); a --preset other than\n"
                  "MODEL's is refused, and data unlike what MODEL was\n"
                  "trained on is warned about"},
-        {.name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        {OPT_OVERWRITE(&a->overwrite),
          .help = "replace MODEL if it exists (default off: without\n"
                  "--resume or --overwrite, an existing MODEL is refused)"},
         {.name = "--batch-samples",

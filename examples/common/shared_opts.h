@@ -29,6 +29,15 @@ extern const opt_choice split_choices[];
 /* nerf_model_options_preset()'s names: tiny, reference, fast. */
 extern const opt_choice preset_choices[];
 
+/* --model MODEL: the checkpoint a program reads. */
+#define OPT_MODEL(p)                                                           \
+    .name = "--model", OPT_TEXT_TO(p), .flags = OPT_REQUIRED,                  \
+    .value = "MODEL", .help = "the checkpoint nerf-train saved (required)"
+
+/* --overwrite: what a run writes may replace what exists (out_file.h);
+ * each program's help says what that is. */
+#define OPT_OVERWRITE(p) .name = "--overwrite", OPT_FLAG_SETS(p, 1)
+
 /* --downscale K: the dataset's images reduced K times. */
 #define OPT_DOWNSCALE(p)                                                       \
     .name = "--downscale", OPT_INT_IN(p, 1, CLI_DOWNSCALE_MAX), .value = "K"

@@ -47,9 +47,7 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     a->march = -1;
     const opt opts[] = {
-        {.name = "--model", OPT_TEXT_TO(&a->model), .flags = OPT_REQUIRED,
-         .value = "MODEL",
-         .help = "the checkpoint nerf-train saved (required)"},
+        {OPT_MODEL(&a->model)},
         {.name = "--data", OPT_TEXT_TO(&a->data), .value = "DIR",
          .help = "the scene MODEL was trained on: its cameras choose\n"
                  "the start view, its bounds the samples (Blender-like\n"
@@ -78,7 +76,7 @@ static int parse(int argc, char **argv, args *a)
          .value = "FILE",
          .help = "render the start view to FILE (PNG) and exit,\n"
                  "without opening a window (default: open one)"},
-        {.name = "--overwrite", OPT_FLAG_SETS(&a->overwrite, 1),
+        {OPT_OVERWRITE(&a->overwrite),
          .help = "with --screenshot: replace FILE if it exists (default\n"
                  "off: an existing FILE is refused; MODEL never is)"},
         {.name = "--quit-after",
