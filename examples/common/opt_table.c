@@ -15,7 +15,11 @@ static size_t opt_count(const opt *opts)
     while (opts[n].name != NULL) {
         n++;
     }
-    assert(n <= OPT_MAX);
+    if (n > OPT_MAX) {
+        /* A program's own mistake, found by its first run. */
+        fprintf(stderr, "opt_table: %zu options, more than %d\n", n, OPT_MAX);
+        abort();
+    }
     return n;
 }
 
@@ -76,23 +80,33 @@ const char *opt_choice_name(const opt_choice *list, int id)
     return NULL;
 }
 
-/* "a, b or c" (last " or "), or "a, b, c" (last ", "), into buf. */
+/* What goes before item k of n in a list: nothing before the first,
+ * last before the last ("a, b or c"), else a comma. */
+static const char *separator(size_t k, size_t n, const char *last)
+{
+    return k == 0 ? "" : k + 1 == n ? last : ", ";
+}
+
+/* Appends text to the string in buf, as far as it fits. */
+static void append(char *buf, size_t size, const char *text)
+{
+    strncat(buf, text, size - strlen(buf) - 1);
+}
+
+/* The names of list that are not aliases, joined: "a, b or c". */
 static void join_names(char *buf, size_t size, const opt_choice *list,
                        const char *last)
 {
-    size_t n = 0, shown = 0, used = 0;
-    for (size_t k = 0; list[k].name != NULL; k++) {
-        n += !list[k].alias;
+    size_t n = 0, k = 0;
+    for (const opt_choice *c = list; c->name != NULL; c++) {
+        n += !c->alias;
     }
     buf[0] = '\0';
-    for (size_t k = 0; list[k].name != NULL && used < size; k++) {
-        if (list[k].alias) {
-            continue;
+    for (const opt_choice *c = list; c->name != NULL; c++) {
+        if (!c->alias) {
+            append(buf, size, separator(k++, n, last));
+            append(buf, size, c->name);
         }
-        const char *sep = shown == 0 ? "" : shown + 1 == n ? last : ", ";
-        used += (size_t)snprintf(buf + used, size - used, "%s%s", sep,
-                                 list[k].name);
-        shown++;
     }
 }
 
@@ -155,48 +169,43 @@ static int read_value(const char *program, const opt *o, const char *v)
 
 /* "--data and --out are required", "--model, --out and --data, --path or
  * --poses are required": every required option named, when one is
- * missing. */
+ * missing, the alternatives last as one item. */
 static int check_required(const opt_program *p, const bool *seen)
 {
     const opt *opts = p->opts;
-    size_t n = opt_count(opts);
-    bool missing = false, group = false, group_seen = false;
-    size_t items = 0, members = 0;
+    const size_t n = opt_count(opts);
+    bool missing = false, alternative_seen = false;
+    size_t required = 0, alternatives = 0;
     for (size_t k = 0; k < n; k++) {
         if (opts[k].flags & OPT_REQUIRED) {
             missing |= !seen[k];
-            items++;
+            required++;
         }
         if (opts[k].flags & OPT_ONE_OF) {
-            group_seen |= seen[k];
-            group = true;
-            members++;
+            alternative_seen |= seen[k];
+            alternatives++;
         }
     }
-    if (!missing && (!group || group_seen)) {
+    if (!missing && (alternatives == 0 || alternative_seen)) {
         return 0;
     }
-    items += group;
+    const size_t items = required + (alternatives > 0);
+    size_t item = 0, alternative = 0;
     char list[512] = "";
-    size_t said = 0, said_members = 0;
     for (size_t k = 0; k < n; k++) {
         if (opts[k].flags & OPT_REQUIRED) {
-            said++;
-            const char *sep = said == 1 ? "" : said == items ? " and " : ", ";
-            strncat(list, sep, sizeof list - strlen(list) - 1);
-            strncat(list, opts[k].name, sizeof list - strlen(list) - 1);
+            append(list, sizeof list, separator(item++, items, " and "));
+            append(list, sizeof list, opts[k].name);
         }
     }
-    /* The alternatives come last, as one item: "A, B or C". */
+    if (alternatives > 0) {
+        append(list, sizeof list, separator(item++, items, " and "));
+    }
     for (size_t k = 0; k < n; k++) {
         if (opts[k].flags & OPT_ONE_OF) {
-            said_members++;
-            const char *sep = said_members > 1
-                                  ? (said_members == members ? " or " : ", ")
-                              : said > 0 ? " and "
-                                         : "";
-            strncat(list, sep, sizeof list - strlen(list) - 1);
-            strncat(list, opts[k].name, sizeof list - strlen(list) - 1);
+            append(list, sizeof list,
+                   separator(alternative++, alternatives, " or "));
+            append(list, sizeof list, opts[k].name);
         }
     }
     cli_usage_error(p->name, "%s %s required", list, items == 1 ? "is" : "are");
