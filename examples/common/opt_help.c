@@ -22,7 +22,8 @@ static void choice_list(char *buf, size_t size, const opt_choice *list)
 }
 
 /* The option with its value as the usage line gives it: "--steps N",
- * "--preset tiny|reference|fast", "--jpeg [QUALITY]". */
+ * "--preset tiny|reference|fast", "--jpeg [QUALITY]"; the help's head
+ * names a choice's value as .value does ("--preset P"), if it does. */
 static void token(char *buf, size_t size, const opt *o, bool for_usage)
 {
     char value[256] = "";

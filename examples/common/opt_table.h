@@ -71,7 +71,7 @@ struct opt {
     opt_type type;
     uint64_t min, max;         /* OPT_INT's range */
     double lo, hi;             /* OPT_REAL's (-HUGE_VAL, HUGE_VAL: none) */
-    unsigned open;             /* CLI_ABOVE_MIN, CLI_BELOW_MAX */
+    unsigned open;             /* CLI_ABOVE_MIN, CLI_BELOW_MAX (options.h) */
     const opt_choice *choices; /* OPT_CHOICE's */
     int set;                   /* what OPT_FLAG stores */
     opt_reader read;           /* OPT_CUSTOM's */
