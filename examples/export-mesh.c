@@ -9,62 +9,33 @@
 
 #include "common/cli.h"
 #include "common/options.h"
+#include "common/opt_table.h"
+#include "common/shared_opts.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/progress.h"
 #include "export.h"
 
-static const char mesh_usage[] =
-    "usage: nerf-export mesh --model MODEL --out FILE [--resolution N]\n"
-    "                        [--threshold T] [--box X0,Y0,Z0,X1,Y1,Z1]\n"
-    "                        [--ascii] [--largest] [--min-faces N]\n"
-    "                        [--no-colour] [--threads N] [--overwrite]\n"
+static const char mesh_about[] =
     "Extract the surface where MODEL's density crosses T with marching\n"
     "cubes, coloured by the model as seen looking at the surface head on,\n"
     "and write it as PLY (binary, or --ascii) or OBJ, by FILE's extension.\n"
-    "The mesh is closed wherever the surface stays inside the box.\n"
-    "  --model MODEL   a checkpoint nerf-train saved (required)\n"
-    "  --out FILE      the mesh: FILE.ply or FILE.obj (required)\n"
-    "  --resolution N  cells along the box's longest side, 1..16384\n"
-    "                  (default 256); memory grows as N^2, time as N^3\n"
-    "  --threshold T   density at the surface (default 25)\n"
-    "  --box B         the region to mesh, min and max corners in the\n"
-    "                  model's space (default: the model's bounds)\n"
-    "  --ascii         write ASCII PLY instead of binary\n"
-    "  --largest       keep only the largest connected piece\n"
-    "  --min-faces N   drop pieces of fewer than N triangles (default 0)\n"
-    "  --no-colour     no vertex colours\n"
-    "  --threads N     threads sampling the density (default 0: all cores)\n"
-    "  --overwrite     replace FILE if it exists (default off: an existing\n"
-    "                  FILE is refused; MODEL never is)\n"
-    "  --help          print this help and exit\n"
+    "The mesh is closed wherever the surface stays inside the box.\n";
+
+static const char mesh_after[] =
     "Examples:\n"
     "  nerf-export mesh --model lego.nerf --out lego.ply\n"
     "  nerf-export mesh --model lego.nerf --out lego.obj --resolution 512 \\\n"
     "      --largest\n";
 
-static const char grid_usage[] =
-    "usage: nerf-export grid --model MODEL --out FILE.npy [--resolution N]\n"
-    "                        [--box X0,Y0,Z0,X1,Y1,Z1] [--colour]\n"
-    "                        [--threads N] [--overwrite]\n"
+static const char grid_about[] =
     "Sample MODEL's density at the centres of a grid of cells over a box\n"
     "and write it as a float32 .npy of shape (nz, ny, nx) (C order: element\n"
     "[k][j][i] is the cell at x index i), with FILE.json beside it recording\n"
     "the box, the shape and the spacing.  The whole grid is held in memory:\n"
-    "4 bytes a cell, 16 with --colour.\n"
-    "  --model MODEL   a checkpoint nerf-train saved (required)\n"
-    "  --out FILE.npy  the density grid (required)\n"
-    "  --resolution N  cells along the box's longest side, 1..16384\n"
-    "                  (default 256)\n"
-    "  --box B         the region, min and max corners in the model's space\n"
-    "                  (default: the model's bounds)\n"
-    "  --colour        also FILE_rgb.npy, (nz, ny, nx, 3) colours in [0, 1]\n"
-    "                  seen looking down the density's gradient\n"
-    "  --threads N     threads sampling the density (default 0: all cores)\n"
-    "  --overwrite     replace FILE.npy and its sidecars if they exist\n"
-    "                  (default off: an existing one is refused; MODEL\n"
-    "                  never is)\n"
-    "  --help          print this help and exit\n"
+    "4 bytes a cell, 16 with --colour.\n";
+
+static const char grid_after[] =
     "Examples:\n"
     "  nerf-export grid --model lego.nerf --out lego.npy --resolution 128\n"
     "  python3 -c \"import numpy; print(numpy.load('lego.npy').shape)\"\n";
@@ -78,17 +49,6 @@ typedef struct args {
     nerf_mesh_options o;
     int ascii, overwrite;
 } args;
-
-static const char *const mesh_options[] = {
-    "--help", "-h", "--model", "--out", "--resolution", "--threshold", "--box",
-    "--ascii", "--largest", "--min-faces", "--no-colour", "--threads",
-    "--overwrite", NULL
-};
-
-static const char *const grid_options[] = {
-    "--help", "-h", "--model", "--out", "--resolution", "--box", "--colour",
-    "--threads", "--overwrite", NULL
-};
 
 /* "x0,y0,z0,x1,y1,z1", each max above its min. */
 static int parse_box(const char *text, float box[6])
@@ -120,86 +80,96 @@ static int parse_box(const char *text, float box[6])
     return 0;
 }
 
-static int is_flag(const char *k, int mesh)
+static int read_box(const char *program, const opt *o, const char *v)
 {
-    if (strcmp(k, "--overwrite") == 0) {
-        return 1;
+    if (v == NULL || parse_box(v, o->to) != 0) {
+        cli_bad_value(program, o->name, v,
+                      "x0,y0,z0,x1,y1,z1 with each max above its min");
+        return -1;
     }
-    return strcmp(k, "--largest") == 0 || strcmp(k, "--no-colour") == 0 ||
-           strcmp(k, "--ascii") == 0 || strcmp(k, "--colour") == 0 ?
-           (mesh ? strcmp(k, "--colour") != 0
-                 : strcmp(k, "--colour") == 0) : 0;
+    return 0;
 }
 
 static int parse(int argc, char **argv, args *a, int mesh)
 {
     const char *program = mesh ? "nerf-export mesh" : "nerf-export grid";
-    const char *const *names = mesh ? mesh_options : grid_options;
     memset(a, 0, sizeof *a);
     NERF_MESH_OPTIONS_INIT(&a->o);
     if (!mesh) {
         a->o.colour = NERF_MESH_COLOUR_NONE;
     }
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(mesh ? mesh_usage : grid_usage, stdout);
-            exit(0);
-        }
-        if (is_flag(k, mesh)) {
-            if (strcmp(k, "--overwrite") == 0) {
-                a->overwrite = 1;
-            } else if (strcmp(k, "--largest") == 0) {
-                a->o.keep_largest = 1;
-            } else if (strcmp(k, "--no-colour") == 0) {
-                a->o.colour = NERF_MESH_COLOUR_NONE;
-            } else if (strcmp(k, "--colour") == 0) {
-                a->o.colour = NERF_MESH_COLOUR_NORMAL;
-            } else {
-                a->ascii = 1;
-            }
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        uint64_t u = 0;
-        double d = 0.0;
-        int rc = 0;
-        if (cli_check_option(program, k, names) != 0) {
-            return -1;
-        } else if (strcmp(k, "--model") == 0) {
-            rc = cli_text_option(program, k, v, &a->model);
-        } else if (strcmp(k, "--out") == 0) {
-            rc = cli_text_option(program, k, v, &a->out);
-        } else if (strcmp(k, "--resolution") == 0) {
-            rc = cli_int_option(program, k, v, 1, RESOLUTION_MAX, &u);
-            a->o.resolution = (uint32_t)u;
-        } else if (strcmp(k, "--threshold") == 0) {
-            rc = cli_real_option(program, k, v, -HUGE_VAL, HUGE_VAL, 0, &d);
-            a->o.threshold = (float)d;
-        } else if (strcmp(k, "--box") == 0) {
-            rc = v != NULL ? parse_box(v, a->o.box) : -1;
-            if (rc != 0) {
-                cli_bad_value(program, k, v, "x0,y0,z0,x1,y1,z1 with each "
-                              "max above its min");
-            }
-        } else if (strcmp(k, "--min-faces") == 0) {
-            rc = cli_int_option(program, k, v, 0, UINT32_MAX, &u);
-            a->o.min_component_faces = (uint32_t)u;
-        } else if (strcmp(k, "--threads") == 0) {
-            rc = cli_int_option(program, k, v, 0, THREADS_MAX, &u);
-            a->o.threads = (uint32_t)u;
-        }
-        if (rc != 0) {
-            return -1;
-        }
+    opt opts[16];
+    size_t n = 0;
+    opts[n++] = (opt){OPT_MODEL(&a->model)};
+    opts[n++] = (opt){
+        .name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
+        .value = mesh ? "FILE" : "FILE.npy",
+        .help = mesh ? "the mesh: FILE.ply or FILE.obj (required)"
+                     : "the density grid (required)"};
+    opts[n++] = (opt){
+        .name = "--resolution",
+        OPT_INT_IN(&a->o.resolution, 1, RESOLUTION_MAX), .value = "N",
+        .help = mesh ? "cells along the box's longest side, {range}\n"
+                       "(default {default}); memory grows as N^2, time as N^3"
+                     : "cells along the box's longest side, {range}\n"
+                       "(default {default})"};
+    if (mesh) {
+        opts[n++] = (opt){
+            .name = "--threshold",
+            OPT_REAL_IN(&a->o.threshold, -HUGE_VAL, HUGE_VAL, 0), .value = "T",
+            .help = "density at the surface (default {default})"};
     }
-    if (a->model == NULL || a->out == NULL) {
-        cli_usage_error(program, "--model and --out are required");
+    opts[n++] = (opt){
+        .name = "--box", OPT_CUSTOM_READ(a->o.box, read_box),
+        .value = "X0,Y0,Z0,X1,Y1,Z1",
+        .help = mesh ? "the region to mesh, min and max corners in the\n"
+                       "model's space (default: the model's bounds)"
+                     : "the region, min and max corners in the model's\n"
+                       "space (default: the model's bounds)"};
+    if (mesh) {
+        opts[n++] = (opt){.name = "--ascii", OPT_FLAG_SETS(&a->ascii, 1),
+                          .help = "write ASCII PLY instead of binary"};
+        opts[n++] = (opt){
+            .name = "--largest", OPT_FLAG_SETS(&a->o.keep_largest, 1),
+            .help = "keep only the largest connected piece"};
+        opts[n++] = (opt){
+            .name = "--min-faces",
+            OPT_INT_IN(&a->o.min_component_faces, 0, UINT32_MAX), .value = "N",
+            .help = "drop pieces of fewer than N triangles (default "
+                    "{default})"};
+        opts[n++] = (opt){
+            .name = "--no-colour",
+            OPT_FLAG_SETS(&a->o.colour, NERF_MESH_COLOUR_NONE),
+            .help = "no vertex colours"};
+    } else {
+        opts[n++] = (opt){
+            .name = "--colour",
+            OPT_FLAG_SETS(&a->o.colour, NERF_MESH_COLOUR_NORMAL),
+            .help = "also FILE_rgb.npy, (nz, ny, nx, 3) colours in [0, 1]\n"
+                    "seen looking down the density's gradient"};
+    }
+    opts[n++] = (opt){
+        .name = "--threads", OPT_INT_IN(&a->o.threads, 0, THREADS_MAX),
+        .value = "N",
+        .help = "threads sampling the density (default {default}: all "
+                "cores)"};
+    opts[n++] = (opt){
+        OPT_OVERWRITE(&a->overwrite),
+        .help = mesh ? "replace FILE if it exists (default off: an existing\n"
+                       "FILE is refused; MODEL never is)"
+                     : "replace FILE.npy and its sidecars if they exist\n"
+                       "(default off: an existing one is refused; MODEL\n"
+                       "never is)"};
+    opts[n] = (opt){.name = NULL};
+    const opt_program p = {.name = program, .opts = opts, .column = 18,
+                           .about = mesh ? mesh_about : grid_about,
+                           .after = mesh ? mesh_after : grid_after};
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (mesh) {
-        const size_t n = strlen(a->out);
-        const char *ext = n >= 4 ? a->out + n - 4 : "";
+        const size_t len = strlen(a->out);
+        const char *ext = len >= 4 ? a->out + len - 4 : "";
         if (strcmp(ext, ".ply") != 0 && strcmp(ext, ".obj") != 0) {
             cli_usage_error(program, "--out %s: the file must end in .ply "
                             "or .obj", a->out);

@@ -4,24 +4,22 @@
  */
 #include <nerf.h>
 
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "common/cli.h"
+#include "common/interrupt.h"
 #include "common/options.h"
+#include "common/opt_table.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+#include "common/shared_opts.h"
 #include "export.h"
 
-static const char depth_usage[] =
-    "usage: nerf-export depth --model MODEL --out DIR\n"
-    "                         (--data DIR [--split S] [--skip K]\n"
-    "                          [--downscale K] | --poses FILE [--data DIR])\n"
-    "                         [--png | --no-png] [--overwrite]\n"
+static const char depth_about[] =
     "Render the views of a split of the scene MODEL was trained on (or the\n"
     "cameras of a file) and write\n"
     "for each, into DIR (created if missing), float32 NumPy arrays of shape\n"
@@ -35,67 +33,24 @@ static const char depth_usage[] =
     "Both depths are 0 where the opacity is 0.  For a forward-facing (LLFF,\n"
     "NDC) model the NDC depth is converted back to world units.  NNN is the\n"
     "view's index in the split (000, K, 2K, ... with --skip K) or in the\n"
-    "file.\n"
-    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
-    "  --data DIR     the scene MODEL was trained on: its views (default:\n"
-    "                 required unless --poses gives the views); with\n"
-    "                 --poses only its bounds, background and placement\n"
-    "  --poses FILE   render the cameras of a camera path file instead, as\n"
-    "                 nerf-render --poses reads it; the file must give the\n"
-    "                 image size and intrinsics (a transforms.json with w,\n"
-    "                 h and camera_angle_x or fl_x) (default none)\n"
-    "  --out DIR      the output folder (required)\n"
-    "  --split S      train, val or test (default test)\n"
-    "  --skip K       only every K-th view of the split (default 1: all)\n"
-    "  --downscale K  load the scene's cameras K times smaller (default 1)\n"
-    "  --png          also write 8-bit previews, as nerf-render --depth does:\n"
-    "                 NNN_depth.png (z depth from the scene's near bound,\n"
-    "                 white, to its far bound, black; black where the\n"
-    "                 opacity is below 0.001) and NNN_opacity.png (the\n"
-    "                 default)\n"
-    "  --no-png       write the .npy arrays only\n"
-    "  --overwrite    replace the views' files if DIR holds them already\n"
-    "                 (default off: any one there is refused before\n"
-    "                 rendering; an input never is replaced)\n"
-    "  --help         print this help and exit\n"
+    "file.\n";
+
+static const char depth_after[] =
     "Examples:\n"
     "  nerf-export depth --model lego.nerf --data lego --downscale 4 \\\n"
     "      --skip 10 --out lego-depth\n"
     "  python3 -c \"import numpy; d = numpy.load('lego-depth/000_zdepth.npy')\"\n";
 
-static const char points_usage[] =
-    "usage: nerf-export points --model MODEL --out FILE.ply\n"
-    "                          (--data DIR [--split S] [--skip K]\n"
-    "                           [--downscale K] | --poses FILE [--data DIR])\n"
-    "                          [--max-points N] [--stride K] [--opacity T]\n"
-    "                          [--ascii] [--overwrite]\n"
+static const char points_about[] =
     "Render the views of a split of the scene MODEL was trained on (or the\n"
     "cameras of a file) and write\n"
     "one point per ray whose opacity reaches T, at the ray's expected\n"
     "termination point, with the ray's colour and a normal estimated from\n"
     "the neighbouring rays' points (0 0 0 where none can be: at the image's\n"
     "depth discontinuities and beside rays without a point), as a PLY file\n"
-    "(written to a temporary name, then renamed).\n"
-    "  --model MODEL   the checkpoint nerf-train saved (required)\n"
-    "  --data DIR      the scene MODEL was trained on: its views (default:\n"
-    "                  required unless --poses gives the views); with\n"
-    "                  --poses only its bounds, background and placement\n"
-    "  --poses FILE    use the cameras of a camera path file instead, as\n"
-    "                  nerf-render --poses reads it; the file must give the\n"
-    "                  image size and intrinsics (default none)\n"
-    "  --out FILE      the PLY file (required; its folder is made if missing)\n"
-    "  --split S       train, val or test (default train)\n"
-    "  --skip K        only every K-th view of the split (default 1: all)\n"
-    "  --downscale K   load the scene's cameras K times smaller (default 1)\n"
-    "  --max-points N  at most N points, thinned evenly in ray order\n"
-    "                  (default 1000000)\n"
-    "  --stride K      one ray per K x K pixels of each view (default 1)\n"
-    "  --opacity T     the least opacity of a ray that gives a point, in\n"
-    "                  [0, 1] (default 0.9)\n"
-    "  --ascii         an ASCII PLY (default binary little-endian)\n"
-    "  --overwrite     replace FILE if it exists (default off: an existing\n"
-    "                  FILE is refused; an input never is replaced)\n"
-    "  --help          print this help and exit\n"
+    "(written to a temporary name, then renamed).\n";
+
+static const char points_after[] =
     "Ctrl-C stops at once; nothing is written.\n"
     "Examples:\n"
     "  nerf-export points --model lego.nerf --data lego --downscale 2 \\\n"
@@ -107,13 +62,6 @@ static const char points_usage[] =
 #define INTERRUPTED 2
 /* A failure already described on stderr. */
 #define REPORTED 1
-
-static volatile sig_atomic_t interrupted;
-
-static void on_signal(int sig)
-{
-    interrupted = sig;
-}
 
 /* The largest --stride: every K-th pixel's ray in each direction. */
 #define STRIDE_MAX 1024
@@ -132,94 +80,97 @@ typedef struct args {
     int ascii;
 } args;
 
-static const char *const depth_options[] = {
-    "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
-    "--downscale", "--png", "--no-png", "--poses", "--overwrite", NULL
-};
+/* --poses in the help of each. */
+static const char depth_poses[] =
+    "render the cameras of a camera path file instead, as\n"
+    "nerf-render --poses reads it; the file must give the\n"
+    "image size and intrinsics (a transforms.json with w,\n"
+    "h and camera_angle_x or fl_x) (default none)";
+static const char points_poses[] =
+    "use the cameras of a camera path file instead, as\n"
+    "nerf-render --poses reads it; the file must give the\n"
+    "image size and intrinsics (default none)";
 
-static const char *const points_options[] = {
-    "--help", "-h", "--model", "--data", "--out", "--split", "--skip",
-    "--downscale", "--max-points", "--stride", "--opacity", "--ascii",
-    "--poses", "--overwrite", NULL
-};
-
-/* 0, 1 after --help, -1 after a usage error (printed). */
+/* 0, or -1 after a usage error (printed). */
 static int parse(int argc, char **argv, args *a, int points)
 {
-    const char *prog = a->program;
-    const char *const *names = points ? points_options : depth_options;
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(points ? points_usage : depth_usage, stdout);
-            return 1;
-        }
-        if (!points && (strcmp(k, "--png") == 0 ||
-                        strcmp(k, "--no-png") == 0)) {
-            a->png = strcmp(k, "--png") == 0;
-            continue;
-        }
-        if (points && strcmp(k, "--ascii") == 0) {
-            a->ascii = 1;
-            continue;
-        }
-        if (strcmp(k, "--overwrite") == 0) {
-            a->overwrite = 1;
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        int rc = 0;
-        if (v == NULL && cli_check_option(prog, k, names) != 0) {
-            /* A flag parse() does not know has no value either. */
-            return -1;
-        } else if (strcmp(k, "--model") == 0) {
-            rc = cli_text_option(prog, k, v, &a->model);
-        } else if (strcmp(k, "--data") == 0) {
-            rc = cli_text_option(prog, k, v, &a->data);
-        } else if (strcmp(k, "--out") == 0) {
-            rc = cli_text_option(prog, k, v, &a->out);
-        } else if (strcmp(k, "--poses") == 0) {
-            rc = cli_text_option(prog, k, v, &a->poses);
-        } else if (strcmp(k, "--split") == 0) {
-            int split = v != NULL ? cli_split(v) : -1;
-            a->split = (uint64_t)split;
-            a->data_options = 1;
-            if (split < 0) {
-                cli_bad_value(prog, k, v, "train, val or test");
-                rc = -1;
-            }
-        } else if (strcmp(k, "--skip") == 0) {
-            rc = cli_int_option(prog, k, v, 1, CLI_SKIP_MAX, &a->skip);
-            a->data_options = 1;
-        } else if (strcmp(k, "--downscale") == 0) {
-            rc = cli_int_option(prog, k, v, 1, CLI_DOWNSCALE_MAX,
-                                &a->downscale);
-            a->data_options = 1;
-        } else if (points && strcmp(k, "--max-points") == 0) {
-            rc = cli_int_option(prog, k, v, 1, UINT64_MAX / 2, &a->max_points);
-        } else if (points && strcmp(k, "--stride") == 0) {
-            rc = cli_int_option(prog, k, v, 1, STRIDE_MAX, &a->stride);
-        } else if (points && strcmp(k, "--opacity") == 0) {
-            rc = cli_real_option(prog, k, v, 0.0, 1.0, 0, &a->opacity);
-        } else {
-            cli_unknown(prog, k, names);
-            return -1;
-        }
-        if (rc != 0) {
-            return -1;
-        }
+    opt opts[16];
+    size_t n = 0;
+    opts[n++] = (opt){OPT_MODEL(&a->model)};
+    opts[n++] = (opt){
+        .name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_ONE_OF,
+        .value = "DIR",
+        .help = "the scene MODEL was trained on: its views (default:\n"
+                "required unless --poses gives the views); with\n"
+                "--poses only its bounds, background and placement"};
+    opts[n++] = (opt){.name = "--poses", OPT_TEXT_TO(&a->poses),
+                      .flags = OPT_ONE_OF, .value = "FILE",
+                      .help = points ? points_poses : depth_poses};
+    opts[n++] = (opt){
+        .name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
+        .value = points ? "FILE" : "DIR",
+        .help = points ? "the PLY file (required; its folder is made if "
+                         "missing)"
+                       : "the output folder (required)"};
+    opts[n++] = (opt){OPT_SPLIT(&a->split), .given = &a->data_options,
+                      .help = "train, val or test (default {default})"};
+    opts[n++] = (opt){
+        OPT_SKIP(&a->skip), .given = &a->data_options,
+        .help = "only every K-th view of the split (default {default}: all)"};
+    opts[n++] = (opt){
+        OPT_DOWNSCALE(&a->downscale), .given = &a->data_options,
+        .help = "load the scene's cameras K times smaller (default "
+                "{default})"};
+    if (points) {
+        opts[n++] = (opt){
+            .name = "--max-points",
+            OPT_INT_IN(&a->max_points, 1, UINT64_MAX / 2), .value = "N",
+            .help = "at most N points, thinned evenly in ray order\n"
+                    "(default {default})"};
+        opts[n++] = (opt){
+            .name = "--stride", OPT_INT_IN(&a->stride, 1, STRIDE_MAX),
+            .value = "K",
+            .help = "one ray per K x K pixels of each view (default "
+                    "{default})"};
+        opts[n++] = (opt){
+            .name = "--opacity", OPT_REAL_IN(&a->opacity, 0.0, 1.0, 0),
+            .value = "T",
+            .help = "the least opacity of a ray that gives a point, in\n"
+                    "{range} (default {default})"};
+        opts[n++] = (opt){
+            .name = "--ascii", OPT_FLAG_SETS(&a->ascii, 1),
+            .help = "an ASCII PLY (default binary little-endian)"};
+    } else {
+        opts[n++] = (opt){
+            .name = "--png", OPT_FLAG_SETS(&a->png, 1),
+            .help = "also write 8-bit previews, as nerf-render --depth does:\n"
+                    "NNN_depth.png (z depth from the scene's near bound,\n"
+                    "white, to its far bound, black; black where the\n"
+                    "opacity is below 0.001) and NNN_opacity.png (the\n"
+                    "default)"};
+        opts[n++] = (opt){.name = "--no-png", OPT_FLAG_SETS(&a->png, 0),
+                          .help = "write the .npy arrays only"};
     }
-    if (a->model == NULL || a->out == NULL ||
-        (a->data == NULL && a->poses == NULL)) {
-        cli_usage_error(prog, "--model, --out and --data or --poses are "
-                        "required");
+    opts[n++] = (opt){
+        OPT_OVERWRITE(&a->overwrite),
+        .help = points ? "replace FILE if it exists (default off: an existing\n"
+                         "FILE is refused; an input never is replaced)"
+                       : "replace the views' files if DIR holds them already\n"
+                         "(default off: any one there is refused before\n"
+                         "rendering; an input never is replaced)"};
+    opts[n] = (opt){.name = NULL};
+    const opt_program p = {.name = a->program, .opts = opts,
+                           .column = points ? 18 : 17,
+                           .about = points ? points_about : depth_about,
+                           .after = points ? points_after : depth_after};
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     /* Refused rather than ignored: the user meant something by them. */
     if (a->poses && a->data_options) {
-        cli_usage_error(prog, "--split, --skip and --downscale choose the "
-                        "views of --data; with --poses they would change "
-                        "nothing");
+        cli_usage_error(a->program, "--split, --skip and --downscale "
+                        "choose the views of --data; with --poses they "
+                        "would change nothing");
         return -1;
     }
     return 0;
@@ -481,9 +432,8 @@ int export_depth(int argc, char **argv)
     a.skip = 1;
     a.downscale = 1;
     a.png = 1;
-    int p = parse(argc, argv, &a, 0);
-    if (p != 0) {
-        return p > 0 ? 0 : 2;
+    if (parse(argc, argv, &a, 0) != 0) {
+        return 2;
     }
     if (out_ready_folder(a.out, a.program) != 0) {
         return 1;
@@ -495,8 +445,7 @@ int export_depth(int argc, char **argv)
         return 2;
     }
     if (rc == NERF_OK) {
-        signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
+        interrupt_catch(1);
         rc = depth_views(&a, &v);
     }
     close_views(&v);
@@ -530,9 +479,8 @@ int export_points(int argc, char **argv)
     a.max_points = NERF_POINTS_DEFAULT_MAX;
     a.stride = 1;
     a.opacity = NERF_POINTS_DEFAULT_OPACITY;
-    int p = parse(argc, argv, &a, 1);
-    if (p != 0) {
-        return p > 0 ? 0 : 2;
+    if (parse(argc, argv, &a, 1) != 0) {
+        return 2;
     }
     const out_input inputs[3] = {
         {"--model", a.model}, {"--data", a.data}, {"--poses", a.poses}};
@@ -568,8 +516,7 @@ int export_points(int argc, char **argv)
         po.progress = on_points_progress;
         po.progress_user = &bar;
         progress_begin(&bar, a.program, total);
-        signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
+        interrupt_catch(1);
         rc = nerf_points_from_views(&pts, v.renderer, cams, n, &po);
     }
     if (rc == NERF_OK) {

@@ -7,39 +7,20 @@
 #include <string.h>
 
 #include "common/cli.h"
-#include "common/options.h"
+#include "common/opt_table.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+#include "common/shared_opts.h"
 
 #define PROG "nerf-eval"
 
-static const char usage[] =
-    "usage: nerf-eval --model MODEL --data DIR [--split S] [--downscale K]\n"
-    "                 [--skip K] [--march-steps N] [--json]\n"
+static const char about[] =
     "Render every view of a split of the scene MODEL was trained on and\n"
     "compare it with the scene's image: PSNR (dB, higher is better) and SSIM\n"
     "(0..1, Gaussian window 11, sigma 1.5) per view and on average.  Views\n"
-    "are numbered by their index in the split: \"view 16\" is its 17th image.\n"
-    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
-    "  --data DIR     the scene (required): Blender, transforms.json, LLFF\n"
-    "                 or COLMAP, as for nerf-train\n"
-    "  --split S      train, val or test (default test)\n"
-    "  --downscale K  load the images K times smaller (default 1: full\n"
-    "                 size); use the value MODEL was trained with\n"
-    "  --skip K       score only every K-th view of the split (views 0, K,\n"
-    "                 2K, ...), to save time, as the reference's \"testskip\"\n"
-    "                 (default 1: every view)\n"
-    "  --march-steps N  render a marching model (the fast preset) in steps\n"
-    "                 of its grid's diagonal / N, 1..65536, instead of the\n"
-    "                 N MODEL records (nerf-train --render-march-steps,\n"
-    "                 1280 for fast since 0.10.9; 1024 before, as it\n"
-    "                 trains): finer steps integrate each ray more exactly\n"
-    "                 and take longer (docs/performance.md; default:\n"
-    "                 MODEL's)\n"
-    "  --json         print one JSON object on stdout instead of the table:\n"
-    "                 {\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
-    "                 [{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)\n"
-    "  --help         print this help and exit\n"
+    "are numbered by their index in the split: \"view 16\" is its 17th image.\n";
+
+static const char after[] =
     "It writes no file: the table (or --json) goes to stdout.\n"
     "Examples:\n"
     "  nerf-eval --model lego.nerf --data lego --downscale 8 --skip 8\n"
@@ -53,12 +34,6 @@ typedef struct args {
     int json;
 } args;
 
-/* The options parse() knows, to suggest for a mistyped one. */
-static const char *const options[] = {
-    "--help", "-h", "--json", "--model", "--data", "--split", "--downscale",
-    "--skip", "--march-steps", NULL
-};
-
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
@@ -66,52 +41,38 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     a->skip = 1;
     a->march = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(usage, stdout);
-            exit(0);
-        }
-        if (strcmp(k, "--json") == 0) {
-            a->json = 1;
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        int rc = 0;
-        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
-            /* A flag parse() does not know has no value either. */
-            rc = -1;
-        } else if (strcmp(k, "--model") == 0) {
-            rc = cli_text_option(PROG, k, v, &a->model);
-        } else if (strcmp(k, "--data") == 0) {
-            rc = cli_text_option(PROG, k, v, &a->data);
-        } else if (strcmp(k, "--split") == 0) {
-            int split = v != NULL ? cli_split(v) : -1;
-            a->split = (uint64_t)split;
-            if (split < 0) {
-                cli_bad_value(PROG, k, v, "train, val or test");
-                rc = -1;
-            }
-        } else if (strcmp(k, "--downscale") == 0) {
-            rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX,
-                                &a->downscale);
-        } else if (strcmp(k, "--skip") == 0) {
-            rc = cli_int_option(PROG, k, v, 1, CLI_SKIP_MAX, &a->skip);
-        } else if (strcmp(k, "--march-steps") == 0) {
-            rc = cli_march_steps(PROG, k, v, &a->march);
-        } else {
-            cli_unknown(PROG, k, options);
-            rc = -1;
-        }
-        if (rc != 0) {
-            return -1;
-        }
-    }
-    if (a->model == NULL || a->data == NULL) {
-        cli_usage_error(PROG, "--model and --data are required");
-        return -1;
-    }
-    return 0;
+    const opt opts[] = {
+        {OPT_MODEL(&a->model)},
+        {.name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_REQUIRED,
+         .value = "DIR",
+         .help = "the scene (required): Blender, transforms.json, LLFF\n"
+                 "or COLMAP, as for nerf-train"},
+        {OPT_SPLIT(&a->split),
+         .help = "train, val or test (default {default})"},
+        {OPT_DOWNSCALE(&a->downscale),
+         .help = "load the images K times smaller (default {default}: full\n"
+                 "size); use the value MODEL was trained with"},
+        {OPT_SKIP(&a->skip),
+         .help = "score only every K-th view of the split (views 0, K,\n"
+                 "2K, ...), to save time, as the reference's \"testskip\"\n"
+                 "(default {default}: every view)"},
+        {OPT_MARCH_STEPS("--march-steps", &a->march),
+         .help = "render a marching model (the fast preset) in steps\n"
+                 "of its grid's diagonal / N, {range}, instead of the\n"
+                 "N MODEL records (nerf-train --render-march-steps,\n"
+                 "1280 for fast since 0.10.9; 1024 before, as it\n"
+                 "trains): finer steps integrate each ray more exactly\n"
+                 "and take longer (docs/performance.md; default:\n"
+                 "MODEL's)"},
+        {.name = "--json", OPT_FLAG_SETS(&a->json, 1),
+         .help = "print one JSON object on stdout instead of the table:\n"
+                 "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
+                 "[{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)"},
+        {.name = NULL},
+    };
+    const opt_program p = {.name = PROG, .opts = opts, .column = 17,
+                           .about = about, .after = after};
+    return opt_parse(&p, argc, argv);
 }
 
 /* Render and score every view; per-view figures go into per_view. */

@@ -12,13 +12,14 @@
 #include "common/cli.h"
 #include "common/model_info.h"
 #include "common/options.h"
+#include "common/opt_table.h"
+#include "common/shared_opts.h"
 #include "common/out_file.h"
 
 /* Fixed, not argv[0]: an installed program's path says nothing. */
 #define PROGRAM "nerf-info"
 
-static const char usage[] =
-    "usage: nerf-info [MODEL [--json] [--export FILE [--overwrite]]]\n"
+static const char about[] =
     "Without arguments, print libnerf's version and build information.\n"
     "With MODEL (a file nerf-train wrote), describe it: its preset, encodings\n"
     "and networks, parameter count, whether its weights are finite, training\n"
@@ -27,16 +28,9 @@ static const char usage[] =
     "optimiser's moments, or a weights-only export) and the settings it is\n"
     "rendered with (recorded by training; guessed for older files).  Status 1\n"
     "when the weights are not finite (the run that trained MODEL diverged):\n"
-    "it is described, but no program renders, evaluates or trains it.\n"
-    "  --json         print the description as one JSON object (default: text)\n"
-    "  --export FILE  write MODEL without its optimiser state to FILE (under half\n"
-    "                 a checkpoint's size), for sharing, rendering\n"
-    "                 and evaluating; nerf-train cannot resume from it.  The\n"
-    "                 description is then FILE's.  FILE is never MODEL\n"
-    "                 itself (by any path or link)\n"
-    "  --overwrite    replace FILE if it exists (default off: an existing\n"
-    "                 FILE is refused)\n"
-    "  --help         print this help and exit\n"
+    "it is described, but no program renders, evaluates or trains it.\n";
+
+static const char after[] =
     "Status 1 if the library found at run time is not the version the\n"
     "program was built against.\n"
     "Examples:\n"
@@ -44,44 +38,35 @@ static const char usage[] =
     "  nerf-info lego.nerf\n"
     "  nerf-info lego.nerf --export lego-weights.nerf\n";
 
-static const char *const options[] = {"--help", "-h", "--json", "--export",
-                                      "--overwrite", NULL};
-
 typedef struct args {
     const char *model, *export_to;
     int json, overwrite;
 } args;
 
-/* 0: parsed; 1: --help printed; 2: a usage error, reported. */
+/* 0: parsed; 2: a usage error, reported. */
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(usage, stdout);
-            return 1;
-        }
-        if (strcmp(k, "--json") == 0) {
-            a->json = 1;
-        } else if (strcmp(k, "--overwrite") == 0) {
-            a->overwrite = 1;
-        } else if (strcmp(k, "--export") == 0) {
-            a->export_to = cli_value(argc, argv, &i);
-            if (a->export_to == NULL) {
-                cli_bad_value(PROGRAM, k, NULL, "a FILE");
-                return 2;
-            }
-        } else if (k[0] == '-' && k[1] != '\0') {
-            cli_unknown(PROGRAM, k, options);
-            return 2;
-        } else if (a->model == NULL) {
-            a->model = k;
-        } else {
-            cli_usage_error(PROGRAM, "one MODEL at a time (%s and %s)",
-                            a->model, k);
-            return 2;
-        }
+    const opt opts[] = {
+        {.name = "--json", OPT_FLAG_SETS(&a->json, 1),
+         .help = "print the description as one JSON object (default: text)"},
+        {.name = "--export", OPT_TEXT_TO(&a->export_to), .value = "FILE",
+         .help = "write MODEL without its optimiser state to FILE "
+                 "(under half\n"
+                 "a checkpoint's size), for sharing, rendering\n"
+                 "and evaluating; nerf-train cannot resume from it.  The\n"
+                 "description is then FILE's.  FILE is never MODEL\n"
+                 "itself (by any path or link)"},
+        {OPT_OVERWRITE(&a->overwrite),
+         .help = "replace FILE if it exists (default off: an existing\n"
+                 "FILE is refused)"},
+        {.name = NULL},
+    };
+    const opt_program p = {.name = PROGRAM, .opts = opts, .column = 17,
+                           .about = about, .after = after,
+                           .operand = "MODEL", .operand_to = &a->model};
+    if (opt_parse(&p, argc, argv) != 0) {
+        return 2;
     }
     if (a->model == NULL && (a->json || a->export_to)) {
         fprintf(stderr, PROGRAM ": --json and --export describe a MODEL; see "
@@ -174,9 +159,8 @@ static int describe(const args *a)
 int main(int argc, char **argv)
 {
     args a;
-    int rc = parse(argc, argv, &a);
-    if (rc != 0) {
-        return rc == 1 ? 0 : 2;
+    if (parse(argc, argv, &a) != 0) {
+        return 2;
     }
     return a.model ? describe(&a) : build_info();
 }

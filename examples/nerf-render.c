@@ -2,7 +2,6 @@
 #include <nerf.h>
 
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,12 +9,15 @@
 
 #include "common/cli.h"
 #include "common/dist.h"
+#include "common/interrupt.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/options.h"
+#include "common/opt_table.h"
 #include "common/orbit.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+#include "common/shared_opts.h"
 #include "common/video.h"
 
 /* nerf-render-mpi is this program built with common/dist_mpi.c. */
@@ -23,89 +25,11 @@
 #define PROG "nerf-render"
 #endif
 
-static const char usage[] =
-    "usage: nerf-render --model MODEL --out DIR\n"
-    "                   (--data DIR [--split S] [--downscale K]\n"
-    "                    | --path orbit|spiral [--frames N] [--data DIR]\n"
-    "                    | --poses FILE [--focal F | --fov DEG] [--data DIR])\n"
-    "                   [--width W] [--height H] [--depth] [--near T --far T]\n"
-    "                   [--march-steps N] [--skip-existing] [--overwrite]\n"
-    "                   [--video FILE.mp4 [--fps N]]\n"
+static const char about[] =
     "Render views of MODEL and write them to DIR (created if missing) as\n"
-    "r_NNN.png, NNN counting from 000 in the order of the views.\n"
-    "  --model MODEL  the checkpoint nerf-train saved (required)\n"
-    "  --out DIR      the folder of the images (required)\n"
-    "  --data DIR     the scene MODEL was trained on.  Alone: render each\n"
-    "                 view of its --split with the scene's own cameras.  With\n"
-    "                 --path or --poses it only gives the bounds, the\n"
-    "                 background and the placement (NDC for LLFF); without\n"
-    "                 it, those MODEL recorded in training (nerf-info shows\n"
-    "                 them; guessed from its shape for older files).\n"
-    "  --split S      with --data alone: train, val or test (default test)\n"
-    "  --downscale K  with --data: read the scene's images and cameras K\n"
-    "                 times smaller (an LLFF or COLMAP scene's images_K/;\n"
-    "                 default 1), which sets the size of the views of\n"
-    "                 --data and of --path unless --width/--height do;\n"
-    "                 a --path without it takes the first of images/,\n"
-    "                 images_2/ ... images_16/ the scene has\n"
-    "  --path orbit   a circle of --frames views around the origin at 30\n"
-    "                 degrees elevation, as for Blender scenes, framed to\n"
-    "                 keep the sphere of radius 1.5 (the box Blender scenes\n"
-    "                 lie in) whole at any aspect ratio: 39.6 degrees\n"
-    "                 across the frame's smaller side, from distance 4.43\n"
-    "  --path spiral  the reference's spiral path of a forward-facing (LLFF)\n"
-    "                 scene, two turns around its average pose (needs --data)\n"
-    "  --frames N     views along --path (default 40)\n"
-    "  --poses FILE   a camera path: a .npy of N camera-to-world matrices,\n"
-    "                 shape (N,3,4), (N,4,4), (N,12) or (N,16), float32 or\n"
-    "                 float64, OpenGL axes; or a transforms.json-style file\n"
-    "                 (camera_angle_x or fl_x, optional w and h,\n"
-    "                 frames[].transform_matrix)\n"
-    "  --focal F      with --poses: focal length in pixels (default: the\n"
-    "                 file's, else --fov 39.6)\n"
-    "  --fov DEG      with --poses: horizontal field of view in degrees\n"
-    "                 (default: the file's, else 39.6, as --path orbit)\n"
-    "  --width W      image width in pixels.  Default: with --data, the\n"
-    "                 size of its images (after --downscale) for its views\n"
-    "                 and either --path (the scene's views and the spiral\n"
-    "                 scale their focal length and centre with the size:\n"
-    "                 the same view, sharper or coarser); 100 for --path\n"
-    "                 orbit without --data; for --poses the file's w,\n"
-    "                 else 100.  Given alone, the height keeps the aspect\n"
-    "                 ratio (except with --poses, which needs both).\n"
-    "  --height H     image height in pixels; defaults as --width\n"
-    "  --depth        also write depth_NNN.png and opacity_NNN.png (default\n"
-    "                 off).  depth_NNN.png is 8-bit grey: the expected depth\n"
-    "                 of each pixel's visible content (the sum of w t over\n"
-    "                 the ray divided by its opacity) mapped linearly from\n"
-    "                 --near (white, 255) to --far (black, 0); pixels of\n"
-    "                 opacity below 0.001 are black.  Grey level v is depth\n"
-    "                 near + (1 - v / 255) (far - near), in units of t along\n"
-    "                 the ray (NDC depth, 0..1, for an LLFF scene).\n"
-    "                 opacity_NNN.png: 255 where the ray is fully absorbed,\n"
-    "                 0 where it sees only the background.\n"
-    "  --near T --far T  the range of depths sampled along each ray (and the\n"
-    "                 depth map's scale), given together, 0 <= T_near <\n"
-    "                 T_far (NDC depths within [0, 1] for an LLFF scene);\n"
-    "                 default the scene's bounds with --data, else 2 and 6\n"
-    "  --march-steps N  march a marching model (the fast preset) in steps of\n"
-    "                 its grid's diagonal / N, 1..65536 (default: the N\n"
-    "                 MODEL records, 1280 for fast since 0.10.9); finer\n"
-    "                 is slower and sharper, as nerf-eval --help says\n"
-    "  --video FILE   also write the views, in order, as an MP4 video\n"
-    "                 (H.264, or MPEG-4 part 2 if FFmpeg lacks libx264);\n"
-    "                 all views must share one even width and height.  A\n"
-    "                 build without FFmpeg's libraries says so and writes\n"
-    "                 the PNGs only (default none: PNGs only)\n"
-    "  --fps N        frames a second of the video (default 30)\n"
-    "  --skip-existing  render only the views whose files are not in DIR\n"
-    "                 yet: the same command again finishes a render that\n"
-    "                 was stopped (default off: render every view)\n"
-    "  --overwrite    replace the files of views DIR holds already, and an\n"
-    "                 existing --video FILE (default off: any file this run\n"
-    "                 would write over is refused before rendering; an\n"
-    "                 input never is replaced)\n"
-    "  --help         print this help and exit\n"
+    "r_NNN.png, NNN counting from 000 in the order of the views.\n";
+
+static const char after[] =
     "Ctrl-C (SIGINT) stops at once (the view being rendered is not\n"
     "written), says which views are written and exits with status 130\n"
     "(SIGTERM: 143).\n"
@@ -119,8 +43,12 @@ static const char usage[] =
     "nerf-render-mpi (built with Open MPI) takes the same flags under\n"
     "mpirun -np N: rank r renders views r, r + N, r + 2N ... (not --video).\n";
 
+/* --path's: none, or a path of --frames views. */
+enum { PATH_NONE, PATH_ORBIT, PATH_SPIRAL };
+
 typedef struct args {
-    const char *model, *out, *data, *path, *poses;
+    const char *model, *out, *data, *poses;
+    int path;
     uint64_t split, downscale, frames, width, height;
     double near, far, focal, fov;
     int depth, size_given, skip_existing, overwrite;
@@ -142,79 +70,18 @@ typedef struct args {
  * are the frames of a --poses file that gives no size. */
 #define ORBIT_SIDE 100
 
-/* The options parse() knows, to suggest for a mistyped one. */
-static const char *const options[] = {
-    "--help", "-h", "--depth", "--model", "--out", "--data", "--path",
-    "--poses", "--focal", "--fov", "--split", "--downscale", "--frames",
-    "--width", "--height", "--near", "--far", "--video", "--fps",
-    "--skip-existing", "--overwrite", "--march-steps", NULL
+static const opt_choice paths[] = {
+    {.name = "orbit", .id = PATH_ORBIT,
+     .help = "a circle of --frames views around the origin at 30\n"
+             "degrees elevation, as for Blender scenes, framed to\n"
+             "keep the sphere of radius 1.5 (the box Blender scenes\n"
+             "lie in) whole at any aspect ratio: 39.6 degrees\n"
+             "across the frame's smaller side, from distance 4.43"},
+    {.name = "spiral", .id = PATH_SPIRAL,
+     .help = "the reference's spiral path of a forward-facing (LLFF)\n"
+             "scene, two turns around its average pose (needs --data)"},
+    {.name = NULL},
 };
-
-/* Option k with its value v into a; 0, or -1 after saying what is wrong
- * (v NULL: the value is missing). */
-static int parse_value(args *a, const char *k, const char *v)
-{
-    int rc = 0;
-    if (strcmp(k, "--model") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->model);
-    } else if (strcmp(k, "--out") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->out);
-    } else if (strcmp(k, "--data") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->data);
-    } else if (strcmp(k, "--path") == 0) {
-        a->path = v;
-        if (v == NULL ||
-            (strcmp(v, "orbit") != 0 && strcmp(v, "spiral") != 0)) {
-            cli_bad_value(PROG, k, v, "orbit or spiral");
-            rc = -1;
-        }
-    } else if (strcmp(k, "--poses") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->poses);
-    } else if (strcmp(k, "--focal") == 0) {
-        rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
-                             &a->focal);
-    } else if (strcmp(k, "--fov") == 0) {
-        rc = cli_real_option(PROG, k, v, 0.0, 180.0,
-                             CLI_ABOVE_MIN | CLI_BELOW_MAX, &a->fov);
-    } else if (strcmp(k, "--split") == 0) {
-        int split = v != NULL ? cli_split(v) : -1;
-        a->split = (uint64_t)split;
-        a->split_given = 1;
-        if (split < 0) {
-            cli_bad_value(PROG, k, v, "train, val or test");
-            rc = -1;
-        }
-    } else if (strcmp(k, "--downscale") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX, &a->downscale);
-        a->downscale_given = 1;
-    } else if (strcmp(k, "--frames") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, FRAMES_MAX, &a->frames);
-        a->frames_given = 1;
-    } else if (strcmp(k, "--width") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->width);
-        a->size_given |= 1;
-    } else if (strcmp(k, "--height") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->height);
-        a->size_given |= 2;
-    } else if (strcmp(k, "--video") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->video);
-    } else if (strcmp(k, "--march-steps") == 0) {
-        rc = cli_march_steps(PROG, k, v, &a->march);
-    } else if (strcmp(k, "--fps") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, FPS_MAX, &a->fps);
-        a->fps_given = 1;
-    } else if (strcmp(k, "--near") == 0) {
-        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->near);
-        a->bounds_given |= 1;
-    } else if (strcmp(k, "--far") == 0) {
-        rc = cli_real_option(PROG, k, v, -HUGE_VAL, HUGE_VAL, 0, &a->far);
-        a->bounds_given |= 2;
-    } else {
-        cli_unknown(PROG, k, options);
-        rc = -1;
-    }
-    return rc;
-}
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -225,37 +92,111 @@ static int parse(int argc, char **argv, args *a)
     a->width = a->height = ORBIT_SIDE;
     a->fps = 30;
     a->march = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(usage, stdout);
-            exit(0);
-        }
-        if (strcmp(k, "--depth") == 0) {
-            a->depth = 1;
-            continue;
-        }
-        if (strcmp(k, "--skip-existing") == 0) {
-            a->skip_existing = 1;
-            continue;
-        }
-        if (strcmp(k, "--overwrite") == 0) {
-            a->overwrite = 1;
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        /* A flag parse() does not know has no value either. */
-        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
-            return -1;
-        }
-        if (parse_value(a, k, v) != 0) {
-            return -1;
-        }
-    }
-    if (a->model == NULL || a->out == NULL ||
-        (a->data == NULL && a->path == NULL && a->poses == NULL)) {
-        cli_usage_error(PROG, "--model, --out and --data, --path or "
-                        "--poses are required");
+    const opt opts[] = {
+        {OPT_MODEL(&a->model)},
+        {.name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
+         .value = "DIR", .help = "the folder of the images (required)"},
+        {.name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_ONE_OF,
+         .value = "DIR",
+         .help = "the scene MODEL was trained on.  Alone: render each\n"
+                 "view of its --split with the scene's own cameras.  With\n"
+                 "--path or --poses it only gives the bounds, the\n"
+                 "background and the placement (NDC for LLFF); without\n"
+                 "it, those MODEL recorded in training (nerf-info shows\n"
+                 "them; guessed from its shape for older files)."},
+        {OPT_SPLIT(&a->split), .given = &a->split_given,
+         .help = "with --data alone: train, val or test (default "
+                 "{default})"},
+        {OPT_DOWNSCALE(&a->downscale), .given = &a->downscale_given,
+         .help = "with --data: read the scene's images and cameras K\n"
+                 "times smaller (an LLFF or COLMAP scene's images_K/;\n"
+                 "default {default}), which sets the size of the views of\n"
+                 "--data and of --path unless --width/--height do;\n"
+                 "a --path without it takes the first of images/,\n"
+                 "images_2/ ... images_16/ the scene has"},
+        {.name = "--path", OPT_CHOICE_OF(&a->path, paths),
+         .flags = OPT_ONE_OF},
+        {.name = "--frames", OPT_INT_IN(&a->frames, 1, FRAMES_MAX),
+         .given = &a->frames_given, .value = "N",
+         .help = "views along --path (default {default})"},
+        {.name = "--poses", OPT_TEXT_TO(&a->poses), .flags = OPT_ONE_OF,
+         .value = "FILE",
+         .help = "a camera path: a .npy of N camera-to-world matrices,\n"
+                 "shape (N,3,4), (N,4,4), (N,12) or (N,16), float32 or\n"
+                 "float64, OpenGL axes; or a transforms.json-style file\n"
+                 "(camera_angle_x or fl_x, optional w and h,\n"
+                 "frames[].transform_matrix)"},
+        {.name = "--focal",
+         OPT_REAL_IN(&a->focal, 0.0, HUGE_VAL, CLI_ABOVE_MIN), .value = "F",
+         .help = "with --poses: focal length in pixels (default: the\n"
+                 "file's, else --fov 39.6)"},
+        {.name = "--fov",
+         OPT_REAL_IN(&a->fov, 0.0, 180.0, CLI_ABOVE_MIN | CLI_BELOW_MAX),
+         .value = "DEG",
+         .help = "with --poses: horizontal field of view in degrees\n"
+                 "(default: the file's, else 39.6, as --path orbit)"},
+        {OPT_IMAGE_SIDE("--width", &a->width, "W"), .given = &a->size_given,
+         .bit = 1,
+         .help = "image width in pixels.  Default: with --data, the\n"
+                 "size of its images (after --downscale) for its views\n"
+                 "and either --path (the scene's views and the spiral\n"
+                 "scale their focal length and centre with the size:\n"
+                 "the same view, sharper or coarser); 100 for --path\n"
+                 "orbit without --data; for --poses the file's w,\n"
+                 "else 100.  Given alone, the height keeps the aspect\n"
+                 "ratio (except with --poses, which needs both)."},
+        {OPT_IMAGE_SIDE("--height", &a->height, "H"),
+         .given = &a->size_given, .bit = 2,
+         .help = "image height in pixels; defaults as --width"},
+        {.name = "--depth", OPT_FLAG_SETS(&a->depth, 1),
+         .help = "also write depth_NNN.png and opacity_NNN.png (default\n"
+                 "off).  depth_NNN.png is 8-bit grey: the expected depth\n"
+                 "of each pixel's visible content (the sum of w t over\n"
+                 "the ray divided by its opacity) mapped linearly from\n"
+                 "--near (white, 255) to --far (black, 0); pixels of\n"
+                 "opacity below 0.001 are black.  Grey level v is depth\n"
+                 "near + (1 - v / 255) (far - near), in units of t along\n"
+                 "the ray (NDC depth, 0..1, for an LLFF scene).\n"
+                 "opacity_NNN.png: 255 where the ray is fully absorbed,\n"
+                 "0 where it sees only the background."},
+        /* Their own checks follow, after both are read. */
+        {.name = "--near", OPT_REAL_IN(&a->near, -HUGE_VAL, HUGE_VAL, 0),
+         .given = &a->bounds_given, .bit = 1, .value = "T",
+         .head = "--near T --far T",
+         .help = "the range of depths sampled along each ray (and the\n"
+                 "depth map's scale), given together, 0 <= T_near <\n"
+                 "T_far (NDC depths within [0, 1] for an LLFF scene);\n"
+                 "default the scene's bounds with --data, else 2 and 6"},
+        {.name = "--far", OPT_REAL_IN(&a->far, -HUGE_VAL, HUGE_VAL, 0),
+         .given = &a->bounds_given, .bit = 2, .value = "T"},
+        {OPT_MARCH_STEPS("--march-steps", &a->march),
+         .help = "march a marching model (the fast preset) in steps of\n"
+                 "its grid's diagonal / N, {range} (default: the N\n"
+                 "MODEL records, 1280 for fast since 0.10.9); finer\n"
+                 "is slower and sharper, as nerf-eval --help says"},
+        {.name = "--video", OPT_TEXT_TO(&a->video), .value = "FILE",
+         .help = "also write the views, in order, as an MP4 video\n"
+                 "(H.264, or MPEG-4 part 2 if FFmpeg lacks libx264);\n"
+                 "all views must share one even width and height.  A\n"
+                 "build without FFmpeg's libraries says so and writes\n"
+                 "the PNGs only (default none: PNGs only)"},
+        {.name = "--fps", OPT_INT_IN(&a->fps, 1, FPS_MAX),
+         .given = &a->fps_given, .value = "N",
+         .help = "frames a second of the video (default {default})"},
+        {.name = "--skip-existing", OPT_FLAG_SETS(&a->skip_existing, 1),
+         .help = "render only the views whose files are not in DIR\n"
+                 "yet: the same command again finishes a render that\n"
+                 "was stopped (default off: render every view)"},
+        {OPT_OVERWRITE(&a->overwrite),
+         .help = "replace the files of views DIR holds already, and an\n"
+                 "existing --video FILE (default off: any file this run\n"
+                 "would write over is refused before rendering; an\n"
+                 "input never is replaced)"},
+        {.name = NULL},
+    };
+    const opt_program p = {.name = PROG, .opts = opts, .column = 17,
+                           .about = about, .after = after};
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (a->path && a->poses) {
@@ -303,19 +244,19 @@ static int parse(int argc, char **argv, args *a)
                         "drop --skip-existing");
         return -1;
     }
-    if (a->path && strcmp(a->path, "spiral") == 0 && a->data == NULL) {
+    if (a->path == PATH_SPIRAL && a->data == NULL) {
         cli_usage_error(PROG, "--path spiral needs --data");
         return -1;
     }
     /* Options that would change nothing are refused rather than ignored:
      * the user meant something by them. */
-    if (a->frames_given && a->path == NULL) {
+    if (a->frames_given && a->path == PATH_NONE) {
         cli_usage_error(PROG, "--frames goes with --path (--data "
                         "renders each view of its split, --poses each "
                         "camera of the file)");
         return -1;
     }
-    int views_of_data = a->path == NULL && a->poses == NULL;
+    int views_of_data = a->path == PATH_NONE && a->poses == NULL;
     if (a->split_given && !views_of_data) {
         cli_usage_error(PROG, "--split chooses the views of --data "
                         "to render; with --%s it would change nothing",
@@ -417,8 +358,8 @@ static int view_camera(const args *a, const nerf_dataset *ds,
     if (cp != NULL) {
         return nerf_camera_path_camera(cp, i, cam);
     }
-    if (a->path == NULL || strcmp(a->path, "spiral") == 0) {
-        int rc = a->path == NULL ? nerf_dataset_camera(ds, i, cam)
+    if (a->path != PATH_ORBIT) {
+        int rc = a->path == PATH_NONE ? nerf_dataset_camera(ds, i, cam)
                                  : nerf_dataset_spiral_camera(ds, i, n, cam);
         if (rc == NERF_OK && a->size_given) {
             resize_camera(a, cam);
@@ -472,7 +413,7 @@ static int load_scene(args *a, const nerf_model *m, const nerf_hooks *hooks,
     dopt.forward_facing = setup_forward_facing(m, -1);
     dopt.hooks = hooks;
     int rc = nerf_dataset_load(out, a->data, &dopt);
-    if (rc != NERF_ENOENT || a->path == NULL || a->downscale_given) {
+    if (rc != NERF_ENOENT || a->path == PATH_NONE || a->downscale_given) {
         return rc;
     }
     char first[1024];
@@ -490,14 +431,6 @@ static int load_scene(args *a, const nerf_model *m, const nerf_hooks *hooks,
     fprintf(stderr, "%s: %s: %s\n", PROG, nerf_status_string(NERF_ENOENT),
             first);
     return REPORTED;
-}
-
-/* The signal that stopped the render (SIGINT, SIGTERM), 0 while none has. */
-static volatile sig_atomic_t interrupted;
-
-static void on_signal(int sig)
-{
-    interrupted = sig;
 }
 
 /* The renderer's reports, within an image, onto the bar of all views. */
@@ -905,12 +838,7 @@ static int run(int argc, char **argv)
      * not, are ended by it). */
     dist_barrier(&D);
     if (rc == NERF_OK) {
-        signal(SIGINT, on_signal);
-        /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
-         * caught, it would leave the rank waiting for the dead one. */
-        if (D.size == 1) {
-            signal(SIGTERM, on_signal);
-        }
+        interrupt_catch(D.size == 1);
         rc = render_all(&a, r, ds, cp, near, far);
     }
     if (rc != NERF_OK && rc != REPORTED && rc != INTERRUPTED &&

@@ -2,7 +2,6 @@
 #include <nerf.h>
 
 #include <math.h>
-#include <signal.h>
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
@@ -10,108 +9,28 @@
 
 #include "common/cli.h"
 #include "common/dist.h"
+#include "common/interrupt.h"
 #include "common/matmul_name.h"
 #include "common/out_folder.h"
 #include "common/out_file.h"
 #include "common/options.h"
+#include "common/opt_table.h"
 #include "common/progress.h"
 #include "common/scene_setup.h"
+#include "common/shared_opts.h"
 
 /* nerf-train-mpi is this program built with common/dist_mpi.c. */
 #ifndef PROG
 #define PROG "nerf-train"
 #endif
 
-static const char usage[] =
-    "usage: nerf-train --data DIR --out MODEL [--preset tiny|reference|fast]\n"
-    "                  [--steps N] [--seconds S] [--downscale K] [--batch N]\n"
-    "                  [--seed N] [--lr RATE] [--lr-final RATE]\n"
-    "                  [--checkpoint-every N]\n"
-    "                  [--resume | --overwrite]\n"
-    "                  [--batch-samples N] [--random-background 0|1]\n"
-    "                  [--matmul " MATMUL_CHOICES "]\n"
-    "                  [--space auto|box|ndc|unbounded]\n"
-    "                  [--coarse-samples N] [--fine-samples N]\n"
-    "                  [--render-march-steps N]\n"
+static const char about[] =
     "Train a NeRF on the scene in DIR (Blender transforms_*.json, one\n"
     "instant-ngp transforms.json split every 8th frame, LLFF\n"
     "poses_bounds.npy, or a COLMAP model in sparse/0/ beside images/,\n"
-    "detected from the folder) and save it to MODEL.\n"
-    "  --data DIR    the scene (required)\n"
-    "  --out MODEL   the checkpoint to write (required)\n"
-    "  --preset      network and samples: reference (the paper's; slow on a\n"
-    "                CPU), tiny (default) or fast (hash grid and small MLPs)\n"
-    "  --steps N     train until the model has taken N steps, the learning\n"
-    "                rate decaying over them (default 2000; --resume: the\n"
-    "                steps MODEL was given)\n"
-    "  --seconds S   without --steps: train for S seconds, the learning\n"
-    "                rate decaying over the steps that time allows (it\n"
-    "                holds for the first quarter while the step rate is\n"
-    "                measured, and the length is fitted again at a half,\n"
-    "                three quarters and nine tenths of the time, or when\n"
-    "                the run reaches it before; the\n"
-    "                fitted length is saved in MODEL, so\n"
-    "                --resume continues the same run bit for bit); with\n"
-    "                --steps: stop at whichever comes first (default none)\n"
-    "  --downscale K load images K times smaller (default 1)\n"
-    "  --batch N     rays per step (default 2048 for fast, else 1024;\n"
-    "                --resume: the batch MODEL was trained with)\n"
-    "  --seed N      seed of initialisation and sampling (default 0)\n"
-    "  --lr RATE     initial learning rate, decaying exponentially over the\n"
-    "                run (default 5e-4 for reference, 5e-3 for tiny, 1e-2\n"
-    "                for fast)\n"
-    "  --lr-final RATE  the learning rate at the run's last step, at most\n"
-    "                --lr (default a tenth of --lr, the paper's)\n"
-    "  --checkpoint-every N  save MODEL every N steps (0: only at the\n"
-    "                end; default: every 2 minutes of training, since a\n"
-    "                save of the fast preset's 140 MB takes seconds)\n"
-    "  --resume      continue from MODEL if it exists (same data, preset,\n"
-    "                batch and seed give the same result as an unbroken run,\n"
-    "                and MODEL keeps its batch unless --batch is given;\n"
-    "                default off: start afresh); a --preset other than\n"
-    "                MODEL's is refused, and data unlike what MODEL was\n"
-    "                trained on is warned about\n"
-    "  --overwrite   replace MODEL if it exists (default off: without\n"
-    "                --resume or --overwrite, an existing MODEL is refused)\n"
-    "  --batch-samples N  a step takes rays until their samples reach N\n"
-    "                (--batch is then the most rays a step takes; 0: always\n"
-    "                --batch rays; default 131072 for fast without --batch,\n"
-    "                else 0; --resume: MODEL's)\n"
-    "  --random-background 0|1  1: train each ray of images with alpha\n"
-    "                (Blender scenes) against a random background colour, so\n"
-    "                that empty space cannot pass for the background (default\n"
-    "                1 for fast, 0 for the others)\n"
-    "  --matmul M    the network's matrix products: fp32 (cblas),\n"
-    "                fp32-onednn (fp32 through oneDNN, CPUs with AVX-512)\n"
-    "                or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
-    "                fp32).  Default: fp32-onednn for the tiny and\n"
-    "                reference presets where it runs, else fp32.  Saved in\n"
-    "                MODEL, so --resume, nerf-render and nerf-eval keep it\n"
-    "  --space S     where the fast preset's grids lie: box (a bounded\n"
-    "                scene), ndc (forward-facing), unbounded (all-round with\n"
-    "                a far background: space beyond a central cube is\n"
-    "                contracted); default auto, the dataset's (LLFF: ndc,\n"
-    "                COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
-    "                on a COLMAP folder places it as LLFF places a\n"
-    "                forward-facing capture (any preset)\n"
-    "  --coarse-samples N  stratified samples a ray, 2..4096 (default:\n"
-    "                the preset's, 64 for reference, 32 for tiny)\n"
-    "  --fine-samples N  hierarchical samples a ray added to them for the\n"
-    "                fine network, 0..4096 (0: none, the coarse network's\n"
-    "                samples only; default: the preset's, 128 for\n"
-    "                reference, 64 for tiny).  Fewer samples train and\n"
-    "                render faster, at some cost in quality; both are\n"
-    "                saved in MODEL, and the programs that render it use\n"
-    "                them.  Not for fast, which places its samples by\n"
-    "                marching\n"
-    "  --render-march-steps N  fast: record in MODEL that it renders in\n"
-    "                steps of its grid's diagonal / N, 1..65536 (it trains\n"
-    "                in 1024): finer steps integrate each ray more closely\n"
-    "                and take longer (default 1280: on lego about 0.1 dB\n"
-    "                more than 1024 for a fifth more time a frame;\n"
-    "                docs/performance.md); nerf-eval and nerf-render\n"
-    "                --march-steps override it\n"
-    "  --help        print this help and exit\n"
+    "detected from the folder) and save it to MODEL.\n";
+
+static const char after[] =
     "Ctrl-C (SIGINT) stops after the current step, saves MODEL and exits\n"
     "with status 130 (SIGTERM: 143).\n"
     "nerf-train-mpi (built with Open MPI) takes the same flags under\n"
@@ -129,19 +48,12 @@ static const char usage[] =
     "  nerf-train --data fern --downscale 8 --out fern.nerf --preset fast \\\n"
     "      --steps 4400 --seconds 600\n";
 
-static volatile sig_atomic_t interrupted;
-
 /* The processes of the run: this one alone, or MPI's ranks. */
 static dist D;
 
 /* A failure already described on stderr (not a libnerf status). */
 #define REPORTED (-1001)
 
-/* The signal that stopped the run (SIGINT, SIGTERM), 0 while none has. */
-static void on_signal(int sig)
-{
-    interrupted = sig;
-}
 
 /* The ranges of the options that have no library bound to take. */
 #define STEPS_MAX (UINT64_C(1) << 40)
@@ -203,116 +115,13 @@ typedef struct args {
     int64_t render_march; /* --render-march-steps; 0: the library's */
 } args;
 
-/* The options parse() knows, to suggest for a mistyped one. */
-static const char *const options[] = {
-    "--help", "-h", "--resume", "--overwrite", "--data", "--out",
-    "--preset", "--steps", "--seconds", "--downscale", "--batch", "--seed",
-    "--checkpoint-every", "--lr", "--lr-final", "--batch-samples",
-    "--matmul", "--space", "--random-background", "--coarse-samples",
-    "--fine-samples", "--render-march-steps", NULL
+static const opt_choice spaces[] = {
+    {.name = "auto", .id = -1},
+    {.name = "box", .id = NERF_SPACE_BOX},
+    {.name = "ndc", .id = NERF_SPACE_NDC},
+    {.name = "unbounded", .id = NERF_SPACE_UNBOUNDED},
+    {.name = NULL},
 };
-
-/* A learning rate's range: the library's for the parameter. */
-static int parse_rate(const char *option, const char *v, int param,
-                      double *out)
-{
-    double lo = 0.0, hi = 0.0;
-    nerf_param_bounds(param, &lo, &hi);
-    return cli_real_option(PROG, option, v, lo, hi, 0, out);
-}
-
-/* The value of the name v among names; -2 when it is none of them (or
- * NULL). */
-static int pick_name(const char *v, const char *const *names,
-                     const int *values)
-{
-    for (int i = 0; v != NULL && names[i] != NULL; i++) {
-        if (strcmp(v, names[i]) == 0) {
-            return values[i];
-        }
-    }
-    return -2;
-}
-
-/* Option k with its value v into a; 0, or -1 after saying what is wrong
- * (v NULL: the value is missing). */
-static int parse_value(args *a, const char *k, const char *v)
-{
-    static const char *const presets[] = {"tiny", "reference", "fast", NULL};
-    static const int preset_ids[] = {NERF_PRESET_TINY, NERF_PRESET_REFERENCE,
-                                     NERF_PRESET_FAST};
-    static const char *const spaces[] = {"auto", "box", "ndc", "unbounded",
-                                         NULL};
-    static const int space_ids[] = {-1, NERF_SPACE_BOX, NERF_SPACE_NDC,
-                                    NERF_SPACE_UNBOUNDED};
-    uint64_t n = 0;
-    int rc = 0;
-    if (strcmp(k, "--data") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->data);
-    } else if (strcmp(k, "--out") == 0) {
-        rc = cli_text_option(PROG, k, v, &a->out);
-    } else if (strcmp(k, "--preset") == 0) {
-        a->preset = pick_name(v, presets, preset_ids);
-        a->preset_given = 1;
-        if (a->preset < 0) {
-            cli_bad_value(PROG, k, v, "tiny, reference or fast");
-            rc = -1;
-        }
-    } else if (strcmp(k, "--steps") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, STEPS_MAX, &a->steps);
-        a->steps_given = 1;
-    } else if (strcmp(k, "--seconds") == 0) {
-        rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
-                             &a->seconds);
-    } else if (strcmp(k, "--downscale") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX, &a->downscale);
-    } else if (strcmp(k, "--batch") == 0) {
-        rc = cli_int_option(PROG, k, v, 1, BATCH_MAX, &a->batch);
-        a->batch_given = 1;
-    } else if (strcmp(k, "--seed") == 0) {
-        rc = cli_int_option(PROG, k, v, 0, UINT64_MAX, &a->seed);
-    } else if (strcmp(k, "--checkpoint-every") == 0) {
-        rc = cli_int_option(PROG, k, v, 0, UINT32_MAX, &a->every);
-    } else if (strcmp(k, "--lr") == 0) {
-        rc = parse_rate(k, v, NERF_PARAM_LEARNING_RATE, &a->lr);
-        a->lr_given |= 1;
-    } else if (strcmp(k, "--lr-final") == 0) {
-        rc = parse_rate(k, v, NERF_PARAM_LEARNING_RATE_FINAL, &a->lr_final);
-        a->lr_given |= 2;
-    } else if (strcmp(k, "--batch-samples") == 0) {
-        rc = cli_int_option(PROG, k, v, 0, BATCH_SAMPLES_MAX,
-                            &a->batch_samples);
-        a->batch_samples_given = 1;
-    } else if (strcmp(k, "--matmul") == 0) {
-        a->matmul = v != NULL ? matmul_parse(v) : -1;
-        if (a->matmul < 0) {
-            cli_bad_value(PROG, k, v, "one of " MATMUL_CHOICES);
-            rc = -1;
-        }
-    } else if (strcmp(k, "--space") == 0) {
-        a->space = pick_name(v, spaces, space_ids);
-        if (a->space == -2) {
-            cli_bad_value(PROG, k, v, "auto, box, ndc or unbounded");
-            rc = -1;
-        }
-    } else if (strcmp(k, "--random-background") == 0) {
-        rc = cli_int_option(PROG, k, v, 0, 1, &n);
-        a->random_bg = (int)n;
-    } else if (strcmp(k, "--coarse-samples") == 0) {
-        /* The ranges nerf_sampler_options takes. */
-        rc = cli_int_option(PROG, k, v, 2, SAMPLES_MAX, &n);
-        a->coarse = (int64_t)n;
-    } else if (strcmp(k, "--fine-samples") == 0) {
-        rc = cli_int_option(PROG, k, v, 0, SAMPLES_MAX, &n);
-        a->fine = (int64_t)n;
-    } else if (strcmp(k, "--render-march-steps") == 0) {
-        rc = cli_march_steps(PROG, k, v, &a->render_march);
-    } else {
-        cli_unknown(PROG, k, options);
-        rc = -1;
-    }
-    return rc;
-}
 
 static int parse(int argc, char **argv, args *a)
 {
@@ -325,31 +134,123 @@ static int parse(int argc, char **argv, args *a)
     a->matmul = -1;
     a->space = -1;
     a->coarse = a->fine = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(usage, stdout);
-            exit(0);
-        }
-        if (strcmp(k, "--resume") == 0) {
-            a->resume = 1;
-            continue;
-        }
-        if (strcmp(k, "--overwrite") == 0) {
-            a->overwrite = 1;
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        /* A flag parse() does not know has no value either. */
-        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
-            return -1;
-        }
-        if (parse_value(a, k, v) != 0) {
-            return -1;
-        }
-    }
-    if (a->data == NULL || a->out == NULL) {
-        cli_usage_error(PROG, "--data and --out are required");
+    /* The learning rates' ranges: the library's for the parameters. */
+    double lr_lo = 0.0, lr_hi = 0.0, final_lo = 0.0, final_hi = 0.0;
+    nerf_param_bounds(NERF_PARAM_LEARNING_RATE, &lr_lo, &lr_hi);
+    nerf_param_bounds(NERF_PARAM_LEARNING_RATE_FINAL, &final_lo, &final_hi);
+    const opt opts[] = {
+        {.name = "--data", OPT_TEXT_TO(&a->data), .flags = OPT_REQUIRED,
+         .value = "DIR", .help = "the scene (required)"},
+        {.name = "--out", OPT_TEXT_TO(&a->out), .flags = OPT_REQUIRED,
+         .value = "MODEL", .help = "the checkpoint to write (required)"},
+        {OPT_PRESET(&a->preset), .given = &a->preset_given,
+         .help = "network and samples: reference (the paper's; slow on a\n"
+                 "CPU), tiny (default) or fast (hash grid and small MLPs)"},
+        {.name = "--steps", OPT_INT_IN(&a->steps, 1, STEPS_MAX),
+         .given = &a->steps_given, .value = "N",
+         .help = "train until the model has taken N steps, the learning\n"
+                 "rate decaying over them (default {default}; --resume: the\n"
+                 "steps MODEL was given)"},
+        {.name = "--seconds",
+         OPT_REAL_IN(&a->seconds, 0.0, HUGE_VAL, CLI_ABOVE_MIN), .value = "S",
+         .help = "without --steps: train for S seconds, the learning\n"
+                 "rate decaying over the steps that time allows (it\n"
+                 "holds for the first quarter while the step rate is\n"
+                 "measured, and the length is fitted again at a half,\n"
+                 "three quarters and nine tenths of the time, or when\n"
+                 "the run reaches it before; the\n"
+                 "fitted length is saved in MODEL, so\n"
+                 "--resume continues the same run bit for bit); with\n"
+                 "--steps: stop at whichever comes first (default none)"},
+        {OPT_DOWNSCALE(&a->downscale),
+         .help = "load images K times smaller (default {default})"},
+        {.name = "--batch", OPT_INT_IN(&a->batch, 1, BATCH_MAX),
+         .given = &a->batch_given, .value = "N",
+         .help = "rays per step (default 2048 for fast, else 1024;\n"
+                 "--resume: the batch MODEL was trained with)"},
+        {.name = "--seed", OPT_INT_IN(&a->seed, 0, UINT64_MAX), .value = "N",
+         .help = "seed of initialisation and sampling (default {default})"},
+        {.name = "--lr", OPT_REAL_IN(&a->lr, lr_lo, lr_hi, 0),
+         .given = &a->lr_given, .bit = 1, .value = "RATE",
+         .help = "initial learning rate, decaying exponentially over the\n"
+                 "run (default 5e-4 for reference, 5e-3 for tiny, 1e-2\n"
+                 "for fast)"},
+        {.name = "--lr-final", OPT_REAL_IN(&a->lr_final, final_lo, final_hi, 0),
+         .given = &a->lr_given, .bit = 2, .value = "RATE",
+         .help = "the learning rate at the run's last step, at most\n"
+                 "--lr (default a tenth of --lr, the paper's)"},
+        {.name = "--checkpoint-every", OPT_INT_IN(&a->every, 0, UINT32_MAX),
+         .value = "N",
+         .help = "save MODEL every N steps (0: only at the\n"
+                 "end; default: every 2 minutes of training, since a\n"
+                 "save of the fast preset's 140 MB takes seconds)"},
+        {.name = "--resume", OPT_FLAG_SETS(&a->resume, 1),
+         .help = "continue from MODEL if it exists (same data, preset,\n"
+                 "batch and seed give the same result as an unbroken run,\n"
+                 "and MODEL keeps its batch unless --batch is given;\n"
+                 "default off: start afresh); a --preset other than\n"
+                 "MODEL's is refused, and data unlike what MODEL was\n"
+                 "trained on is warned about"},
+        {OPT_OVERWRITE(&a->overwrite),
+         .help = "replace MODEL if it exists (default off: without\n"
+                 "--resume or --overwrite, an existing MODEL is refused)"},
+        {.name = "--batch-samples",
+         OPT_INT_IN(&a->batch_samples, 0, BATCH_SAMPLES_MAX),
+         .given = &a->batch_samples_given, .value = "N",
+         .help = "a step takes rays until their samples reach N\n"
+                 "(--batch is then the most rays a step takes; 0: always\n"
+                 "--batch rays; default 131072 for fast without --batch,\n"
+                 "else 0; --resume: MODEL's)"},
+        {.name = "--random-background", OPT_INT_IN(&a->random_bg, 0, 1),
+         .value = "0|1",
+         .help = "1: train each ray of images with alpha\n"
+                 "(Blender scenes) against a random background colour, so\n"
+                 "that empty space cannot pass for the background (default\n"
+                 "1 for fast, 0 for the others)"},
+        {.name = "--matmul", OPT_CHOICE_OF(&a->matmul, matmul_choices),
+         .value = "M",
+         .help = "the network's matrix products: fp32 (cblas),\n"
+                 "fp32-onednn (fp32 through oneDNN, CPUs with AVX-512)\n"
+                 "or bf16 (oneDNN, CPUs with AVX512-BF16; weights stay\n"
+                 "fp32).  Default: fp32-onednn for the tiny and\n"
+                 "reference presets where it runs, else fp32.  Saved in\n"
+                 "MODEL, so --resume, nerf-render and nerf-eval keep it"},
+        {.name = "--space", OPT_CHOICE_OF(&a->space, spaces), .value = "S",
+         .help = "where the fast preset's grids lie: box (a bounded\n"
+                 "scene), ndc (forward-facing), unbounded (all-round with\n"
+                 "a far background: space beyond a central cube is\n"
+                 "contracted); default {default}, the dataset's (LLFF: ndc,\n"
+                 "COLMAP or aabb_scale > 1: unbounded, else box); ndc\n"
+                 "on a COLMAP folder places it as LLFF places a\n"
+                 "forward-facing capture (any preset)"},
+        /* The ranges nerf_sampler_options takes. */
+        {.name = "--coarse-samples", OPT_INT_IN(&a->coarse, 2, SAMPLES_MAX),
+         .value = "N",
+         .help = "stratified samples a ray, {range} (default:\n"
+                 "the preset's, 64 for reference, 32 for tiny)"},
+        {.name = "--fine-samples", OPT_INT_IN(&a->fine, 0, SAMPLES_MAX),
+         .value = "N",
+         .help = "hierarchical samples a ray added to them for the\n"
+                 "fine network, {range} (0: none, the coarse network's\n"
+                 "samples only; default: the preset's, 128 for\n"
+                 "reference, 64 for tiny).  Fewer samples train and\n"
+                 "render faster, at some cost in quality; both are\n"
+                 "saved in MODEL, and the programs that render it use\n"
+                 "them.  Not for fast, which places its samples by\n"
+                 "marching"},
+        {OPT_MARCH_STEPS("--render-march-steps", &a->render_march),
+         .help = "fast: record in MODEL that it renders in\n"
+                 "steps of its grid's diagonal / N, {range} (it trains\n"
+                 "in 1024): finer steps integrate each ray more closely\n"
+                 "and take longer (default 1280: on lego about 0.1 dB\n"
+                 "more than 1024 for a fifth more time a frame;\n"
+                 "docs/performance.md); nerf-eval and nerf-render\n"
+                 "--march-steps override it"},
+        {.name = NULL},
+    };
+    const opt_program p = {.name = PROG, .opts = opts, .column = 16,
+                           .about = about, .after = after};
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (a->resume && a->overwrite) {
@@ -392,16 +293,6 @@ static int parse(int argc, char **argv, args *a)
     return 0;
 }
 
-/* The checkpoint to resume, loaded before the dataset, whose placement
- * depends on the model's space; *m stays NULL when there is none. */
-static const char *preset_name(int preset)
-{
-    return preset == NERF_PRESET_TINY        ? "tiny"
-           : preset == NERF_PRESET_REFERENCE ? "reference"
-           : preset == NERF_PRESET_FAST      ? "fast"
-                                             : NULL;
-}
-
 /*
  * A model is a network of one shape: training another preset's network
  * from it cannot be done, and silently keeping the model's would be
@@ -413,12 +304,13 @@ static int check_preset(const args *a, const nerf_model *m)
     if (!a->preset_given || have == a->preset) {
         return NERF_OK;
     }
-    const char *name = preset_name(have);
+    const char *name = opt_choice_name(preset_choices, have);
     fprintf(stderr, PROG ": %s holds a model of %s%s%s, not of "
             "--preset %s: resume it without --preset, or train a new one "
             "with --overwrite\n", a->out, name ? "the " : "",
             name ? name : "no preset's network",
-            name ? " preset" : "", preset_name(a->preset));
+            name ? " preset" : "",
+            opt_choice_name(preset_choices, a->preset));
     return SETUP_USAGE;
 }
 
@@ -434,6 +326,8 @@ static int check_existing(const args *a)
                           &data, 1);
 }
 
+/* The checkpoint to resume, loaded before the dataset, whose placement
+ * depends on the model's space; *m stays NULL when there is none. */
 static int resume_model(const args *a, const nerf_hooks *hooks,
                         nerf_model **m)
 {
@@ -725,12 +619,7 @@ static int run(int argc, char **argv)
         nerf_sampler_destroy(s);
         return rc == SETUP_USAGE ? 2 : 1;
     }
-    signal(SIGINT, on_signal);
-    /* Under mpirun, SIGTERM is how the job ends a rank whose peer died:
-     * caught, it would leave the rank waiting for the dead one. */
-    if (D.size == 1) {
-        signal(SIGTERM, on_signal);
-    }
+    interrupt_catch(D.size == 1);
     plan pl;
     rc = plan_run(&a, m, &pl);
     if (rc != NERF_OK) {

@@ -4,11 +4,8 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include <nerf.h>
-
-#include "options.h"
 
 int cli_uint(const char *text, uint64_t min, uint64_t max, uint64_t *out)
 {
@@ -38,39 +35,6 @@ int cli_double(const char *text, double *out)
     }
     *out = v;
     return 0;
-}
-
-int cli_split(const char *text)
-{
-    static const char *const names[] = {"train", "val", "test"};
-    static const int splits[] = {NERF_SPLIT_TRAIN, NERF_SPLIT_VAL,
-                                 NERF_SPLIT_TEST};
-    for (int i = 0; i < 3; i++) {
-        if (strcmp(text, names[i]) == 0) {
-            return splits[i];
-        }
-    }
-    return -1;
-}
-
-int cli_march_steps(const char *program, const char *option, const char *text,
-                    int64_t *out)
-{
-    uint64_t n = 0;
-    if (cli_int_option(program, option, text, 1, CLI_MARCH_STEPS_MAX, &n) !=
-        0) {
-        return -1;
-    }
-    *out = (int64_t)n;
-    return 0;
-}
-
-const char *cli_value(int argc, char **argv, int *i)
-{
-    if (*i + 1 >= argc) {
-        return NULL;
-    }
-    return argv[++*i];
 }
 
 void cli_report(const char *program, int status)

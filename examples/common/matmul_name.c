@@ -4,17 +4,18 @@
 
 #include <nerf.h>
 
-static const char *const names[] = {
-    [NERF_MATMUL_FP32] = "fp32",
-    [NERF_MATMUL_BF16] = "bf16",
-    [NERF_MATMUL_FP32_ONEDNN] = "fp32-onednn",
+const opt_choice matmul_choices[] = {
+    {.name = "fp32", .id = NERF_MATMUL_FP32},
+    {.name = "bf16", .id = NERF_MATMUL_BF16},
+    {.name = "fp32-onednn", .id = NERF_MATMUL_FP32_ONEDNN},
+    {.name = NULL},
 };
 
 int matmul_parse(const char *name)
 {
-    for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++) {
-        if (strcmp(name, names[k]) == 0) {
-            return k;
+    for (const opt_choice *c = matmul_choices; c->name != NULL; c++) {
+        if (strcmp(name, c->name) == 0) {
+            return c->id;
         }
     }
     return -1;
@@ -22,5 +23,10 @@ int matmul_parse(const char *name)
 
 const char *matmul_name(uint32_t kind)
 {
-    return kind < sizeof names / sizeof names[0] ? names[kind] : "unknown";
+    for (const opt_choice *c = matmul_choices; c->name != NULL; c++) {
+        if ((uint32_t)c->id == kind) {
+            return c->name;
+        }
+    }
+    return "unknown";
 }

@@ -7,8 +7,13 @@
 
 #include <stdint.h>
 
-/* "fp32|bf16|fp32-onednn", for usage lines and error messages. */
+#include "opt_table.h"
+
+/* "fp32|bf16|fp32-onednn", for nerf-bench's usage line. */
 #define MATMUL_CHOICES "fp32|bf16|fp32-onednn"
+
+/* The names, as --matmul's choices (opt_table.h). */
+extern const opt_choice matmul_choices[];
 
 /* The nerf_matmul named `name`, or -1. */
 int matmul_parse(const char *name);

@@ -5,15 +5,12 @@
 #include "model_info.h"
 #include "matmul_name.h"
 #include "scene_setup.h"
+#include "shared_opts.h"
 
 static const char *preset_name(int preset)
 {
-    switch (preset) {
-    case NERF_PRESET_REFERENCE: return "reference";
-    case NERF_PRESET_TINY: return "tiny";
-    case NERF_PRESET_FAST: return "fast";
-    default: return "custom";
-    }
+    const char *name = opt_choice_name(preset_choices, preset);
+    return name != NULL ? name : "custom";
 }
 
 static const char *encoding_name(uint32_t e)

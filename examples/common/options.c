@@ -85,18 +85,6 @@ const char *cli_suggest(const char *arg, const char *const *names)
     return best;
 }
 
-int cli_check_option(const char *program, const char *arg,
-                     const char *const *names)
-{
-    for (int k = 0; names[k] != NULL; k++) {
-        if (strcmp(arg, names[k]) == 0) {
-            return 0;
-        }
-    }
-    cli_unknown(program, arg, names);
-    return -1;
-}
-
 void cli_unknown(const char *program, const char *arg,
                  const char *const *names)
 {
@@ -185,15 +173,4 @@ int cli_real_option(const char *program, const char *option,
     word_range(expected, sizeof expected, min, max, flags);
     cli_bad_value(program, option, value, expected);
     return -1;
-}
-
-int cli_text_option(const char *program, const char *option,
-                    const char *value, const char **out)
-{
-    if (value == NULL) {
-        cli_bad_value(program, option, NULL, NULL);
-        return -1;
-    }
-    *out = value;
-    return 0;
 }

@@ -17,16 +17,10 @@
 const char *cli_suggest(const char *arg, const char *const *names);
 
 /*
- * 0 if arg is one of names; else prints, as one line on stderr,
- * "PROGRAM: unknown option 'ARG' (did you mean --X?); PROGRAM --help
- * lists the options" (or "unexpected argument" for a word that is not an
- * option) and returns -1.
+ * Prints, as one line on stderr, "PROGRAM: unknown option 'ARG' (did you
+ * mean --X?); PROGRAM --help lists the options" (or "unexpected argument"
+ * for a word that is not an option), the suggestion the nearest of names.
  */
-int cli_check_option(const char *program, const char *arg,
-                     const char *const *names);
-
-/* The message of cli_check_option() for an arg known not to be an option,
- * from a parser that matched it against its options itself. */
 void cli_unknown(const char *program, const char *arg,
                  const char *const *names);
 
@@ -53,11 +47,6 @@ void cli_bad_value(const char *program, const char *option, const char *value,
  */
 int cli_int_option(const char *program, const char *option, const char *value,
                    uint64_t min, uint64_t max, uint64_t *out);
-
-/* A text option's value (a path, a name): 0 with *out set, or -1 after
- * "OPTION needs a value" when value is NULL. */
-int cli_text_option(const char *program, const char *option,
-                    const char *value, const char **out);
 
 /* Flags of cli_real_option(): the range's ends themselves refused. */
 #define CLI_ABOVE_MIN 0x1u

@@ -71,7 +71,7 @@ int setup_model_space(nerf_model_options *mo, const nerf_dataset *dataset,
 
 /* A march asked of a model that does not march is set as asked, for the
  * renderer to refuse by name; steps is the programs' --march-steps,
- * 1..65536 (cli_march_steps()). */
+ * 1..65536 (OPT_MARCH_STEPS()). */
 static int march_with(nerf_sampler_options *so, int64_t steps)
 {
     if (so->march_steps == 0) {

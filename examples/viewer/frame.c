@@ -4,23 +4,17 @@
 #include <string.h>
 #include <time.h>
 
-int view_mode_parse(const char *name)
-{
-    for (int m = VIEW_RGB; m <= VIEW_OPACITY; m++) {
-        if (strcmp(name, view_mode_name((view_mode)m)) == 0) {
-            return m;
-        }
-    }
-    return -1;
-}
+const opt_choice view_modes[] = {
+    {.name = "rgb", .id = VIEW_RGB},
+    {.name = "depth", .id = VIEW_DEPTH},
+    {.name = "opacity", .id = VIEW_OPACITY},
+    {.name = NULL},
+};
 
 const char *view_mode_name(view_mode mode)
 {
-    switch (mode) {
-    case VIEW_DEPTH: return "depth";
-    case VIEW_OPACITY: return "opacity";
-    default: return "rgb";
-    }
+    const char *name = opt_choice_name(view_modes, (int)mode);
+    return name != NULL ? name : "rgb";
 }
 
 static int frame_reserve(frame *f, size_t pixels)

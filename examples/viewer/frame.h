@@ -10,6 +10,8 @@
 
 #include <nerf.h>
 
+#include "../common/opt_table.h"
+
 typedef enum view_mode {
     VIEW_RGB = 0,
     VIEW_DEPTH = 1,
@@ -26,8 +28,8 @@ typedef struct frame {
     double seconds;  /* time the last render took */
 } frame;
 
-/* "rgb", "depth" or "opacity" to a view_mode; -1 for anything else. */
-int view_mode_parse(const char *name);
+/* The modes' names, "rgb", "depth" and "opacity", as --view's choices. */
+extern const opt_choice view_modes[];
 const char *view_mode_name(view_mode mode);
 
 /* Render cam (whose size the frame takes) with r.  Returns a libnerf

@@ -8,41 +8,18 @@
 
 #include "../common/cli.h"
 #include "../common/options.h"
+#include "../common/opt_table.h"
 #include "../common/out_file.h"
 #include "../common/scene_setup.h"
+#include "../common/shared_opts.h"
 #include "viewer.h"
 
 #define PROG "nerf-viewer"
 
-static const char usage[] =
-    "usage: nerf-viewer --model MODEL [--data DIR [--downscale K]]\n"
-    "                   [--width W] [--height H] [--view rgb|depth|opacity]\n"
-    "                   [--march-steps N] [--screenshot FILE]\n"
-    "                   [--overwrite] [--quit-after SECONDS]\n"
-    "Show MODEL in a window, rendered from a camera you move with the mouse.\n"
-    "  --model MODEL   the checkpoint nerf-train saved (required)\n"
-    "  --data DIR      the scene MODEL was trained on: its cameras choose\n"
-    "                  the start view, its bounds the samples (Blender-like\n"
-    "                  scenes circle the origin; LLFF scenes start at the\n"
-    "                  first camera).  Default none: a Blender-like scene.\n"
-    "  --downscale K   with --data: load its images K times smaller\n"
-    "                  (default 1)\n"
-    "  --width W, --height H  image size (default 256 wide, the data's\n"
-    "                  aspect ratio); rendering on the CPU is slow, keep it\n"
-    "                  small\n"
-    "  --view MODE     what to show first: rgb, depth or opacity (default\n"
-    "                  rgb)\n"
-    "  --march-steps N  march a marching model (the fast preset) in steps of\n"
-    "                  its grid's diagonal / N, 1..65536 (default: the N\n"
-    "                  MODEL records, 1280 for fast): coarser draws\n"
-    "                  faster, as nerf-render --march-steps\n"
-    "  --screenshot FILE  render the start view to FILE (PNG) and exit,\n"
-    "                  without opening a window (default: open one)\n"
-    "  --overwrite     with --screenshot: replace FILE if it exists (default\n"
-    "                  off: an existing FILE is refused; MODEL never is)\n"
-    "  --quit-after S  close the window after S seconds and print what was\n"
-    "                  rendered (for tests; default: stay open)\n"
-    "  --help          print this help and exit\n"
+static const char about[] =
+    "Show MODEL in a window, rendered from a camera you move with the mouse.\n";
+
+static const char after[] =
     "Mouse: left drag orbits, right drag or shift + left drag pans, the\n"
     "wheel zooms.  Keys: 1 colour, 2 depth, 3 opacity, r reset the view,\n"
     "q or Esc quit.  While the view moves it is drawn at a reduced\n"
@@ -64,69 +41,54 @@ typedef struct args {
     double quit_after;
 } args;
 
-/* The options parse() knows, to suggest for a mistyped one. */
-static const char *const options[] = {
-    "--help", "-h", "--model", "--data", "--screenshot", "--downscale",
-    "--width", "--height", "--view", "--march-steps", "--quit-after",
-    "--overwrite", NULL
-};
-
 static int parse(int argc, char **argv, args *a)
 {
     memset(a, 0, sizeof *a);
     a->downscale = 1;
     a->march = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *k = argv[i];
-        if (strcmp(k, "--help") == 0 || strcmp(k, "-h") == 0) {
-            fputs(usage, stdout);
-            exit(0);
-        }
-        if (strcmp(k, "--overwrite") == 0) {
-            a->overwrite = 1;
-            continue;
-        }
-        const char *v = cli_value(argc, argv, &i);
-        int rc = 0;
-        if (v == NULL && cli_check_option(PROG, k, options) != 0) {
-            /* A flag parse() does not know has no value either. */
-            rc = -1;
-        } else if (strcmp(k, "--model") == 0) {
-            rc = cli_text_option(PROG, k, v, &a->model);
-        } else if (strcmp(k, "--data") == 0) {
-            rc = cli_text_option(PROG, k, v, &a->data);
-        } else if (strcmp(k, "--screenshot") == 0) {
-            rc = cli_text_option(PROG, k, v, &a->screenshot);
-        } else if (strcmp(k, "--downscale") == 0) {
-            rc = cli_int_option(PROG, k, v, 1, CLI_DOWNSCALE_MAX,
-                                &a->downscale);
-            a->downscale_given = 1;
-        } else if (strcmp(k, "--width") == 0) {
-            rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE, &a->width);
-        } else if (strcmp(k, "--height") == 0) {
-            rc = cli_int_option(PROG, k, v, 1, NERF_IMAGE_MAX_SIDE,
-                                &a->height);
-        } else if (strcmp(k, "--view") == 0) {
-            a->mode = v != NULL ? view_mode_parse(v) : -1;
-            if (a->mode < 0) {
-                cli_bad_value(PROG, k, v, "rgb, depth or opacity");
-                rc = -1;
-            }
-        } else if (strcmp(k, "--march-steps") == 0) {
-            rc = cli_march_steps(PROG, k, v, &a->march);
-        } else if (strcmp(k, "--quit-after") == 0) {
-            rc = cli_real_option(PROG, k, v, 0.0, HUGE_VAL, CLI_ABOVE_MIN,
-                                 &a->quit_after);
-        } else {
-            cli_unknown(PROG, k, options);
-            rc = -1;
-        }
-        if (rc != 0) {
-            return -1;
-        }
-    }
-    if (a->model == NULL) {
-        cli_usage_error("nerf-viewer", "--model is required");
+    const opt opts[] = {
+        {OPT_MODEL(&a->model)},
+        {.name = "--data", OPT_TEXT_TO(&a->data), .value = "DIR",
+         .help = "the scene MODEL was trained on: its cameras choose\n"
+                 "the start view, its bounds the samples (Blender-like\n"
+                 "scenes circle the origin; LLFF scenes start at the\n"
+                 "first camera).  Default none: a Blender-like scene."},
+        {OPT_DOWNSCALE(&a->downscale), .given = &a->downscale_given,
+         .help = "with --data: load its images K times smaller\n"
+                 "(default {default})"},
+        {OPT_IMAGE_SIDE("--width", &a->width, "W"),
+         .head = "--width W, --height H",
+         .help = "image size (default " CLI_STR(DEFAULT_WIDTH)
+                 " wide, the data's\n"
+                 "aspect ratio); rendering on the CPU is slow, keep it\n"
+                 "small"},
+        {OPT_IMAGE_SIDE("--height", &a->height, "H")},
+        {.name = "--view", OPT_CHOICE_OF(&a->mode, view_modes),
+         .value = "MODE",
+         .help = "what to show first: rgb, depth or opacity (default\n"
+                 "{default})"},
+        {OPT_MARCH_STEPS("--march-steps", &a->march),
+         .help = "march a marching model (the fast preset) in steps of\n"
+                 "its grid's diagonal / N, {range} (default: the N\n"
+                 "MODEL records, 1280 for fast): coarser draws\n"
+                 "faster, as nerf-render --march-steps"},
+        {.name = "--screenshot", OPT_TEXT_TO(&a->screenshot),
+         .value = "FILE",
+         .help = "render the start view to FILE (PNG) and exit,\n"
+                 "without opening a window (default: open one)"},
+        {OPT_OVERWRITE(&a->overwrite),
+         .help = "with --screenshot: replace FILE if it exists (default\n"
+                 "off: an existing FILE is refused; MODEL never is)"},
+        {.name = "--quit-after",
+         OPT_REAL_IN(&a->quit_after, 0.0, HUGE_VAL, CLI_ABOVE_MIN),
+         .value = "S",
+         .help = "close the window after S seconds and print what was\n"
+                 "rendered (for tests; default: stay open)"},
+        {.name = NULL},
+    };
+    const opt_program p = {.name = PROG, .opts = opts, .column = 18,
+                           .about = about, .after = after};
+    if (opt_parse(&p, argc, argv) != 0) {
         return -1;
     }
     if (a->overwrite && a->screenshot == NULL) {
