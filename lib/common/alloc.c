@@ -97,3 +97,19 @@ void *nerf__carve(unsigned char **at, size_t bytes)
     *at += line_round(bytes);
     return p;
 }
+
+int nerf__carve_floats(const nerf__env *env, void **block,
+                       float **const *slots, const size_t *bytes,
+                       size_t count)
+{
+    unsigned char *at = nerf__alloc(env, nerf__carve_size(bytes, count));
+    if (at == NULL) {
+        return NERF_ENOMEM;
+    }
+    nerf__free(env, *block);
+    *block = at;
+    for (size_t i = 0; i < count; i++) {
+        *slots[i] = nerf__carve(&at, bytes[i]);
+    }
+    return NERF_OK;
+}

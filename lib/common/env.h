@@ -43,6 +43,16 @@ void nerf__free(const nerf__env *env, void *ptr);
 size_t nerf__carve_size(const size_t *bytes, size_t count);
 void *nerf__carve(unsigned char **at, size_t bytes);
 
+/*
+ * The growing scratch of a batch: replace *block with one allocation
+ * carved into count float arrays of bytes[i] bytes, *slots[i] set to
+ * each (NULL for an empty one).  On failure (NERF_ENOMEM) *block and the
+ * slots are left as they were.
+ */
+int nerf__carve_floats(const nerf__env *env, void **block,
+                       float **const *slots, const size_t *bytes,
+                       size_t count);
+
 /* Multiply sizes; returns 0 and sets *out on success, -1 on overflow. */
 int nerf__mul_size(size_t a, size_t b, size_t *out);
 

@@ -61,14 +61,12 @@ static int reserve_samples(nerf__opacity_cut *c, const nerf_model *m,
     if (c->sample_block == NULL || n > c->cap_samples) {
         const size_t cap = nerf__with_headroom(n);
         const size_t bytes[] = {3 * cap * sizeof(float), cap * sizeof(float)};
-        unsigned char *p = nerf__alloc(&c->env, nerf__carve_size(bytes, 2));
-        if (p == NULL) {
-            return NERF_ENOMEM;
+        float **const slots[] = {&c->pos, &c->sigma};
+        int rc = nerf__carve_floats(&c->env, &c->sample_block, slots, bytes,
+                                    2);
+        if (rc != NERF_OK) {
+            return rc;
         }
-        nerf__free(&c->env, c->sample_block);
-        c->sample_block = p;
-        c->pos = nerf__carve(&p, bytes[0]);
-        c->sigma = nerf__carve(&p, bytes[1]);
         c->cap_samples = cap;
     }
     /* The same headroom for the network's workspace, which

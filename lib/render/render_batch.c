@@ -71,19 +71,12 @@ static int reserve_rays(nerf__batch *b, size_t n)
     float **slots[] = {&b->ray_o, &b->ray_d, &b->viewdir, &b->dir_norm};
     const size_t f = sizeof(float);
     const size_t bytes[] = {3 * n * f, 3 * n * f, 3 * n * f, n * f};
-    const size_t count = sizeof bytes / sizeof bytes[0];
-    unsigned char *block = nerf__alloc(&b->env,
-                                       nerf__carve_size(bytes, count));
-    if (block == NULL) {
-        return NERF_ENOMEM;
+    int rc = nerf__carve_floats(&b->env, &b->ray_block, slots, bytes,
+                                sizeof bytes / sizeof bytes[0]);
+    if (rc == NERF_OK) {
+        b->cap_rays = n;
     }
-    nerf__free(&b->env, b->ray_block);
-    b->ray_block = block;
-    for (size_t i = 0; i < count; i++) {
-        *slots[i] = nerf__carve(&block, bytes[i]);
-    }
-    b->cap_rays = n;
-    return NERF_OK;
+    return rc;
 }
 
 int nerf__batch_begin(nerf__batch *b, const nerf__render_setup *s,

@@ -78,16 +78,10 @@ static int reserve_packed(nerf__batch *b, size_t n, bool keep)
     const size_t f = sizeof(float);
     const size_t bytes[] = {3 * cap * f, 3 * cap * f, 3 * cap * f, cap * f,
                             keep ? 3 * cap * f : 0, keep ? cap * f : 0};
-    const size_t count = sizeof bytes / sizeof bytes[0];
-    unsigned char *block = nerf__alloc(&b->env,
-                                       nerf__carve_size(bytes, count));
-    if (block == NULL) {
-        return NERF_ENOMEM;
-    }
-    nerf__free(&b->env, st->packed_block);
-    st->packed_block = block;
-    for (size_t i = 0; i < count; i++) {
-        *slots[i] = nerf__carve(&block, bytes[i]);
+    int rc = nerf__carve_floats(&b->env, &st->packed_block, slots, bytes,
+                                sizeof bytes / sizeof bytes[0]);
+    if (rc != NERF_OK) {
+        return rc;
     }
     st->cap_packed = cap;
     st->cap_packed_keep = keep;

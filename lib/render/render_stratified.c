@@ -47,14 +47,9 @@ static int reserve(nerf__stratified_state *st, const nerf__env *env,
     for (size_t i = 0; i < count; i++) {
         bytes[i] *= sizeof(float);
     }
-    unsigned char *block = nerf__alloc(env, nerf__carve_size(bytes, count));
-    if (block == NULL) {
-        return NERF_ENOMEM;
-    }
-    nerf__free(env, st->block);
-    st->block = block;
-    for (size_t i = 0; i < count; i++) {
-        *slots[i] = nerf__carve(&block, bytes[i]);
+    int rc = nerf__carve_floats(env, &st->block, slots, bytes, count);
+    if (rc != NERF_OK) {
+        return rc;
     }
     st->cap_rays = n;
     st->cap_c = n_c;
