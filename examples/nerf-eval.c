@@ -32,6 +32,7 @@ typedef struct args {
     uint64_t split, downscale, skip;
     int64_t march; /* -1: the model's */
     int json;
+    uint32_t appearance;
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -64,9 +65,15 @@ static int parse(int argc, char **argv, args *a)
                  "trains): finer steps integrate each ray more exactly\n"
                  "and take longer (docs/performance.md; default:\n"
                  "MODEL's)"},
+        {OPT_APPEARANCE(&a->appearance),
+         .help = "a model with appearance codes (nerf-train\n"
+                 "--appearance-codes) renders with: neutral (the mean\n"
+                 "of its codes, the default) or training image A's\n"
+                 "code; the output says which"},
         {.name = "--json", OPT_FLAG_SETS(&a->json, 1),
          .help = "print one JSON object on stdout instead of the table:\n"
-                 "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"per_view\":\n"
+                 "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"appearance\",\n"
+                 "\"per_view\":\n"
                  "[{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)"},
         {.name = NULL},
     };
@@ -173,8 +180,16 @@ int main(int argc, char **argv)
         nerf_renderer_options ro;
         NERF_RENDERER_OPTIONS_INIT(&ro);
         ro.white_background = (uint32_t)setup_white_background(ds);
+        ro.appearance = a.appearance;
         ro.hooks = &hooks;
         rc = nerf_renderer_create(&r, m, s, &ro);
+    }
+    char look[96] = "";
+    if (rc == NERF_OK) {
+        appearance_text(m, a.appearance, look, sizeof look);
+        if (!a.json) {
+            printf("appearance: %s\n", look);
+        }
     }
     cJSON *root = cJSON_CreateObject();
     cJSON *per_view = cJSON_CreateArray();
@@ -189,6 +204,7 @@ int main(int argc, char **argv)
             cJSON_AddNumberToObject(root, "ssim", ssim);
             cJSON_AddNumberToObject(root, "views", nerf_dataset_count(ds));
             cJSON_AddNumberToObject(root, "seconds", seconds);
+            cJSON_AddStringToObject(root, "appearance", look);
             cJSON_AddItemToObject(root, "per_view", per_view);
             per_view = NULL;
             char *text = cJSON_PrintUnformatted(root);

@@ -58,6 +58,7 @@ typedef struct args {
     uint64_t fps;
     int fps_given;
     int64_t march; /* -1: the model's */
+    uint32_t appearance;
 } args;
 
 /* The most views of a --path (nerf_camera_path_load()'s most poses), and
@@ -183,6 +184,10 @@ static int parse(int argc, char **argv, args *a)
         {.name = "--fps", OPT_INT_IN(&a->fps, 1, FPS_MAX),
          .given = &a->fps_given, .value = "N",
          .help = "frames a second of the video (default {default})"},
+        {OPT_APPEARANCE(&a->appearance),
+         .help = "a model with appearance codes renders with: neutral\n"
+                 "(the mean of its codes, the default) or training\n"
+                 "image A's code, that photo's exposure and colour"},
         {.name = "--skip-existing", OPT_FLAG_SETS(&a->skip_existing, 1),
          .help = "render only the views whose files are not in DIR\n"
                  "yet: the same command again finishes a render that\n"
@@ -828,6 +833,7 @@ static int run(int argc, char **argv)
         nerf_renderer_options ro;
         NERF_RENDERER_OPTIONS_INIT(&ro);
         ro.white_background = (uint32_t)setup_background(m, ds);
+        ro.appearance = a.appearance;
         ro.hooks = &hooks;
         rc = nerf_renderer_create(&r, m, s, &ro);
     }

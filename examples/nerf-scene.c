@@ -176,6 +176,11 @@ static int parse(int argc, char **argv, args *a)
          .help = "photograph through that lens (OpenCV's model, as\n"
                  "nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
                  "may be left out; default none: a pinhole camera)"},
+        {.name = "--appearance-changes",
+         OPT_FLAG_SETS(&o->appearance, NERF_SCENE_APPEARANCE_VARIED),
+         .help = "give each training photo its own exposure and\n"
+                 "white balance, as a phone's automatic ones do\n"
+                 "(blender layout; test views keep the scene's look)"},
         {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "those of the scene's names (default off: a DIR\n"

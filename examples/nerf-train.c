@@ -113,6 +113,7 @@ typedef struct args {
     int space;     /* nerf_space; -1: the dataset's */
     int64_t coarse, fine; /* samples a ray; -1: the preset's */
     int64_t render_march; /* --render-march-steps; 0: the library's */
+    int appearance_codes;
 } args;
 
 static const opt_choice spaces[] = {
@@ -201,6 +202,12 @@ static int parse(int argc, char **argv, args *a)
                  "(--batch is then the most rays a step takes; 0: always\n"
                  "--batch rays; default 131072 for fast without --batch,\n"
                  "else 0; --resume: MODEL's)"},
+        {.name = "--appearance-codes", OPT_FLAG_SETS(&a->appearance_codes, 1),
+         .help = "learn a small code per training image that takes in\n"
+                 "how its exposure and white balance differ from the\n"
+                 "other photos' (phone captures); renders use their\n"
+                 "mean.  Saved in MODEL; --resume keeps training them\n"
+                 "(default off)"},
         {.name = "--random-background", OPT_INT_IN(&a->random_bg, 0, 1),
          .value = "0|1",
          .help = "1: train each ray of images with alpha\n"
@@ -532,6 +539,7 @@ static int trainer_options(const args *a, const nerf_model *m,
     if (a->batch_samples_given) {
         to->batch_samples = (uint32_t)a->batch_samples;
     }
+    to->appearance_codes = (uint32_t)a->appearance_codes;
     if (a->random_bg >= 0) {
         to->random_background = a->random_bg;
     }

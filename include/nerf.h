@@ -521,7 +521,16 @@ typedef struct nerf_renderer_options {
                                     (docs/threading.md, "How many worker
                                     threads").  Results do not depend on
                                     it. */
-    uint32_t reserved0;        /**< Must be 0. */
+    uint32_t appearance;       /**< Which of the model's per-image
+                                    appearance codes renders use:
+                                    NERF_APPEARANCE_NEUTRAL (0, the
+                                    default: the mean of the codes), or
+                                    NERF_APPEARANCE_OF(i), training image
+                                    i's.  Nothing changes for a model
+                                    without codes, which takes only
+                                    NERF_APPEARANCE_NEUTRAL.  Was
+                                    reserved0 before 0.13.
+                                    @since 0.13 */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL =
                                     defaults. */
 } nerf_renderer_options;
@@ -1023,6 +1032,11 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
                                            queried, and nothing else takes it
                                            (see nerf_model_load()).
                                            @since 0.11 */
+#define NERF_MODEL_HAS_APPEARANCE 0x80u /**< Per-image appearance codes
+                                           (nerf_trainer_options.
+                                           appearance_codes), kept by
+                                           checkpoints and exports.
+                                           @since 0.13 */
 
 /**
  * What @p model holds beyond its weights, NERF_MODEL_HAS_*
@@ -1032,6 +1046,41 @@ NERF_API int nerf_model_import_npz(nerf_model **out, const char *path,
  * @since 0.4
  */
 NERF_API uint32_t nerf_model_contents(const nerf_model *model);
+
+/** nerf_renderer_options.appearance and nerf_model_appearance_code():
+ * the neutral appearance, the mean of a model's codes (the training
+ * photos' average look).  @since 0.13 */
+#define NERF_APPEARANCE_NEUTRAL 0u
+/** The same for training image @p i's own appearance.  @since 0.13 */
+#define NERF_APPEARANCE_OF(i) ((uint32_t)(i) + 1u)
+/** Floats of one appearance code: the natural logarithms of the gains
+ * of red, green and blue, mapping a colour c to (e^l0 c0, e^l1 c1,
+ * e^l2 c2).  @since 0.13 */
+#define NERF_APPEARANCE_CODE_FLOATS 3u
+
+/**
+ * How many per-image appearance codes @p model holds, into @p count: the
+ * training images of the trainer that added them
+ * (nerf_trainer_options.appearance_codes), 0 for a model without.  What
+ * they are and how renders use them: docs/api-notes.md, "Photos whose
+ * exposure differs".
+ * @return NERF_OK, or NERF_EINVAL (a NULL argument).
+ * @since 0.13
+ */
+NERF_API int nerf_model_appearance_count(const nerf_model *model,
+                                         uint32_t *count);
+
+/**
+ * The appearance code @p which (NERF_APPEARANCE_NEUTRAL, or
+ * NERF_APPEARANCE_OF(i) for training image i) of @p model into
+ * @p code[NERF_APPEARANCE_CODE_FLOATS].  A model without codes has only
+ * the neutral one, all zeros (gains of 1).
+ * @return NERF_OK, or NERF_EINVAL (a NULL argument, an image beyond the
+ * model's codes).
+ * @since 0.13
+ */
+NERF_API int nerf_model_appearance_code(const nerf_model *model,
+                                        uint32_t which, float *code);
 
 /**
  * A one-line description of the data @p model was last trained
@@ -1823,7 +1872,19 @@ typedef struct nerf_trainer_options {
                                     nerf-train sets it up").  0 (default):
                                     the sampler's own.  Ignored without
                                     marching. */
-    uint32_t reserved2;       /**< Must be 0. */
+    uint32_t appearance_codes; /**< 1: learn a small appearance code per
+                                    training image, which absorbs how its
+                                    exposure and white balance differ from
+                                    the other photos' (docs/api-notes.md,
+                                    "Photos whose exposure differs"); the
+                                    trainer adds the codes to a model
+                                    without them, and takes a model's own
+                                    (one per image of the dataset) as they
+                                    are.  0 (default): none, and a model's
+                                    codes stay as they are.  Not with
+                                    worker_count > 1 yet.  Was reserved2
+                                    before 0.13.
+                                    @since 0.13 */
 } nerf_trainer_options;
 
 /**
@@ -2083,8 +2144,13 @@ typedef struct nerf_scene_options {
     uint32_t n_test;      /**< Test views (a circle at 30 degrees),
                                0..NERF_SCENE_MAX_VIEWS; default 16. */
     uint32_t threads;     /**< Worker threads; 0 (default) = all cores. */
-    uint32_t reserved0;   /**< Must be 0. */
-    uint64_t seed;        /**< Placement of the validation views; default 0. */
+    uint32_t appearance;  /**< NERF_SCENE_APPEARANCE_*: whether the
+                               training photos' exposure and white balance
+                               differ; default CONSTANT.  Was reserved0
+                               before 0.13.
+                               @since 0.13 */
+    uint64_t seed;        /**< Placement of the validation views, and the
+                               appearance changes' draws; default 0. */
     const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
     uint32_t capture;     /**< How the scene is photographed:
                                NERF_SCENE_CAPTURE_*; default OBJECT.
@@ -2120,6 +2186,17 @@ typedef struct nerf_scene_options {
     background: the solids on a ground within a backdrop 40 units away,
     from rings of cameras 2.2 to 3 units from them looking at them;
     horizontal field of view 1 radian.  Opaque. */
+
+/** How the training photos look (nerf_scene_options.appearance).
+ * @since 0.13 */
+#define NERF_SCENE_APPEARANCE_CONSTANT 0u /**< All alike, as rendered. */
+#define NERF_SCENE_APPEARANCE_VARIED 1u /**< Each training photo's channels
+    scaled by its own exposure (2^u, u within +-0.5) and white balance
+    (2^v per channel, v within +-0.15), normalised so that their mean
+    over the training photos is 1 per channel: the look of a phone's
+    automatic exposure.  Validation and test views keep the scene's own
+    look, which a model with appearance codes renders with its neutral
+    code (NERF_APPEARANCE_NEUTRAL).  Blender layout only. */
 
 /** Layouts of the written scene (nerf_scene_options.layout). */
 #define NERF_SCENE_LAYOUT_BLENDER 0u       /**< transforms_{train,val,test}

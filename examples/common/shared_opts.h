@@ -63,4 +63,19 @@ extern const opt_choice preset_choices[];
 #define OPT_PRESET(p)                                                          \
     .name = "--preset", OPT_CHOICE_OF(p, preset_choices), .value = "P"
 
+/* The largest training image --appearance names. */
+#define NERF_APPEARANCE_IMAGE_MAX 1000000
+
+/* --appearance A: which of the model's appearance codes renders use,
+ * "neutral" or a training image's number, into a uint32_t as
+ * nerf_renderer_options.appearance counts. */
+int opt_read_appearance(const char *program, const opt *o, const char *v);
+#define OPT_APPEARANCE(p)                                                      \
+    .name = "--appearance", OPT_CUSTOM_READ(p, opt_read_appearance),           \
+    .value = "A"
+
+/* What renders of m with appearance `which` look like, in words. */
+void appearance_text(const nerf_model *m, uint32_t which, char *buf,
+                     size_t size);
+
 #endif

@@ -677,6 +677,79 @@ static int read_corrections(const char *path, nerf_model *m,
     return NERF_OK;
 }
 
+/* The per-image appearance codes (appearance.h): u32 count, u32 floats
+ * per code, the codes, then (but in a weights-only file) their Adam
+ * moments, first then second. */
+static bool has_appearance(const nerf__ckpt_save *s)
+{
+    return s->m->appearance.n > 0;
+}
+
+static void write_appearance(nerf__buf *b, const nerf__ckpt_save *s)
+{
+    const nerf__appearance *a = &s->m->appearance;
+    unsigned char *p = nerf__buf_grow(b, 8);
+    if (p != NULL) {
+        nerf__store_le32(p, a->n);
+        nerf__store_le32(p + 4, NERF__CODE_FLOATS);
+    }
+    const size_t n = (size_t)a->n * NERF__CODE_FLOATS;
+    put_floats(b, a->code, n);
+    if (!s->weights_only) {
+        put_floats(b, a->adam_m, n);
+        put_floats(b, a->adam_v, n);
+    }
+}
+
+/* A file without the section holds a model without codes. */
+static int read_appearance(const char *path, nerf_model *m,
+                           const unsigned char *b, uint64_t len,
+                           const nerf__ckpt_view *v)
+{
+    if (b == NULL) {
+        return NERF_OK;
+    }
+    if (len < 8) {
+        return corrupt(path, "the appearance codes section is shorter than "
+                       "its head");
+    }
+    const uint32_t n = nerf__load_le32(b);
+    const uint32_t floats = nerf__load_le32(b + 4);
+    const uint64_t arrays = v->body[NERF__CKPT_WEIGHTS_ONLY] ? 1 : 3;
+    if (n == 0 || n > NERF__CODES_MAX || floats != NERF__CODE_FLOATS ||
+        len != 8 + arrays * 4 * (uint64_t)n * floats) {
+        return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint (an "
+                           "appearance codes section of %llu bytes for %u "
+                           "codes of %u floats; expected 1 to %u codes of "
+                           "%u)", path, (unsigned long long)len,
+                           (unsigned)n, (unsigned)floats,
+                           (unsigned)NERF__CODES_MAX,
+                           (unsigned)NERF__CODE_FLOATS);
+    }
+    int rc = nerf__appearance_create(m, n);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    nerf__appearance *a = &m->appearance;
+    const size_t k = (size_t)n * NERF__CODE_FLOATS;
+    get_floats(b + 8, a->code, k);
+    if (arrays == 3) {
+        get_floats(b + 8 + 4 * k, a->adam_m, k);
+        get_floats(b + 8 + 8 * k, a->adam_v, k);
+    }
+    for (size_t i = 0; i < k; i++) {
+        /* The negations catch NaN. */
+        if (!isfinite(a->code[i]) || !isfinite(a->adam_m[i]) ||
+            !(a->adam_v[i] >= 0.0f && isfinite(a->adam_v[i]))) {
+            return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
+                               "(appearance code %zu holds a value that is "
+                               "not finite, or a negative second moment)",
+                               path, i / NERF__CODE_FLOATS);
+        }
+    }
+    return NERF_OK;
+}
+
 /* ---- the table ---------------------------------------------------------- */
 
 bool nerf__ckpt_written(const nerf__ckpt_section *k, const nerf__ckpt_save *s)
@@ -775,4 +848,10 @@ const nerf__ckpt_section nerf__ckpt_sections[NERF__CKPT_N_SECTIONS] = {
         .tag = 17u, .name = "Adam corrections",
         .flags = NERF__CKPT_OPTIMISER, .wanted = has_corrections,
         .write = write_corrections, .read = read_corrections},
+    /* Optional: a reader that skips it renders the networks' own colours,
+     * the look of no photo in particular (model/appearance.h). */
+    [NERF__CKPT_APPEARANCE] = {
+        .tag = 18u, .name = "appearance codes", .flags = NERF__CKPT_STORED,
+        .wanted = has_appearance, .write = write_appearance,
+        .read = read_appearance},
 };

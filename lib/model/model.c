@@ -518,6 +518,7 @@ NERF_API void nerf_model_destroy(nerf_model *model)
     nerf__free(&env, model->adam_v);
     nerf__free(&env, model->adam_r);
     nerf__average_free(model);
+    nerf__appearance_free(&model->env, &model->appearance);
     nerf__onednn_destroy(model->onednn);
     nerf__occupancy_destroy(model->grid);
     nerf__free(&env, model->source);
@@ -574,6 +575,9 @@ NERF_API uint32_t nerf_model_contents(const nerf_model *model)
     }
     if (!nerf__model_finite(model)) {
         c |= NERF_MODEL_HAS_NONFINITE_WEIGHTS;
+    }
+    if (model->appearance.n > 0) {
+        c |= NERF_MODEL_HAS_APPEARANCE;
     }
     return c;
 }
@@ -834,6 +838,7 @@ int nerf__model_adam_step(nerf_model *m)
         }
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }
+    nerf__appearance_adam(m, m->step, lr);
     m->grads_dirty = false;
     nerf__average_step(m);
     nerf__model_weights_changed(m);

@@ -9,6 +9,7 @@
 #include <stdbool.h>
 
 #include "adam.h"
+#include "appearance.h"
 #include "env.h"
 #include "fingerprint.h"
 #include "network.h"
@@ -86,6 +87,9 @@ struct nerf_model {
      * next change; atomic because renderers on several threads may ask
      * one model at once. */
     atomic_int finite;
+    /* Per-image appearance codes (appearance.h): none until a trainer
+     * with appearance_codes adds them, or a checkpoint carries them. */
+    nerf__appearance appearance;
     /* The file the model was loaded from, for messages that name it;
      * NULL for a model created or imported. */
     char *source;

@@ -68,9 +68,10 @@ static int reserve_rays(nerf__batch *b, size_t n)
         return nerf__error(NERF_EINVAL, "render batch of %zu rays is too "
                            "large", n);
     }
-    float **slots[] = {&b->ray_o, &b->ray_d, &b->viewdir, &b->dir_norm};
+    float **slots[] = {&b->ray_o, &b->ray_d, &b->viewdir, &b->dir_norm,
+                       &b->opacity};
     const size_t f = sizeof(float);
-    const size_t bytes[] = {3 * n * f, 3 * n * f, 3 * n * f, n * f};
+    const size_t bytes[] = {3 * n * f, 3 * n * f, 3 * n * f, n * f, n * f};
     int rc = nerf__carve_floats(&b->env, &b->ray_block, slots, bytes,
                                 sizeof bytes / sizeof bytes[0]);
     if (rc == NERF_OK) {
@@ -112,10 +113,29 @@ int nerf__render_batch(nerf__batch *b, const nerf__render_setup *s,
     b->marched = false;
     b->n_rays = 0;
     b->n_evaluated = 0;
-    if (nerf__sampler_marches(s->sampler)) {
-        return nerf__render_march(b, s, n_rays, origins, directions, out);
+    const int last = nerf__sampler_last_pass(s->sampler);
+    const bool map = s->appearance && out[last].rgb != NULL;
+    nerf__pass_out own[NERF__PASSES];
+    if (map && out[last].opacity == NULL) {
+        /* The map needs each ray's opacity: the batch's own array. */
+        int rc = reserve_rays(b, n_rays);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        memcpy(own, out, sizeof own);
+        own[last].opacity = b->opacity;
+        out = own;
     }
-    return nerf__render_stratified(b, s, n_rays, origins, directions, out);
+    int rc = nerf__sampler_marches(s->sampler)
+                 ? nerf__render_march(b, s, n_rays, origins, directions,
+                                      out)
+                 : nerf__render_stratified(b, s, n_rays, origins,
+                                           directions, out);
+    if (rc == NERF_OK && map) {
+        nerf__appearance_apply(s->code, b->n_rays, out[last].rgb,
+                               out[last].opacity, b->ray_bg, s->white_background ? 1.0f : 0.0f);
+    }
+    return rc;
 }
 
 int nerf__render_batch_backward(nerf__batch *b, nerf_model *m,

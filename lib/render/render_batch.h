@@ -62,6 +62,8 @@ typedef struct nerf__batch {
     size_t cap_rays;
     void *ray_block;
     float *ray_o, *ray_d, *viewdir; /* [n_rays, 3] */
+    float *opacity;                 /* [n_rays]: for the appearance map
+                                       when the caller asks for none */
 } nerf__batch;
 
 void nerf__batch_init(nerf__batch *b, const nerf__env *env);

@@ -48,6 +48,11 @@ typedef struct nerf__render_setup {
      * backward) instead of white_background's.  It must stay unchanged
      * until the backward.  NULL: white_background. */
     const float *background;
+    /* Rendering a model with appearance codes: the code its last pass's
+     * colours are mapped by (model/appearance.h).  Training maps each
+     * ray by its own image's code itself, and leaves this unset. */
+    bool appearance;
+    float code[NERF__CODE_FLOATS];
 } nerf__render_setup;
 
 /* Outputs of one pass; any pointer may be NULL. */

@@ -60,8 +60,6 @@ static int check_options(const void *opts)
         what = "chunk_rays must be 1..2^20";
     } else if (o->threads > NERF__MAX_THREADS) {
         what = "threads must be 0..1024";
-    } else if (o->reserved0 != 0) {
-        what = "reserved0 must be 0";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_renderer_options: %s", what);
@@ -105,6 +103,10 @@ NERF_API int nerf_renderer_create(nerf_renderer **out,
     if (rc == NERF_OK) {
         /* NaN weights would render black (or NaN) with no word of why. */
         rc = nerf__model_check_finite(model, "nerf_renderer_create");
+    }
+    if (rc == NERF_OK) {
+        rc = nerf__appearance_check(model, o.appearance,
+                                    "nerf_renderer_create");
     }
     nerf_sampler *owned = NULL;
     if (rc == NERF_OK && sampler == NULL) {
@@ -195,6 +197,13 @@ void nerf__renderer_eval_setup(const nerf_renderer *r, nerf__render_setup *s)
     s->ndc_focal = r->sampler->opts.ndc_focal;
     s->ndc_width = (float)r->sampler->opts.ndc_width;
     s->ndc_height = (float)r->sampler->opts.ndc_height;
+    /* Checked against the model's codes at creation; a model gains codes
+     * (a trainer adds them) but never loses them. */
+    if (r->model->appearance.n > 0) {
+        s->appearance = true;
+        nerf__appearance_pick(&r->model->appearance, r->opts.appearance,
+                              s->code);
+    }
 }
 
 int nerf__renderer_set_march_test(nerf_renderer *r,

@@ -73,6 +73,14 @@ int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
 void nerf__scene_capture_camera(const nerf_scene_options *o, int split,
                                 uint32_t i, uint32_t n, nerf_camera *cam);
 
+/* nerf_scene_options.appearance (appearance_changes.c): the gains of the
+ * channels of view i of a split (all 1 but for varied training views),
+ * and a rendered view of `channels` bytes a pixel changed by them. */
+void nerf__scene_appearance_gains(const nerf_scene_options *o, int split,
+                                  uint32_t i, double gains[3]);
+void nerf__scene_vary_view(const nerf_scene_options *o, int split,
+                           uint32_t i, uint32_t channels, uint8_t *px);
+
 /* The COLMAP layouts, text or binary (write_colmap.c); px holds one view
  * of 4 channels. */
 int nerf__scene_write_colmap(const char *dir, const nerf_scene_options *o,

@@ -314,6 +314,7 @@ static int write_split(const char *dir, int split, uint32_t n,
         nerf_camera cam;
         nerf__scene_capture_camera(o, split, i, n, &cam);
         nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
+        nerf__scene_vary_view(o, split, i, look.channels, px);
         snprintf(path, sizeof path, "%s/%s/r_%u", dir, names[split], i);
         rc = nerf__scene_image_write(env, path, o, look.channels, px);
         cJSON *frame = cJSON_CreateObject();
@@ -394,8 +395,18 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
                            "be 1..%d (train) and 0..%d (val, test)",
                            NERF_SCENE_MAX_VIEWS, NERF_SCENE_MAX_VIEWS);
     }
-    if (o.reserved0 != 0) {
-        return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved0 must be 0");
+    if (o.appearance > NERF_SCENE_APPEARANCE_VARIED) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: appearance %u "
+                           "is unknown (0 constant, 1 varied)",
+                           (unsigned)o.appearance);
+    }
+    if (o.appearance == NERF_SCENE_APPEARANCE_VARIED &&
+        o.layout != NERF_SCENE_LAYOUT_BLENDER) {
+        /* The other layouts' loaders choose the held-out views, which
+         * must keep the scene's own look. */
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: appearance "
+                           "changes need the Blender layout, whose test "
+                           "views the writer knows");
     }
     rc = check_capture(&o);
     rc = rc == NERF_OK ? nerf__scene_image_check(&o) : rc;

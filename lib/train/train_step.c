@@ -123,8 +123,10 @@ static int render_share(nerf_trainer *t, uint64_t k, nerf__share *sh)
     }
     nerf__pass_out out[NERF__PASSES];
     memset(out, 0, sizeof out);
-    out[0].rgb = t->rgb[0];
-    out[1].rgb = t->rgb[1];
+    for (int p = 0; p < NERF__PASSES; p++) {
+        out[p].rgb = t->rgb[p];
+        out[p].opacity = t->codes ? t->coded[p].opacity : NULL;
+    }
     int rc = nerf__render_batch(&t->batch, &t->setup, sh->hi - lo,
                                 t->origins + 3 * lo, t->directions + 3 * lo,
                                 out);
@@ -165,6 +167,9 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
     const size_t n = sh.hi - sh.lo;
     const float *targets = t->targets + 3 * sh.lo;
     double mse[NERF__PASSES] = {0.0, 0.0};
+    if (t->codes) {
+        nerf__trainer_appearance_forward(t, passes, sh.lo, n);
+    }
     for (uint32_t p = 0; p < passes; p++) {
         mse[p] = pass_loss(3 * n, 3 * sh.all, t->rgb[p], targets, t->d_rgb[p]);
     }
@@ -177,7 +182,15 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
         const float *d_rgb[NERF__PASSES] = {t->d_rgb[0],
                                             passes > 1 ? t->d_rgb[1] : NULL};
         const float *none[NERF__PASSES] = {NULL, NULL};
-        rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none, none);
+        const float *d_opacity[NERF__PASSES] = {NULL, NULL};
+        if (t->codes) {
+            nerf__trainer_appearance_backward(t, passes, sh.lo, n);
+            for (uint32_t p = 0; p < passes; p++) {
+                d_opacity[p] = t->coded[p].d_opacity;
+            }
+        }
+        rc = nerf__render_batch_backward(&t->batch, m, d_rgb, none,
+                                         d_opacity);
         if (rc != NERF_OK) {
             return rc;
         }

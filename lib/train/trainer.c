@@ -70,8 +70,8 @@ static int check_options(const void *opts)
         what = "checkpoint_seconds needs a checkpoint_path";
     } else if (o->render_march_steps > 65536) {
         what = "render_march_steps must be 0..65536";
-    } else if (o->reserved2 != 0) {
-        what = "reserved2 must be 0";
+    } else if (o->appearance_codes > 1) {
+        what = "appearance_codes must be 0 or 1";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_options: %s", what);
@@ -264,6 +264,9 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     if (rc == NERF_OK) {
         rc = alloc_buffers(t);
     }
+    if (rc == NERF_OK) {
+        rc = nerf__trainer_appearance_setup(t);
+    }
     if (rc == NERF_OK && o.checkpoint_path) {
         t->checkpoint_path = copy_string(&env, o.checkpoint_path);
         rc = t->checkpoint_path ? NERF_OK : NERF_ENOMEM;
@@ -317,6 +320,7 @@ NERF_API void nerf_trainer_destroy(nerf_trainer *t)
         nerf__free(&env, bufs[i]);
     }
     nerf__free(&env, t->backgrounds);
+    nerf__trainer_appearance_free(t);
     nerf__free(&env, t->picked);
     nerf__free(&env, t->march_offsets);
     nerf__free(&env, t->cameras);

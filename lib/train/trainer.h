@@ -52,6 +52,13 @@ struct nerf_trainer {
     nerf_exchange exchange;
     bool checked;
     size_t *march_offsets;
+    /* A model with appearance codes (appearance_step.c): each pass's
+     * colours before the map [batch_rays, 3], opacities and their loss
+     * gradients [batch_rays]. */
+    bool codes;
+    struct {
+        float *rgb, *opacity, *d_opacity;
+    } coded[NERF__PASSES];
 };
 
 /*
@@ -143,6 +150,20 @@ int nerf__trainer_exchange(nerf_trainer *t, uint64_t step, size_t rays,
                            size_t all);
 /* The checksum comparison, when checksum_every says (or `first`). */
 int nerf__trainer_check_workers(nerf_trainer *t, bool first);
+
+/*
+ * Appearance codes (appearance_step.c).  At creation: add the codes a
+ * model needs (or check its own against the dataset) and the buffers.  In
+ * a step, on the share's n rays from ray lo: map each pass's colours by
+ * their images' codes, and take the loss gradients back through the map
+ * (into d_rgb in place, the opacities' gradients, the codes' gradients).
+ */
+int nerf__trainer_appearance_setup(nerf_trainer *t);
+void nerf__trainer_appearance_free(nerf_trainer *t);
+void nerf__trainer_appearance_forward(nerf_trainer *t, uint32_t passes,
+                                      size_t lo, size_t n);
+void nerf__trainer_appearance_backward(nerf_trainer *t, uint32_t passes,
+                                       size_t lo, size_t n);
 
 /*
  * Record the trainer's dataset in its model (model->data), first warning

@@ -65,7 +65,8 @@ FROZEN(nerf_scene_options, n_train, 12);
 FROZEN(nerf_scene_options, n_val, 16);
 FROZEN(nerf_scene_options, n_test, 20);
 FROZEN(nerf_scene_options, threads, 24);
-FROZEN(nerf_scene_options, reserved0, 28);
+/* reserved0 until 0.13. */
+FROZEN(nerf_scene_options, appearance, 28);
 FROZEN(nerf_scene_options, seed, 32);
 FROZEN(nerf_scene_options, hooks, 40);
 FROZEN(nerf_scene_options, capture, 48);
@@ -140,7 +141,8 @@ FROZEN(nerf_renderer_options, white_background, 4);
 FROZEN(nerf_renderer_options, raw_noise_std, 8);
 FROZEN(nerf_renderer_options, chunk_rays, 12);
 FROZEN(nerf_renderer_options, threads, 16);
-FROZEN(nerf_renderer_options, reserved0, 20);
+/* reserved0 until 0.13. */
+FROZEN(nerf_renderer_options, appearance, 20);
 FROZEN(nerf_renderer_options, hooks, 24);
 SIZE(nerf_renderer_options, 32);
 
@@ -205,7 +207,8 @@ FROZEN(nerf_trainer_options, reserved1, 92);
 FROZEN(nerf_trainer_options, checkpoint_seconds, 96);
 /* Appended in 0.12. */
 FROZEN(nerf_trainer_options, render_march_steps, 104);
-FROZEN(nerf_trainer_options, reserved2, 108);
+/* reserved2 until 0.13. */
+FROZEN(nerf_trainer_options, appearance_codes, 108);
 SIZE(nerf_trainer_options, 112);
 
 /* New in 0.5. */

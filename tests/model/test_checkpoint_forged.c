@@ -447,6 +447,71 @@ TEST(forged_batch_sections)
     forge("two batch sections", edit_add_two_batches, NERF_EFORMAT);
 }
 
+/* The appearance codes (optional tag 18): u32 count, u32 floats a code,
+ * then the codes and their two moments. */
+static uint32_t codes_n = 2, codes_floats = 3, codes_bad = 0;
+static size_t codes_len_delta = 0;
+
+static void edit_add_codes(payload *p)
+{
+    unsigned char b[8 + 3 * 4 * 2 * 3 + 4];
+    put32(b, codes_n);
+    put32(b + 4, codes_floats);
+    for (uint32_t i = 0; i < 18; i++) {
+        float v = i < 6 ? 0.1f * (float)i : 0.01f; /* codes, m, v */
+        if (codes_bad == 1 && i == 2) {
+            v = NAN;
+        }
+        if (codes_bad == 2 && i == 15) {
+            v = -1.0f;
+        }
+        memcpy(b + 8 + 4 * i, &v, 4); /* little-endian hosts */
+    }
+    add_section(p, 18u, b, 8 + 4 * 18 + codes_len_delta);
+}
+
+static void edit_add_two_codes(payload *p)
+{
+    edit_add_codes(p);
+    edit_add_codes(p);
+}
+
+TEST(forged_appearance_sections)
+{
+    forge("two appearance codes", edit_add_codes, NERF_OK);
+    char path[128];
+    path_in(path, sizeof path, "forged.ckpt");
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    uint32_t n = 0;
+    CHECK_OK(nerf_model_appearance_count(m, &n));
+    CHECK_EQ_INT((int)n, 2);
+    float c[NERF_APPEARANCE_CODE_FLOATS];
+    CHECK_OK(nerf_model_appearance_code(m, NERF_APPEARANCE_OF(1), c));
+    CHECK(c[0] == 0.3f && c[2] == 0.5f);
+    CHECK_OK(nerf_model_appearance_code(m, NERF_APPEARANCE_NEUTRAL, c));
+    CHECK_NEAR(c[0], 0.15, 1e-6);
+    CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_APPEARANCE);
+    nerf_model_destroy(m);
+    codes_len_delta = 4;
+    forge("appearance codes 4 bytes long", edit_add_codes, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "appearance codes section") != NULL);
+    codes_len_delta = 0;
+    codes_n = 0;
+    forge("no appearance codes", edit_add_codes, NERF_EFORMAT);
+    codes_n = 2;
+    codes_floats = 12;
+    forge("codes of 12 floats", edit_add_codes, NERF_EFORMAT);
+    codes_floats = 3;
+    codes_bad = 1;
+    forge("a NaN code", edit_add_codes, NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "appearance code 0") != NULL);
+    codes_bad = 2;
+    forge("a negative second moment", edit_add_codes, NERF_EFORMAT);
+    codes_bad = 0;
+    forge("two appearance sections", edit_add_two_codes, NERF_EFORMAT);
+}
+
 /* The average (optional tag 16): f64 steps, u32 running, u32 reserved,
  * then the running average's n floats. */
 static double average_steps;
@@ -1298,6 +1363,7 @@ int main(void)
     RUN(forged_average_sections);
     RUN(forged_schedule_sections);
     RUN(forged_batch_sections);
+    RUN(forged_appearance_sections);
     RUN(forged_section_framing);
     RUN(occupancy_grid_section);
     RUN(forged_corrections_sections);

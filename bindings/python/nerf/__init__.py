@@ -43,6 +43,7 @@ from .data import (CAMERA_PATH_FILE_INTRINSICS, CAMERA_PATH_FILE_SIZE,
                    IMAGE_FORMAT_JPEG, IMAGE_FORMAT_PNG, IMAGE_MAX_SIDE,
                    SCENE_CAPTURE_FORWARD, SCENE_CAPTURE_OBJECT,
                    SCENE_CAPTURE_UNBOUNDED, SCENE_LAYOUT_BLENDER,
+                   SCENE_APPEARANCE_CONSTANT, SCENE_APPEARANCE_VARIED,
                    SCENE_LAYOUT_COLMAP_BINARY, SCENE_LAYOUT_COLMAP_TEXT,
                    SCENE_LAYOUT_LLFF, SCENE_LAYOUT_TRANSFORMS,
                    SCENE_MAX_SIDE, SCENE_MAX_VIEWS, SCENE_MIN_SIDE, SPLIT_TEST,
@@ -64,7 +65,9 @@ from .model import (ENCODING_FREQUENCY, ENCODING_INCLUDE_INPUT,
                     MODEL_HAS_OPTIMIZER, MODEL_HAS_OCCUPANCY,
                     MODEL_HAS_RENDER_SETTINGS, MODEL_HAS_DATA_RECORD,
                     MODEL_HAS_BATCH_RECORD, MODEL_HAS_ADAM_CORRECTIONS,
-                    MODEL_HAS_NONFINITE_WEIGHTS, matmul_supported)
+                    MODEL_HAS_NONFINITE_WEIGHTS, MODEL_HAS_APPEARANCE,
+                    APPEARANCE_NEUTRAL, APPEARANCE_CODE_FLOATS,
+                    appearance_of, matmul_supported)
 from .render import (CAMERA_PIXEL_CORNER, NOISE_AUTO, SAMPLE_TRAINING,
                      SAMPLER_FOR_RENDERING, SAMPLER_FOR_TRAINING,
                      DepthResult, PointCloud, RenderResult, Renderer, Sampler)
@@ -107,7 +110,7 @@ __all__ = [
     "version", "version_number", "version_string", "build_info",
     "library_path", "status_string", "last_error", "clear_error",
     "param_bounds", "set_log_handler", "log_to_stderr", "log_stderr",
-    "matmul_supported",
+    "matmul_supported", "appearance_of",
     # Constants.
     "HAVE_NUMPY", "EXPECTED_MAJOR", "LOG_ERROR", "LOG_WARN", "LOG_INFO",
     "LOG_DEBUG", "PARAMS", "PARAM_LEARNING_RATE", "PARAM_LEARNING_RATE_FINAL",
@@ -139,6 +142,8 @@ __all__ = [
     "MESH_FORMAT_PLY_ASCII", "MESH_FORMAT_OBJ", "EXCHANGE_MAX_SPARSE",
     "POINTS_DEFAULT_MAX", "POINTS_DEFAULT_OPACITY", "POINTS_PLY_ASCII",
     "POINTS_PLY_BINARY", "SCHEDULE_STEPS", "SCHEDULE_MEASURING",
-    "SCHEDULE_FITTED",
+    "SCHEDULE_FITTED", "MODEL_HAS_APPEARANCE", "APPEARANCE_NEUTRAL",
+    "APPEARANCE_CODE_FLOATS", "SCENE_APPEARANCE_CONSTANT",
+    "SCENE_APPEARANCE_VARIED",
 ]
 

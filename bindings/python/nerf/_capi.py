@@ -124,6 +124,9 @@ _PROTOTYPES = {
     "nerf_model_schedule": (c_int, [ModelP, POINTER(ScheduleStruct)], True),
     # Since 0.8: the batch a trainer recorded.
     "nerf_model_training_batch": (c_int, [ModelP, _U32, _U32], True),
+    # Since 0.13: per-image appearance codes.
+    "nerf_model_appearance_count": (c_int, [ModelP, _U32], True),
+    "nerf_model_appearance_code": (c_int, [ModelP, c_uint32, _F], True),
     # Since 0.5: meshes and density grids.
     "nerf_mesh_options_init": (c_int, [POINTER(MeshOptions), c_size_t], True),
     "nerf_mesh_extract": (c_int, [POINTER(MeshP), ModelP,

@@ -57,13 +57,26 @@ MODEL_HAS_DATA_RECORD = 0x8
 MODEL_HAS_BATCH_RECORD = 0x10
 MODEL_HAS_ADAM_CORRECTIONS = 0x20
 MODEL_HAS_NONFINITE_WEIGHTS = 0x40
+MODEL_HAS_APPEARANCE = 0x80
 CONTENTS = {MODEL_HAS_OPTIMIZER: "optimizer",
             MODEL_HAS_OCCUPANCY: "occupancy",
             MODEL_HAS_RENDER_SETTINGS: "render_settings",
             MODEL_HAS_DATA_RECORD: "data_record",
             MODEL_HAS_BATCH_RECORD: "batch_record",
             MODEL_HAS_ADAM_CORRECTIONS: "adam_corrections",
-            MODEL_HAS_NONFINITE_WEIGHTS: "nonfinite_weights"}
+            MODEL_HAS_NONFINITE_WEIGHTS: "nonfinite_weights",
+            MODEL_HAS_APPEARANCE: "appearance"}
+
+# nerf_renderer_options.appearance: the neutral look, or a training
+# image's (appearance_of(i)).
+APPEARANCE_NEUTRAL = 0
+APPEARANCE_CODE_FLOATS = 3
+
+
+def appearance_of(image: int) -> int:
+    """``NERF_APPEARANCE_OF(image)``: training image ``image``'s
+    appearance, for :class:`RendererOptions`' ``appearance``."""
+    return integer(image, "image", ctypes.c_uint32) + 1
 
 LogFn = Optional[Callable[[int, str], Any]]
 
@@ -272,7 +285,9 @@ class Model(_handle.Handle):
         model's Adam corrections of each table parameter by its own count
         of updates, since 0.10; without them such a model from an older
         file corrects by the step), ``"nonfinite_weights"`` (weights that
-        are NaN or infinite: a run that diverged; see :meth:`load`)."""
+        are NaN or infinite: a run that diverged; see :meth:`load`),
+        ``"appearance"`` (per-image appearance codes, since 0.13:
+        :meth:`appearance_code`)."""
         with self._using() as ptr:
             bits = int(lib.nerf_model_contents(ptr))
         return frozenset(name for bit, name in CONTENTS.items() if bits & bit)
@@ -298,6 +313,27 @@ class Model(_handle.Handle):
             lib.nerf_model_training_batch(ptr, ctypes.byref(rays),
                                           ctypes.byref(samples))
         return (rays.value, samples.value) if rays.value else None
+
+    @property
+    def appearance_count(self) -> int:
+        """How many per-image appearance codes the model holds
+        (``nerf_model_appearance_count``): the training images of a
+        trainer with ``appearance_codes=1``, 0 for a model without."""
+        n = ctypes.c_uint32(0)
+        with self._using() as ptr:
+            lib.nerf_model_appearance_count(ptr, ctypes.byref(n))
+        return n.value
+
+    def appearance_code(self, image: Optional[int] = None
+                        ) -> Tuple[float, float, float]:
+        """The appearance code of training image ``image``, or the neutral
+        one (the mean of all) when None (``nerf_model_appearance_code``):
+        the natural logarithms of the red, green and blue gains."""
+        which = APPEARANCE_NEUTRAL if image is None else appearance_of(image)
+        code = (ctypes.c_float * APPEARANCE_CODE_FLOATS)()
+        with self._using() as ptr:
+            lib.nerf_model_appearance_code(ptr, which, code)
+        return tuple(float(v) for v in code)  # type: ignore[return-value]
 
     @property
     def schedule(self) -> dict:

@@ -425,7 +425,8 @@ class SceneOptions(_Versioned):
         ("n_val", c_uint32),
         ("n_test", c_uint32),
         ("threads", c_uint32),
-        ("reserved0", c_uint32),
+        # Formerly reserved0 (0 = constant); libnerf 0.13.
+        ("appearance", c_uint32),
         ("seed", c_uint64),
         ("hooks", POINTER(Hooks)),
         ("capture", c_uint32),
@@ -479,7 +480,8 @@ class RendererOptions(_Versioned):
         ("raw_noise_std", c_float),
         ("chunk_rays", c_uint32),
         ("threads", c_uint32),
-        ("reserved0", c_uint32),
+        # Formerly reserved0 (0 = the neutral appearance); libnerf 0.13.
+        ("appearance", c_uint32),
         ("hooks", POINTER(Hooks)),
     ]
 
@@ -616,10 +618,11 @@ class TrainerOptions(_Versioned):
         ("checkpoint_seconds", c_double),
         # Appended in libnerf 0.12.
         ("render_march_steps", c_uint32),
-        ("reserved2", c_uint32),
+        # Formerly reserved2 (0 = no codes); libnerf 0.13.
+        ("appearance_codes", c_uint32),
     ]
     _private_ = ("struct_size", "hooks", "grad_hook", "checksum_hook",
-                 "hook_user", "reserved1", "reserved2")
+                 "hook_user", "reserved1")
 
     def _get(self, name: str) -> Any:
         value = getattr(self, name)

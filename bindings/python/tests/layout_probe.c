@@ -98,7 +98,7 @@ static void structs(void)
     FIELD(nerf_scene_options, n_val);
     FIELD(nerf_scene_options, n_test);
     FIELD(nerf_scene_options, threads);
-    FIELD(nerf_scene_options, reserved0);
+    FIELD(nerf_scene_options, appearance);
     FIELD(nerf_scene_options, seed);
     FIELD(nerf_scene_options, hooks);
     FIELD(nerf_scene_options, capture);
@@ -166,7 +166,7 @@ static void structs(void)
     FIELD(nerf_renderer_options, raw_noise_std);
     FIELD(nerf_renderer_options, chunk_rays);
     FIELD(nerf_renderer_options, threads);
-    FIELD(nerf_renderer_options, reserved0);
+    FIELD(nerf_renderer_options, appearance);
     FIELD(nerf_renderer_options, hooks);
     end_struct();
 
@@ -230,7 +230,7 @@ static void structs(void)
     FIELD(nerf_trainer_options, reserved1);
     FIELD(nerf_trainer_options, checkpoint_seconds);
     FIELD(nerf_trainer_options, render_march_steps);
-    FIELD(nerf_trainer_options, reserved2);
+    FIELD(nerf_trainer_options, appearance_codes);
     end_struct();
 
     BEGIN(nerf_exchange);

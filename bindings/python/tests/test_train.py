@@ -79,6 +79,44 @@ class Training(TestCase):
                                   "random_background"):
             trainer(model, ds, sampler, random_background=2)
 
+    def test_appearance_codes(self):
+        # A code per training image, kept by checkpoints, chosen by the
+        # renderer's appearance option.
+        path = os.path.join(_support.tmpdir(), "codes.nerf")
+        ds, model, sampler = _support.tiny_setup(seed=2)
+        self.assertEqual(model.appearance_count, 0)
+        self.assertEqual(model.appearance_code(), (0.0, 0.0, 0.0))
+        with trainer(model, ds, sampler, appearance_codes=1) as t:
+            t.run(5)
+        self.assertEqual(model.appearance_count, len(ds))
+        self.assertIn("appearance", model.contents)
+        codes = [model.appearance_code(i) for i in range(len(ds))]
+        self.assertEqual(len(codes[0]), nerf.APPEARANCE_CODE_FLOATS)
+        self.assertNotEqual(codes[0], codes[1])
+        neutral = model.appearance_code()
+        for k in range(3):
+            mean = sum(c[k] for c in codes) / len(codes)
+            self.assertAlmostEqual(neutral[k], mean, places=5)
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "appearance"):
+            model.appearance_code(len(ds))
+        model.save(path)
+        with nerf.Model.load(path) as back:
+            self.assertEqual(back.appearance_code(1), codes[1])
+        cam = ds.camera(0)
+        with nerf.Renderer(model, sampler) as r:
+            plain = r.render_image(cam).rgb
+        with nerf.Renderer(model, sampler,
+                           appearance=nerf.appearance_of(1)) as r:
+            own = r.render_image(cam).rgb
+        self.assertNotEqual(_support.flat(plain), _support.flat(own))
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "appearance"):
+            nerf.Renderer(model, sampler,
+                          appearance=nerf.appearance_of(len(ds)))
+        for h in (ds, model, sampler):
+            h.close()
+
     def test_checkpoint(self):
         path = os.path.join(_support.tmpdir(), "ckpt.nerf")
         ds, model, sampler = _support.tiny_setup()
