@@ -44,6 +44,27 @@ int nerf__find_image_dir(const nerf__env *env, const char *dir,
                        (unsigned)factor, (unsigned)factor);
 }
 
+int nerf__find_mask_dir(const nerf__env *env, const char *dir,
+                        uint32_t factor, char **path_out)
+{
+    char name[32];
+    if (factor == 1) {
+        snprintf(name, sizeof name, "masks");
+    } else {
+        snprintf(name, sizeof name, "masks_%u", (unsigned)factor);
+    }
+    *path_out = nerf__path_join(env, dir, name);
+    if (*path_out == NULL) {
+        return NERF_ENOMEM;
+    }
+    struct stat st;
+    if (stat(*path_out, &st) != 0) {
+        nerf__free(env, *path_out);
+        *path_out = NULL;
+    }
+    return NERF_OK;
+}
+
 int nerf__check_image_factor(const char *image_dir, uint32_t factor,
                              uint32_t w, uint32_t h, double full_w,
                              double full_h, const char *source)
