@@ -176,6 +176,10 @@ static int parse(int argc, char **argv, args *a)
          .help = "photograph through that lens (OpenCV's model, as\n"
                  "nerf_camera's k1, k2, p1, p2, k3; trailing ones\n"
                  "may be left out; default none: a pinhole camera)"},
+        {.name = "--occluders", OPT_FLAG_SETS(&o->occluders, 1),
+         .help = "paint a moving magenta disc into every other training\n"
+                 "view, as a person walking through, and write its\n"
+                 "masks (mask_path; masks/ for COLMAP; not llff)"},
         {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "those of the scene's names (default off: a DIR\n"
