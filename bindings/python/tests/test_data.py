@@ -150,6 +150,47 @@ POSES = [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 4, 0, 0, 0, 1],
          [0, 0, 1, 4, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 1]]
 
 
+class Masks(TestCase):
+    def test_occluded_scene_has_masks(self):
+        out = os.path.join(_support.tmpdir(), "occluded")
+        nerf.write_scene(out, width=16, height=16, n_train=4, n_val=0,
+                         n_test=2, occluders=1)
+        with nerf.Dataset(out) as ds:
+            self.assertTrue(ds.has_masks)
+            w, h = ds.image_size
+            painted, clear = bytes(ds.mask(0)), bytes(ds.mask(1))
+            self.assertEqual(len(painted), w * h)
+            self.assertEqual(set(clear), {1})
+            self.assertEqual(set(painted), {0, 1})
+            self.assertEqual(shape(ds.mask(-4)), (h, w))
+            with self.assertRaises(IndexError):
+                ds.mask(4)
+            a, b = ds.image(0), ds.image(1)
+            # Over every pixel, as without a mask; the masked pixels
+            # changing leaves the masked score as it was.
+            self.assertEqual(nerf.psnr(a, b, mask=clear), nerf.psnr(a, b))
+            self.assertEqual(nerf.ssim(a, b, mask=clear), nerf.ssim(a, b))
+            kept = nerf.psnr(a, b, mask=painted)
+            self.assertNotEqual(kept, nerf.psnr(a, b))
+            with self.assertRaises(ValueError):
+                nerf.psnr(a, b, mask=painted[:10])
+        with nerf.Dataset(out, ignore_masks=1) as ds:
+            self.assertFalse(ds.has_masks)
+            self.assertIsNone(ds.mask(0))
+        with nerf.Dataset(out, "test") as ds:
+            self.assertFalse(ds.has_masks)
+
+    def test_mask_of_another_size_names_it(self):
+        out = os.path.join(_support.tmpdir(), "occluded-bad")
+        nerf.write_scene(out, width=16, height=16, n_train=4, n_val=0,
+                         n_test=2, occluders=1)
+        nerf.write_png(os.path.join(out, "train", "masks", "r_2.png"),
+                       bytes([255] * 64), 8, 8, 1)
+        with self.assertRaises(nerf.NerfFormatError) as cm:
+            nerf.Dataset(out)
+        self.assertIn("r_2.png: mask is 8x8 but its photo", str(cm.exception))
+
+
 class CameraPaths(TestCase):
     def test_npy(self):
         path = os.path.join(_support.tmpdir(), "path.npy")
