@@ -1448,7 +1448,12 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * poses, no frames left, a forward-facing COLMAP model without sparse points
  * in front of its cameras, an images_K/ folder whose photos are not K times
  * smaller than the poses say, an image header claiming more pixels than its
- * file holds); NERF_ENOMEM.  Messages name the file and the problem.
+ * file holds, a mask of another size than its photo or one that is not a
+ * PNG or JPEG, a mask_path that is not a file name, masks that leave out
+ * every pixel of the split); NERF_ENOMEM.  A missing or unreadable mask
+ * fails as a missing or unreadable image does (NERF_ENOENT, NERF_EIO,
+ * NERF_EUNRECOGNISED), naming the mask and its photo.  Messages name the
+ * file and the problem.
  * On failure *out is NULL.  Reentrant: separate loads may run on
  * separate threads.
  */
