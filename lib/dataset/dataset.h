@@ -162,6 +162,18 @@ int nerf__find_mask_dir(const nerf__env *env, const char *dir,
                         uint32_t factor, char **path_out);
 
 /*
+ * COLMAP's convention for a folder of photos (COLMAP and LLFF layouts):
+ * the mask of <image folder>/<name> is mask_dir/<name>.png, 0 = leave out.
+ * Loaded into slot (load; photo loaded before it, factor its block size)
+ * or checked by its header.  Once a capture has a mask folder every photo
+ * needs its mask, so that one lost in copying is an error naming it rather
+ * than a photo silently trained on whole.
+ */
+int nerf__folder_mask(nerf_dataset *ds, const char *mask_dir,
+                      const char *name, const char *photo, bool load,
+                      uint32_t slot, uint32_t factor);
+
+/*
  * Whether the w x h photos of the folder image_dir, found for factor
  * (nerf__find_image_dir), are what that folder's name says: the full-size
  * photos' full_w x full_h (as source, the poses' file or camera, gives

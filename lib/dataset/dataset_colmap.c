@@ -501,36 +501,6 @@ static int view_intrinsics(colmap_ctx *c, uint32_t i, const char *path,
     return NERF_OK;
 }
 
-/*
- * COLMAP's own convention (its feature extractor's mask folder): the mask
- * of images/<name> is masks/<name>.png, 0 = leave out.  Once a capture has
- * a mask folder every photo needs its mask, so that one lost in copying is
- * an error naming it rather than a photo silently trained on whole.
- */
-static int take_mask(colmap_ctx *c, const nerf__colmap_image *im,
-                     const char *photo, bool load, uint32_t slot,
-                     uint32_t extra)
-{
-    nerf_dataset *ds = c->ds;
-    size_t n = strlen(im->name);
-    char *name = nerf__alloc(&ds->env, n + 5);
-    if (name == NULL) {
-        return NERF_ENOMEM;
-    }
-    memcpy(name, im->name, n);
-    strcpy(name + n, ".png");
-    char *path = nerf__path_join(&ds->env, c->mask_dir, name);
-    nerf__free(&ds->env, name);
-    if (path == NULL) {
-        return NERF_ENOMEM;
-    }
-    int rc = load ? nerf__dataset_load_mask(ds, slot, path, photo, extra,
-                                            NERF__MASK_ZERO_DROPS)
-                  : nerf__dataset_check_mask(ds, path, photo);
-    nerf__free(&ds->env, path);
-    return rc;
-}
-
 /* The photo of sorted image i, loaded into slot when load, else checked
  * by its header; its camera into v. */
 static int take_photo(colmap_ctx *c, uint32_t i, bool load, uint32_t slot,
@@ -551,7 +521,8 @@ static int take_photo(colmap_ctx *c, uint32_t i, bool load, uint32_t slot,
         rc = nerf__dataset_check_image(ds, path);
     }
     if (rc == NERF_OK && c->mask_dir != NULL) {
-        rc = take_mask(c, im, path, load, slot, extra);
+        rc = nerf__folder_mask(ds, c->mask_dir, im->name, path, load, slot,
+                               extra);
     }
     if (rc == NERF_OK) {
         rc = view_intrinsics(c, i, path, extra, v);

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <string.h>
 #include <sys/stat.h>
 
 #include "dataset.h"
@@ -63,6 +64,29 @@ int nerf__find_mask_dir(const nerf__env *env, const char *dir,
         *path_out = NULL;
     }
     return NERF_OK;
+}
+
+int nerf__folder_mask(nerf_dataset *ds, const char *mask_dir,
+                      const char *name, const char *photo, bool load,
+                      uint32_t slot, uint32_t factor)
+{
+    size_t n = strlen(name);
+    char *file = nerf__alloc(&ds->env, n + 5);
+    if (file == NULL) {
+        return NERF_ENOMEM;
+    }
+    memcpy(file, name, n);
+    strcpy(file + n, ".png");
+    char *path = nerf__path_join(&ds->env, mask_dir, file);
+    nerf__free(&ds->env, file);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    int rc = load ? nerf__dataset_load_mask(ds, slot, path, photo, factor,
+                                            NERF__MASK_ZERO_DROPS)
+                  : nerf__dataset_check_mask(ds, path, photo);
+    nerf__free(&ds->env, path);
+    return rc;
 }
 
 int nerf__check_image_factor(const char *image_dir, uint32_t factor,
