@@ -33,6 +33,7 @@ typedef struct args {
     int64_t march; /* -1: the model's */
     int json;
     uint32_t appearance;
+    int no_masks;
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -70,11 +71,16 @@ static int parse(int argc, char **argv, args *a)
                  "--appearance-codes) renders with: neutral (the mean\n"
                  "of its codes, the default) or training image A's\n"
                  "code; the output says which"},
+        {.name = "--no-masks", OPT_FLAG_SETS(&a->no_masks, 1),
+         .help = "score every pixel, even those the scene's masks leave\n"
+                 "out (by default a masked pixel counts in neither\n"
+                 "score, and the output says how many were left out)"},
         {.name = "--json", OPT_FLAG_SETS(&a->json, 1),
          .help = "print one JSON object on stdout instead of the table:\n"
-                 "{\"psnr\", \"ssim\", \"views\", \"seconds\", \"appearance\",\n"
-                 "\"per_view\":\n"
-                 "[{\"view\", \"psnr\", \"ssim\"}, ...]} (default off)"},
+                 "{\"psnr\", \"ssim\", \"views\", \"seconds\",\n"
+                 "\"appearance\", \"masked_pixels\", \"pixels\", \"per_view\":\n"
+                 "[{\"view\", \"psnr\", \"ssim\", \"masked_pixels\"},\n"
+                 "...]} (default off)"},
         {.name = NULL},
     };
     const opt_program p = {.name = PROG, .opts = opts, .column = 17,
@@ -84,8 +90,10 @@ static int parse(int argc, char **argv, args *a)
 
 /* Render and score every view; per-view figures go into per_view. */
 static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
-                    cJSON *per_view, double *psnr_out, double *ssim_out)
+                    cJSON *per_view, double *psnr_out, double *ssim_out,
+                    uint64_t *masked_out)
 {
+    *masked_out = 0;
     uint32_t n = nerf_dataset_count(ds), w, h;
     nerf_dataset_image_size(ds, &w, &h);
     float *rgb = malloc((size_t)w * h * 3 * sizeof(float));
@@ -110,12 +118,28 @@ static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             rc = nerf_renderer_render_image(r, &cam, rgb, NULL, NULL,
                                             (size_t)w * h);
         }
+        const uint8_t *mask = NULL;
         if (rc == NERF_OK) {
-            rc = nerf_psnr(rgb, truth, (size_t)w * h * 3, &psnr);
+            rc = nerf_dataset_mask(ds, i, &mask);
+        }
+        uint64_t left_out = 0;
+        for (size_t p = 0; mask != NULL && p < (size_t)w * h; p++) {
+            left_out += mask[p] == 0;
+        }
+        /* A view its mask leaves whole scores as it always has. */
+        if (left_out == 0) {
+            mask = NULL;
         }
         if (rc == NERF_OK) {
-            rc = nerf_ssim(rgb, truth, w, h, 3, &ssim);
+            rc = mask ? nerf_psnr_masked(rgb, truth, mask, (size_t)w * h, 3,
+                                         &psnr)
+                      : nerf_psnr(rgb, truth, (size_t)w * h * 3, &psnr);
         }
+        if (rc == NERF_OK) {
+            rc = mask ? nerf_ssim_masked(rgb, truth, mask, w, h, 3, &ssim)
+                      : nerf_ssim(rgb, truth, w, h, 3, &ssim);
+        }
+        *masked_out += left_out;
         if (rc != NERF_OK) {
             break;
         }
@@ -129,7 +153,12 @@ static int evaluate(const args *a, nerf_renderer *r, const nerf_dataset *ds,
             cJSON_AddNumberToObject(v, "view", (double)view);
             cJSON_AddNumberToObject(v, "psnr", psnr);
             cJSON_AddNumberToObject(v, "ssim", ssim);
+            cJSON_AddNumberToObject(v, "masked_pixels", (double)left_out);
             cJSON_AddItemToArray(per_view, v);
+        } else if (left_out > 0) {
+            printf("view %3llu  psnr %6.2f  ssim %.4f  (%llu pixels masked "
+                   "out)\n", (unsigned long long)view, psnr, ssim,
+                   (unsigned long long)left_out);
         } else {
             printf("view %3llu  psnr %6.2f  ssim %.4f\n",
                    (unsigned long long)view, psnr, ssim);
@@ -165,6 +194,7 @@ int main(int argc, char **argv)
     dopt.split = (uint32_t)a.split;
     dopt.downscale = (uint32_t)a.downscale;
     dopt.skip = (uint32_t)a.skip;
+    dopt.ignore_masks = (uint32_t)a.no_masks;
     dopt.hooks = &hooks;
     int rc = nerf_model_load(&m, a.model, &hooks);
     if (rc == NERF_OK) {
@@ -194,17 +224,23 @@ int main(int argc, char **argv)
     cJSON *root = cJSON_CreateObject();
     cJSON *per_view = cJSON_CreateArray();
     double psnr = 0.0, ssim = 0.0;
+    uint64_t masked = 0;
     if (rc == NERF_OK) {
-        rc = evaluate(&a, r, ds, per_view, &psnr, &ssim);
+        rc = evaluate(&a, r, ds, per_view, &psnr, &ssim, &masked);
     }
     if (rc == NERF_OK) {
         double seconds = progress_now() - start;
+        uint32_t w = 0, h = 0;
+        nerf_dataset_image_size(ds, &w, &h);
+        uint64_t pixels = (uint64_t)w * h * nerf_dataset_count(ds);
         if (a.json) {
             cJSON_AddNumberToObject(root, "psnr", psnr);
             cJSON_AddNumberToObject(root, "ssim", ssim);
             cJSON_AddNumberToObject(root, "views", nerf_dataset_count(ds));
             cJSON_AddNumberToObject(root, "seconds", seconds);
             cJSON_AddStringToObject(root, "appearance", look);
+            cJSON_AddNumberToObject(root, "masked_pixels", (double)masked);
+            cJSON_AddNumberToObject(root, "pixels", (double)pixels);
             cJSON_AddItemToObject(root, "per_view", per_view);
             per_view = NULL;
             char *text = cJSON_PrintUnformatted(root);
@@ -213,6 +249,13 @@ int main(int argc, char **argv)
         } else {
             printf("mean      psnr %6.2f  ssim %.4f  (%u views, %.1f s)\n",
                    psnr, ssim, nerf_dataset_count(ds), seconds);
+            if (nerf_dataset_has_masks(ds)) {
+                printf("masks left %llu of %llu pixels out of the scores "
+                       "(%.2f%%)\n", (unsigned long long)masked,
+                       (unsigned long long)pixels,
+                       pixels ? 100.0 * (double)masked / (double)pixels
+                              : 0.0);
+            }
         }
     } else {
         cli_report("nerf-eval", rc);

@@ -181,6 +181,10 @@ static int parse(int argc, char **argv, args *a)
          .help = "give each training photo its own exposure and\n"
                  "white balance, as a phone's automatic ones do\n"
                  "(blender layout; test views keep the scene's look)"},
+        {.name = "--occluders", OPT_FLAG_SETS(&o->occluders, 1),
+         .help = "paint a moving magenta disc into every other training\n"
+                 "view, as a person walking through, and write its\n"
+                 "masks (mask_path; masks/ for COLMAP; not llff)"},
         {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "those of the scene's names (default off: a DIR\n"

@@ -114,6 +114,7 @@ typedef struct args {
     int64_t coarse, fine; /* samples a ray; -1: the preset's */
     int64_t render_march; /* --render-march-steps; 0: the library's */
     int appearance_codes;
+    int no_masks;
 } args;
 
 static const opt_choice spaces[] = {
@@ -195,6 +196,10 @@ static int parse(int argc, char **argv, args *a)
         {OPT_OVERWRITE(&a->overwrite),
          .help = "replace MODEL if it exists (default off: without\n"
                  "--resume or --overwrite, an existing MODEL is refused)"},
+        {.name = "--no-masks", OPT_FLAG_SETS(&a->no_masks, 1),
+         .help = "train on every pixel, even those the scene's masks\n"
+                 "leave out (default off: masked pixels are never\n"
+                 "trained on; docs/formats.md, \"Masks\")"},
         {.name = "--batch-samples",
          OPT_INT_IN(&a->batch_samples, 0, BATCH_SAMPLES_MAX),
          .given = &a->batch_samples_given, .value = "N",
@@ -577,6 +582,7 @@ static int run(int argc, char **argv)
     NERF_DATASET_OPTIONS_INIT(&dopt);
     dopt.downscale = (uint32_t)a.downscale;
     dopt.forward_facing = setup_forward_facing(m, a.space);
+    dopt.ignore_masks = (uint32_t)a.no_masks;
     dopt.hooks = &hooks;
     if (rc == NERF_OK) {
         rc = nerf_dataset_load(&ds, a.data, &dopt);

@@ -1446,6 +1446,11 @@ typedef struct nerf_dataset_options {
                                     with 1 is refused.
                                     @since 0.4 */
     const nerf_hooks *hooks;   /**< Allocation and logging; NULL = defaults. */
+    uint32_t ignore_masks;     /**< 1: read no mask file, so that every pixel
+                                    counts (nerf_dataset_has_masks() 0), as
+                                    before masks were read.  0 (default):
+                                    the layout's masks, when it has any.
+                                    @since 0.13 */
 } nerf_dataset_options;
 
 /**
@@ -1492,7 +1497,12 @@ NERF_API int nerf_dataset_options_init(nerf_dataset_options *opts,
  * poses, no frames left, a forward-facing COLMAP model without sparse points
  * in front of its cameras, an images_K/ folder whose photos are not K times
  * smaller than the poses say, an image header claiming more pixels than its
- * file holds); NERF_ENOMEM.  Messages name the file and the problem.
+ * file holds, a mask of another size than its photo or one that is not a
+ * PNG or JPEG, a mask_path that is not a file name, masks that leave out
+ * every pixel of the split); NERF_ENOMEM.  A missing or unreadable mask
+ * fails as a missing or unreadable image does (NERF_ENOENT, NERF_EIO,
+ * NERF_EUNRECOGNISED), naming the mask and its photo.  Messages name the
+ * file and the problem.
  * On failure *out is NULL.  Reentrant: separate loads may run on
  * separate threads.
  */
@@ -1524,6 +1534,30 @@ NERF_API int nerf_dataset_image_size(const nerf_dataset *ds,
  */
 NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
                                 const float **rgb_out);
+
+/**
+ * 1 when some image of the loaded split has a mask (a transforms frame's
+ * mask_path, an instant-ngp dynamic_mask_<stem>.png beside the image, a
+ * COLMAP or LLFF masks/ folder beside images/; docs/formats.md, "Masks"),
+ * else 0 (also for NULL).  Masked pixels are left out of training (the
+ * trainer never draws their rays) and out of nerf-eval's scores.
+ * @since 0.13
+ */
+NERF_API int nerf_dataset_has_masks(const nerf_dataset *ds);
+
+/**
+ * Borrow the mask of image @p index: width x height bytes, row-major from
+ * the top-left pixel as nerf_dataset_image(), 1 where the pixel counts
+ * and 0 where the mask leaves it out (whatever the convention of the
+ * layout's files; a downscaled pixel counts only when all the pixels of
+ * its block do).  An image without a mask file of a dataset with masks
+ * has every byte 1.  *mask_out is NULL when the dataset has no masks
+ * (nerf_dataset_has_masks() 0).  Valid until the dataset is destroyed.
+ * @return NERF_OK or NERF_EINVAL (NULL pointer, index out of range).
+ * @since 0.13
+ */
+NERF_API int nerf_dataset_mask(const nerf_dataset *ds, uint32_t index,
+                               const uint8_t **mask_out);
 
 /**
  * The camera of image @p index: pose (OpenGL axes, world units of the
@@ -2172,6 +2206,22 @@ typedef struct nerf_scene_options {
                                COLMAP's OPENCV model has no k3).  Default 0: a
                                pinhole camera.
                                @since 0.3 */
+    uint32_t occluders;   /**< 1: people walking through, as it were: every
+                               other training view (0, 2, 4, ...) has an
+                               opaque magenta disc painted over it (a thing
+                               just before the lens), a fifth of the
+                               picture's shorter side in radius, at a place
+                               that moves from view to view; the layout
+                               records its mask
+                               (BLENDER and TRANSFORMS: the frame's mask_path,
+                               0 = leave out; COLMAP: masks/<image>.png for
+                               every image).  LLFF is refused.  Views of the
+                               other splits are not painted (TRANSFORMS: the
+                               loader's split is not the writer's, so some
+                               painted views may land in the test split,
+                               masks and all).  0 (default): none, and the
+                               files are as before, byte for byte.
+                               @since 0.13 */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
@@ -2670,6 +2720,36 @@ NERF_API int nerf_psnr(const float *a, const float *b, size_t count,
  */
 NERF_API int nerf_ssim(const float *a, const float *b, uint32_t width,
                        uint32_t height, uint32_t channels, double *out);
+
+/**
+ * nerf_psnr() over the pixels @p mask keeps: the mean squared error of
+ * every channel of the pixels whose mask byte is nonzero (a dataset's
+ * mask, nerf_dataset_mask()).
+ * @param a, b     @p pixels x @p channels floats, channels interleaved.
+ * @param mask     @p pixels bytes, 0 = leave the pixel out.
+ * @param channels 1..4.
+ * @return NERF_OK; NERF_EINVAL (NULL pointer, pixels 0, bad channel
+ * count, NaN or infinite values, a mask that keeps no pixel).  Reentrant.
+ * @since 0.13
+ */
+NERF_API int nerf_psnr_masked(const float *a, const float *b,
+                              const uint8_t *mask, size_t pixels,
+                              uint32_t channels, double *out);
+
+/**
+ * nerf_ssim() over the pixels @p mask keeps: the SSIM map averaged over
+ * the 11 x 11 windows that hold no left-out pixel (mask byte 0), so that a
+ * left-out pixel changes nothing.  With a mask of all ones it equals
+ * nerf_ssim().
+ * @param mask width x height bytes, row-major.
+ * @return NERF_OK; NERF_EINVAL (as nerf_ssim(), a NULL mask, no window
+ * free of left-out pixels); NERF_ENOMEM.  Reentrant.
+ * @since 0.13
+ */
+NERF_API int nerf_ssim_masked(const float *a, const float *b,
+                              const uint8_t *mask, uint32_t width,
+                              uint32_t height, uint32_t channels,
+                              double *out);
 
 #ifdef __cplusplus
 }

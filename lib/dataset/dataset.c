@@ -55,9 +55,9 @@ static int read_options(nerf_dataset_options *o, const nerf_dataset_options *in)
     } else if (o->skip < 1) {
         what = "skip must be at least 1";
     } else if (o->white_background > 1 || o->skip_missing > 1 ||
-               o->forward_facing > 1) {
-        what = "white_background, skip_missing and forward_facing must be "
-               "0 or 1";
+               o->forward_facing > 1 || o->ignore_masks > 1) {
+        what = "white_background, skip_missing, forward_facing and "
+               "ignore_masks must be 0 or 1";
     }
     if (what) {
         return nerf__error(NERF_EINVAL, "nerf_dataset_options: %s", what);
@@ -155,6 +155,27 @@ static int detect_and_load(nerf_dataset *ds, const char *dir,
                        "sparse/): not a known dataset layout", dir, name);
 }
 
+/*
+ * A trainer draws only kept pixels, so a split with none left is refused
+ * now rather than by every later call; the count left out goes to the
+ * log, as the loaders' other figures do.
+ */
+static int check_masks(nerf_dataset *ds, const char *dir)
+{
+    size_t n = (size_t)ds->count * ds->width * ds->height, kept = 0;
+    for (size_t i = 0; i < n; i++) {
+        kept += ds->mask[i] != 0;
+    }
+    if (kept == 0) {
+        return nerf__error(NERF_EFORMAT, "%s: the masks leave out every "
+                           "pixel of the split", dir);
+    }
+    nerf__log(&ds->env, NERF_LOG_INFO, "%s: masks leave out %zu of %zu "
+              "pixels (%.2f%%)", dir, n - kept, n,
+              100.0 * (double)(n - kept) / (double)n);
+    return NERF_OK;
+}
+
 NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
                                const nerf_dataset_options *opts)
 {
@@ -182,7 +203,8 @@ NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
     ds->aabb_scale = 1.0;
     nerf__dataset_config cfg = {o.split, o.downscale, o.skip,
                                 o.white_background, o.skip_missing,
-                                o.llff_holdout, o.forward_facing};
+                                o.llff_holdout, o.forward_facing,
+                                o.ignore_masks};
     rc = detect_and_load(ds, dir, &cfg);
     if (rc == NERF_OK && o.forward_facing &&
         ds->kind == NERF__DATASET_BLENDER) {
@@ -193,6 +215,13 @@ NERF_API int nerf_dataset_load(nerf_dataset **out, const char *dir,
     if (rc != NERF_OK) {
         nerf_dataset_destroy(ds);
         return rc;
+    }
+    if (ds->mask != NULL) {
+        rc = check_masks(ds, dir);
+        if (rc != NERF_OK) {
+            nerf_dataset_destroy(ds);
+            return rc;
+        }
     }
     ds->white_background = ds->kind == NERF__DATASET_BLENDER &&
                            o.white_background;
@@ -208,6 +237,7 @@ NERF_API void nerf_dataset_destroy(nerf_dataset *ds)
     nerf__env env = ds->env;
     nerf__free(&env, ds->pixels);
     nerf__free(&env, ds->alpha);
+    nerf__free(&env, ds->mask);
     nerf__free(&env, ds->views);
     nerf__free(&env, ds);
 }
@@ -255,6 +285,23 @@ NERF_API int nerf_dataset_image(const nerf_dataset *ds, uint32_t index,
     int rc = check_index(ds, index, rgb_out, "nerf_dataset_image");
     if (rc == NERF_OK) {
         *rgb_out = ds->pixels + (size_t)index * ds->width * ds->height * 3;
+    }
+    return rc;
+}
+
+NERF_API int nerf_dataset_has_masks(const nerf_dataset *ds)
+{
+    return ds != NULL && ds->mask != NULL;
+}
+
+NERF_API int nerf_dataset_mask(const nerf_dataset *ds, uint32_t index,
+                               const uint8_t **mask_out)
+{
+    int rc = check_index(ds, index, mask_out, "nerf_dataset_mask");
+    if (rc == NERF_OK) {
+        *mask_out = ds->mask ? ds->mask + (size_t)index * ds->width *
+                                              ds->height
+                             : NULL;
     }
     return rc;
 }

@@ -44,6 +44,7 @@ typedef struct nerf__dataset_config {
     uint32_t skip_missing;
     uint32_t llff_holdout;
     uint32_t forward_facing;
+    uint32_t ignore_masks;
 } nerf__dataset_config;
 
 struct nerf_dataset {
@@ -62,6 +63,10 @@ struct nerf_dataset {
      * 1.5e-5 in coverage is far below what 8-bit colours resolve. */
     uint16_t *alpha;
     float alpha_bg;        /* the grey pixels were composited onto (0, 1) */
+    /* count x height x width: 1 where a pixel counts (trained on, scored),
+     * 0 where its image's mask leaves it out; NULL when no image of the
+     * split has a mask, so that a capture without masks costs nothing. */
+    uint8_t *mask;
     nerf__view *views;     /* count */
     float near_bound, far_bound; /* ray interval: NDC [0, 1] for LLFF */
     int ndc;
@@ -101,6 +106,28 @@ int nerf__dataset_load_image(nerf_dataset *ds, uint32_t index,
                              const char *path, uint32_t factor,
                              uint32_t white_background);
 
+/* How a layout's mask images say which pixels to leave out. */
+typedef enum nerf__mask_rule {
+    NERF__MASK_ZERO_DROPS = 0,    /* nerfstudio's mask_path, COLMAP masks/ */
+    NERF__MASK_NONZERO_DROPS = 1  /* instant-ngp's dynamic_mask_* */
+} nerf__mask_rule;
+
+/*
+ * Read the mask image at path for image index (loaded before it, whose
+ * file photo names in messages) and store it into ds->mask (allocated by
+ * the first mask, every pixel kept): a stored pixel is kept only when
+ * every source pixel of its downscaled block is.  The mask must be the
+ * size of its photo's file.
+ */
+int nerf__dataset_load_mask(nerf_dataset *ds, uint32_t index,
+                            const char *path, const char *photo,
+                            uint32_t factor, nerf__mask_rule rule);
+
+/* The check nerf__dataset_check_image makes, for the mask at path of the
+ * photo photo (not loaded): readable, and the size of the loaded photos. */
+int nerf__dataset_check_mask(const nerf_dataset *ds, const char *path,
+                             const char *photo);
+
 /*
  * Check the image at path that the dataset names but does not load (a
  * frame of another split, or one that skip passes over) as far as its
@@ -124,6 +151,27 @@ char *nerf__path_join(const nerf__env *env, const char *dir,
 int nerf__find_image_dir(const nerf__env *env, const char *dir,
                          uint32_t factor, char **path_out,
                          uint32_t *factor_out);
+
+/*
+ * The mask folder beside the image folder of factor (nerf__find_image_dir's
+ * *factor_out): masks/ for images/, masks_<factor>/ for images_<factor>/,
+ * in *path_out (free with nerf__free), or NULL when there is none (of any
+ * kind: a file in its place is for the mask reads to refuse).
+ */
+int nerf__find_mask_dir(const nerf__env *env, const char *dir,
+                        uint32_t factor, char **path_out);
+
+/*
+ * COLMAP's convention for a folder of photos (COLMAP and LLFF layouts):
+ * the mask of <image folder>/<name> is mask_dir/<name>.png, 0 = leave out.
+ * Loaded into slot (load; photo loaded before it, factor its block size)
+ * or checked by its header.  Once a capture has a mask folder every photo
+ * needs its mask, so that one lost in copying is an error naming it rather
+ * than a photo silently trained on whole.
+ */
+int nerf__folder_mask(nerf_dataset *ds, const char *mask_dir,
+                      const char *name, const char *photo, bool load,
+                      uint32_t slot, uint32_t factor);
 
 /*
  * Whether the w x h photos of the folder image_dir, found for factor

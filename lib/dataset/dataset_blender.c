@@ -31,6 +31,8 @@ typedef struct frame {
     bool dropped;    /* loaded, but its image is missing (skip_missing) */
     char name[224];  /* for messages: index and file_path */
     char *path;
+    char *mask;      /* its mask image, or NULL */
+    nerf__mask_rule rule;
     double c2w[12];
     nerf__intrinsics in;
 } frame;
@@ -110,6 +112,54 @@ static int frame_path(const blender_ctx *b, const char *json_path,
     *out = nerf__path_join(&b->ds->env, b->dir, rel);
     nerf__free(&b->ds->env, rel);
     return *out ? NERF_OK : NERF_ENOMEM;
+}
+
+/*
+ * The frame's mask, when it has one: nerfstudio's mask_path (relative to
+ * the json's folder, 0 = leave out), else instant-ngp's
+ * dynamic_mask_<image stem>.png beside the image (nonzero = something
+ * that moves: leave out), which instant-ngp finds by its name alone.
+ */
+static int frame_mask(const blender_ctx *b, const char *json_path,
+                      const cJSON *fr, frame *f)
+{
+    nerf__env *env = &b->ds->env;
+    const cJSON *mp = cJSON_GetObjectItemCaseSensitive(fr, "mask_path");
+    if (mp != NULL) {
+        if (!cJSON_IsString(mp) || mp->valuestring[0] == '\0') {
+            return nerf__error(NERF_EFORMAT, "%s: %s: 'mask_path' is not "
+                               "a file name", json_path, f->name);
+        }
+        const char *name = mp->valuestring;
+        while (name[0] == '.' && name[1] == '/') {
+            name += 2;
+        }
+        f->mask = nerf__path_join(env, b->dir, name);
+        f->rule = NERF__MASK_ZERO_DROPS;
+        return f->mask ? NERF_OK : NERF_ENOMEM;
+    }
+    const char *base = strrchr(f->path, '/');
+    base = base ? base + 1 : f->path;
+    const char *dot = strrchr(base, '.');
+    size_t stem = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    size_t head = (size_t)(base - f->path);
+    static const char prefix[] = "dynamic_mask_";
+    char *path = nerf__alloc(env, head + sizeof prefix + stem + 5);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    memcpy(path, f->path, head);
+    memcpy(path + head, prefix, sizeof prefix - 1);
+    memcpy(path + head + sizeof prefix - 1, base, stem);
+    strcpy(path + head + sizeof prefix - 1 + stem, ".png");
+    struct stat st;
+    if (lstat(path, &st) != 0) {
+        nerf__free(env, path);
+        return NERF_OK;
+    }
+    f->mask = path;
+    f->rule = NERF__MASK_NONZERO_DROPS;
+    return NERF_OK;
 }
 
 /*
@@ -202,7 +252,12 @@ static int parse_frames(blender_ctx *b, uint32_t file, const cJSON *root,
         if (rc == NERF_OK) {
             rc = frame_path(b, json_path, fr, f->name, idx, &f->path);
         }
+        if (rc == NERF_OK && !cfg->ignore_masks) {
+            rc = frame_mask(b, json_path, fr, f);
+        }
         if (rc != NERF_OK) {
+            nerf__free(&b->ds->env, f->path);
+            nerf__free(&b->ds->env, f->mask);
             return rc;
         }
         b->n_frames++;
@@ -289,6 +344,10 @@ static int load_frames(blender_ctx *b, const nerf__dataset_config *cfg)
         }
         rc = nerf__dataset_load_image(ds, slot, f->path, cfg->downscale,
                                       cfg->white_background);
+        if (rc == NERF_OK && f->mask != NULL) {
+            rc = nerf__dataset_load_mask(ds, slot, f->mask, f->path,
+                                         cfg->downscale, f->rule);
+        }
         nerf__view *v = &ds->views[slot++];
         if (rc == NERF_OK) {
             rc = resolve_intrinsics(b, f, ds->src_width, ds->src_height, v);
@@ -333,6 +392,9 @@ static int check_frames(blender_ctx *b)
         }
         nerf__view v;
         rc = nerf__dataset_check_image(b->ds, f->path);
+        if (rc == NERF_OK && f->mask != NULL) {
+            rc = nerf__dataset_check_mask(b->ds, f->mask, f->path);
+        }
         if (rc == NERF_OK) {
             rc = resolve_intrinsics(b, f, b->ds->src_width,
                                     b->ds->src_height, &v);
@@ -465,6 +527,7 @@ int nerf__blender_load(nerf_dataset *ds, const char *dir, const char *name,
     }
     for (uint32_t i = 0; i < b.n_frames; i++) {
         nerf__free(&ds->env, b.frames[i].path);
+        nerf__free(&ds->env, b.frames[i].mask);
     }
     nerf__free(&ds->env, b.frames);
     for (uint32_t f = 0; f < b.n_files; f++) {

@@ -52,6 +52,7 @@ typedef struct colmap_ctx {
     double near, far;
     char *image_dir;
     uint32_t image_factor;
+    char *mask_dir;          /* masks/ (masks_M/ beside images_M/), or NULL */
 } colmap_ctx;
 
 /* Of any kind: a FIFO in a model file's place is for its reader to
@@ -519,6 +520,10 @@ static int take_photo(colmap_ctx *c, uint32_t i, bool load, uint32_t slot,
     } else if (rc == NERF_OK) {
         rc = nerf__dataset_check_image(ds, path);
     }
+    if (rc == NERF_OK && c->mask_dir != NULL) {
+        rc = nerf__folder_mask(ds, c->mask_dir, im->name, path, load, slot,
+                               extra);
+    }
     if (rc == NERF_OK) {
         rc = view_intrinsics(c, i, path, extra, v);
     }
@@ -602,6 +607,9 @@ static int load(colmap_ctx *c, const nerf__dataset_config *cfg)
         rc = nerf__find_image_dir(env, c->dir, cfg->downscale, &c->image_dir,
                                   &c->image_factor);
     }
+    if (rc == NERF_OK && !cfg->ignore_masks) {
+        rc = nerf__find_mask_dir(env, c->dir, c->image_factor, &c->mask_dir);
+    }
     uint32_t count = 0;
     if (rc == NERF_OK) {
         count = nerf__holdout_split(n, cfg, sel);
@@ -673,5 +681,6 @@ int nerf__colmap_load(nerf_dataset *ds, const char *dir,
     nerf__free(&ds->env, c.order);
     nerf__free(&ds->env, c.poses);
     nerf__free(&ds->env, c.image_dir);
+    nerf__free(&ds->env, c.mask_dir);
     return rc;
 }

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <string.h>
 #include <sys/stat.h>
 
 #include "dataset.h"
@@ -42,6 +43,50 @@ int nerf__find_image_dir(const nerf__env *env, const char *dir,
                        "(looked for images_%u/, images_M/ with M dividing "
                        "%u, and images/)", dir, (unsigned)factor,
                        (unsigned)factor, (unsigned)factor);
+}
+
+int nerf__find_mask_dir(const nerf__env *env, const char *dir,
+                        uint32_t factor, char **path_out)
+{
+    char name[32];
+    if (factor == 1) {
+        snprintf(name, sizeof name, "masks");
+    } else {
+        snprintf(name, sizeof name, "masks_%u", (unsigned)factor);
+    }
+    *path_out = nerf__path_join(env, dir, name);
+    if (*path_out == NULL) {
+        return NERF_ENOMEM;
+    }
+    struct stat st;
+    if (stat(*path_out, &st) != 0) {
+        nerf__free(env, *path_out);
+        *path_out = NULL;
+    }
+    return NERF_OK;
+}
+
+int nerf__folder_mask(nerf_dataset *ds, const char *mask_dir,
+                      const char *name, const char *photo, bool load,
+                      uint32_t slot, uint32_t factor)
+{
+    size_t n = strlen(name);
+    char *file = nerf__alloc(&ds->env, n + 5);
+    if (file == NULL) {
+        return NERF_ENOMEM;
+    }
+    memcpy(file, name, n);
+    strcpy(file + n, ".png");
+    char *path = nerf__path_join(&ds->env, mask_dir, file);
+    nerf__free(&ds->env, file);
+    if (path == NULL) {
+        return NERF_ENOMEM;
+    }
+    int rc = load ? nerf__dataset_load_mask(ds, slot, path, photo, factor,
+                                            NERF__MASK_ZERO_DROPS)
+                  : nerf__dataset_check_mask(ds, path, photo);
+    nerf__free(&ds->env, path);
+    return rc;
 }
 
 int nerf__check_image_factor(const char *image_dir, uint32_t factor,

@@ -1,5 +1,6 @@
 /* Image storage shared by the loaders: compositing and area downscaling. */
 #include <stdbool.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "dataset.h"
@@ -200,4 +201,85 @@ int nerf__dataset_check_image(const nerf_dataset *ds, const char *path)
     uint32_t w, h;
     int rc = nerf__image_read_size(&ds->env, path, &w, &h);
     return rc == NERF_OK ? check_size(ds, path, w, h) : rc;
+}
+
+/*
+ * A block is kept only when all its source pixels are: a block that a
+ * person covers in part holds some of the person's colour, which is what
+ * the mask is there to keep out of training.  Every colour channel is
+ * looked at, so grey, RGB and palette masks read alike; alpha is not (a
+ * mask's transparency says nothing in any of the layouts' conventions).
+ */
+static void mask_box(const float *rgba, uint32_t src_w, uint32_t factor,
+                     uint32_t w, uint32_t h, nerf__mask_rule rule,
+                     uint8_t *dst)
+{
+    for (uint32_t oy = 0; oy < h; oy++) {
+        for (uint32_t ox = 0; ox < w; ox++) {
+            uint8_t keep = 1;
+            for (uint32_t dy = 0; dy < factor; dy++) {
+                const float *p = rgba + ((size_t)(oy * factor + dy) * src_w +
+                                         (size_t)ox * factor) * 4;
+                for (uint32_t dx = 0; dx < factor; dx++, p += 4) {
+                    bool zero = p[0] == 0.0f && p[1] == 0.0f && p[2] == 0.0f;
+                    if (zero == (rule == NERF__MASK_ZERO_DROPS)) {
+                        keep = 0;
+                    }
+                }
+            }
+            dst[(size_t)oy * w + ox] = keep;
+        }
+    }
+}
+
+int nerf__dataset_load_mask(nerf_dataset *ds, uint32_t index,
+                            const char *path, const char *photo,
+                            uint32_t factor, nerf__mask_rule rule)
+{
+    uint32_t w, h;
+    float *rgba;
+    int rc = nerf__image_read_rgba(&ds->env, path, &w, &h, &rgba);
+    if (rc != NERF_OK) {
+        char prefix[4200];
+        snprintf(prefix, sizeof prefix, "mask of %s", photo);
+        return nerf__error_prefix(rc, prefix);
+    }
+    const size_t per_image = (size_t)ds->width * ds->height;
+    if (w != ds->src_width || h != ds->src_height) {
+        rc = nerf__error(NERF_EFORMAT, "%s: mask is %ux%u but its photo %s "
+                         "is %ux%u", path, (unsigned)w, (unsigned)h, photo,
+                         (unsigned)ds->src_width, (unsigned)ds->src_height);
+    } else if (ds->mask == NULL) {
+        /* No overflow: first_image() checked per_image * 3 * count. */
+        ds->mask = nerf__alloc(&ds->env, per_image * ds->count);
+        if (ds->mask == NULL) {
+            rc = nerf__error_prefix(NERF_ENOMEM, path);
+        } else {
+            memset(ds->mask, 1, per_image * ds->count);
+        }
+    }
+    if (rc == NERF_OK) {
+        mask_box(rgba, w, factor, ds->width, ds->height, rule,
+                 ds->mask + per_image * index);
+    }
+    nerf__free(&ds->env, rgba);
+    return rc;
+}
+
+int nerf__dataset_check_mask(const nerf_dataset *ds, const char *path,
+                             const char *photo)
+{
+    uint32_t w, h;
+    int rc = nerf__image_read_size(&ds->env, path, &w, &h);
+    if (rc != NERF_OK) {
+        char prefix[4200];
+        snprintf(prefix, sizeof prefix, "mask of %s", photo);
+        return nerf__error_prefix(rc, prefix);
+    }
+    if (w != ds->src_width || h != ds->src_height) {
+        return nerf__error(NERF_EFORMAT, "%s: mask is %ux%u but its photo %s "
+                           "is %ux%u", path, (unsigned)w, (unsigned)h, photo,
+                           (unsigned)ds->src_width, (unsigned)ds->src_height);
+    }
+    return NERF_OK;
 }

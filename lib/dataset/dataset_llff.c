@@ -31,6 +31,7 @@ typedef struct llff_ctx {
     double *bounds;  /* n x 2 */
     char *image_dir;
     uint32_t image_factor; /* the folder's downscale: images_<factor> */
+    char *mask_dir;        /* masks/ or masks_<factor>/, or NULL */
     char **names;    /* n image file names, sorted */
     size_t n_names;
 } llff_ctx;
@@ -242,6 +243,10 @@ static int load_images(llff_ctx *c, const nerf__dataset_config *cfg,
         }
         rc = nerf__dataset_load_image(ds, i, path, extra,
                                       cfg->white_background);
+        if (rc == NERF_OK && c->mask_dir != NULL) {
+            rc = nerf__folder_mask(ds, c->mask_dir, c->names[sel[i]], path,
+                                   true, i, extra);
+        }
         nerf__free(&ds->env, path);
     }
     if (rc != NERF_OK) {
@@ -286,6 +291,10 @@ static int check_others(llff_ctx *c, const uint32_t *sel, uint32_t count)
         char *path = nerf__path_join(&c->ds->env, c->image_dir,
                                      c->names[i]);
         rc = path ? nerf__dataset_check_image(c->ds, path) : NERF_ENOMEM;
+        if (rc == NERF_OK && c->mask_dir != NULL) {
+            rc = nerf__folder_mask(c->ds, c->mask_dir, c->names[i], path,
+                                   false, 0, 1);
+        }
         nerf__free(&c->ds->env, path);
     }
     return rc;
@@ -318,6 +327,10 @@ static int load(llff_ctx *c, const nerf__dataset_config *cfg)
     int rc = read_rows(c);
     if (rc == NERF_OK) {
         rc = find_image_dir(c, cfg->downscale);
+    }
+    if (rc == NERF_OK && !cfg->ignore_masks) {
+        rc = nerf__find_mask_dir(&c->ds->env, c->dir, c->image_factor,
+                                 &c->mask_dir);
     }
     if (rc == NERF_OK) {
         rc = list_images(c);
@@ -384,6 +397,7 @@ int nerf__llff_load(nerf_dataset *ds, const char *dir,
     }
     nerf__free(&ds->env, c.names);
     nerf__free(&ds->env, c.image_dir);
+    nerf__free(&ds->env, c.mask_dir);
     nerf__free(&ds->env, c.rows);
     nerf__free(&ds->env, c.poses);
     nerf__free(&ds->env, c.bounds);

@@ -30,7 +30,8 @@ enum {
     NERF__STREAM_NOISE_COARSE = 3,
     NERF__STREAM_NOISE_FINE = 4,
     NERF__STREAM_MARCH = 5,
-    NERF__STREAM_BACKGROUND = 6 /* the trainer's random backgrounds */
+    NERF__STREAM_BACKGROUND = 6, /* the trainer's random backgrounds */
+    NERF__STREAM_MASK = 7        /* the trainer's redraws of masked pixels */
 };
 
 /* The checks nerf_sampler_create() makes of a full options struct:

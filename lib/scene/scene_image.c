@@ -1,5 +1,6 @@
 #include "scene_image.h"
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 
@@ -66,4 +67,48 @@ int nerf__scene_image_write(const nerf__env *env, const char *stem,
                                o->jpeg_quality);
     nerf__free(env, rgb);
     return rc;
+}
+
+bool nerf__scene_occluded(const nerf_scene_options *o, int split, uint32_t i)
+{
+    return o->occluders != 0 && split == 0 && i % 2 == 0;
+}
+
+void nerf__scene_paint_occluder(const nerf_scene_options *o, uint32_t i,
+                                uint32_t channels, uint8_t *px,
+                                uint8_t *mask)
+{
+    static const uint8_t colour[3] = {200, 30, 160};
+    /* Golden-ratio steps spread the discs' places evenly over the middle
+     * of the picture, where the solids are, whatever the view count. */
+    const double fx = fmod(0.5 + i * 0.6180339887498949, 1.0);
+    const double fy = fmod(0.5 + i * 0.7548776662466927, 1.0);
+    const double side = o->width < o->height ? o->width : o->height;
+    const double cx = o->width * (0.2 + 0.6 * fx);
+    const double cy = o->height * (0.2 + 0.6 * fy);
+    const double r = 0.2 * side;
+    for (uint32_t y = 0; y < o->height; y++) {
+        for (uint32_t x = 0; x < o->width; x++) {
+            const double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
+            const bool in = dx * dx + dy * dy <= r * r;
+            const size_t at = (size_t)y * o->width + x;
+            if (mask != NULL) {
+                mask[at] = in ? 0 : 255;
+            }
+            if (in && px != NULL) {
+                for (uint32_t c = 0; c < 3; c++) {
+                    px[at * channels + c] = colour[c];
+                }
+                if (channels == 4) {
+                    px[at * channels + 3] = 255;
+                }
+            }
+        }
+    }
+}
+
+int nerf__scene_mask_write(const nerf__env *env, const char *path,
+                           const nerf_scene_options *o, const uint8_t *mask)
+{
+    return nerf__png_write8(env, path, o->width, o->height, 1, mask);
 }

@@ -45,9 +45,19 @@ int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
     char path[4096];
     snprintf(path, sizeof path, "%s/images", dir);
     int rc = nerf__scene_make_dir(path);
+    uint8_t *mask = NULL;
+    if (rc == NERF_OK && o->occluders) {
+        snprintf(path, sizeof path, "%s/masks", dir);
+        rc = nerf__scene_make_dir(path);
+        mask = nerf__alloc(env, (size_t)o->width * o->height);
+        if (rc == NERF_OK && mask == NULL) {
+            return NERF_ENOMEM;
+        }
+    }
     cJSON *root = cJSON_CreateObject();
     cJSON *frames = cJSON_CreateArray();
     if (root == NULL || frames == NULL) {
+        nerf__free(env, mask);
         cJSON_Delete(root);
         cJSON_Delete(frames);
         return nerf__error(NERF_ENOMEM, "%s: out of memory building JSON", dir);
@@ -61,6 +71,10 @@ int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
             nerf_camera cam;
             nerf__scene_capture_camera(o, split, i, counts[split], &cam);
             nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
+            const bool occluded = nerf__scene_occluded(o, split, i);
+            if (occluded) {
+                nerf__scene_paint_occluder(o, i, look.channels, px, mask);
+            }
             char file[64];
             snprintf(file, sizeof file, "images/%s_%u",
                      nerf__scene_split_names[split], i);
@@ -71,6 +85,13 @@ int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
                      nerf__scene_image_extension(o));
             cJSON *frame = cJSON_CreateObject();
             cJSON_AddStringToObject(frame, "file_path", file);
+            if (occluded && rc == NERF_OK) {
+                snprintf(file, sizeof file, "masks/%s_%u.png",
+                         nerf__scene_split_names[split], i);
+                snprintf(path, sizeof path, "%s/%s", dir, file);
+                rc = nerf__scene_mask_write(env, path, o, mask);
+                cJSON_AddStringToObject(frame, "mask_path", file);
+            }
             cJSON_AddItemToObject(frame, "transform_matrix",
                                   nerf__scene_matrix_json(cam.c2w));
             cJSON_AddItemToArray(frames, frame);
@@ -82,6 +103,7 @@ int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
         rc = nerf__scene_write_json(env, path, root);
     }
     cJSON_Delete(root);
+    nerf__free(env, mask);
     nerf__log(env, NERF_LOG_INFO, "scene: wrote %u views of %ux%u to "
               "%s/transforms.json", (unsigned)written, o->width, o->height,
               dir);

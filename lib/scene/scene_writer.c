@@ -280,7 +280,7 @@ int nerf__scene_write_json(const nerf__env *env, const char *path,
 
 static int write_split(const char *dir, int split, uint32_t n,
                        const nerf_scene_options *o, const nerf__env *env,
-                       uint8_t *px)
+                       uint8_t *px, uint8_t *mask)
 {
     const char *const *names = nerf__scene_split_names;
     const nerf__scene_look look = nerf__scene_look_of(o->capture);
@@ -315,6 +315,10 @@ static int write_split(const char *dir, int split, uint32_t n,
         nerf__scene_capture_camera(o, split, i, n, &cam);
         nerf__scene_render_view(&cam, &look, o->threads, px, NULL);
         nerf__scene_vary_view(o, split, i, look.channels, px);
+        const bool occluded = nerf__scene_occluded(o, split, i);
+        if (occluded) {
+            nerf__scene_paint_occluder(o, i, look.channels, px, mask);
+        }
         snprintf(path, sizeof path, "%s/%s/r_%u", dir, names[split], i);
         rc = nerf__scene_image_write(env, path, o, look.channels, px);
         cJSON *frame = cJSON_CreateObject();
@@ -322,6 +326,16 @@ static int write_split(const char *dir, int split, uint32_t n,
         snprintf(file, sizeof file, "./%s/r_%u%s", names[split], i,
                  nerf__scene_image_suffix(o));
         cJSON_AddStringToObject(frame, "file_path", file);
+        if (occluded && rc == NERF_OK) {
+            snprintf(path, sizeof path, "%s/%s/masks", dir, names[split]);
+            rc = nerf__scene_make_dir(path);
+            snprintf(file, sizeof file, "./%s/masks/r_%u.png", names[split],
+                     i);
+            snprintf(path, sizeof path, "%s/%s", dir, file + 2);
+            rc = rc == NERF_OK ? nerf__scene_mask_write(env, path, o, mask)
+                               : rc;
+            cJSON_AddStringToObject(frame, "mask_path", file);
+        }
         cJSON_AddItemToObject(frame, "transform_matrix",
                               nerf__scene_matrix_json(cam.c2w));
         cJSON_AddItemToArray(frames, frame);
@@ -408,6 +422,15 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
                            "changes need the Blender layout, whose test "
                            "views the writer knows");
     }
+    if (o.occluders > 1) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: occluders must "
+                           "be 0 or 1");
+    }
+    if (o.occluders && o.layout == NERF_SCENE_LAYOUT_LLFF) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: occluders are "
+                           "written for the Blender, transforms and COLMAP "
+                           "layouts, not LLFF");
+    }
     rc = check_capture(&o);
     rc = rc == NERF_OK ? nerf__scene_image_check(&o) : rc;
     if (rc != NERF_OK) {
@@ -431,7 +454,10 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     uint8_t *px = rc == NERF_OK
                       ? nerf__alloc(&env, (size_t)o.width * o.height * 4)
                       : NULL;
-    if (rc == NERF_OK && px == NULL) {
+    uint8_t *mask = rc == NERF_OK && o.occluders
+                        ? nerf__alloc(&env, (size_t)o.width * o.height)
+                        : NULL;
+    if (rc == NERF_OK && (px == NULL || (o.occluders && mask == NULL))) {
         rc = NERF_ENOMEM;
     }
     if (rc == NERF_OK && o.layout == NERF_SCENE_LAYOUT_TRANSFORMS) {
@@ -448,8 +474,9 @@ NERF_API int nerf_scene_write(const char *dir, const nerf_scene_options *opts)
     for (int split = 0; split < 3 && rc == NERF_OK &&
                         o.layout == NERF_SCENE_LAYOUT_BLENDER;
          split++) {
-        rc = write_split(dir, split, counts[split], &o, &env, px);
+        rc = write_split(dir, split, counts[split], &o, &env, px, mask);
     }
     nerf__free(&env, px);
+    nerf__free(&env, mask);
     return rc;
 }

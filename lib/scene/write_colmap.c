@@ -86,6 +86,15 @@ static int write_views(colmap_writer *w, uint8_t *rgba)
     char path[4096];
     snprintf(path, sizeof path, "%s/images", w->dir);
     int rc = nerf__scene_make_dir(path);
+    uint8_t *mask = NULL;
+    if (rc == NERF_OK && o->occluders) {
+        /* Every photo gets its mask: the loader asks for one per photo
+         * once a masks/ folder is there. */
+        snprintf(path, sizeof path, "%s/masks", w->dir);
+        rc = nerf__scene_make_dir(path);
+        mask = nerf__alloc(w->env, (size_t)o->width * o->height);
+        rc = rc == NERF_OK && mask == NULL ? NERF_ENOMEM : rc;
+    }
     uint32_t k = 0;
     for (int split = 0; split < 3; split++) {
         for (uint32_t i = 0; i < counts[split] && rc == NERF_OK; i++, k++) {
@@ -102,10 +111,23 @@ static int write_views(colmap_writer *w, uint8_t *rgba)
                         to8(rgba[4 * j + c] / 255.0 * a + (1.0 - a));
                 }
             }
+            if (mask != NULL) {
+                memset(mask, 255, px);
+                if (nerf__scene_occluded(o, split, i)) {
+                    nerf__scene_paint_occluder(o, i, 3, rgba, mask);
+                }
+            }
             snprintf(path, sizeof path, "%s/images/%05u", w->dir, (unsigned)k);
             rc = nerf__scene_image_write(w->env, path, o, 3, rgba);
+            if (rc == NERF_OK && mask != NULL) {
+                /* COLMAP's name for the mask of images/<name>. */
+                snprintf(path, sizeof path, "%s/masks/%05u%s.png", w->dir,
+                         (unsigned)k, nerf__scene_image_extension(o));
+                rc = nerf__scene_mask_write(w->env, path, o, mask);
+            }
         }
     }
+    nerf__free(w->env, mask);
     return rc;
 }
 

@@ -75,6 +75,46 @@ static void fill_rays(void *ctx, size_t begin, size_t end)
 }
 
 /*
+ * A ray whose pixel a mask leaves out is drawn again, from a stream of its
+ * own (keyed by the seed, the step and the ray's number, as its background
+ * is), until it lands on a kept pixel: the rays stay uniform over the kept
+ * pixels, a step's choices still depend on nothing but the seed and the
+ * step (so a resumed run draws what an uninterrupted one does), and every
+ * ray whose first draw is kept is the ray it is without masks.  A crop
+ * (precrop) or images that are nearly all masked could make redrawing
+ * slow; after MASK_TRIES draws the ray takes the next kept pixel in
+ * storage order instead, which the loader guarantees exists.
+ */
+#define MASK_TRIES 64u
+
+static size_t redraw_masked(const nerf_trainer *t, uint64_t step, uint32_t r,
+                            uint32_t x0, uint32_t y0, uint32_t cw,
+                            uint32_t ch, size_t at)
+{
+    const uint8_t *mask = t->dataset->mask;
+    const uint32_t W = t->width, H = t->height;
+    nerf__rng rng = nerf__ray_rng(t->model->opts.seed, NERF__STREAM_MASK,
+                                  step * t->opts.batch_rays + r);
+    for (uint32_t k = 0; k < MASK_TRIES; k++) {
+        uint32_t img = (uint32_t)(nerf__rng_uniform_d(&rng) * t->n_images);
+        uint32_t x = x0 + (uint32_t)(nerf__rng_uniform_d(&rng) * cw);
+        uint32_t y = y0 + (uint32_t)(nerf__rng_uniform_d(&rng) * ch);
+        size_t again = ((size_t)img * H + y) * W + x;
+        if (mask[again] != 0) {
+            return again;
+        }
+    }
+    const size_t n = (size_t)t->n_images * H * W;
+    for (size_t k = 1; k < n; k++) {
+        size_t i = (at + k) % n;
+        if (mask[i] != 0) {
+            return i;
+        }
+    }
+    return at;
+}
+
+/*
  * The draws come from one stream and are cheap; the rest of a ray (its
  * camera ray, and its pixel and coverage, which are cache misses in the
  * images' hundreds of megabytes) is spread over the cores, so that no
@@ -96,11 +136,16 @@ void nerf__trainer_pick_rays(nerf_trainer *t, uint64_t step)
         y0 = (H - ch) / 2;
     }
     nerf__rng rng = nerf__rng_make(t->model->opts.seed ^ TRAIN_STREAM, step);
+    const uint8_t *mask = t->dataset->mask;
     for (uint32_t r = 0; r < t->opts.batch_rays; r++) {
         uint32_t img = (uint32_t)(nerf__rng_uniform_d(&rng) * t->n_images);
         uint32_t x = x0 + (uint32_t)(nerf__rng_uniform_d(&rng) * cw);
         uint32_t y = y0 + (uint32_t)(nerf__rng_uniform_d(&rng) * ch);
-        t->picked[r] = ((size_t)img * H + y) * W + x;
+        size_t at = ((size_t)img * H + y) * W + x;
+        if (mask != NULL && mask[at] == 0) {
+            at = redraw_masked(t, step, r, x0, y0, cw, ch, at);
+        }
+        t->picked[r] = at;
     }
     fill_job j = {t, step};
     nerf__parallel_for(t->opts.batch_rays, 256, fill_rays, &j);

@@ -78,6 +78,7 @@ FROZEN(nerf_scene_options, k2, 68);
 FROZEN(nerf_scene_options, p1, 72);
 FROZEN(nerf_scene_options, p2, 76);
 FROZEN(nerf_scene_options, k3, 80);
+FROZEN(nerf_scene_options, occluders, 84);
 SIZE(nerf_scene_options, 88);
 
 FROZEN(nerf_camera, struct_size, 0);
@@ -180,7 +181,8 @@ FROZEN(nerf_dataset_options, skip_missing, 20);
 FROZEN(nerf_dataset_options, llff_holdout, 24);
 FROZEN(nerf_dataset_options, forward_facing, 28);
 FROZEN(nerf_dataset_options, hooks, 32);
-SIZE(nerf_dataset_options, 40);
+FROZEN(nerf_dataset_options, ignore_masks, 40);
+SIZE(nerf_dataset_options, 48);
 
 FROZEN(nerf_trainer_options, struct_size, 0);
 FROZEN(nerf_trainer_options, batch_rays, 4);

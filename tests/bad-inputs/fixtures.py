@@ -358,6 +358,90 @@ def _ngp_lens(fx, path):
     return path
 
 
+# Masks: {scene-masked} is {scene} with occluders (train views 0 and 2
+# masked through mask_path); {colmap-masked} a COLMAP model with masks/.
+@fixture("scene-masked")
+def _scene_masked(fx, path):
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 4, "--val", 0, "--test", 2, "--occluders")
+    return path
+
+
+register_damage("mask-missing", "scene-masked", "train/masks/r_2.png",
+                "missing")
+register_damage("mask-fifo", "scene-masked", "train/masks/r_2.png", "fifo")
+register_damage("mask-not-image", "scene-masked", "train/masks/r_2.png",
+                b"not an image\n")
+register_damage("mask-truncated", "scene-masked", "train/masks/r_2.png",
+                png(16, 16, colour=0)[:30])
+register_damage("mask-wrong-size", "scene-masked", "train/masks/r_2.png",
+                png(8, 8))
+
+
+def _edit_frame(fx, path, base, name, index, key, value):
+    if base is not None:
+        fx.copy(base, path)
+    target = os.path.join(path, name)
+    with open(target, encoding="utf-8") as f:
+        data = json.load(f)
+    data["frames"][index][key] = value
+    write(target, json.dumps(data, indent=1))
+    return path
+
+
+@fixture("mask-path-number")
+def _mask_path_number(fx, path):
+    return _edit_frame(fx, path, "scene-masked", "transforms_train.json", 0,
+                       "mask_path", 5)
+
+
+@fixture("mask-held-wrong-size")
+def _mask_held_wrong_size(fx, path):
+    """A test frame's mask of another size: refused when the train split
+    is loaded, as the test frames' images are checked."""
+    fx.copy("scene-masked", path)
+    write(os.path.join(path, "test", "m1.png"), png(8, 8))
+    return _edit_frame(fx, path, None, "transforms_test.json", 1,
+                       "mask_path", "test/m1.png")
+
+
+@fixture("ngp-dynamic-wrong-size")
+def _ngp_dynamic_wrong_size(fx, path):
+    """instant-ngp's dynamic mask of view 1 is 8x8."""
+    fx.copy("ngp", path)
+    image = ngp_image(fx, 1)
+    stem = os.path.splitext(os.path.basename(image))[0]
+    write(os.path.join(path, os.path.dirname(image),
+                       "dynamic_mask_" + stem + ".png"), png(8, 8))
+    return path
+
+
+@fixture("ngp-dynamic-all")
+def _ngp_dynamic_all(fx, path):
+    """Every view's dynamic mask nonzero everywhere: nothing to train on."""
+    fx.copy("ngp", path)
+    for i in range(9):
+        image = ngp_image(fx, i)
+        stem = os.path.splitext(os.path.basename(image))[0]
+        write(os.path.join(path, os.path.dirname(image),
+                           "dynamic_mask_" + stem + ".png"), png(16, 16))
+    return path
+
+
+@fixture("colmap-masked")
+def _colmap_masked(fx, path):
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 4, "--val", 0, "--test", 2, "--layout", "colmap-text",
+            "--occluders")
+    return path
+
+
+register_damage("colmap-mask-missing", "colmap-masked",
+                "masks/00003.png.png", "missing")
+register_damage("colmap-mask-held-wrong-size", "colmap-masked",
+                "masks/00000.png.png", png(8, 8))
+
+
 # LLFF layout: 10 photos of 16x12 in images/, photos 0 and 8 held out.
 @fixture("llff")
 def _llff(fx, path):

@@ -39,8 +39,32 @@ static float *random_image(size_t n)
  * window, weighted means, variances and covariance with the 2-D Gaussian
  * weight g(dx) g(dy), all in double.  No separability, no ring buffer.
  */
+static double reference_ssim_masked(const float *a, const float *b,
+                                    const uint8_t *mask, int w, int h,
+                                    int ch);
+
 static double reference_ssim(const float *a, const float *b, int w, int h,
                              int ch)
+{
+    return reference_ssim_masked(a, b, NULL, w, h, ch);
+}
+
+/* Whether the window at (x, y) holds no pixel mask leaves out. */
+static int window_whole(const uint8_t *mask, int w, int x, int y)
+{
+    for (int dy = 0; mask != NULL && dy < 11; dy++) {
+        for (int dx = 0; dx < 11; dx++) {
+            if (mask[(size_t)(y + dy) * w + x + dx] == 0) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+static double reference_ssim_masked(const float *a, const float *b,
+                                    const uint8_t *mask, int w, int h,
+                                    int ch)
 {
     double g[11], sum = 0.0;
     for (int k = 0; k < 11; k++) {
@@ -51,10 +75,14 @@ static double reference_ssim(const float *a, const float *b, int w, int h,
         g[k] /= sum;
     }
     const double c1 = 0.01 * 0.01, c2 = 0.03 * 0.03;
-    double total = 0.0;
+    double total = 0.0, windows = 0.0;
     for (int c = 0; c < ch; c++) {
         for (int y = 0; y + 11 <= h; y++) {
             for (int x = 0; x + 11 <= w; x++) {
+                if (!window_whole(mask, w, x, y)) {
+                    continue;
+                }
+                windows += 1.0;
                 double ma = 0, mb = 0, aa = 0, bb = 0, ab = 0;
                 for (int dy = 0; dy < 11; dy++) {
                     for (int dx = 0; dx < 11; dx++) {
@@ -73,7 +101,7 @@ static double reference_ssim(const float *a, const float *b, int w, int h,
             }
         }
     }
-    return total / ((double)(w - 10) * (h - 10) * ch);
+    return total / windows;
 }
 
 TEST(identical_images)
@@ -149,6 +177,83 @@ TEST(ssim_matches_direct_definition)
     }
 }
 
+/*
+ * The masked scores against their definitions: PSNR over the kept pixels'
+ * channels, SSIM over the windows that hold no left-out pixel; a mask of
+ * ones gives the unmasked scores, and what lies under a left-out pixel
+ * changes nothing.
+ */
+TEST(masked_scores_leave_the_masked_pixels_out)
+{
+    static const int sizes[][3] = {{23, 17, 3}, {40, 30, 3}, {14, 29, 1}};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        int w = sizes[s][0], h = sizes[s][1], ch = sizes[s][2];
+        size_t px = (size_t)w * h, n = px * ch;
+        float *a = random_image(n), *b = random_image(n);
+        uint8_t *mask = malloc(px), *ones = malloc(px);
+        memset(ones, 1, px);
+        size_t kept = 0;
+        for (size_t i = 0; i < px; i++) {
+            /* A block in a corner and a few scattered pixels. */
+            int x = (int)(i % w), y = (int)(i / w);
+            mask[i] = !((x < 5 && y < 6) || uniform() < 0.01);
+            kept += mask[i];
+        }
+        for (size_t i = 0; i < n; i++) {
+            b[i] = 0.7f * a[i] + 0.3f * b[i];
+        }
+        double sum = 0.0;
+        for (size_t i = 0; i < px; i++) {
+            for (int c = 0; c < ch && mask[i]; c++) {
+                double d = (double)a[i * ch + c] - b[i * ch + c];
+                sum += d * d;
+            }
+        }
+        double psnr, ssim, all_psnr, all_ssim, psnr1, ssim1;
+        CHECK_OK(nerf_psnr_masked(a, b, mask, px, (uint32_t)ch, &psnr));
+        CHECK_NEAR(psnr, -10.0 * log10(sum / ((double)kept * ch)), 1e-9);
+        CHECK_OK(nerf_ssim_masked(a, b, mask, (uint32_t)w, (uint32_t)h,
+                                  (uint32_t)ch, &ssim));
+        CHECK_NEAR(ssim, reference_ssim_masked(a, b, mask, w, h, ch),
+                   1e-10);
+        CHECK_OK(nerf_psnr(a, b, n, &all_psnr));
+        CHECK_OK(nerf_ssim(a, b, (uint32_t)w, (uint32_t)h, (uint32_t)ch,
+                           &all_ssim));
+        CHECK_OK(nerf_psnr_masked(a, b, ones, px, (uint32_t)ch, &psnr1));
+        CHECK_OK(nerf_ssim_masked(a, b, ones, (uint32_t)w, (uint32_t)h,
+                                  (uint32_t)ch, &ssim1));
+        CHECK(psnr1 == all_psnr);
+        CHECK(ssim1 == all_ssim);
+        CHECK(ssim != all_ssim);
+        for (size_t i = 0; i < px; i++) {
+            for (int c = 0; c < ch && !mask[i]; c++) {
+                b[i * ch + c] = 1.0f - b[i * ch + c];
+            }
+        }
+        double psnr2, ssim2;
+        CHECK_OK(nerf_psnr_masked(a, b, mask, px, (uint32_t)ch, &psnr2));
+        CHECK_OK(nerf_ssim_masked(a, b, mask, (uint32_t)w, (uint32_t)h,
+                                  (uint32_t)ch, &ssim2));
+        CHECK(psnr2 == psnr);
+        CHECK(ssim2 == ssim);
+        free(a);
+        free(b);
+        free(mask);
+        free(ones);
+    }
+    float a[12 * 12] = {0}, b[12 * 12] = {0};
+    uint8_t none[12 * 12] = {0};
+    double out;
+    CHECK_EQ_INT(nerf_psnr_masked(a, b, none, 144, 1, &out), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "leaves no pixel") != NULL);
+    none[0] = 1;
+    CHECK_EQ_INT(nerf_ssim_masked(a, b, none, 12, 12, 1, &out), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "window whole") != NULL);
+    CHECK_EQ_INT(nerf_ssim_masked(a, b, NULL, 12, 12, 1, &out), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_psnr_masked(a, b, NULL, 144, 1, &out), NERF_EINVAL);
+    CHECK_EQ_INT(nerf_psnr_masked(a, b, none, 144, 5, &out), NERF_EINVAL);
+}
+
 TEST(more_noise_lower_scores)
 {
     enum { W = 48, H = 40, N = W * H * 3 };
@@ -200,6 +305,7 @@ int main(void)
     RUN(psnr_closed_forms);
     RUN(ssim_constant_images);
     RUN(ssim_matches_direct_definition);
+    RUN(masked_scores_leave_the_masked_pixels_out);
     RUN(more_noise_lower_scores);
     RUN(bad_arguments);
     HARNESS_EXIT();

@@ -9,6 +9,10 @@
  * test split with holdouts 2 and 0 and as the train split with holdout
  * 1 (always empty), which the split of one file for every split takes.
  * Every camera of a load must be usable (fuzz_camera.h), its lens too.
+ * Both folders also hold masks, which frames name with mask_path or find
+ * by instant-ngp's name: m_0.png (4x4 grey, half of it 0) and
+ * dynamic_mask_r_0.png (4x4 grey, one pixel nonzero), so that the masks'
+ * reads, size checks and refusals are fuzzed with the frames.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -49,6 +53,13 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
         fx_write_png(p, 4, 4, 6, 8, px, NULL, 0, NULL, 0);
         fx_path(p, sizeof p, dirs[d], "r_1.png");
         fx_write_png(p, 2, 2, 0, 8, px, NULL, 0, NULL, 0);
+        uint16_t half[16] = {0, 0, 0, 0, 0, 0, 0, 0,
+                             255, 255, 255, 255, 255, 255, 255, 255};
+        fx_path(p, sizeof p, dirs[d], "m_0.png");
+        fx_write_png(p, 4, 4, 0, 8, half, NULL, 0, NULL, 0);
+        uint16_t one[16] = {0, 0, 0, 0, 0, 9};
+        fx_path(p, sizeof p, dirs[d], "dynamic_mask_r_0.png");
+        fx_write_png(p, 4, 4, 0, 8, one, NULL, 0, NULL, 0);
     }
     fx_path(json_path, sizeof json_path, scene, "transforms_train.json");
     fx_path(whole_path, sizeof whole_path, whole, "transforms.json");

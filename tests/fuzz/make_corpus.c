@@ -310,7 +310,27 @@ static void transforms_seeds(void)
         "[0, 0, 0, 1]]}]}\n";
     save("transforms", "blender.json", blender, sizeof blender - 1);
     save("transforms", "ngp.json", ngp, sizeof ngp - 1);
+    /* nerfstudio's mask_path: a mask of the photo's size (m_0.png), one
+     * of another size (r_1.png's 2x2 for r_0's 4x4), one missing; r_0's
+     * second frame also has instant-ngp's dynamic_mask_r_0.png beside
+     * it, which mask_path overrides and the third frame picks up. */
+    static const char masks[] =
+        "{\"camera_angle_x\": 0.69, \"frames\": [\n"
+        "{\"file_path\": \"r_0.png\", \"mask_path\": \"./m_0.png\", "
+        "\"transform_matrix\": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4], "
+        "[0, 0, 0, 1]]},\n"
+        "{\"file_path\": \"r_0.png\", \"mask_path\": \"r_1.png\", "
+        "\"transform_matrix\": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 3], "
+        "[0, 0, 0, 1]]},\n"
+        "{\"file_path\": \"r_0\", \"transform_matrix\": [[1, 0, 0, 0], "
+        "[0, 1, 0, 0], [0, 0, 1, 2], [0, 0, 0, 1]]},\n"
+        "{\"file_path\": \"r_0.png\", \"mask_path\": \"nope.png\", "
+        "\"transform_matrix\": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 5], "
+        "[0, 0, 0, 1]]}]}\n";
+    save("transforms", "blender.json", blender, sizeof blender - 1);
+    save("transforms", "ngp.json", ngp, sizeof ngp - 1);
     save("transforms", "lens.json", lens, sizeof lens - 1);
+    save("transforms", "masks.json", masks, sizeof masks - 1);
 }
 
 /*

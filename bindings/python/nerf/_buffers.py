@@ -452,3 +452,17 @@ def borrowed_floats(address: int, shape: Sequence[int], owner: Any,
         return arr
     view = memoryview(carr).cast("B").cast("f", tuple(shape))
     return view.toreadonly() if readonly else view
+
+
+def borrowed_bytes(address: int, shape: Sequence[int], owner: Any) -> Any:
+    """:func:`borrowed_floats` for 8-bit data, always read-only."""
+    n = 1
+    for s in shape:
+        n *= int(s)
+    carr = (ctypes.c_uint8 * n).from_address(address)
+    carr._nerf_owner = owner  # the array's lifetime pins the owner
+    if np is not None:
+        arr = np.frombuffer(carr, dtype=np.uint8).reshape(tuple(shape))
+        arr.flags.writeable = False
+        return arr
+    return memoryview(carr).cast("B").cast("B", tuple(shape)).toreadonly()

@@ -188,6 +188,31 @@ class Dataset(_handle.Handle):
         address = ctypes.cast(pixels, ctypes.c_void_p).value
         return _buffers.borrowed_floats(address, (h, w, 3), lease)
 
+    @property
+    def has_masks(self) -> bool:
+        """True when some image of the split has a mask
+        (``nerf_dataset_has_masks``): its masked pixels are left out of
+        training and of nerf-eval's scores.  ``ignore_masks=1`` loads
+        none."""
+        with self._using() as ptr:
+            return bool(lib.nerf_dataset_has_masks(ptr))
+
+    def mask(self, index: int) -> Any:
+        """The mask of image ``index`` as a read-only height x width uint8
+        array, 1 where the pixel counts and 0 where it is left out, or
+        None when the dataset has no masks (``nerf_dataset_mask``).  Like
+        :meth:`image`, no copy: it keeps the dataset's C object alive."""
+        i = self._index(index)
+        w, h = self.image_size
+        mask = ctypes.POINTER(ctypes.c_uint8)()
+        with self._using() as ptr:
+            lib.nerf_dataset_mask(ptr, i, ctypes.byref(mask))
+            if not mask:
+                return None
+            lease = _Lease(self._res)
+        address = ctypes.cast(mask, ctypes.c_void_p).value
+        return _buffers.borrowed_bytes(address, (h, w), lease)
+
     def camera(self, index: int) -> Camera:
         """The camera of image ``index`` (a new :class:`nerf.Camera`)."""
         cam = Camera()
@@ -377,27 +402,52 @@ def write_npy(path: Any, values: Any, shape: Optional[Any] = None) -> None:
     lib.nerf_npy_write_float(raw, buf.ptr, c_shape, len(dims))
 
 
-def psnr(a: Any, b: Any) -> float:
+def _mask_input(mask: Any, pixels: int, name: str) -> Any:
+    ptr, n, keep, _ = _buffers.as_uint8_input(mask, name)
+    if n != pixels:
+        raise ValueError("%s: %d values for %d pixels" % (name, n, pixels))
+    return ptr, keep
+
+
+def psnr(a: Any, b: Any, mask: Any = None) -> float:
     """Peak signal-to-noise ratio in dB of two images in [0, 1] of any
-    (equal) layout; ``inf`` for identical images (``nerf_psnr``)."""
+    (equal) layout; ``inf`` for identical images (``nerf_psnr``).  With
+    ``mask`` (one byte a pixel, 0 = leave out, as :meth:`Dataset.mask`;
+    the images then (height, width, channels) or (pixels, channels)),
+    over the kept pixels only (``nerf_psnr_masked``)."""
     # The library refuses images that hold NaN or infinite values.
     x = _buffers.as_float_input(a, "psnr: a", finite=True)
     y = _buffers.as_float_input(b, "psnr: b", shape=x.shape, finite=True)
     out = ctypes.c_double()
-    lib.nerf_psnr(x.ptr, y.ptr, x.size, ctypes.byref(out))
+    if mask is None:
+        lib.nerf_psnr(x.ptr, y.ptr, x.size, ctypes.byref(out))
+        return out.value
+    channels = x.shape[-1] if len(x.shape) >= 2 else 1
+    pixels = x.size // channels
+    mp, keep = _mask_input(mask, pixels, "psnr: mask")
+    lib.nerf_psnr_masked(x.ptr, y.ptr, mp, pixels, channels,
+                         ctypes.byref(out))
+    del keep
     return out.value
 
 
 def ssim(a: Any, b: Any, width: Optional[int] = None,
          height: Optional[int] = None,
-         channels: Optional[int] = None) -> float:
+         channels: Optional[int] = None, mask: Any = None) -> float:
     """Structural similarity of two images in [0, 1] as the reference NeRF
     evaluation computes it (``nerf_ssim``); at least 11 x 11 pixels.  The
     geometry comes from the shape of ``a``, (height, width[, channels]),
-    unless given."""
+    unless given.  With ``mask`` (height x width bytes, 0 = leave out),
+    over the windows that hold no left-out pixel
+    (``nerf_ssim_masked``)."""
     x = _buffers.as_float_input(a, "ssim: a", finite=True)
     w, h, c = _image_geometry(x.shape, width, height, channels, "ssim: a")
     y = _buffers.as_float_input(b, "ssim: b", shape=x.shape, finite=True)
     out = ctypes.c_double()
-    lib.nerf_ssim(x.ptr, y.ptr, w, h, c, ctypes.byref(out))
+    if mask is None:
+        lib.nerf_ssim(x.ptr, y.ptr, w, h, c, ctypes.byref(out))
+        return out.value
+    mp, keep = _mask_input(mask, w * h, "ssim: mask")
+    lib.nerf_ssim_masked(x.ptr, y.ptr, mp, w, h, c, ctypes.byref(out))
+    del keep
     return out.value

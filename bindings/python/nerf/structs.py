@@ -438,6 +438,7 @@ class SceneOptions(_Versioned):
         ("p1", c_float),
         ("p2", c_float),
         ("k3", c_float),
+        ("occluders", c_uint32),
     ]
 
 
@@ -574,6 +575,7 @@ class DatasetOptions(_Versioned):
         ("llff_holdout", c_uint32),
         ("forward_facing", c_uint32),
         ("hooks", POINTER(Hooks)),
+        ("ignore_masks", c_uint32),
     ]
 
 

@@ -110,6 +110,7 @@ static void structs(void)
     FIELD(nerf_scene_options, p1);
     FIELD(nerf_scene_options, p2);
     FIELD(nerf_scene_options, k3);
+    FIELD(nerf_scene_options, occluders);
     end_struct();
 
     BEGIN(nerf_camera);
@@ -206,6 +207,7 @@ static void structs(void)
     FIELD(nerf_dataset_options, llff_holdout);
     FIELD(nerf_dataset_options, forward_facing);
     FIELD(nerf_dataset_options, hooks);
+    FIELD(nerf_dataset_options, ignore_masks);
     end_struct();
 
     BEGIN(nerf_trainer_options);

@@ -150,6 +150,75 @@ POSES = [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 4, 0, 0, 0, 1],
          [0, 0, 1, 4, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 1]]
 
 
+class Masks(TestCase):
+    def test_occluded_scene_has_masks(self):
+        out = os.path.join(_support.tmpdir(), "occluded")
+        nerf.write_scene(out, width=16, height=16, n_train=4, n_val=0,
+                         n_test=2, occluders=1)
+        with nerf.Dataset(out) as ds:
+            self.assertTrue(ds.has_masks)
+            w, h = ds.image_size
+            painted, clear = bytes(ds.mask(0)), bytes(ds.mask(1))
+            self.assertEqual(len(painted), w * h)
+            self.assertEqual(set(clear), {1})
+            self.assertEqual(set(painted), {0, 1})
+            self.assertEqual(shape(ds.mask(-4)), (h, w))
+            with self.assertRaises(IndexError):
+                ds.mask(4)
+            a, b = ds.image(0), ds.image(1)
+            # Over every pixel, as without a mask; the masked pixels
+            # changing leaves the masked score as it was.
+            self.assertEqual(nerf.psnr(a, b, mask=clear), nerf.psnr(a, b))
+            self.assertEqual(nerf.ssim(a, b, mask=clear), nerf.ssim(a, b))
+            kept = nerf.psnr(a, b, mask=painted)
+            self.assertNotEqual(kept, nerf.psnr(a, b))
+            with self.assertRaises(ValueError):
+                nerf.psnr(a, b, mask=painted[:10])
+        with nerf.Dataset(out, ignore_masks=1) as ds:
+            self.assertFalse(ds.has_masks)
+            self.assertIsNone(ds.mask(0))
+        with nerf.Dataset(out, "test") as ds:
+            self.assertFalse(ds.has_masks)
+
+    def test_llff_masks_folder(self):
+        """COLMAP's convention, masks/<image name>.png, in an LLFF scene;
+        every photo needs its mask once the folder is there."""
+        out = os.path.join(_support.tmpdir(), "llff-masked")
+        nerf.write_scene(out, capture="forward", layout="llff", width=16,
+                         height=12, n_train=7, n_test=2)
+        names = sorted(os.listdir(os.path.join(out, "images")))
+        os.mkdir(os.path.join(out, "masks"))
+        for k, name in enumerate(names):
+            # Photo k leaves its first k pixels out.
+            pixels = bytes([0] * k + [255] * (16 * 12 - k))
+            nerf.write_png(os.path.join(out, "masks", name + ".png"), pixels,
+                           16, 12, 1)
+        with nerf.Dataset(out) as ds:
+            self.assertTrue(ds.has_masks)
+            # The train split: photos 1..7 (photo 0 and 8 held out).
+            for i in range(len(ds)):
+                m = bytes(ds.mask(i))
+                self.assertEqual(m.count(0), i + 1)
+                self.assertEqual(m[:i + 1], bytes(i + 1))
+        with nerf.Dataset(out, downscale=2) as ds:
+            # A 2x2 block is kept only when all its pixels are.
+            self.assertEqual(bytes(ds.mask(0))[:2], bytes([0, 1]))
+        os.remove(os.path.join(out, "masks", names[8] + ".png"))
+        with self.assertRaises(nerf.NerfNotFound) as cm:
+            nerf.Dataset(out)
+        self.assertIn(names[8] + ".png", str(cm.exception))
+
+    def test_mask_of_another_size_names_it(self):
+        out = os.path.join(_support.tmpdir(), "occluded-bad")
+        nerf.write_scene(out, width=16, height=16, n_train=4, n_val=0,
+                         n_test=2, occluders=1)
+        nerf.write_png(os.path.join(out, "train", "masks", "r_2.png"),
+                       bytes([255] * 64), 8, 8, 1)
+        with self.assertRaises(nerf.NerfFormatError) as cm:
+            nerf.Dataset(out)
+        self.assertIn("r_2.png: mask is 8x8 but its photo", str(cm.exception))
+
+
 class CameraPaths(TestCase):
     def test_npy(self):
         path = os.path.join(_support.tmpdir(), "path.npy")
