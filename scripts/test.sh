@@ -136,13 +136,16 @@ run_suite clang build/clang -- --native-file scripts/native/clang.ini \
   "${NERF_RELEASE_OPTIONS[@]}" --
 
 # Sanitized code runs slower, hence the longer timeouts.  Leak checking is on
-# so a missing free fails the test that leaked.
+# so a missing free fails the test that leaked.  NERF_TEST_QUICK asks the
+# tests that compare what several trainings reach (masks, appearance codes)
+# for their code paths in a few steps: their figures, minutes of training
+# here, are checked by the release and clang runs.
 test_args=(--timeout-multiplier 3 ${test_args[@]+"${test_args[@]}"})
 run_suite sanitize build/sanitize -- \
   -Db_sanitize=address,undefined -Db_lundef=false \
   -Dbuildtype=debugoptimized --werror -- \
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
-  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 NERF_TEST_QUICK=1
 
 # The fuzz targets (clang, libFuzzer; tests/fuzz/README.md): each replays
 # its committed corpus once, then fuzzes for a few seconds.  Only the

@@ -3,7 +3,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdlib.h>
 
 #include "adam.h"
 #include "error.h"
@@ -63,20 +62,16 @@ void nerf__appearance_adam(nerf_model *m, uint64_t t, double lr)
         return;
     }
     const size_t n = (size_t)a->n * NERF__CODE_FLOATS;
-    const char *e = getenv("NERF_CODE_LR");
-    if (e) lr *= atof(e);
-    const char *d = getenv("NERF_CODE_DECAY");
-    const float decay = d ? (float)atof(d) : NERF__CODE_DECAY;
     for (size_t i = 0; i < n; i++) {
         /* Only the codes this step's rays reached, as below. */
         if (a->grad[i] != 0.0f) {
-            a->grad[i] += decay * a->code[i];
+            a->grad[i] += NERF__CODE_DECAY * a->code[i];
         }
     }
     /* Sparse: a step's rays touch a few images' codes, and the others
      * keep their moments, as a hash table's untouched entries do. */
-    nerf__adam_update(&m->adam, t, lr, n, a->code, a->grad, a->adam_m,
-                      a->adam_v, NERF__ADAM_SPARSE);
+    nerf__adam_update(&m->adam, t, NERF__CODE_RATE * lr, n, a->code,
+                      a->grad, a->adam_m, a->adam_v, NERF__ADAM_SPARSE);
 }
 
 void nerf__appearance_apply(const float code[NERF__CODE_FLOATS], size_t n,

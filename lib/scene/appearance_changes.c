@@ -16,7 +16,6 @@
  * learned.  Values past 255 clip, as a camera's do.
  */
 #include <math.h>
-#include <stdlib.h>
 
 #include "rng.h"
 #include "scene_internal.h"
@@ -33,8 +32,7 @@ static void raw_gains(const nerf_scene_options *o, uint32_t i, double g[3])
     const double e = 2.0 * nerf__rng_uniform_d(&rng) - 1.0;
     for (int c = 0; c < 3; c++) {
         const double v = 2.0 * nerf__rng_uniform_d(&rng) - 1.0;
-        const char *x = getenv("NERF_EXPOSURE_STOPS");
-        g[c] = exp2((x ? atof(x) : EXPOSURE_STOPS) * e + BALANCE_STOPS * v);
+        g[c] = exp2(EXPOSURE_STOPS * e + BALANCE_STOPS * v);
     }
 }
 

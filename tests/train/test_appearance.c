@@ -31,6 +31,13 @@ static int env_int(const char *name, int fallback)
     return v ? atoi(v) : fallback;
 }
 
+/* The sanitizer run (scripts/test.sh): the trainings' code paths in a few
+ * steps, without the figures they reach. */
+static bool quick(void)
+{
+    return getenv("NERF_TEST_QUICK") != NULL;
+}
+
 /* ---- the map ----------------------------------------------------------- */
 
 /* A code, a ray and its background, all away from special values. */
@@ -173,7 +180,7 @@ static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
 static double trained_psnr(const fixture *f, uint32_t codes)
 {
     const uint64_t seed = fixture_seed();
-    const int steps = env_int("NERF_TEST_STEPS", STEPS);
+    const int steps = quick() ? 10 : env_int("NERF_TEST_STEPS", STEPS);
     nerf_model *m = fast_model(seed);
     nerf_sampler *s = fast_sampler(seed);
     nerf_trainer *t = make_trainer(m, s, f, codes, steps);

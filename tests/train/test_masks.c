@@ -342,7 +342,8 @@ int main(void)
     RUN(the_trainer_never_draws_a_masked_pixel);
     RUN(a_masked_run_resumes_bit_for_bit);
     RUN(the_occluder_has_no_influence_with_masks);
-    if (!getenv("NERF_TEST_SKIP_TRAINING")) {
+    /* NERF_TEST_QUICK: the sanitizer run (scripts/test.sh). */
+    if (!getenv("NERF_TEST_SKIP_TRAINING") && !getenv("NERF_TEST_QUICK")) {
         RUN(masks_recover_what_the_occluder_costs);
     }
     nerf_dataset_destroy(clean_train);
