@@ -437,6 +437,7 @@ class SceneOptions(_Versioned):
         ("p1", c_float),
         ("p2", c_float),
         ("k3", c_float),
+        ("texture", c_uint32),
     ]
 
 

@@ -110,6 +110,7 @@ static void structs(void)
     FIELD(nerf_scene_options, p1);
     FIELD(nerf_scene_options, p2);
     FIELD(nerf_scene_options, k3);
+    FIELD(nerf_scene_options, texture);
     end_struct();
 
     BEGIN(nerf_camera);
