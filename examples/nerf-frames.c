@@ -162,9 +162,19 @@ static int open_input(input *in, const char *path)
     const AVCodec *codec = NULL;
     rc = av_find_best_stream(in->fmt, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
     if (rc == AVERROR_STREAM_NOT_FOUND) {
-        fprintf(stderr, PROG ": %s: has no video stream (%u stream%s of "
-                "other kinds: audio, subtitles, data)\n", path,
-                in->fmt->nb_streams, in->fmt->nb_streams == 1 ? "" : "s");
+        /* What it has instead, so that a user knows what they gave. */
+        char kinds[160] = "";
+        size_t used = 0;
+        for (unsigned s = 0; s < in->fmt->nb_streams && used < 120; s++) {
+            const char *k = av_get_media_type_string(
+                in->fmt->streams[s]->codecpar->codec_type);
+            int w = snprintf(kinds + used, sizeof kinds - used, "%s%s",
+                             s ? ", " : "", k ? k : "unknown");
+            used += w > 0 ? (size_t)w : 0;
+        }
+        fprintf(stderr, PROG ": %s: has no video stream (%s%s)\n", path,
+                in->fmt->nb_streams ? "its streams: " : "no streams at all",
+                kinds);
         close_input(in);
         return -1;
     }
