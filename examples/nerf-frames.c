@@ -7,6 +7,7 @@
  */
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
+#include <libavutil/display.h>
 #include <libavutil/imgutils.h>
 #include <libswscale/swscale.h>
 
@@ -95,6 +96,7 @@ typedef struct input {
     AVFormatContext *fmt;
     AVCodecContext *dec;
     int stream;
+    int turn; /* degrees clockwise the frames are turned to be upright */
 } input;
 
 static void close_input(input *in)
@@ -141,6 +143,61 @@ static int check_file(const char *path)
     return 0;
 }
 
+/*
+ * Phones store a portrait video as landscape frames and a display matrix
+ * that says how to turn them (FFmpeg's players turn them by it): the
+ * photos are turned the same way, so that they stand as the user saw
+ * them.  Degrees clockwise, 0, 90, 180 or 270; mirroring is not undone.
+ */
+static int upright_turn(const AVStream *st)
+{
+    const uint8_t *m = NULL;
+#if LIBAVCODEC_VERSION_INT >= AV_VERSION_INT(60, 31, 100)
+    const AVPacketSideData *sd = av_packet_side_data_get(
+        st->codecpar->coded_side_data, st->codecpar->nb_coded_side_data,
+        AV_PKT_DATA_DISPLAYMATRIX);
+    m = sd != NULL && sd->size >= 9 * sizeof(int32_t) ? sd->data : NULL;
+#else
+    size_t size = 0;
+    m = av_stream_get_side_data(st, AV_PKT_DATA_DISPLAYMATRIX, &size);
+    m = size >= 9 * sizeof(int32_t) ? m : NULL;
+#endif
+    if (m == NULL) {
+        return 0;
+    }
+    /* The matrix turns counter-clockwise by the angle given. */
+    double angle = -av_display_rotation_get((const int32_t *)(const void *)m);
+    if (angle != angle) { /* NaN: a degenerate matrix */
+        return 0;
+    }
+    long q = lround(angle / 90.0);
+    return (int)(((q % 4) + 4) % 4) * 90;
+}
+
+/* src (w x h RGB) turned clockwise by turn degrees into dst. */
+static void turn_rgb(const uint8_t *src, int w, int h, int turn,
+                     uint8_t *dst)
+{
+    int ow = turn == 180 ? w : h;
+    for (int y = 0; y < h; y++) {
+        for (int x = 0; x < w; x++) {
+            int ox, oy;
+            if (turn == 90) {
+                ox = h - 1 - y;
+                oy = x;
+            } else if (turn == 270) {
+                ox = y;
+                oy = w - 1 - x;
+            } else {
+                ox = w - 1 - x;
+                oy = h - 1 - y;
+            }
+            memcpy(dst + 3 * ((size_t)oy * ow + ox),
+                   src + 3 * ((size_t)y * w + x), 3);
+        }
+    }
+}
+
 /* Open path's best video stream and its decoder; 0, or -1 after a line
  * naming path. */
 static int open_input(input *in, const char *path)
@@ -185,6 +242,7 @@ static int open_input(input *in, const char *path)
         return -1;
     }
     in->stream = rc;
+    in->turn = upright_turn(in->fmt->streams[rc]);
     /* FFmpeg reads a lone photo as a video of one frame (its image2 and
      * *_pipe demuxers): a photo belongs in a folder of photos. */
     const char *demuxer = in->fmt->iformat->name;
@@ -369,6 +427,8 @@ typedef struct picker {
     int w, h;
     uint64_t written;
     struct SwsContext *sws;
+    int turn;         /* input.turn */
+    uint8_t *turned;  /* best, turned upright; NULL when turn is 0 */
 } picker;
 
 static int flush_stretch(picker *pk)
@@ -383,7 +443,17 @@ static int flush_stretch(picker *pk)
         fprintf(stderr, PROG ": %s: the path is too long\n", pk->a->out);
         return -1;
     }
-    if (write_jpeg(path, pk->best, pk->w, pk->h, (int)pk->a->quality) != 0) {
+    const uint8_t *px = pk->best;
+    int w = pk->w, h = pk->h;
+    if (pk->turn != 0) {
+        turn_rgb(pk->best, pk->w, pk->h, pk->turn, pk->turned);
+        px = pk->turned;
+        if (pk->turn != 180) {
+            w = pk->h;
+            h = pk->w;
+        }
+    }
+    if (write_jpeg(path, px, w, h, (int)pk->a->quality) != 0) {
         return -1;
     }
     if (pk->a->list) {
@@ -407,7 +477,11 @@ static int take_frame(picker *pk, const AVFrame *f, int64_t k, double time,
         pk->h = f->height;
         pk->cur = malloc((size_t)pk->w * pk->h * 3);
         pk->best = malloc((size_t)pk->w * pk->h * 3);
-        if (pk->cur == NULL || pk->best == NULL) {
+        if (pk->turn != 0) {
+            pk->turned = malloc((size_t)pk->w * pk->h * 3);
+        }
+        if (pk->cur == NULL || pk->best == NULL ||
+            (pk->turn != 0 && pk->turned == NULL)) {
             say(path, "out of memory for its frames", 0);
             return -1;
         }
@@ -579,6 +653,7 @@ int main(int argc, char **argv)
     }
     interrupt_catch(1);
     picker pk = {.a = &a, .n = a.frames < tl.count ? a.frames : tl.count,
+                 .turn = in.turn,
                  .stretch = -1};
     if (tl.count < a.frames) {
         fprintf(stderr, PROG ": %s has %llu frames, fewer than --frames "
@@ -598,10 +673,17 @@ int main(int argc, char **argv)
         result = FAILED;
     }
     if (result == DONE) {
-        char note[160];
-        snprintf(note, sizeof note, "(%llu of %llu frames, %dx%d, to %s)",
+        char note[4400];
+        int upright = pk.turn == 90 || pk.turn == 270;
+        char turned[48] = "";
+        if (pk.turn != 0) {
+            snprintf(turned, sizeof turned, ", turned %d degrees as the "
+                     "video says", pk.turn);
+        }
+        snprintf(note, sizeof note, "(%llu of %llu frames, %dx%d%s, to %s)",
                  (unsigned long long)pk.written,
-                 (unsigned long long)pk.decoded, pk.w, pk.h, a.out);
+                 (unsigned long long)pk.decoded, upright ? pk.h : pk.w,
+                 upright ? pk.w : pk.h, turned, a.out);
         progress_end(&bar, note);
     } else if (bar.tty) {
         fputc('\n', stderr);
@@ -613,6 +695,7 @@ int main(int argc, char **argv)
     sws_freeContext(pk.sws);
     free(pk.cur);
     free(pk.best);
+    free(pk.turned);
     close_input(&in);
     return result == DONE          ? 0
            : result == INTERRUPTED ? 128 + (int)interrupted

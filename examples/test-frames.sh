@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # nerf-frames, a video's photos (suite data):
-#   test-frames.sh PYTHON [NERF_FRAMES]
-# NERF_FRAMES is absent when meson found no FFmpeg libraries: skipped (77).
+#   test-frames.sh PYTHON NERF_FRAMES FFMPEG
+# NERF_FRAMES is "" when meson found no FFmpeg libraries: skipped (77);
+# FFMPEG "" without the ffmpeg program: the turned video is not tried.
 # The videos are YUV4MPEG2 files written here (a header and raw frames,
 # which FFmpeg reads without a codec), so that no ffmpeg program is
-# needed: in each stretch of the video one frame is sharp and the others
+# needed but for the last part: in each stretch of the video one frame is sharp and the others
 # blurred, and the sharp one must be the photo taken.
 set -u
-python=$1 frames=${2:-}
+python=$1 frames=${2:-} ffmpeg=${3:-}
 if [ -z "$frames" ]; then
   echo "SKIP: nerf-frames is not built (FFmpeg's libraries were not found:" \
        "libavformat-dev libavcodec-dev libswscale-dev libavutil-dev)"
@@ -86,3 +87,51 @@ rc=$?
 [ $rc = 1 ] || fail "no frames: exit $rc: $out"
 case $out in *"empty.y4m: has no frames"*) ;; *) fail "no frames: $out" ;; esac
 echo "ok   --frames 0, a folder that holds files and a video of no frames refused"
+
+# A video that asks to be turned (as phones store portrait videos): the
+# photo stands as FFmpeg's own player shows it.  Needs the ffmpeg program
+# (optional) to make the video and decode both for comparison.
+if [ -z "$ffmpeg" ]; then
+  echo "ok   (turned videos not tried: no ffmpeg program)"
+  exit 0
+fi
+"$ffmpeg" -loglevel error -f rawvideo -pix_fmt yuv420p -s 64x48 -r 10 \
+  -i <(tail -c +$(( $(head -1 "$tmp/v.y4m" | wc -c) + 1 )) "$tmp/v.y4m" |
+       "$python" -c '
+import sys
+d = sys.stdin.buffer.read()
+frame = 64 * 48 * 3 // 2
+step = len(b"FRAME\n") + frame
+sys.stdout.buffer.write(b"".join(d[i + 6:i + step]
+                                 for i in range(0, len(d), step)))') \
+  -c:v libx264 -crf 10 "$tmp/plain.mp4" &&
+# The turn is written as the stream is copied (as a phone writes it
+# beside frames it does not turn).
+"$ffmpeg" -loglevel error -i "$tmp/plain.mp4" -c copy \
+  -metadata:s:v:0 rotate=90 "$tmp/turned.mp4" ||
+  fail "ffmpeg could not make a turned video"
+list=$("$frames" --video "$tmp/turned.mp4" --out "$tmp/t" --frames 1 --list \
+       2>"$tmp/err") || { cat "$tmp/err"; fail "nerf-frames on a turned video"; }
+k=$(echo "$list" | awk '{print $2}')
+"$ffmpeg" -loglevel error -i "$tmp/turned.mp4" -vf "select=eq(n\,$k)" \
+  -frames:v 1 -f rawvideo -pix_fmt rgb24 "$tmp/player.rgb" ||
+  fail "ffmpeg could not decode the turned video"
+"$ffmpeg" -loglevel error -i "$tmp/t/frame_00000.jpg" -f rawvideo \
+  -pix_fmt rgb24 "$tmp/photo.rgb" || fail "ffmpeg could not read the photo"
+"$python" - "$tmp/player.rgb" "$tmp/photo.rgb" <<'EOF' ||
+import sys
+import numpy as np
+a = np.fromfile(sys.argv[1], np.uint8).astype(float)
+b = np.fromfile(sys.argv[2], np.uint8).astype(float)
+# The same size (48x64 once turned) and nearly the same pixels: JPEG's
+# loss is a few levels on this noise.
+ok = a.size == b.size == 48 * 64 * 3 and np.abs(a - b).mean() < 12
+print("  photo against the player's frame: %s" %
+      ("%.1f levels apart" % np.abs(a - b).mean() if a.size == b.size
+       else "sizes differ"))
+sys.exit(0 if ok else 1)
+EOF
+  fail "the turned video's photo does not stand as the player shows it"
+grep -q "48x64, turned 270 degrees" "$tmp/err" ||
+  fail "no word of the turn: $(cat "$tmp/err")"
+echo "ok   a turned video's photos stand as its player shows them"
