@@ -77,7 +77,7 @@ static int parse(int argc, char **argv, args *a)
         {.name = "--list", OPT_FLAG_SETS(&a->list, 1),
          .help = "print a line for each photo on stdout: its name,\n"
                  "the frame it is (counting from 0), its time in\n"
-                 "seconds and its sharpness"},
+                 "seconds and its sharpness (default off)"},
         {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "photos of the same names (default off: a DIR\n"
