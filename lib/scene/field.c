@@ -71,7 +71,9 @@ static float mixf(float a, float b, float s)
 }
 
 /* A value in [0, 1) for each lattice point, the same on every machine
- * (integer arithmetic only). */
+ * (integer arithmetic only).  The multipliers are odd numbers with well
+ * mixed bits, the four 32-bit primes the xxHash format publishes; the
+ * mixing around them is only what a lattice needs. */
 static float lattice(int32_t i, int32_t j, int32_t k)
 {
     uint32_t h = (uint32_t)i * 0x9e3779b1u;
