@@ -34,6 +34,9 @@ MIN_INLIERS = 15
 # Fewer SIFT features than this in a photo rarely leave 15 inliers with
 # any other: a smooth, dark or blurred photo.
 FEW_FEATURES = 100
+# The mapper keeps no reconstruction of fewer photos than this
+# (Mapper.min_model_size, COLMAP 3.8's default).
+MIN_MODEL_SIZE = 10
 
 
 def pair_images(pair_id):
@@ -134,7 +137,7 @@ def explain(database, sparse, kept, matcher):
     if not left:
         return out
     counts = {"few": 0, "unmatched": 0, "unverified": 0, "elsewhere": 0,
-              "unregistered": 0}
+              "unregistered": 0, "nomodel": 0}
     out.append("%s of %d not placed%s:" % (
         plural(len(left), "photo"), n,
         " in reconstruction %s" % kept if kept else ""))
@@ -180,6 +183,13 @@ def explain(database, sparse, kept, matcher):
             why = ("none of %s shares %d or more verified matches with "
                    "it: it overlaps too little with them, or shows "
                    "something else" % (label, MIN_INLIERS))
+        elif not placed:
+            counts["nomodel"] += 1
+            why = ("it overlaps with %s, but the mapper kept no "
+                   "reconstruction: it keeps none of fewer than %d photos "
+                   "and needs two that overlap well from viewpoints far "
+                   "enough apart to start from"
+                   % (plural(len(good), "other photo"), MIN_MODEL_SIZE))
         else:
             counts["unregistered"] += 1
             why = ("it overlaps with %s, but the mapper could not fit its "
@@ -199,6 +209,10 @@ def explain(database, sparse, kept, matcher):
                      "together, each sharing most of its view with the "
                      "next, of textured surfaces, sharp and well lit; "
                      "remove photos of something else")
+    if counts["nomodel"]:
+        steps.append("more photos (COLMAP keeps no reconstruction of fewer "
+                     "than %d), some of them from viewpoints further apart"
+                     % MIN_MODEL_SIZE)
     if counts["unregistered"]:
         steps.append("another camera model: --camera-model OPENCV (or "
                      "RADIAL) for a wide-angle or fisheye lens")

@@ -14,7 +14,9 @@
 #     sequential matching -> poses; most photos placed, and one step of
 #     nerf-train loads the result;
 #  2. a folder of 12 views and two photos unrelated to them (blotchy
-#     noise, plain grey): both left out, each named with its reason.
+#     noise, plain grey): both left out, each named with its reason;
+#  3. two stretches of the walk from opposite sides: two reconstructions,
+#     the larger kept, and the output says so and why.
 set -u
 script=$1 scene=$2 train=$3 python=$4 frames=${5:-} colmap=${6:-}
 ffmpeg=${7:-}
@@ -137,3 +139,27 @@ fi
 grep -q "What usually helps: more overlap" "$tmp/log2" ||
   fail "no next step suggested"
 echo "ok   photos COLMAP cannot place are named, each with its reason"
+
+# 3. Two stretches of the walk from opposite sides of the solids, 12 views
+# and 10 (the mapper keeps no reconstruction of fewer), which share
+# nothing: COLMAP makes two reconstructions, and the output says which it
+# kept and why, and where the other photos went.
+mkdir "$tmp/apart"
+for i in 0 1 2 3 4 5 6 7 8 9 10 11 20 21 22 23 24 25 26 27 28 29; do
+  cp "$tmp/walk/train/r_$i.png" "$tmp/apart/$(printf %02d $i).png"
+done
+"$script" --colmap "$colmap" --no-train --min-registered 10 "$tmp/apart" \
+  "$tmp/out3" >"$tmp/log3" 2>&1 ||
+  { cat "$tmp/log3"; fail "colmap-train failed on two stretches"; }
+grep -v "^colmap-train: \[" "$tmp/log3"
+grep -q "COLMAP made 2 separate reconstructions: [01] (12 photos), [01] (10 photos); kept [01], which has the most photos registered" "$tmp/log3" ||
+  fail "the reconstructions and the one kept are not said"
+grep -q "COLMAP placed 12 of 22 photos" "$tmp/log3" || fail "not 12 of 22 placed"
+for i in 20 21 22 23 24 25 26 27 28 29; do
+  grep -q "  $i.png: .*placed in reconstruction [01] instead, which was not joined" \
+    "$tmp/log3" || fail "$i.png is not said to be in the other reconstruction"
+done
+# The loader's sparse/0 is the larger.
+[ "$(od -An -t u8 -N 8 "$tmp/out3/sparse/0/images.bin" | tr -d ' ')" = 12 ] ||
+  fail "sparse/0 is not the reconstruction of 12 photos"
+echo "ok   of two reconstructions the larger is kept, and the output says why"
