@@ -21,7 +21,9 @@ static const char after[] =
     "  nerf-scene --out scene\n"
     "  nerf-scene --out fern-like --capture forward --width 160 --height 120\n"
     "  nerf-scene --out tiny --width 32 --height 32 --train 20 --val 0 \\\n"
-    "      --test 4\n";
+    "      --test 4\n"
+    "  nerf-scene --out walk --capture walk --texture --width 320 \\\n"
+    "      --height 240 --train 60   (frames of a video for COLMAP)\n";
 
 /* The most worker threads asked for; nerf_scene_write() runs at most its
  * own number. */
@@ -38,6 +40,10 @@ static const opt_choice captures[] = {
     {.name = "unbounded", .id = NERF_SCENE_CAPTURE_UNBOUNDED,
      .help = "all-round photos of the solids on a ground\n"
              "within a far backdrop (40 units away)"},
+    {.name = "walk", .id = NERF_SCENE_CAPTURE_WALK,
+     .help = "the same world seen as a video is shot: the\n"
+             "train views, in order, walk once round the\n"
+             "solids, each overlapping the next"},
     {.name = NULL},
 };
 
@@ -185,6 +191,10 @@ static int parse(int argc, char **argv, args *a)
          .help = "paint a moving magenta disc into every other training\n"
                  "view, as a person walking through, and write its\n"
                  "masks (mask_path; masks/ for COLMAP; not llff)"},
+        {.name = "--texture", OPT_FLAG_SETS(&o->texture, 1),
+         .help = "blotches of light and dark on the solids and the\n"
+                 "ground, for feature matchers such as COLMAP's\n"
+                 "(default off: the plain scene)"},
         {OPT_OVERWRITE(&a->overwrite),
          .help = "write into DIR even if it holds files, replacing\n"
                  "those of the scene's names (default off: a DIR\n"

@@ -4,9 +4,10 @@
 # ends with real example commands.
 #
 #   test-help.sh NERF-SCENE NERF-TRAIN NERF-RENDER NERF-EVAL NERF-INFO
-#                [NERF-VIEWER]
+#                [NERF-VIEWER [NERF-FRAMES]]
+# (the optional programs "" when not built)
 set -eu
-scene=$1 train=$2 render=$3 eval=$4 info=$5 viewer=${6:-}
+scene=$1 train=$2 render=$3 eval=$4 info=$5 viewer=${6:-} frames=${7:-}
 wrap=${MESON_EXE_WRAPPER:-}
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-help.XXXXXX")
@@ -66,10 +67,16 @@ help "$eval" --split --downscale --skip --json --march-steps
 entry --skip | grep -q "0, K" || fail "nerf-eval --skip: numbering unsaid"
 help "$scene" --width --height --train --val --test --threads \
   "--capture object" "--layout blender" --format --jpeg --distortion \
-  --overwrite
+  --texture --overwrite
 help "$info" --overwrite
 if [ -n "$viewer" ]; then
   help "$viewer" --data --downscale "--width W," --view --march-steps \
     --screenshot --quit-after --overwrite
+fi
+if [ -n "$frames" ]; then
+  help "$frames" --frames --quality --list --overwrite
+  for opt in "--video FILE" "--out DIR"; do
+    [ -n "$(entry "$opt")" ] || fail "nerf-frames: $opt unexplained"
+  done
 fi
 echo "ok"

@@ -75,6 +75,21 @@ $wrap "$scene" --out "$work/llff" --capture forward --width 8 --height 8 \
   --train 2 --test 1 --overwrite 2>"$work/again.log" ||
   { cat "$work/again.log"; fail "again with --overwrite"; }
 
+# --capture walk --texture: the walk's train views as a Blender layout,
+# each different from the plain scene's (the flag reaches the library).
+$wrap "$scene" --out "$work/walk" --capture walk --texture --width 16 \
+  --height 12 --train 2 --val 0 --test 0 2>"$work/walk.log" ||
+  { cat "$work/walk.log"; fail "--capture walk --texture"; }
+$wrap "$scene" --out "$work/walk0" --capture walk --width 16 --height 12 \
+  --train 2 --val 0 --test 0 2>"$work/walk.log" ||
+  { cat "$work/walk.log"; fail "--capture walk"; }
+[ -f "$work/walk/train/r_1.png" ] || fail "--capture walk: no train/r_1.png"
+if cmp -s "$work/walk/train/r_1.png" "$work/walk0/train/r_1.png"; then
+  fail "--texture changed nothing"
+fi
+grep -q '"aabb_scale"' "$work/walk/transforms_train.json" ||
+  fail "--capture walk: no aabb_scale"
+
 # A lens no camera has: the library says why (status 1).
 status=0
 $wrap "$scene" --out "$work/bad" --distortion 0,5000 2>"$work/bad.log" ||

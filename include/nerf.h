@@ -2222,6 +2222,15 @@ typedef struct nerf_scene_options {
                                masks and all).  0 (default): none, and the
                                files are as before, byte for byte.
                                @since 0.13 */
+    uint32_t texture;     /**< 1: blotches of light and dark on the solids
+                               and the ground (two octaves of smooth
+                               noise), which give feature matchers such as
+                               COLMAP's SIFT something to find: the plain
+                               solids' smooth shading gives too few.  0
+                               (default): the plain scene, byte for byte as
+                               before.  0 or 1.
+                               @since 0.13 */
+    uint32_t reserved1;   /**< Must be 0.  @since 0.13 */
 } nerf_scene_options;
 
 /** Captures of the built-in scene (nerf_scene_options.capture). */
@@ -2236,6 +2245,15 @@ typedef struct nerf_scene_options {
     background: the solids on a ground within a backdrop 40 units away,
     from rings of cameras 2.2 to 3 units from them looking at them;
     horizontal field of view 1 radian.  Opaque. */
+#define NERF_SCENE_CAPTURE_WALK 3u      /**< The all-round world of
+    UNBOUNDED seen as a video is shot: the train views, in order, walk
+    once round the solids on one continuous path (2.3 to 2.9 units from
+    them, rising and falling between 9 and 21 degrees of elevation,
+    looking at them), so that each view overlaps the next; validation
+    views anywhere on the path; test views evenly along it, half a step
+    on from where the train views stand (halfway between them when there
+    are as many).
+    Horizontal field of view 1 radian.  Opaque.  @since 0.13 */
 
 /** How the training photos look (nerf_scene_options.appearance).
  * @since 0.13 */

@@ -1,6 +1,6 @@
 /*
- * The cameras of the forward-facing and all-round captures of the built-in
- * scene.  Both stand well clear of the solids (within 1.1 units of the
+ * The cameras of the forward-facing, all-round and walk captures of the
+ * built-in scene.  Both stand well clear of the solids (within 1.1 units of the
  * origin) and above the ground, so no camera starts inside the field.
  */
 #include <math.h>
@@ -27,6 +27,7 @@
 /* Random streams of the rng, apart from the object capture's (77 + i). */
 #define STREAM_FORWARD 1000000u
 #define STREAM_UNBOUNDED 2000000u
+#define STREAM_WALK 3000000u
 
 static void intrinsics(const nerf_scene_options *o, nerf_camera *cam)
 {
@@ -125,5 +126,46 @@ void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
     double eye[3] = {rad * cos(el) * cos(az), rad * cos(el) * sin(az),
                      rad * sin(el)};
     const double at[3] = {0.0, 0.0, 0.0};
+    look(cam, eye, at);
+}
+
+/* Where the walk is at s in [0, 1): one turn round the solids, nearer and
+ * farther twice and higher and lower three times, as a person walking
+ * round them with a phone would be, and never so fast that a view of 60
+ * in a turn loses sight of what the one before saw. */
+static void walk_at(double s, double eye[3])
+{
+    double az = 2.0 * PI * s;
+    double rad = 2.6 + 0.3 * sin(4.0 * PI * s);
+    double el = (15.0 + 6.0 * sin(6.0 * PI * s + 1.0)) * DEG;
+    eye[0] = rad * cos(el) * cos(az);
+    eye[1] = rad * cos(el) * sin(az);
+    eye[2] = rad * sin(el);
+}
+
+/*
+ * Train views in path order, i of n at i / n of the turn, so that written
+ * in order they make a video; validation views anywhere on the path; test
+ * views halfway between train views' places when the counts match, so
+ * that none is seen in training.
+ */
+void nerf__scene_walk_camera(const nerf_scene_options *o, int split,
+                             uint32_t i, uint32_t n, nerf_camera *cam)
+{
+    intrinsics(o, cam);
+    double s;
+    if (split == 0) {
+        s = (double)i / n;
+    } else if (split == 1) {
+        nerf__rng r = nerf__rng_make(o->seed, STREAM_WALK + i);
+        s = nerf__rng_uniform_d(&r);
+    } else {
+        s = (i + 0.5) / n;
+    }
+    double eye[3];
+    walk_at(s, eye);
+    /* Looking a little above the ground's centre, so that the solids sit
+     * in the middle of the view with the ground below them. */
+    const double at[3] = {0.0, 0.0, -0.1};
     look(cam, eye, at);
 }

@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdlib.h>
 
 /* Density deep inside a solid, and the width of its soft edge (in scene
@@ -20,6 +21,10 @@
 #define GROUND_PERIOD 0.8
 #define GROUND_STEPS 24.0
 #define PI 3.14159265358979323846
+
+/* Sideways steps over the textured ground: this many per lattice cell,
+ * so that a blotch is not skipped between two samples. */
+#define TEXTURE_STEPS 6.0
 
 typedef enum { SPHERE, BOX, TORUS } kind;
 
@@ -60,9 +65,69 @@ static float sdf(const solid *s, const float x[3])
     return 1e30f;
 }
 
+static float mixf(float a, float b, float s)
+{
+    return a + (b - a) * s;
+}
+
+/* A value in [0, 1) for each lattice point, the same on every machine
+ * (integer arithmetic only).  The multipliers are odd numbers with well
+ * mixed bits, the four 32-bit primes the xxHash format publishes; the
+ * mixing around them is only what a lattice needs. */
+static float lattice(int32_t i, int32_t j, int32_t k)
+{
+    uint32_t h = (uint32_t)i * 0x9e3779b1u;
+    h = (h ^ (uint32_t)j) * 0x85ebca77u;
+    h = (h ^ (uint32_t)k) * 0xc2b2ae3du;
+    h ^= h >> 15;
+    h *= 0x27d4eb2fu;
+    h ^= h >> 13;
+    return (float)(h >> 8) * (1.0f / 16777216.0f);
+}
+
+static float smooth(float t)
+{
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* Value noise: the lattice's values blended smoothly between lattice
+ * points, continuous so that the field stays one a network can fit. */
+static float noise(float x, float y, float z)
+{
+    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
+    int32_t i = (int32_t)fx, j = (int32_t)fy, k = (int32_t)fz;
+    float u = smooth(x - fx), v = smooth(y - fy), w = smooth(z - fz);
+    float c[2][2];
+    for (int a = 0; a < 2; a++) {
+        for (int b = 0; b < 2; b++) {
+            c[a][b] = mixf(lattice(i + a, j + b, k),
+                           lattice(i + a, j + b, k + 1), w);
+        }
+    }
+    return mixf(mixf(c[0][0], c[0][1], v), mixf(c[1][0], c[1][1], v), u);
+}
+
+/*
+ * Blotches: two octaves of noise pushed towards 0 or 1.  SIFT, which
+ * COLMAP places photos with, finds its keypoints at blobs and corners of
+ * contrast; the plain scene's smooth shading gives it some 20 a photo,
+ * too few to match.  Irregular blotches a few pixels across give it
+ * hundreds, and unlike a checker they do not repeat, so that a feature
+ * matches its own place only.
+ */
+static float blotch(float x, float y, float z, float spacing)
+{
+    float s = 1.0f / spacing;
+    float n = 0.65f * noise(x * s, y * s, z * s) +
+              0.35f * noise(x * s * 2.3f + 17.0f, y * s * 2.3f + 5.0f,
+                            z * s * 2.3f + 11.0f);
+    return 0.5f + 0.5f * tanhf(8.0f * (n - 0.5f));
+}
+
 /* Add the solids' density at x to *total and their density-weighted
- * colour to acc. */
-static void solids(const float x[3], float *total, float acc[3])
+ * colour to acc; textured: with blotches. */
+static void solids(const float x[3], bool textured, float *total,
+                   float acc[3])
 {
     for (unsigned i = 0; i < sizeof solids_ / sizeof solids_[0]; i++) {
         float d = sdf(&solids_[i], x);
@@ -73,15 +138,14 @@ static void solids(const float x[3], float *total, float acc[3])
         *total += sigma;
         /* Shade by height so that each solid has some texture to learn. */
         float shade = 0.75f + 0.25f * tanhf(2.0f * (x[2] - solids_[i].c[2]));
+        if (textured) {
+            shade *= 0.45f + 0.75f * blotch(x[0], x[1], x[2],
+                                            NERF__SCENE_TEXTURE_SOLID);
+        }
         for (int c = 0; c < 3; c++) {
             acc[c] += sigma * solids_[i].rgb[c] * shade;
         }
     }
-}
-
-static float mixf(float a, float b, float s)
-{
-    return a + (b - a) * s;
 }
 
 /*
@@ -89,7 +153,8 @@ static float mixf(float a, float b, float s)
  * the solids, so that the far ground, which covers few pixels, is a smooth
  * tone a network can fit, while the near one shows parallax.
  */
-static void ground(const float x[3], float *total, float acc[3])
+static void ground(const float x[3], bool textured, float *total,
+                   float acc[3])
 {
     float h = x[2] - NERF__SCENE_GROUND_Z;
     if (h > 8.0f * NERF__SCENE_GROUND_EDGE) {
@@ -103,6 +168,11 @@ static void ground(const float x[3], float *total, float acc[3])
     float s = 0.5f + 0.5f * contrast * tanhf(4.0f * u);
     /* A slow change of tone across the far ground. */
     float tone = 0.9f + 0.1f * sinf(0.15f * x[0] + 0.1f * x[1]);
+    if (textured) {
+        /* Fading as the checker does, for the same reason. */
+        float b = blotch(x[0], x[1], 0.0f, NERF__SCENE_TEXTURE_GROUND);
+        tone *= 1.0f + contrast * (0.7f * b - 0.5f);
+    }
     static const float dark[3] = {0.30f, 0.36f, 0.22f};
     static const float light[3] = {0.62f, 0.56f, 0.42f};
     *total += sigma;
@@ -154,9 +224,10 @@ float nerf__scene_field_in(nerf__scene_world world, const float x[3],
                            float rgb[3])
 {
     float total = 0.0f, acc[3] = {0, 0, 0};
-    solids(x, &total, acc);
-    if (world == NERF__SCENE_SURROUNDED) {
-        ground(x, &total, acc);
+    const bool textured = (world & NERF__SCENE_TEXTURED) != 0;
+    solids(x, textured, &total, acc);
+    if (world & NERF__SCENE_SURROUNDED) {
+        ground(x, textured, &total, acc);
         backdrop(x, &total, acc);
     }
     if (rgb) {
@@ -268,11 +339,15 @@ float nerf__scene_render_ray_in(nerf__scene_world world, const float o[3],
     if (chord(o, d, NERF__SCENE_RADIUS, &a, &b)) {
         part[n_parts++] = (stretch){a, b, (EDGE / STEPS_PER_EDGE) / norm};
     }
-    if (world == NERF__SCENE_SURROUNDED) {
+    if (world & NERF__SCENE_SURROUNDED) {
         /* The ground is zero above its edge: z > GROUND_Z + 8 edges. */
         double top = (double)NERF__SCENE_GROUND_Z +
                      8.0 * NERF__SCENE_GROUND_EDGE - o[2];
         double dt = (GROUND_PERIOD / GROUND_STEPS) / norm;
+        if (world & NERF__SCENE_TEXTURED) {
+            double fine = (NERF__SCENE_TEXTURE_GROUND / TEXTURE_STEPS) / norm;
+            dt = fine < dt ? fine : dt;
+        }
         if (d[2] != 0.0f) {
             double cross = (double)NERF__SCENE_GROUND_EDGE /
                            (STEPS_PER_EDGE * fabs((double)d[2]));

@@ -30,11 +30,18 @@
 #define NERF__SCENE_BACKDROP_EDGE 0.5f
 #define NERF__SCENE_WORLD_FAR 60.0f
 
-/* What the field holds. */
+/* What the field holds: SOLIDS or SURROUNDED, and TEXTURED or'ed in for
+ * nerf_scene_options.texture. */
 typedef enum nerf__scene_world {
-    NERF__SCENE_SOLIDS = 0,    /* the solids in a transparent void */
-    NERF__SCENE_SURROUNDED = 1 /* the solids, the ground and the backdrop */
+    NERF__SCENE_SOLIDS = 0,     /* the solids in a transparent void */
+    NERF__SCENE_SURROUNDED = 1, /* the solids, the ground and the backdrop */
+    NERF__SCENE_TEXTURED = 2    /* blotches on the solids and the ground */
 } nerf__scene_world;
+
+/* The blotches' lattice spacing (scene units): on the solids, and on the
+ * ground, whose far parts cover fewer pixels. */
+#define NERF__SCENE_TEXTURE_SOLID 0.07f
+#define NERF__SCENE_TEXTURE_GROUND 0.12f
 
 /* Density at x, and the colour there (rgb may be NULL): the solids. */
 float nerf__scene_field(const float x[3], float rgb[3]);

@@ -57,7 +57,7 @@ static void fill_row(const nerf_camera *cam, float *zdepth, size_t pixels,
 int nerf__scene_write_llff(const char *dir, const nerf_scene_options *o,
                            const nerf__env *env, uint8_t *px)
 {
-    const nerf__scene_look look = nerf__scene_look_of(o->capture);
+    const nerf__scene_look look = nerf__scene_look_of(o);
     const uint32_t n = o->n_train + o->n_test;
     const size_t pixels = (size_t)o->width * o->height;
     char path[4096];

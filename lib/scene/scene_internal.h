@@ -21,8 +21,8 @@ typedef struct nerf__scene_look {
     uint32_t channels; /* 4: straight RGBA (the object); 3: opaque RGB */
 } nerf__scene_look;
 
-/* The look of a capture (nerf_scene_options.capture, already checked). */
-nerf__scene_look nerf__scene_look_of(uint32_t capture);
+/* The look of the options' capture and texture (already checked). */
+nerf__scene_look nerf__scene_look_of(const nerf_scene_options *o);
 
 /*
  * Render one view into px (width x height x look->channels bytes) with up
@@ -38,13 +38,15 @@ int nerf__scene_make_dir(const char *path);
 
 /*
  * Camera i of n of a split (0 train, 1 val, 2 test) of a capture, with the
- * options' image size: FORWARD and UNBOUNDED (captures.c); OBJECT stays in
+ * options' image size: FORWARD, UNBOUNDED and WALK (captures.c); OBJECT stays in
  * scene_writer.c.
  */
 void nerf__scene_forward_camera(const nerf_scene_options *o, int split,
                                 uint32_t i, uint32_t n, nerf_camera *cam);
 void nerf__scene_unbounded_camera(const nerf_scene_options *o, int split,
                                   uint32_t i, uint32_t n, nerf_camera *cam);
+void nerf__scene_walk_camera(const nerf_scene_options *o, int split,
+                             uint32_t i, uint32_t n, nerf_camera *cam);
 
 /* The horizontal field of view (radians) of FORWARD and UNBOUNDED. */
 #define NERF__SCENE_WIDE_ANGLE_X 1.0

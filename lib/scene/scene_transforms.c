@@ -41,7 +41,7 @@ static void top_fields(cJSON *root, const nerf_scene_options *o)
 int nerf__scene_write_transforms(const char *dir, const nerf_scene_options *o,
                                  const nerf__env *env, uint8_t *px)
 {
-    const nerf__scene_look look = nerf__scene_look_of(o->capture);
+    const nerf__scene_look look = nerf__scene_look_of(o);
     char path[4096];
     snprintf(path, sizeof path, "%s/images", dir);
     int rc = nerf__scene_make_dir(path);

@@ -88,14 +88,17 @@ static void place_camera(int split, uint32_t i, uint32_t n, uint64_t seed,
     nerf_camera_look_at(cam, eye, target, up);
 }
 
-nerf__scene_look nerf__scene_look_of(uint32_t capture)
+nerf__scene_look nerf__scene_look_of(const nerf_scene_options *o)
 {
-    if (capture == NERF_SCENE_CAPTURE_OBJECT) {
-        return (nerf__scene_look){NERF__SCENE_SOLIDS, NEAR, FAR, 4};
+    const int textured = o->texture ? NERF__SCENE_TEXTURED : 0;
+    if (o->capture == NERF_SCENE_CAPTURE_OBJECT) {
+        return (nerf__scene_look){
+            (nerf__scene_world)(NERF__SCENE_SOLIDS | textured), NEAR, FAR, 4};
     }
     /* Nothing stands within a unit of a camera: start at it. */
-    return (nerf__scene_look){NERF__SCENE_SURROUNDED, 0.0f,
-                              NERF__SCENE_WORLD_FAR, 3};
+    return (nerf__scene_look){
+        (nerf__scene_world)(NERF__SCENE_SURROUNDED | textured), 0.0f,
+        NERF__SCENE_WORLD_FAR, 3};
 }
 
 typedef struct view_job {
@@ -231,6 +234,10 @@ static void capture_pose(const nerf_scene_options *o, int split, uint32_t i,
         nerf__scene_unbounded_camera(o, split, i, n, cam);
         return;
     }
+    if (o->capture == NERF_SCENE_CAPTURE_WALK) {
+        nerf__scene_walk_camera(o, split, i, n, cam);
+        return;
+    }
     NERF_CAMERA_INIT(cam);
     cam->width = o->width;
     cam->height = o->height;
@@ -283,7 +290,7 @@ static int write_split(const char *dir, int split, uint32_t n,
                        uint8_t *px, uint8_t *mask)
 {
     const char *const *names = nerf__scene_split_names;
-    const nerf__scene_look look = nerf__scene_look_of(o->capture);
+    const nerf__scene_look look = nerf__scene_look_of(o);
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[split]);
     int rc = nerf__scene_make_dir(path);
@@ -301,7 +308,8 @@ static int write_split(const char *dir, int split, uint32_t n,
     /* Only with a lens, so that a pinhole scene's files stay as they
      * were. */
     nerf__scene_lens_json(root, o, false);
-    if (o->capture == NERF_SCENE_CAPTURE_UNBOUNDED) {
+    if (o->capture == NERF_SCENE_CAPTURE_UNBOUNDED ||
+        o->capture == NERF_SCENE_CAPTURE_WALK) {
         /*
          * instant-ngp's hint that the scene reaches far beyond the unit
          * box: 16 is the largest power of two its grids cascade to that
@@ -353,11 +361,20 @@ static int write_split(const char *dir, int split, uint32_t n,
 /* The capture and layout: known, implemented here, and fitting each other. */
 static int check_capture(const nerf_scene_options *o)
 {
-    static const char *const captures[] = {"object", "forward", "unbounded"};
-    if (o->capture > NERF_SCENE_CAPTURE_UNBOUNDED) {
+    static const char *const captures[] = {"object", "forward", "unbounded",
+                                           "walk"};
+    if (o->capture > NERF_SCENE_CAPTURE_WALK) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: capture %u is "
-                           "unknown (0 object, 1 forward, 2 unbounded)",
-                           (unsigned)o->capture);
+                           "unknown (0 object, 1 forward, 2 unbounded, "
+                           "3 walk)", (unsigned)o->capture);
+    }
+    if (o->texture > 1) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: texture %u is "
+                           "not 0 or 1", (unsigned)o->texture);
+    }
+    if (o->reserved1 != 0) {
+        return nerf__error(NERF_EINVAL, "nerf_scene_options: reserved1 "
+                           "must be 0");
     }
     if (o->layout > NERF_SCENE_LAYOUT_COLMAP_BINARY) {
         return nerf__error(NERF_EINVAL, "nerf_scene_options: layout %u is "

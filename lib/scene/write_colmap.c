@@ -406,7 +406,7 @@ int nerf__scene_write_colmap(const char *dir, const nerf_scene_options *o,
     w.o = o;
     w.env = env;
     w.dir = dir;
-    w.look = nerf__scene_look_of(o->capture);
+    w.look = nerf__scene_look_of(o);
     w.n = o->n_train + o->n_val + o->n_test;
     w.cams = nerf__calloc(env, w.n, sizeof *w.cams);
     int rc = w.cams ? write_views(&w, rgba) : NERF_ENOMEM;

@@ -78,8 +78,11 @@ FROZEN(nerf_scene_options, k2, 68);
 FROZEN(nerf_scene_options, p1, 72);
 FROZEN(nerf_scene_options, p2, 76);
 FROZEN(nerf_scene_options, k3, 80);
+/* Appended in 0.13: occluders took the padding after k3. */
 FROZEN(nerf_scene_options, occluders, 84);
-SIZE(nerf_scene_options, 88);
+FROZEN(nerf_scene_options, texture, 88);
+FROZEN(nerf_scene_options, reserved1, 92);
+SIZE(nerf_scene_options, 96);
 
 FROZEN(nerf_camera, struct_size, 0);
 FROZEN(nerf_camera, flags, 4);

@@ -89,6 +89,36 @@ def _empty(fx, path):
     return write(path, b"")
 
 
+# ---- videos (nerf-frames) -----------------------------------------------------
+
+@fixture("audio")
+def _audio(fx, path):
+    """A WAV file of a tenth of a second of silence: a file FFmpeg reads,
+    with one stream, and that not a video."""
+    rate = 8000
+    data = b"\0\0" * (rate // 10)
+    fmt = struct.pack("<HHIIHH", 1, 1, rate, 2 * rate, 2, 16)
+    body = (b"WAVE" + b"fmt " + struct.pack("<I", len(fmt)) + fmt +
+            b"data" + struct.pack("<I", len(data)) + data)
+    return write(path + ".wav",
+                 b"RIFF" + struct.pack("<I", len(body)) + body)
+
+
+@fixture("video-no-frames")
+def _video_no_frames(fx, path):
+    """A YUV4MPEG2 video's header and no frame: a video stream, empty."""
+    return write(path + ".y4m", b"YUV4MPEG2 W16 H16 F10:1 Ip A1:1 C420jpeg\n")
+
+
+@fixture("still-image")
+def _still_image(fx, path):
+    """One of the built-in scene's photos, as JPEG: a photo, not a
+    video."""
+    fx.tool("nerf-scene", "--out", path, "--width", 16, "--height", 16,
+            "--train", 1, "--val", 0, "--test", 0, "--format", "jpeg")
+    return os.path.join(path, "train", "r_0.jpg")
+
+
 # ---- a scene and a model trained on it --------------------------------------
 
 @fixture("scene")

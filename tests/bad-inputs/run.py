@@ -35,12 +35,14 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import fixtures  # noqa: E402 (after the line above)
 
 # Each program and where the build puts it under BINDIR.  nerf-viewer is
-# built only where SDL2 is found: without it its cases are skipped.
+# built only where SDL2 is found, nerf-frames only where FFmpeg's
+# libraries are: without them their cases are skipped.
 PROGRAMS = {"nerf-scene": "nerf-scene", "nerf-train": "nerf-train",
             "nerf-render": "nerf-render", "nerf-eval": "nerf-eval",
             "nerf-info": "nerf-info", "nerf-export": "nerf-export",
-            "nerf-viewer": os.path.join("viewer", "nerf-viewer")}
-OPTIONAL = ("nerf-viewer",)
+            "nerf-viewer": os.path.join("viewer", "nerf-viewer"),
+            "nerf-frames": "nerf-frames"}
+OPTIONAL = ("nerf-viewer", "nerf-frames")
 
 
 class Skip(Exception):

@@ -39,6 +39,25 @@ case $out in
 esac
 echo "ok   an existing model is not replaced unasked"
 
+# Bad arguments of the video way in, refused before anything runs (the
+# stand-in COLMAP, true, would do nothing).
+bad() {
+  local words=$1
+  shift
+  out=$("$script" --colmap true "$@" 2>&1)
+  rc=$?
+  [ $rc = 2 ] || fail "$*: exit $rc, not 2: $out"
+  case $out in *"$words"*) ;; *) fail "$*: message '$out'" ;; esac
+}
+bad "--frames needs a whole number of photos above 0, not '0'" \
+  --frames 0 "$tmp/scene/images" "$tmp/out3"
+bad "--matcher must be exhaustive or sequential, not 'vocab'" \
+  --matcher vocab "$tmp/scene/images" "$tmp/out3"
+bad "$tmp/none.mp4: neither a folder of photos nor a video file" \
+  "$tmp/none.mp4" "$tmp/out3"
+[ ! -e "$tmp/out3" ] || fail "a refused run made its OUT_DIR"
+echo "ok   --frames 0, an unknown --matcher and a missing video refused"
+
 if [ -z "$colmap" ]; then
   echo "SKIP: COLMAP is not installed (Debian package colmap), so the" \
        "reconstructions are not tried"

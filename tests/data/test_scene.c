@@ -399,9 +399,9 @@ TEST(bad_options)
     /* Captures and layouts: unknown, not yet written, not fitting. */
     char out[600];
     snprintf(out, sizeof out, "%s/out", dir);
-    o.capture = 3;
+    o.capture = 4;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
-    CHECK(strstr(nerf_last_error(), "capture 3 is unknown") != NULL);
+    CHECK(strstr(nerf_last_error(), "capture 4 is unknown") != NULL);
     o.capture = NERF_SCENE_CAPTURE_FORWARD;
     o.layout = 5;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
@@ -413,6 +413,9 @@ TEST(bad_options)
     o.capture = NERF_SCENE_CAPTURE_OBJECT;
     CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
     CHECK(strstr(nerf_last_error(), "not the object capture") != NULL);
+    o.capture = NERF_SCENE_CAPTURE_WALK;
+    CHECK_EQ_INT(nerf_scene_write(out, &o), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "not the walk capture") != NULL);
     /* Lenses a layout cannot record. */
     o.capture = NERF_SCENE_CAPTURE_FORWARD;
     o.k1 = 0.1f;

@@ -5,6 +5,7 @@
  */
 #include <cJSON.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,8 +45,9 @@ static float norm3(const float v[3])
  * one fixed step, finer than any edge of the field, over all of
  * [near, far], empty or not.
  */
-static float brute_force(const float o[3], const float d[3], float near,
-                         float far, float rgb[3], float *depth)
+static float brute_force(nerf__scene_world world, const float o[3],
+                         const float d[3], float near, float far,
+                         float rgb[3], float *depth)
 {
     double n = norm3(d), dt = 0.002 / n;
     long steps = (long)ceil((far - near) / dt);
@@ -56,7 +58,7 @@ static float brute_force(const float o[3], const float d[3], float near,
         float x[3] = {(float)(o[0] + t * d[0]), (float)(o[1] + t * d[1]),
                       (float)(o[2] + t * d[2])};
         float c[3];
-        double sigma = nerf__scene_field_in(NERF__SCENE_SURROUNDED, x, c);
+        double sigma = nerf__scene_field_in(world, x, c);
         double alpha = 1.0 - exp(-sigma * dt * n);
         for (int k = 0; k < 3; k++) {
             acc[k] += T * alpha * c[k];
@@ -73,25 +75,32 @@ static float brute_force(const float o[3], const float d[3], float near,
 
 static int compared;
 
-static void compare_ray(const float o[3], const float d[3])
+static void compare_ray_in(nerf__scene_world world, const float o[3],
+                           const float d[3])
 {
     float want[3], got[3], want_depth, got_depth;
     float far = NERF__SCENE_WORLD_FAR;
-    float wa = brute_force(o, d, 0.0f, far, want, &want_depth);
-    float ga = nerf__scene_render_ray_in(NERF__SCENE_SURROUNDED, o, d, 0.0f,
-                                         far, got, &got_depth);
+    float wa = brute_force(world, o, d, 0.0f, far, want, &want_depth);
+    float ga = nerf__scene_render_ray_in(world, o, d, 0.0f, far, got,
+                                         &got_depth);
     bool ok = fabsf(ga - wa) < 1e-4f && wa > 0.9999f &&
               fabsf(got_depth - want_depth) < 2e-3f * want_depth;
     for (int k = 0; k < 3; k++) {
         ok = ok && fabsf(got[k] - want[k]) < 2e-3f;
     }
     if (!ok) {
-        FAILF("ray o (%g %g %g) d (%g %g %g): adaptive alpha %g rgb %g %g %g "
-              "depth %g, brute force %g, %g %g %g, %g", o[0], o[1], o[2],
+        FAILF("world %d ray o (%g %g %g) d (%g %g %g): adaptive alpha %g "
+              "rgb %g %g %g depth %g, brute force %g, %g %g %g, %g",
+              (int)world, o[0], o[1], o[2],
               d[0], d[1], d[2], ga, got[0], got[1], got[2], got_depth, wa,
               want[0], want[1], want[2], want_depth);
     }
     compared++;
+}
+
+static void compare_ray(const float o[3], const float d[3])
+{
+    compare_ray_in(NERF__SCENE_SURROUNDED, o, d);
 }
 
 TEST(adaptive_integration_matches_brute_force)
@@ -472,6 +481,186 @@ TEST(out_of_memory)
     fx_remove_tree(dir);
 }
 
+/* Mean absolute difference of neighbouring pixels of an RGB view: how
+ * much detail a feature detector has to find. */
+static double detail(const uint8_t *px, uint32_t w, uint32_t h)
+{
+    double sum = 0.0;
+    for (uint32_t y = 0; y < h; y++) {
+        for (uint32_t x = 0; x + 1 < w; x++) {
+            for (int c = 0; c < 3; c++) {
+                size_t a = 3 * ((size_t)y * w + x) + (size_t)c;
+                sum += abs((int)px[a] - (int)px[a + 3]);
+            }
+        }
+    }
+    return sum / ((double)h * (w - 1) * 3);
+}
+
+/*
+ * The texture: off, the field and the views are the plain scene's (the
+ * option's default changes nothing); on, the solids and the ground carry
+ * blotches that leave far more detail between neighbouring pixels, and
+ * the integration that skips empty space still agrees with brute force.
+ */
+TEST(texture)
+{
+    const nerf__scene_world plain = NERF__SCENE_SURROUNDED;
+    const nerf__scene_world textured =
+        (nerf__scene_world)(NERF__SCENE_SURROUNDED | NERF__SCENE_TEXTURED);
+    nerf_scene_options o;
+    small_options(&o, NERF_SCENE_CAPTURE_WALK, NERF_SCENE_LAYOUT_BLENDER);
+    CHECK_EQ_INT(o.texture, 0);
+    nerf__scene_look look = nerf__scene_look_of(&o);
+    CHECK_EQ_INT(look.world, plain);
+    o.texture = 1;
+    look = nerf__scene_look_of(&o);
+    CHECK_EQ_INT(look.world, textured);
+    o.capture = NERF_SCENE_CAPTURE_OBJECT;
+    CHECK_EQ_INT(nerf__scene_look_of(&o).world, NERF__SCENE_TEXTURED);
+
+    /* On the sphere, the box and the ground, colours differ between the
+     * worlds only with the texture; densities never. */
+    const float pts[][3] = {{0.45f, -0.2f, 0.55f}, {-0.5f, 0.35f, 0.35f},
+                            {1.3f, -1.1f, -0.76f}};
+    int differ = 0;
+    for (int k = 0; k < 3; k++) {
+        float a[3], b[3];
+        float sa = nerf__scene_field_in(plain, pts[k], a);
+        float sb = nerf__scene_field_in(textured, pts[k], b);
+        CHECK(sa > 1.0f && sa == sb);
+        differ += fabsf(a[0] - b[0]) + fabsf(a[1] - b[1]) +
+                      fabsf(a[2] - b[2]) > 1e-3f;
+    }
+    CHECK(differ >= 2);
+
+    /* A view of the walk, 64 x 48, plain and textured. */
+    enum { VW = 64, VH = 48 };
+    nerf_scene_options v;
+    small_options(&v, NERF_SCENE_CAPTURE_WALK, NERF_SCENE_LAYOUT_BLENDER);
+    v.width = VW;
+    v.height = VH;
+    nerf_camera cam;
+    nerf__scene_walk_camera(&v, 0, 3, 20, &cam);
+    static uint8_t px[2][VW * VH * 3];
+    for (int t = 0; t < 2; t++) {
+        v.texture = (uint32_t)t;
+        nerf__scene_look lk = nerf__scene_look_of(&v);
+        nerf__scene_render_view(&cam, &lk, 2, px[t], NULL);
+    }
+    double d0 = detail(px[0], VW, VH), d1 = detail(px[1], VW, VH);
+    printf("  neighbouring pixels differ by %.2f levels plain, %.2f "
+           "textured\n", d0, d1);
+    CHECK(d1 > 2.0 * d0);
+
+    /* Rays of the textured walk into the solids and down to the ground,
+     * near and far, against brute force. */
+    compared = 0;
+    v.width = W;
+    v.height = H;
+    for (uint32_t view = 0; view < 20; view += 7) {
+        nerf__scene_walk_camera(&v, 0, view, 20, &cam);
+        for (uint32_t y = 3; y < H; y += 6) {
+            for (uint32_t x = 1; x < W; x += 10) {
+                float org[3], dir[3];
+                nerf__camera_rays(&cam, (size_t)y * W + x, 1, org, dir);
+                compare_ray_in(textured, org, dir);
+            }
+        }
+    }
+    for (int k = 0; k < 8; k++) {
+        const float org[3] = {-0.4f, -2.5f, 0.3f};
+        float fall = 1.0f / (1.0f + 1.5f * k * k / 6.0f);
+        const float dir[3] = {0.2f * cosf((float)k), 1.0f, -fall};
+        compare_ray_in(textured, org, dir);
+    }
+    CHECK(compared == 3 * 4 * 4 + 8);
+
+    /* Neither 2 nor any other value than 0 and 1 is taken. */
+    char *dir = fx_make_temp_dir();
+    v.texture = 2;
+    v.n_train = 1;
+    v.n_val = 0;
+    v.n_test = 0;
+    nerf_clear_error();
+    CHECK_EQ_INT(nerf_scene_write(dir, &v), NERF_EINVAL);
+    CHECK(strstr(nerf_last_error(), "texture 2") != NULL);
+    fx_remove_tree(dir);
+}
+
+/*
+ * The walk: train views in order along one path round the solids, each a
+ * short step from the one before (the last from the first too: one whole
+ * turn), so that a video of them overlaps from frame to frame; test views
+ * between them; written in the Blender layout, read back with the
+ * far-background hint.
+ */
+TEST(walk_capture)
+{
+    enum { N = 24 };
+    nerf_scene_options o;
+    small_options(&o, NERF_SCENE_CAPTURE_WALK, NERF_SCENE_LAYOUT_BLENDER);
+    double longest = 0.0, turned = 0.0;
+    for (uint32_t i = 0; i < N; i++) {
+        nerf_camera a, b;
+        nerf__scene_walk_camera(&o, 0, i, N, &a);
+        nerf__scene_walk_camera(&o, 0, (i + 1) % N, N, &b);
+        float ca[3] = {a.c2w[3], a.c2w[7], a.c2w[11]};
+        float step[3] = {b.c2w[3] - ca[0], b.c2w[7] - ca[1],
+                         b.c2w[11] - ca[2]};
+        CHECK(norm3(ca) > 2.2f && norm3(ca) < 3.0f);
+        double s = norm3(step);
+        longest = s > longest ? s : longest;
+        /* Azimuth always increasing: one way round. */
+        double da = atan2(b.c2w[7], b.c2w[3]) - atan2(ca[1], ca[0]);
+        da = da < -M_PI ? da + 2.0 * M_PI : da;
+        CHECK(da > 0.0 && da < 2.0 * M_PI / N * 1.01);
+        turned += da;
+        /* Looking at the solids: the optical axis (-z column) passes
+         * within a unit of the origin. */
+        float fwd[3] = {-a.c2w[2], -a.c2w[6], -a.c2w[10]};
+        float along = -(ca[0] * fwd[0] + ca[1] * fwd[1] + ca[2] * fwd[2]);
+        float miss[3] = {ca[0] + along * fwd[0], ca[1] + along * fwd[1],
+                         ca[2] + along * fwd[2]};
+        CHECK(norm3(miss) < 0.2f);
+    }
+    CHECK_NEAR(turned, 2.0 * M_PI, 1e-6);
+    /* 24 views: a turn of some 16 units in steps under a unit. */
+    CHECK(longest < 0.9);
+
+    char *dir = fx_make_temp_dir();
+    o.n_train = 6;
+    o.n_val = 1;
+    o.n_test = 2;
+    o.texture = 1;
+    CHECK_OK(nerf_scene_write(dir, &o));
+    char path[1024];
+    fx_path(path, sizeof path, dir, "transforms_train.json");
+    nerf__env env;
+    nerf__env_default(&env);
+    unsigned char *text = NULL;
+    size_t size = 0;
+    CHECK_OK(nerf__file_read(&env, path, 1 << 20, &text, &size));
+    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size) : NULL;
+    nerf__free(&env, text);
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "aabb_scale")) == 16);
+    cJSON_Delete(root);
+    nerf_dataset *ds = NULL;
+    CHECK_OK(nerf_dataset_load(&ds, dir, NULL));
+    CHECK_EQ_INT(nerf_dataset_count(ds), 6);
+    for (uint32_t j = 0; ds && j < 6; j++) {
+        nerf_camera lc, wc;
+        NERF_CAMERA_INIT(&lc);
+        CHECK_OK(nerf_dataset_camera(ds, j, &lc));
+        nerf__scene_walk_camera(&o, 0, j, 6, &wc);
+        for (int k = 0; k < 12; k++) {
+            CHECK_NEAR(lc.c2w[k], wc.c2w[k], 1e-6);
+        }
+    }
+    nerf_dataset_destroy(ds);
+    fx_remove_tree(dir);
+}
+
 int main(void)
 {
     RUN(surroundings);
@@ -480,5 +669,7 @@ int main(void)
     RUN(forward_capture_in_llff_layout);
     RUN(unbounded_capture_in_blender_layout);
     RUN(out_of_memory);
+    RUN(texture);
+    RUN(walk_capture);
     HARNESS_EXIT();
 }

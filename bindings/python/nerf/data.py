@@ -26,9 +26,11 @@ FORMATS = {DATASET_BLENDER: "blender", DATASET_LLFF: "llff",
 SCENE_CAPTURE_OBJECT = 0
 SCENE_CAPTURE_FORWARD = 1
 SCENE_CAPTURE_UNBOUNDED = 2
+SCENE_CAPTURE_WALK = 3
 SCENE_CAPTURES = {"object": SCENE_CAPTURE_OBJECT,
                   "forward": SCENE_CAPTURE_FORWARD,
-                  "unbounded": SCENE_CAPTURE_UNBOUNDED}
+                  "unbounded": SCENE_CAPTURE_UNBOUNDED,
+                  "walk": SCENE_CAPTURE_WALK}
 SCENE_APPEARANCE_CONSTANT = 0
 SCENE_APPEARANCE_VARIED = 1
 SCENE_LAYOUT_BLENDER = 0
@@ -275,9 +277,9 @@ def write_scene(path: Any, *, log: LogFn = None,
     """Write the built-in scene to folder ``path`` (``nerf_scene_write``).
     Keyword options are fields of :class:`nerf.SceneOptions` (width,
     height, n_train, n_val, n_test, threads, seed, capture, layout,
-    image_format, jpeg_quality, and the lens k1, k2, p1, p2, k3);
+    image_format, jpeg_quality, the lens k1, k2, p1, p2, k3, and texture);
     capture and layout may be given by name ("object", "forward",
-    "unbounded"; "blender", "llff", ...).  As in C, the layout defaults to
+    "unbounded", "walk"; "blender", "llff", ...).  As in C, the layout defaults to
     Blender whatever the capture: a forward capture is usually written
     with layout="llff"."""
     for key, names in (("capture", SCENE_CAPTURES),

@@ -439,6 +439,8 @@ class SceneOptions(_Versioned):
         ("p2", c_float),
         ("k3", c_float),
         ("occluders", c_uint32),
+        ("texture", c_uint32),
+        ("reserved1", c_uint32),
     ]
 
 

@@ -111,6 +111,8 @@ static void structs(void)
     FIELD(nerf_scene_options, p2);
     FIELD(nerf_scene_options, k3);
     FIELD(nerf_scene_options, occluders);
+    FIELD(nerf_scene_options, texture);
+    FIELD(nerf_scene_options, reserved1);
     end_struct();
 
     BEGIN(nerf_camera);

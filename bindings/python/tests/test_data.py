@@ -55,6 +55,17 @@ class Scene(TestCase):
         with nerf.Dataset.load(out, "train") as ds:
             self.assertEqual(ds.format, "blender")
             self.assertFalse(ds.is_ndc)
+        # The walk, textured (0.13): its train views load in path order,
+        # and a texture other than 0 or 1 is refused by the library.
+        walk = os.path.join(_support.tmpdir(), "walk")
+        nerf.write_scene(walk, width=16, height=12, n_train=3, n_val=0,
+                         n_test=0, capture="walk", texture=1)
+        with nerf.Dataset.load(walk, "train") as ds:
+            self.assertEqual((ds.format, len(ds)), ("blender", 3))
+        with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
+                                  "texture 2 is not 0 or 1"):
+            nerf.write_scene(walk, capture=nerf.SCENE_CAPTURE_WALK,
+                             texture=2)
         with self.assertRaises(ValueError):
             nerf.write_scene(out, capture="sideways")
         with self.assertNerfError(nerf.NerfInvalidArgument, nerf.EINVAL,
