@@ -200,6 +200,22 @@ cJSON *model_info(const nerf_model *model, const char *path, long long bytes)
         cJSON_AddNumberToObject(b, "rays", rays);
         cJSON_AddNumberToObject(b, "samples", samples);
     }
+    if (c & NERF_MODEL_HAS_APPEARANCE) {
+        uint32_t n = 0;
+        float code[NERF_APPEARANCE_CODE_FLOATS];
+        nerf_model_appearance_count(model, &n);
+        nerf_model_appearance_code(model, NERF_APPEARANCE_NEUTRAL, code);
+        cJSON_AddItemToArray(holds, cJSON_CreateString("appearance codes"));
+        cJSON *a = cJSON_AddObjectToObject(o, "appearance");
+        cJSON_AddNumberToObject(a, "images", n);
+        cJSON *gains = cJSON_AddArrayToObject(a, "neutral_gains");
+        for (uint32_t k = 0; k < NERF_APPEARANCE_CODE_FLOATS; k++) {
+            /* Rounded: the line is for reading, not for reuse. */
+            double g = exp((double)code[k]);
+            cJSON_AddItemToArray(gains,
+                                 cJSON_CreateNumber(round(g * 1e4) / 1e4));
+        }
+    }
     cJSON_AddItemToObject(o, "render", render_object(model));
     return o;
 }

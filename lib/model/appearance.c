@@ -62,6 +62,10 @@ void nerf__appearance_adam(nerf_model *m, uint64_t t, double lr)
         return;
     }
     const size_t n = (size_t)a->n * NERF__CODE_FLOATS;
+    if (t <= NERF__CODE_WARMUP) {
+        memset(a->grad, 0, n * sizeof(float));
+        return;
+    }
     for (size_t i = 0; i < n; i++) {
         /* Only the codes this step's rays reached, as below. */
         if (a->grad[i] != 0.0f) {

@@ -240,6 +240,13 @@ static void checkpoint_seeds(void)
     put_le(&extra, 8, 8);
     put_le(&extra, NERF_MATMUL_BF16, 4);
     put_le(&extra, 0, 4);
+    put_le(&extra, 18, 4); /* appearance codes: one code, its moments */
+    put_le(&extra, 8 + 4 * 3 * 3, 8);
+    put_le(&extra, 1, 4);
+    put_le(&extra, 3, 4);
+    for (int i = 0; i < 9; i++) {
+        put_le(&extra, 0x3c23d70au, 4); /* 0.01f */
+    }
     put_le(&extra, 0x1234, 4); /* optional, unknown: skipped */
     put_le(&extra, 3, 8);
     put(&extra, "abc", 3);

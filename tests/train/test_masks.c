@@ -90,31 +90,6 @@ static nerf_dataset *load(const char *dir, uint32_t split, uint32_t ignore)
     return ds;
 }
 
-static nerf_model *fast_model(uint64_t seed)
-{
-    nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_log2_size = 15;
-    o.hash_levels = 8;
-    o.hash_max_resolution = 256;
-    o.seed = seed;
-    nerf_model *m = NULL;
-    CHECK_OK(nerf_model_create(&m, &o));
-    return m;
-}
-
-static nerf_sampler *fast_sampler(uint64_t seed)
-{
-    nerf_sampler_options o;
-    NERF_SAMPLER_OPTIONS_INIT(&o);
-    CHECK_OK(nerf_sampler_options_preset(&o, NERF_PRESET_FAST));
-    o.seed = seed;
-    nerf_sampler *s = NULL;
-    CHECK_OK(nerf_sampler_create(&s, &o));
-    return s;
-}
-
 static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
                                   const nerf_dataset *ds)
 {
@@ -172,8 +147,8 @@ TEST(datasets_say_whether_they_have_masks)
  * created afresh (as on resume) draws the same rays. */
 TEST(the_trainer_never_draws_a_masked_pixel)
 {
-    nerf_model *m = fast_model(fixture_seed());
-    nerf_sampler *s = fast_sampler(fixture_seed());
+    nerf_model *m = fixture_fast_model(fixture_seed(), 8, 15, 256);
+    nerf_sampler *s = fixture_fast_sampler(fixture_seed());
     nerf_trainer *a = make_trainer(m, s, masked_train);
     nerf_trainer *b = make_trainer(m, s, masked_train);
     if (a == NULL || b == NULL) {
@@ -223,9 +198,9 @@ TEST(a_masked_run_resumes_bit_for_bit)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/resume.nerf", occluded_dir);
-    nerf_sampler *s = fast_sampler(fixture_seed());
-    nerf_model *whole = fast_model(fixture_seed());
-    nerf_model *first = fast_model(fixture_seed());
+    nerf_sampler *s = fixture_fast_sampler(fixture_seed());
+    nerf_model *whole = fixture_fast_model(fixture_seed(), 8, 15, 256);
+    nerf_model *first = fixture_fast_model(fixture_seed(), 8, 15, 256);
     if (!whole || !first || !s) {
         return;
     }
@@ -251,8 +226,8 @@ TEST(a_masked_run_resumes_bit_for_bit)
 static double train_and_score(const nerf_dataset *train, int steps,
                               double *curve)
 {
-    nerf_model *m = fast_model(fixture_seed());
-    nerf_sampler *s = fast_sampler(fixture_seed());
+    nerf_model *m = fixture_fast_model(fixture_seed(), 8, 15, 256);
+    nerf_sampler *s = fixture_fast_sampler(fixture_seed());
     CHECK_OK(nerf_model_set_param(m, NERF_PARAM_LEARNING_RATE,
                                   LEARNING_RATE));
     CHECK_OK(nerf_model_set_param(m, NERF_PARAM_LEARNING_RATE_FINAL,

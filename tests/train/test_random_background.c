@@ -31,31 +31,6 @@ static nerf_trainer *make(nerf_model *m, nerf_sampler *s,
     return t;
 }
 
-static nerf_model *fast_model(uint64_t seed)
-{
-    nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_levels = 4;
-    o.hash_log2_size = 12;
-    o.hash_max_resolution = 64;
-    o.seed = seed;
-    nerf_model *m = NULL;
-    CHECK_OK(nerf_model_create(&m, &o));
-    return m;
-}
-
-static nerf_sampler *fast_sampler(uint64_t seed)
-{
-    nerf_sampler_options o;
-    NERF_SAMPLER_OPTIONS_INIT(&o);
-    nerf_sampler_options_preset(&o, NERF_PRESET_FAST);
-    o.seed = seed;
-    nerf_sampler *s = NULL;
-    CHECK_OK(nerf_sampler_create(&s, &o));
-    return s;
-}
-
 TEST(bad_values_refused)
 {
     nerf_model *m = tiny_model(1);
@@ -195,8 +170,8 @@ TEST(target_and_render_share_the_background)
         return;
     }
     for (int fast = 0; fast < 2; fast++) {
-        nerf_model *m = fast ? fast_model(5) : tiny_model(5);
-        nerf_sampler *s = fast ? fast_sampler(6) : tiny_sampler(6);
+        nerf_model *m = fast ? fixture_fast_model(5, 4, 12, 64) : tiny_model(5);
+        nerf_sampler *s = fast ? fixture_fast_sampler(6) : tiny_sampler(6);
         if (m == NULL || s == NULL) {
             nerf_sampler_destroy(s);
             nerf_model_destroy(m);
@@ -229,8 +204,8 @@ TEST(target_and_render_share_the_background)
 TEST(rays_whatever_the_split)
 {
     enum { MANY = 4096 };
-    nerf_model *m = fast_model(3);
-    nerf_sampler *s = fast_sampler(4);
+    nerf_model *m = fixture_fast_model(3, 4, 12, 64);
+    nerf_sampler *s = fixture_fast_sampler(4);
     nerf_trainer_options o;
     NERF_TRAINER_OPTIONS_INIT(&o);
     o.batch_rays = MANY;
@@ -278,8 +253,8 @@ TEST(rays_whatever_the_split)
 static float *train(const nerf_dataset *ds, int fast, int32_t random_bg,
                     int steps, size_t *n)
 {
-    nerf_model *m = fast ? fast_model(3) : tiny_model(3);
-    nerf_sampler *s = fast ? fast_sampler(4) : tiny_sampler(4);
+    nerf_model *m = fast ? fixture_fast_model(3, 4, 12, 64) : tiny_model(3);
+    nerf_sampler *s = fast ? fixture_fast_sampler(4) : tiny_sampler(4);
     nerf_trainer *t = m && s ? make(m, s, ds, random_bg) : NULL;
     for (int i = 0; t && i < steps; i++) {
         CHECK_OK(nerf_trainer_step(t, NULL));

@@ -96,32 +96,6 @@ TEST(resume_is_bit_identical)
     nerf_sampler_destroy(s);
 }
 
-/* The fast preset with a small hash grid, and its marching sampler. */
-static nerf_model *fast_model(uint64_t seed)
-{
-    nerf_model_options o;
-    NERF_MODEL_OPTIONS_INIT(&o);
-    nerf_model_options_preset(&o, NERF_PRESET_FAST);
-    o.hash_levels = 4;
-    o.hash_log2_size = 12;
-    o.hash_max_resolution = 64;
-    o.seed = seed;
-    nerf_model *m = NULL;
-    CHECK_OK(nerf_model_create(&m, &o));
-    return m;
-}
-
-static nerf_sampler *fast_sampler(uint64_t seed)
-{
-    nerf_sampler_options o;
-    NERF_SAMPLER_OPTIONS_INIT(&o);
-    nerf_sampler_options_preset(&o, NERF_PRESET_FAST);
-    o.seed = seed;
-    nerf_sampler *s = NULL;
-    CHECK_OK(nerf_sampler_create(&s, &o));
-    return s;
-}
-
 static void train_fast(nerf_model *m, nerf_sampler *s, int steps)
 {
     nerf_trainer *t = make_trainer(m, s, 32, NULL);
@@ -145,8 +119,9 @@ TEST(fast_resume_is_bit_identical)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/fast.nerf", fx.dir);
-    nerf_sampler *s = fast_sampler(5);
-    nerf_model *whole = fast_model(9), *first = fast_model(9);
+    nerf_sampler *s = fixture_fast_sampler(5);
+    nerf_model *whole = fixture_fast_model(9, 4, 12, 64);
+    nerf_model *first = fixture_fast_model(9, 4, 12, 64);
     if (!whole || !first || !s) {
         return;
     }
@@ -192,7 +167,7 @@ TEST(grid_schedule)
 
 TEST(marching_needs_a_grid)
 {
-    nerf_sampler *s = fast_sampler(1);
+    nerf_sampler *s = fixture_fast_sampler(1);
     nerf_model *m = tiny_model(1);
     nerf_trainer *t = NULL;
     CHECK_EQ_INT(nerf_trainer_create(&t, m, fx.train, s, NULL), NERF_EINVAL);

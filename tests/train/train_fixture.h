@@ -118,6 +118,37 @@ static inline uint64_t fixture_seed(void)
     return v ? strtoull(v, NULL, 10) : 0;
 }
 
+/* The fast preset with a smaller hash grid than its own (`levels` levels
+ * of 2^log2_size entries, up to max_resolution cells across), as the
+ * tests that train it take one to stay cheap; NULL on failure, said. */
+static inline nerf_model *fixture_fast_model(uint64_t seed, uint32_t levels,
+                                             uint32_t log2_size,
+                                             uint32_t max_resolution)
+{
+    nerf_model_options o;
+    NERF_MODEL_OPTIONS_INIT(&o);
+    nerf_model_options_preset(&o, NERF_PRESET_FAST);
+    o.hash_levels = levels;
+    o.hash_log2_size = log2_size;
+    o.hash_max_resolution = max_resolution;
+    o.seed = seed;
+    nerf_model *m = NULL;
+    CHECK_OK(nerf_model_create(&m, &o));
+    return m;
+}
+
+/* The fast preset's marching sampler. */
+static inline nerf_sampler *fixture_fast_sampler(uint64_t seed)
+{
+    nerf_sampler_options o;
+    NERF_SAMPLER_OPTIONS_INIT(&o);
+    CHECK_OK(nerf_sampler_options_preset(&o, NERF_PRESET_FAST));
+    o.seed = seed;
+    nerf_sampler *s = NULL;
+    CHECK_OK(nerf_sampler_create(&s, &o));
+    return s;
+}
+
 static inline nerf_model *tiny_model(uint64_t seed)
 {
     nerf_model_options o;
