@@ -1910,14 +1910,14 @@ typedef struct nerf_trainer_options {
                                     training image, which absorbs how its
                                     exposure and white balance differ from
                                     the other photos' (docs/api-notes.md,
-                                    "Photos whose exposure differs"); the
-                                    trainer adds the codes to a model
-                                    without them, and takes a model's own
-                                    (one per image of the dataset) as they
-                                    are.  0 (default): none, and a model's
-                                    codes stay as they are.  Not with
-                                    worker_count > 1 yet.  Was reserved2
-                                    before 0.13.
+                                    "Photos whose exposure differs"): the
+                                    trainer adds them to a model without
+                                    codes.  0 (default): a model without
+                                    codes trains without.  A model with
+                                    codes (one per image of the dataset,
+                                    else refused) trains them on either
+                                    way.  Not with worker_count > 1 yet.
+                                    Was reserved2 before 0.13.
                                     @since 0.13 */
 } nerf_trainer_options;
 

@@ -20,12 +20,7 @@ int nerf__trainer_appearance_setup(nerf_trainer *t)
                            "codes are not supported with worker_count > 1 "
                            "yet");
     }
-    if (have == 0) {
-        int rc = nerf__appearance_create(m, t->n_images);
-        if (rc != NERF_OK) {
-            return rc;
-        }
-    } else if (have != t->n_images) {
+    if (have != 0 && have != t->n_images) {
         return nerf__error(NERF_EINVAL, "nerf_trainer_create: the model "
                            "holds appearance codes for %u images and the "
                            "dataset has %u: codes belong to the images they "
@@ -42,6 +37,14 @@ int nerf__trainer_appearance_setup(nerf_trainer *t)
             return NERF_ENOMEM;
         }
     }
+    /* Last, so that a trainer that cannot be made leaves the model as it
+     * was. */
+    if (have == 0) {
+        int rc = nerf__appearance_create(m, t->n_images);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+    }
     t->codes = true;
     return NERF_OK;
 }
@@ -55,7 +58,8 @@ void nerf__trainer_appearance_free(nerf_trainer *t)
     }
 }
 
-/* Ray r of the share starting at lo: its code and its background. */
+/* A ray of the step (numbered across the whole batch): its image's code,
+ * and the background its colour was finished on. */
 static const float *ray_code(const nerf_trainer *t, size_t ray)
 {
     const size_t plane = (size_t)t->width * t->height;

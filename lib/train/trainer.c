@@ -264,9 +264,6 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     if (rc == NERF_OK) {
         rc = alloc_buffers(t);
     }
-    if (rc == NERF_OK) {
-        rc = nerf__trainer_appearance_setup(t);
-    }
     if (rc == NERF_OK && o.checkpoint_path) {
         t->checkpoint_path = copy_string(&env, o.checkpoint_path);
         rc = t->checkpoint_path ? NERF_OK : NERF_ENOMEM;
@@ -274,6 +271,10 @@ NERF_API int nerf_trainer_create(nerf_trainer **out, nerf_model *model,
     if (rc == NERF_OK && o.checkpoint_path) {
         /* Now, not at the first save, maybe hours of training later. */
         rc = nerf__file_check_writable(&env, o.checkpoint_path);
+    }
+    if (rc == NERF_OK) {
+        /* The only change to the model a failed create could leave. */
+        rc = nerf__trainer_appearance_setup(t);
     }
     if (rc != NERF_OK) {
         nerf_trainer_destroy(t);

@@ -87,7 +87,8 @@ class Training(TestCase):
         self.assertEqual(model.appearance_count, 0)
         self.assertEqual(model.appearance_code(), (0.0, 0.0, 0.0))
         with trainer(model, ds, sampler, appearance_codes=1) as t:
-            t.run(5)
+            # The codes are held for a model's first 100 steps.
+            t.run(105)
         self.assertEqual(model.appearance_count, len(ds))
         self.assertIn("appearance", model.contents)
         codes = [model.appearance_code(i) for i in range(len(ds))]
