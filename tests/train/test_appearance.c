@@ -27,12 +27,6 @@
 #define BATCH 1024
 #define PRECROP 50
 
-static int env_int(const char *name, int fallback)
-{
-    const char *v = getenv(name);
-    return v ? atoi(v) : fallback;
-}
-
 /* The sanitizer run (scripts/test.sh): the trainings' code paths in a few
  * steps, without the figures they reach. */
 static bool quick(void)
@@ -124,11 +118,9 @@ static void open_scene(fixture *f, uint32_t appearance)
     memset(f, 0, sizeof *f);
     snprintf(f->dir, sizeof f->dir, "%s", fx_make_temp_dir());
     nerf_scene_options so;
-    NERF_SCENE_OPTIONS_INIT(&so);
-    so.width = so.height = (uint32_t)env_int("NERF_TEST_WIDTH", WIDTH);
-    so.n_train = N_TRAIN;
-    so.n_val = 0;
-    so.n_test = N_TEST;
+    fixture_scene_options(&so,
+                          (uint32_t)fixture_env_int("NERF_TEST_WIDTH", WIDTH),
+                          N_TRAIN, N_TEST);
     so.appearance = appearance;
     CHECK_OK(nerf_scene_write(f->dir, &so));
     nerf_dataset_options dopt;
@@ -145,7 +137,7 @@ static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
     CHECK_OK(nerf_model_set_param(m, NERF_PARAM_DECAY_STEPS, steps));
     nerf_trainer_options o;
     NERF_TRAINER_OPTIONS_INIT(&o);
-    o.batch_rays = (uint32_t)env_int("NERF_TEST_BATCH", BATCH);
+    o.batch_rays = (uint32_t)fixture_env_int("NERF_TEST_BATCH", BATCH);
     o.precrop_steps = PRECROP;
     o.appearance_codes = codes;
     nerf_trainer *t = NULL;
@@ -158,7 +150,7 @@ static nerf_trainer *make_trainer(nerf_model *m, nerf_sampler *s,
 static double trained_psnr(const fixture *f, uint32_t codes, float *neutral)
 {
     const uint64_t seed = fixture_seed();
-    const int steps = quick() ? 10 : env_int("NERF_TEST_STEPS", STEPS);
+    const int steps = quick() ? 10 : fixture_env_int("NERF_TEST_STEPS", STEPS);
     nerf_model *m = fixture_fast_model(seed, 8, 15, 256);
     nerf_sampler *s = fixture_fast_sampler(seed);
     nerf_trainer *t = make_trainer(m, s, f, codes, steps);
@@ -175,26 +167,6 @@ static double trained_psnr(const fixture *f, uint32_t codes, float *neutral)
     nerf_sampler_destroy(s);
     nerf_model_destroy(m);
     return psnr;
-}
-
-/* The bytes of a file, malloc'd, into *size; NULL if unreadable. */
-static unsigned char *file_bytes(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *data = NULL;
-    long n = -1;
-    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 &&
-        fseek(f, 0, SEEK_SET) == 0 && (data = malloc((size_t)n + 1))) {
-        if (fread(data, 1, (size_t)n, f) != (size_t)n) {
-            free(data);
-            data = NULL;
-        }
-    }
-    if (f) {
-        fclose(f);
-    }
-    *size = n > 0 ? (size_t)n : 0;
-    return data;
 }
 
 static int no_exchange(void *user, float *grads, size_t n, nerf_exchange *x)
@@ -287,7 +259,7 @@ TEST(codes_are_kept_and_used)
     CHECK_OK(nerf_model_save(m, path));
     CHECK_OK(nerf_model_save(back, exported));
     size_t n_a = 0, n_b = 0;
-    unsigned char *a = file_bytes(path, &n_a), *b = file_bytes(exported, &n_b);
+    unsigned char *a = fx_slurp(path, &n_a), *b = fx_slurp(exported, &n_b);
     CHECK(a && b && n_a == n_b && memcmp(a, b, n_a) == 0);
     free(a);
     free(b);

@@ -55,12 +55,6 @@
 #define WORSE_DB 1.5
 #define EXACT_STEPS 60
 
-static int env_int(const char *name, int fallback)
-{
-    const char *v = getenv(name);
-    return v ? atoi(v) : fallback;
-}
-
 static char clean_dir[512], occluded_dir[512];
 static nerf_dataset *clean_train, *masked_train, *unmasked_train, *test;
 
@@ -68,11 +62,9 @@ static int write_scene(char *dir, size_t cap, uint32_t occluders)
 {
     snprintf(dir, cap, "%s", fx_make_temp_dir());
     nerf_scene_options so;
-    NERF_SCENE_OPTIONS_INIT(&so);
-    so.width = so.height = (uint32_t)env_int("NERF_TEST_WIDTH", WIDTH);
-    so.n_train = N_TRAIN;
-    so.n_val = 0;
-    so.n_test = N_TEST;
+    fixture_scene_options(&so,
+                          (uint32_t)fixture_env_int("NERF_TEST_WIDTH", WIDTH),
+                          N_TRAIN, N_TEST);
     so.occluders = occluders;
     return nerf_scene_write(dir, &so);
 }
@@ -285,7 +277,7 @@ TEST(the_occluder_has_no_influence_with_masks)
 
 TEST(masks_recover_what_the_occluder_costs)
 {
-    const int steps = env_int("NERF_TEST_STEPS", STEPS);
+    const int steps = fixture_env_int("NERF_TEST_STEPS", STEPS);
     double clean = train_and_score(clean_train, steps, NULL);
     double masked = train_and_score(masked_train, steps, NULL);
     double unmasked = train_and_score(unmasked_train, steps, NULL);

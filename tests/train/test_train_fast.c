@@ -46,12 +46,6 @@
 #define LEARNING_RATE 1e-2
 #define MIN_PSNR 25.0
 
-static int env_int(const char *name, int fallback)
-{
-    const char *v = getenv(name);
-    return v ? atoi(v) : fallback;
-}
-
 static double now(void)
 {
     struct timespec ts;
@@ -103,8 +97,8 @@ static nerf_sampler *sampler;
 
 TEST(fast_preset_learns_the_builtin_scene)
 {
-    const int steps = env_int("NERF_TEST_STEPS", STEPS);
-    const int curve = env_int("NERF_TEST_CURVE", 0);
+    const int steps = fixture_env_int("NERF_TEST_STEPS", STEPS);
+    const int curve = fixture_env_int("NERF_TEST_CURVE", 0);
     const char *env_lr = getenv("NERF_TEST_LR");
     const double lr = env_lr ? atof(env_lr) : LEARNING_RATE;
     sampler = fast_sampler(fixture_seed());
@@ -117,8 +111,8 @@ TEST(fast_preset_learns_the_builtin_scene)
     CHECK_OK(nerf_model_set_param(trained, NERF_PARAM_DECAY_STEPS, steps));
     nerf_trainer_options o;
     NERF_TRAINER_OPTIONS_INIT(&o);
-    o.batch_rays = (uint32_t)env_int("NERF_TEST_BATCH", BATCH);
-    o.precrop_steps = (uint32_t)env_int("NERF_TEST_PRECROP", PRECROP);
+    o.batch_rays = (uint32_t)fixture_env_int("NERF_TEST_BATCH", BATCH);
+    o.precrop_steps = (uint32_t)fixture_env_int("NERF_TEST_PRECROP", PRECROP);
     nerf_trainer *t = NULL;
     CHECK_OK(nerf_trainer_create(&t, trained, fx.train, sampler, &o));
     nerf_train_stats st;
@@ -515,7 +509,7 @@ TEST(depth_finds_the_scene_surface)
 
 int main(void)
 {
-    const int width = env_int("NERF_TEST_WIDTH", WIDTH);
+    const int width = fixture_env_int("NERF_TEST_WIDTH", WIDTH);
     if (fixture_open(&fx, (uint32_t)width, N_TRAIN, N_TEST) != NERF_OK) {
         printf("fixture: %s\n", nerf_last_error());
         return 1;

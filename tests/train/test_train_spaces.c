@@ -44,12 +44,6 @@
  * images of 40 pixels do not miss, and a quarter of the samples. */
 #define MARCH_STEPS 256
 
-static int env_int(const char *name, int fallback)
-{
-    const char *v = getenv(name);
-    return v ? atoi(v) : fallback;
-}
-
 /* The capture written and both splits loaded. */
 static int open_capture(fixture *f, uint32_t capture, uint32_t layout,
                         uint32_t w, uint32_t h, uint32_t n_train,
@@ -127,8 +121,8 @@ static double train(nerf_model *m, nerf_sampler *s, const fixture *f,
                     const char *what, int default_steps, double *train_psnr)
 {
     *train_psnr = -1.0;
-    const int steps = env_int("NERF_TEST_STEPS", default_steps);
-    const int curve = env_int("NERF_TEST_CURVE", 0);
+    const int steps = fixture_env_int("NERF_TEST_STEPS", default_steps);
+    const int curve = fixture_env_int("NERF_TEST_CURVE", 0);
     if (m == NULL || s == NULL) {
         return -1.0;
     }

@@ -17,6 +17,27 @@ typedef struct fixture {
     nerf_dataset *test;
 } fixture;
 
+/* An integer from the environment variable name, else fallback: the
+ * tests' overrides for experiments (NERF_TEST_STEPS, ...). */
+static inline int fixture_env_int(const char *name, int fallback)
+{
+    const char *v = getenv(name);
+    return v ? atoi(v) : fallback;
+}
+
+/* The built-in scene's options at width x width, n_train training and
+ * n_test test views, no validation views. */
+static inline void fixture_scene_options(nerf_scene_options *so,
+                                         uint32_t width, uint32_t n_train,
+                                         uint32_t n_test)
+{
+    NERF_SCENE_OPTIONS_INIT(so);
+    so->width = so->height = width;
+    so->n_train = n_train;
+    so->n_val = 0;
+    so->n_test = n_test;
+}
+
 /* Write the built-in scene at width x width and load both splits. */
 static inline int fixture_open(fixture *f, uint32_t width, uint32_t n_train,
                                uint32_t n_test)
@@ -24,11 +45,7 @@ static inline int fixture_open(fixture *f, uint32_t width, uint32_t n_train,
     memset(f, 0, sizeof *f);
     snprintf(f->dir, sizeof f->dir, "%s", fx_make_temp_dir());
     nerf_scene_options so;
-    NERF_SCENE_OPTIONS_INIT(&so);
-    so.width = so.height = width;
-    so.n_train = n_train;
-    so.n_val = 0;
-    so.n_test = n_test;
+    fixture_scene_options(&so, width, n_train, n_test);
     nerf_dataset_options dopt;
     NERF_DATASET_OPTIONS_INIT(&dopt);
     int rc = nerf_scene_write(f->dir, &so);
