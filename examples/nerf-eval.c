@@ -71,7 +71,7 @@ static int parse(int argc, char **argv, args *a)
                  "--appearance-codes) renders with: neutral (the mean\n"
                  "of its codes, the default) or training image A's\n"
                  "code; the output says which"},
-        {.name = "--no-masks", OPT_FLAG_SETS(&a->no_masks, 1),
+        {OPT_NO_MASKS(&a->no_masks),
          .help = "score every pixel, even those the scene's masks leave\n"
                  "out (by default a masked pixel counts in neither\n"
                  "score, and the output says how many were left out)"},

@@ -196,7 +196,7 @@ static int parse(int argc, char **argv, args *a)
         {OPT_OVERWRITE(&a->overwrite),
          .help = "replace MODEL if it exists (default off: without\n"
                  "--resume or --overwrite, an existing MODEL is refused)"},
-        {.name = "--no-masks", OPT_FLAG_SETS(&a->no_masks, 1),
+        {OPT_NO_MASKS(&a->no_masks),
          .help = "train on every pixel, even those the scene's masks\n"
                  "leave out (default off: masked pixels are never\n"
                  "trained on; docs/formats.md, \"Masks\")"},

@@ -63,6 +63,10 @@ extern const opt_choice preset_choices[];
 #define OPT_PRESET(p)                                                          \
     .name = "--preset", OPT_CHOICE_OF(p, preset_choices), .value = "P"
 
+/* --no-masks: a scene's masks are ignored (nerf_dataset_options.
+ * ignore_masks). */
+#define OPT_NO_MASKS(p) .name = "--no-masks", OPT_FLAG_SETS(p, 1)
+
 /* The largest training image --appearance names. */
 #define NERF_APPEARANCE_IMAGE_MAX 1000000
 
