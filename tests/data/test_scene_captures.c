@@ -320,6 +320,22 @@ TEST(forward_capture_in_llff_layout)
     fx_remove_tree(dir);
 }
 
+/* The JSON file name in dir, parsed; NULL (and a failed check) if it
+ * cannot be read. */
+static cJSON *read_json(const char *dir, const char *name)
+{
+    char path[1024];
+    fx_path(path, sizeof path, dir, name);
+    nerf__env env;
+    nerf__env_default(&env);
+    unsigned char *text = NULL;
+    size_t size = 0;
+    CHECK_OK(nerf__file_read(&env, path, 1 << 20, &text, &size));
+    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size) : NULL;
+    nerf__free(&env, text);
+    return root;
+}
+
 TEST(unbounded_capture_in_blender_layout)
 {
     char *dir = fx_make_temp_dir();
@@ -331,15 +347,7 @@ TEST(unbounded_capture_in_blender_layout)
     CHECK_OK(nerf_scene_write(dir, &o));
 
     /* instant-ngp's hint of a far background, beside Blender's fields. */
-    char path[1024];
-    fx_path(path, sizeof path, dir, "transforms_train.json");
-    nerf__env env;
-    nerf__env_default(&env);
-    unsigned char *text = NULL;
-    size_t size = 0;
-    CHECK_OK(nerf__file_read(&env, path, 1 << 20, &text, &size));
-    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size) : NULL;
-    nerf__free(&env, text);
+    cJSON *root = read_json(dir, "transforms_train.json");
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "aabb_scale")) == 16);
     CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "camera_angle_x")),
                1.0, 1e-12);
@@ -348,6 +356,9 @@ TEST(unbounded_capture_in_blender_layout)
     /* Photographs: no transparent pixel in any file. */
     static const char *const files[] = {"train/r_0.png", "val/r_0.png",
                                         "test/r_1.png"};
+    char path[1024];
+    nerf__env env;
+    nerf__env_default(&env);
     for (int f = 0; f < 3; f++) {
         fx_path(path, sizeof path, dir, files[f]);
         uint32_t w = 0, h = 0;
@@ -634,15 +645,7 @@ TEST(walk_capture)
     o.n_test = 2;
     o.texture = 1;
     CHECK_OK(nerf_scene_write(dir, &o));
-    char path[1024];
-    fx_path(path, sizeof path, dir, "transforms_train.json");
-    nerf__env env;
-    nerf__env_default(&env);
-    unsigned char *text = NULL;
-    size_t size = 0;
-    CHECK_OK(nerf__file_read(&env, path, 1 << 20, &text, &size));
-    cJSON *root = text ? cJSON_ParseWithLength((const char *)text, size) : NULL;
-    nerf__free(&env, text);
+    cJSON *root = read_json(dir, "transforms_train.json");
     CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(root, "aabb_scale")) == 16);
     cJSON_Delete(root);
     nerf_dataset *ds = NULL;
