@@ -4,14 +4,13 @@
 #include <math.h>
 #include <string.h>
 
-#include "adam.h"
 #include "error.h"
 #include "model.h"
 
 int nerf__appearance_create(nerf_model *m, uint32_t n)
 {
     const size_t floats = (size_t)n * NERF__CODE_FLOATS;
-    float *block = nerf__calloc(&m->env, 4 * floats, sizeof(float));
+    float *block = nerf__calloc(&m->env, 5 * floats, sizeof(float));
     if (block == NULL) {
         return nerf__error(NERF_ENOMEM, "out of memory for %u appearance "
                            "codes", (unsigned)n);
@@ -22,8 +21,9 @@ int nerf__appearance_create(nerf_model *m, uint32_t n)
     a->block = block;
     a->code = block;
     a->grad = block + floats;
-    a->adam_m = block + 2 * floats;
-    a->adam_v = block + 3 * floats;
+    a->curv = block + 2 * floats;
+    a->mean_grad = block + 3 * floats;
+    a->mean_curv = block + 4 * floats;
     return NERF_OK;
 }
 
@@ -55,27 +55,33 @@ void nerf__appearance_pick(const nerf__appearance *a, uint32_t which,
     }
 }
 
-void nerf__appearance_adam(nerf_model *m, uint64_t t, double lr)
+void nerf__appearance_step(nerf_model *m, uint64_t t)
 {
     nerf__appearance *a = &m->appearance;
-    if (a->n == 0) {
-        return;
-    }
     const size_t n = (size_t)a->n * NERF__CODE_FLOATS;
-    if (t <= NERF__CODE_WARMUP) {
-        memset(a->grad, 0, n * sizeof(float));
+    if (n == 0) {
         return;
     }
-    for (size_t i = 0; i < n; i++) {
-        /* Only the codes this step's rays reached, as below. */
-        if (a->grad[i] != 0.0f) {
-            a->grad[i] += NERF__CODE_DECAY * a->code[i];
+    const float keep = NERF__CODE_MEMORY, take = 1.0f - NERF__CODE_MEMORY;
+    const float p = NERF__CODE_PRIOR / (float)a->n;
+    for (size_t i = 0; t > NERF__CODE_WARMUP && i < n; i++) {
+        /* Only the codes this step's rays reached: a photo drawn in no
+         * step keeps its means, as a hash table's untouched entries keep
+         * their moments.  A ray with no curvature (all background) gives
+         * no slope either. */
+        if (a->curv[i] > 0.0f) {
+            a->mean_grad[i] = keep * a->mean_grad[i] +
+                              take * (a->grad[i] + p * a->code[i]);
+            a->mean_curv[i] = keep * a->mean_curv[i] +
+                              take * (a->curv[i] + p);
+            /* Both means start at 0 and share their weights, so that
+             * their ratio needs no correction of that start. */
+            a->code[i] -= NERF__CODE_STEP * a->mean_grad[i] /
+                          a->mean_curv[i];
         }
     }
-    /* Sparse: a step's rays touch a few images' codes, and the others
-     * keep their moments, as a hash table's untouched entries do. */
-    nerf__adam_update(&m->adam, t, NERF__CODE_RATE * lr, n, a->code,
-                      a->grad, a->adam_m, a->adam_v, NERF__ADAM_SPARSE);
+    memset(a->grad, 0, n * sizeof(float));
+    memset(a->curv, 0, n * sizeof(float));
 }
 
 void nerf__appearance_apply(const float code[NERF__CODE_FLOATS], size_t n,
@@ -100,15 +106,19 @@ void nerf__appearance_backward(const float code[NERF__CODE_FLOATS],
                                const float d_out[3], const float rgb[3],
                                float opacity, const float bg[3],
                                float grad[NERF__CODE_FLOATS], float d_rgb[3],
-                               float *d_opacity)
+                               float *d_opacity, float loss_curv,
+                               float curv[NERF__CODE_FLOATS])
 {
     /* out = e^l (rgb - (1 - a) g) + (1 - a) g: d out / d rgb = e^l,
-     * d out / d a = (e^l - 1) g, d out / d l = e^l (rgb - (1 - a) g). */
+     * d out / d a = (e^l - 1) g, d out / d l = e^l (rgb - (1 - a) g) = x,
+     * whose Gauss-Newton curvature is x^2 times the loss's. */
     const float rest = 1.0f - opacity;
     float da = 0.0f;
     for (int c = 0; c < 3; c++) {
         const float gain = expf(code[c]);
-        grad[c] += d_out[c] * gain * (rgb[c] - rest * bg[c]);
+        const float x = gain * (rgb[c] - rest * bg[c]);
+        grad[c] += d_out[c] * x;
+        curv[c] += loss_curv * x * x;
         d_rgb[c] = d_out[c] * gain;
         da += d_out[c] * (gain - 1.0f) * bg[c];
     }

@@ -26,9 +26,9 @@
  * gain common to all photos (the colours times k, every code minus
  * log k), and gains that vary smoothly from one camera position to the
  * next (the view-dependent colour).  Along those directions the data say
- * nothing, and Adam's normalised steps would let the codes wander; a
- * small pull of every code towards 0 (NERF__CODE_DECAY) settles them on
- * the networks' side, where the test views, which no code belongs to,
+ * nothing, and the codes could wander with the networks; a small pull of
+ * every code towards 0 (NERF__CODE_PRIOR) settles them on the networks'
+ * side, where the test views, which no code belongs to,
  * see them.  Gains that differ from photo to photo at random, as
  * automatic exposure makes them, no smooth function of the camera can
  * take, and the data hold those codes where the photos put them.  The
@@ -50,16 +50,28 @@ struct nerf_model;
 #define NERF__CODE_FLOATS 3u
 
 /*
- * The codes' learning rate, as a multiple of the networks' scheduled one.
- * A code sees only its own photo's few rays a step, and the view-
- * dependent colour learns a photo's look as readily as a code does: at
- * the networks' rate the colour took most of it first.  On the built-in
- * scene with varied photos (tests/train/test_appearance.c, batch 1024,
- * 400 steps of the fast preset, codes learnt from the first step), rates
- * of 1, 3 and 10 times the networks' gave test PSNRs of 29.84, 30.36 and
- * 34.28 dB, against 29.18 without codes.
+ * How the codes learn.  A code's loss is, near its best, a quadratic in
+ * it whose curvature the rays of its photo give as plainly as its slope
+ * (Gauss-Newton: the sum of the map's squared derivatives times the
+ * loss's 2/(3 rays)), so that slope over curvature is the distance to the
+ * photo's best gain.  Each step moves a code a fraction NERF__CODE_STEP of
+ * that distance, taken from running means (NERF__CODE_MEMORY) of the
+ * slope and the curvature over the steps its photo was drawn in: a
+ * photo's few rays a step give a noisy distance, the means a steadier
+ * one.  A step in units of the distance is the same for every scene,
+ * batch and image count, and it is small where the data say little,
+ * which Adam, whose normalised steps are of the learning rate's size
+ * whatever the slope, is not: with Adam at 10 times the networks' rate
+ * (libnerf 0.13.0) the codes of photos that all look alike wandered by
+ * 0.5 to 0.9% from step to step and cost 0.10 to 0.30 dB of test PSNR
+ * (0.20 on average; tests/train/test_appearance.c's scene, seeds 0 to
+ * 3, 16 test views); with these steps and the prior below, 0.11 on
+ * average and 0.22 at most, for as much gain on varied photos or more
+ * (bench/bench_captures.c; docs/api-notes.md).  Steps of 0.3 and 0.03 of
+ * the distance did about as well as 0.1.
  */
-#define NERF__CODE_RATE 10.0
+#define NERF__CODE_STEP 0.1f
+#define NERF__CODE_MEMORY 0.9f
 
 /*
  * The first steps of a model's training, during which the codes stay as
@@ -67,26 +79,41 @@ struct nerf_model;
  * takes in how a half-formed scene renders each photo, and the view-
  * dependent colour settles around it, so that neither lets go later: on
  * photos that all look alike, codes learnt from the first step cost 1.0
- * and 2.7 dB of test PSNR (seeds 0 and 1, 400 steps), codes held for
- * 100 steps 0.1 dB after 800.
+ * and 2.7 dB of test PSNR (seeds 0 and 1, 400 steps, Adam), codes held
+ * for 100 steps 0.1 dB after 800.
  */
 #define NERF__CODE_WARMUP 100u
 
-/* The pull towards 0 added to each code's gradient, per unit of the
- * code: small beside the data's hold on a code that a photo's exposure
- * sets (the loss's curvature in a code is about 3e-3 for a thousand-ray
- * batch over sixty photos), so that it moves such a code by a few per
- * cent of its value; 2e-3 instead cost 6 dB on varied photos. */
-#define NERF__CODE_DECAY 1e-4f
+/*
+ * The pull towards 0: a prior whose curvature is this over the number of
+ * codes, added to each code's in a step its photo is drawn in.  The loss
+ * is a mean over the batch, so that a photo's share of a step's
+ * curvature in its code is about 2/3 E[x^2] / images (x the map's
+ * derivative, a ray's colour in front of its background): the prior is
+ * then a fixed share of it whatever the batch and the number of photos:
+ * about a fifth early in training on the built-in scene, less later and
+ * on photos that the subject fills.  It keeps a code whose rays give it
+ * almost no curvature (they hit little but background) from steps that
+ * slope over curvature would make huge, and settles the directions the
+ * data leave free (above) on the networks' side; it also shrinks the gain a photo sets,
+ * by that share of its logarithm, so that a photo's own render
+ * (NERF_APPEARANCE_OF) shows a little less of its difference than the
+ * photo has.  A prior as a share of the step's mean curvature instead
+ * (0.05 of it) let the codes of photos alike drift with the view-
+ * dependent colour (0.29 dB lost on seed 3), and a larger share (0.2)
+ * took back 0.5 to 0.8 dB of what varied photos gain.
+ */
+#define NERF__CODE_PRIOR 6e-3f
 
 /* The most codes a model holds: one per image of the largest dataset. */
 #define NERF__CODES_MAX (1u << 20)
 
 typedef struct nerf__appearance {
     uint32_t n;  /* codes: the training images; 0: the model has none */
-    /* [n, NERF__CODE_FLOATS] each: the codes, their gradients and their
-     * Adam moments, carved from one block. */
-    float *code, *grad, *adam_m, *adam_v;
+    /* [n, NERF__CODE_FLOATS] each, carved from one block: the codes; the
+     * step's slopes and curvatures, summed over its rays; and their
+     * running means, which checkpoints keep. */
+    float *code, *grad, *curv, *mean_grad, *mean_curv;
     void *block;
 } nerf__appearance;
 
@@ -106,9 +133,9 @@ void nerf__appearance_pick(const nerf__appearance *a, uint32_t which,
 int nerf__appearance_check(const struct nerf_model *m, uint32_t which,
                            const char *fn);
 
-/* The Adam step of the codes at step t (1-based) with rate lr, the
- * gradients zeroed as they are read. */
-void nerf__appearance_adam(struct nerf_model *m, uint64_t t, double lr);
+/* The codes' step at the model's step t (1-based), the step's slopes and
+ * curvatures zeroed as they are read. */
+void nerf__appearance_step(struct nerf_model *m, uint64_t t);
 
 /*
  * The map on n rays: rgb [n, 3] is the composited colour, opacity [n] its
@@ -121,14 +148,17 @@ void nerf__appearance_apply(const float code[NERF__CODE_FLOATS], size_t n,
 
 /*
  * One ray's backward: d_out is dL/d(out) of the pixel the map gave, rgb
- * and opacity the ray's values before it, bg its background.  Adds the
- * code's gradient to grad[NERF__CODE_FLOATS] and writes dL/d(rgb) and
- * dL/d(opacity) of the ray before the map.
+ * and opacity the ray's values before it, bg its background, and
+ * loss_curv the loss's second derivative in a pixel's channel.  Adds the
+ * code's slope to grad[NERF__CODE_FLOATS] and its Gauss-Newton curvature
+ * to curv[NERF__CODE_FLOATS], and writes dL/d(rgb) and dL/d(opacity) of
+ * the ray before the map.
  */
 void nerf__appearance_backward(const float code[NERF__CODE_FLOATS],
                                const float d_out[3], const float rgb[3],
                                float opacity, const float bg[3],
                                float grad[NERF__CODE_FLOATS], float d_rgb[3],
-                               float *d_opacity);
+                               float *d_opacity, float loss_curv,
+                               float curv[NERF__CODE_FLOATS]);
 
 #endif

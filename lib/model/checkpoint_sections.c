@@ -678,8 +678,9 @@ static int read_corrections(const char *path, nerf_model *m,
 }
 
 /* The per-image appearance codes (appearance.h): u32 count, u32 floats
- * per code, the codes, then (but in a weights-only file) their Adam
- * moments, first then second. */
+ * per code, the codes, then (but in a weights-only file) the running
+ * means of their slopes and curvatures.  libnerf 0.13.0 wrote the same
+ * layout under tag 18 with Adam's moments in place of the means. */
 static bool has_appearance(const nerf__ckpt_save *s)
 {
     return s->m->appearance.n > 0;
@@ -696,22 +697,24 @@ static void write_appearance(nerf__buf *b, const nerf__ckpt_save *s)
     const size_t n = (size_t)a->n * NERF__CODE_FLOATS;
     put_floats(b, a->code, n);
     if (!s->weights_only) {
-        put_floats(b, a->adam_m, n);
-        put_floats(b, a->adam_v, n);
+        put_floats(b, a->mean_grad, n);
+        put_floats(b, a->mean_curv, n);
     }
 }
 
-/* A file without the section holds a model without codes. */
-static int read_appearance(const char *path, nerf_model *m,
-                           const unsigned char *b, uint64_t len,
-                           const nerf__ckpt_view *v)
+/* The codes of a section of either tag; the state after them is read
+ * when keep_state, else left at its start (zero means). */
+static int read_codes(const char *path, nerf_model *m,
+                      const unsigned char *b, uint64_t len,
+                      const nerf__ckpt_view *v, bool keep_state)
 {
-    if (b == NULL) {
-        return NERF_OK;
-    }
     if (len < 8) {
         return corrupt(path, "the appearance codes section is shorter than "
                        "its head");
+    }
+    if (m->appearance.n != 0) {
+        return corrupt(path, "the appearance codes are there twice, under "
+                       "tags 18 and 19");
     }
     const uint32_t n = nerf__load_le32(b);
     const uint32_t floats = nerf__load_le32(b + 4);
@@ -733,21 +736,44 @@ static int read_appearance(const char *path, nerf_model *m,
     nerf__appearance *a = &m->appearance;
     const size_t k = (size_t)n * NERF__CODE_FLOATS;
     get_floats(b + 8, a->code, k);
-    if (arrays == 3) {
-        get_floats(b + 8 + 4 * k, a->adam_m, k);
-        get_floats(b + 8 + 8 * k, a->adam_v, k);
+    if (arrays == 3 && keep_state) {
+        get_floats(b + 8 + 4 * k, a->mean_grad, k);
+        get_floats(b + 8 + 8 * k, a->mean_curv, k);
     }
     for (size_t i = 0; i < k; i++) {
         /* The negations catch NaN. */
-        if (!isfinite(a->code[i]) || !isfinite(a->adam_m[i]) ||
-            !(a->adam_v[i] >= 0.0f && isfinite(a->adam_v[i]))) {
+        if (!isfinite(a->code[i]) || !isfinite(a->mean_grad[i]) ||
+            !(a->mean_curv[i] >= 0.0f && isfinite(a->mean_curv[i]))) {
             return nerf__error(NERF_EFORMAT, "%s: corrupted checkpoint "
                                "(appearance code %zu holds a value that is "
-                               "not finite, or a negative second moment)",
+                               "not finite, or a negative curvature)",
                                path, i / NERF__CODE_FLOATS);
         }
     }
     return NERF_OK;
+}
+
+/* A file without the section holds a model without codes. */
+static int read_appearance(const char *path, nerf_model *m,
+                           const unsigned char *b, uint64_t len,
+                           const nerf__ckpt_view *v)
+{
+    return b ? read_codes(path, m, b, len, v, true) : NERF_OK;
+}
+
+/* 0.13.0's codes: their Adam moments mean nothing to the codes' steps
+ * since, which start their means afresh, as a model's first steps do. */
+static int read_appearance_0_13(const char *path, nerf_model *m,
+                                const unsigned char *b, uint64_t len,
+                                const nerf__ckpt_view *v)
+{
+    return b ? read_codes(path, m, b, len, v, false) : NERF_OK;
+}
+
+static bool never(const nerf__ckpt_save *s)
+{
+    (void)s;
+    return false;
 }
 
 /* ---- the table ---------------------------------------------------------- */
@@ -851,7 +877,13 @@ const nerf__ckpt_section nerf__ckpt_sections[NERF__CKPT_N_SECTIONS] = {
     /* Optional: a reader that skips it renders the networks' own colours,
      * the look of no photo in particular (model/appearance.h). */
     [NERF__CKPT_APPEARANCE] = {
-        .tag = 18u, .name = "appearance codes", .flags = NERF__CKPT_STORED,
+        .tag = 19u, .name = "appearance codes", .flags = NERF__CKPT_STORED,
         .wanted = has_appearance, .write = write_appearance,
         .read = read_appearance},
+    /* Read, never written: 0.13.0's codes, whose optimiser state
+     * (Adam's moments) the codes' steps no longer use. */
+    [NERF__CKPT_APPEARANCE_0_13] = {
+        .tag = 18u, .name = "appearance codes (0.13.0)",
+        .flags = NERF__CKPT_STORED, .wanted = never, .write = write_nothing,
+        .read = read_appearance_0_13},
 };

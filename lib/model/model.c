@@ -838,7 +838,7 @@ int nerf__model_adam_step(nerf_model *m)
         }
         adam_range(m, lr, layers, net->offset + net->count, NERF__ADAM_DECAY);
     }
-    nerf__appearance_adam(m, m->step, lr);
+    nerf__appearance_step(m, m->step);
     m->grads_dirty = false;
     nerf__average_step(m);
     nerf__model_weights_changed(m);

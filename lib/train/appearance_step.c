@@ -91,8 +91,11 @@ void nerf__trainer_appearance_forward(nerf_trainer *t, uint32_t passes,
 }
 
 void nerf__trainer_appearance_backward(nerf_trainer *t, uint32_t passes,
-                                       size_t lo, size_t n)
+                                       size_t lo, size_t n, size_t all)
 {
+    /* The loss is the mean over the batch's channels of the squared
+     * error (train_step.c): its second derivative in one is 2 / (3 all). */
+    const float loss_curv = 2.0f / (3.0f * (float)all);
     nerf__appearance *a = &t->model->appearance;
     const size_t plane = (size_t)t->width * t->height;
     for (uint32_t p = 0; p < passes; p++) {
@@ -106,7 +109,9 @@ void nerf__trainer_appearance_backward(nerf_trainer *t, uint32_t passes,
                                       d_out, t->coded[p].rgb + 3 * r,
                                       t->coded[p].opacity[r], bg,
                                       a->grad + img * NERF__CODE_FLOATS,
-                                      d + 3 * r, &t->coded[p].d_opacity[r]);
+                                      d + 3 * r, &t->coded[p].d_opacity[r],
+                                      loss_curv,
+                                      a->curv + img * NERF__CODE_FLOATS);
         }
     }
 }

@@ -184,7 +184,7 @@ static int step(nerf_trainer *t, nerf_train_stats *stats)
         const float *none[NERF__PASSES] = {NULL, NULL};
         const float *d_opacity[NERF__PASSES] = {NULL, NULL};
         if (t->codes) {
-            nerf__trainer_appearance_backward(t, passes, sh.lo, n);
+            nerf__trainer_appearance_backward(t, passes, sh.lo, n, sh.all);
             for (uint32_t p = 0; p < passes; p++) {
                 d_opacity[p] = t->coded[p].d_opacity;
             }

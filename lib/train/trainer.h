@@ -163,7 +163,7 @@ void nerf__trainer_appearance_free(nerf_trainer *t);
 void nerf__trainer_appearance_forward(nerf_trainer *t, uint32_t passes,
                                       size_t lo, size_t n);
 void nerf__trainer_appearance_backward(nerf_trainer *t, uint32_t passes,
-                                       size_t lo, size_t n);
+                                       size_t lo, size_t n, size_t all);
 
 /*
  * Record the trainer's dataset in its model (model->data), first warning

@@ -447,9 +447,10 @@ TEST(forged_batch_sections)
     forge("two batch sections", edit_add_two_batches, NERF_EFORMAT);
 }
 
-/* The appearance codes (optional tag 18): u32 count, u32 floats a code,
- * then the codes and their two moments. */
-static uint32_t codes_n = 2, codes_floats = 3, codes_bad = 0;
+/* The appearance codes (optional tag 19; 0.13.0's tag 18): u32 count,
+ * u32 floats a code, then the codes and the two means of their steps
+ * (0.13.0: Adam's moments). */
+static uint32_t codes_n = 2, codes_floats = 3, codes_bad = 0, codes_tag = 19;
 static size_t codes_len_delta = 0;
 
 static void edit_add_codes(payload *p)
@@ -467,13 +468,33 @@ static void edit_add_codes(payload *p)
         }
         memcpy(b + 8 + 4 * i, &v, 4); /* little-endian hosts */
     }
-    add_section(p, 18u, b, 8 + 4 * 18 + codes_len_delta);
+    add_section(p, codes_tag, b, 8 + 4 * 18 + codes_len_delta);
 }
 
 static void edit_add_two_codes(payload *p)
 {
     edit_add_codes(p);
     edit_add_codes(p);
+}
+
+static void edit_add_codes_of_both_tags(payload *p)
+{
+    codes_tag = 18;
+    edit_add_codes(p);
+    codes_tag = 19;
+    edit_add_codes(p);
+}
+
+/* The codes' state as the model holds it: whether every mean is v. */
+static bool code_means_are(const nerf_model *m, float v)
+{
+    const nerf__appearance *a = &m->appearance;
+    for (size_t i = 0; i < (size_t)a->n * NERF__CODE_FLOATS; i++) {
+        if (a->mean_grad[i] != v || a->mean_curv[i] != v) {
+            return false;
+        }
+    }
+    return a->n > 0;
 }
 
 TEST(forged_appearance_sections)
@@ -492,6 +513,19 @@ TEST(forged_appearance_sections)
     CHECK_OK(nerf_model_appearance_code(m, NERF_APPEARANCE_NEUTRAL, c));
     CHECK_NEAR(c[0], 0.15, 1e-6);
     CHECK(nerf_model_contents(m) & NERF_MODEL_HAS_APPEARANCE);
+    CHECK(code_means_are(m, 0.01f));
+    nerf_model_destroy(m);
+    /* 0.13.0's section: the codes, and Adam's moments left behind. */
+    codes_tag = 18;
+    codes_bad = 2;
+    forge("0.13.0's appearance codes", edit_add_codes, NERF_OK);
+    codes_bad = 0;
+    codes_tag = 19;
+    m = NULL;
+    CHECK_OK(nerf_model_load(&m, path, NULL));
+    CHECK_OK(nerf_model_appearance_code(m, NERF_APPEARANCE_OF(1), c));
+    CHECK(c[0] == 0.3f && c[2] == 0.5f);
+    CHECK(code_means_are(m, 0.0f));
     nerf_model_destroy(m);
     codes_len_delta = 4;
     forge("appearance codes 4 bytes long", edit_add_codes, NERF_EFORMAT);
@@ -507,9 +541,12 @@ TEST(forged_appearance_sections)
     forge("a NaN code", edit_add_codes, NERF_EFORMAT);
     CHECK(strstr(nerf_last_error(), "appearance code 0") != NULL);
     codes_bad = 2;
-    forge("a negative second moment", edit_add_codes, NERF_EFORMAT);
+    forge("a negative mean curvature", edit_add_codes, NERF_EFORMAT);
     codes_bad = 0;
     forge("two appearance sections", edit_add_two_codes, NERF_EFORMAT);
+    forge("codes under tags 18 and 19", edit_add_codes_of_both_tags,
+          NERF_EFORMAT);
+    CHECK(strstr(nerf_last_error(), "twice") != NULL);
 }
 
 /* The average (optional tag 16): f64 steps, u32 running, u32 reserved,
