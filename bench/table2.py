@@ -229,7 +229,10 @@ def main(argv=None):
         proto["steps"] = args.steps
     picked = list(range(len(ROWS)))
     if args.rows:
-        picked = [int(r) - 1 for r in args.rows.split(",")]
+        try:
+            picked = [int(r) - 1 for r in args.rows.split(",")]
+        except ValueError:
+            picked = [-1]
         if any(r < 0 or r >= len(ROWS) for r in picked):
             print("table2: --rows takes numbers 1..%d" % len(ROWS),
                   file=sys.stderr)

@@ -29,8 +29,9 @@
  * rounding, which moves training as another seed does, cannot cross it,
  * while a row that stops learning (LEARNT: at least 3 dB above its
  * untrained model; every row gained 7.8 dB or more) or an encoding that
- * stops helping fails.  The whole test took 43 s there, about one core's
- * worth; NERF_TEST_STEPS overrides the steps.
+ * stops helping fails.  The whole test took 35 to 43 s there (about one
+ * core's worth; 3 s under NERF_TEST_QUICK); NERF_TEST_STEPS overrides the
+ * steps.
  */
 #define WIDTH 64
 #define STEPS 300
