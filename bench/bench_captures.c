@@ -35,6 +35,16 @@ static int fail(const char *what)
     return 1;
 }
 
+/* A scene folder this program made under /tmp, and all it holds. */
+static void remove_dir(const char *dir)
+{
+    char cmd[64];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) {
+        fprintf(stderr, "bench_captures: could not remove %s\n", dir);
+    }
+}
+
 /* The scattered capture's masks in dir, beside its training images
  * train/r_<i>.png: for view i, as many pixels as the occluded capture's
  * mask of view i leaves out, each pixel kept or not by a fixed stream so
@@ -92,11 +102,7 @@ static int scatter_masks(const char *dir, const nerf_scene_options *clean)
     free(drop);
 out:
     nerf_dataset_destroy(occ);
-    char cmd[sizeof odir + 16];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", odir);
-    if (system(cmd) != 0) {
-        fprintf(stderr, "bench_captures: could not remove %s\n", odir);
-    }
+    remove_dir(odir);
     return rc;
 }
 
@@ -226,10 +232,6 @@ int main(int argc, char **argv)
     nerf_model_destroy(m);
     nerf_dataset_destroy(train);
     nerf_dataset_destroy(test);
-    char cmd[sizeof dir + 16];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    if (system(cmd) != 0) {
-        fprintf(stderr, "bench_captures: could not remove %s\n", dir);
-    }
+    remove_dir(dir);
     return rc;
 }
