@@ -22,6 +22,7 @@ at it (starts_alive()).
 import argparse
 import os
 import platform
+import shlex
 import sys
 import time
 
@@ -223,6 +224,8 @@ def train_row(row, proto, data, test, quiet):
 
 
 def main(argv=None):
+    if argv is None:
+        argv = sys.argv[1:]
     args = parse_args(argv)
     proto = dict(QUICK if args.quick else PROTOCOL)
     if args.steps:
@@ -252,7 +255,8 @@ def main(argv=None):
     for line in protocol_lines(proto, args.quick, n_test, size):
         print(line)
     print("machine: " + machine_line())
-    print("command: bench/table2.py%s" % (" --quick" if args.quick else ""))
+    # As given, so that the page's copy of the output says how to rerun it.
+    print("command: bench/table2.py " + " ".join(shlex.quote(a) for a in argv))
     print(flush=True)
 
     results = {}
