@@ -27,18 +27,23 @@ static const char after[] =
     "Examples:\n"
     "  nerf-viewer --model lego.nerf\n"
     "  nerf-viewer --model fern.nerf --data fern --downscale 8 --width 320\n"
-    "  nerf-viewer --model lego.nerf --screenshot lego.png --view depth\n";
+    "  nerf-viewer --model lego.nerf --screenshot lego.png --view depth\n"
+    "  nerf-viewer --model lego.nerf --data lego --width 640 --fly 10\n";
 
 /* Default image width when none is given. */
 #define DEFAULT_WIDTH 256
+/* While the view moves, a marching model is drawn in this fraction of
+ * the still view's march steps (docs/viewer.md, "Figures"). */
+#define PREVIEW_MARCH_DIVISOR 4
 
 typedef struct args {
     const char *model, *data, *screenshot;
     uint64_t width, height, downscale;
     int downscale_given, overwrite;
     int mode;
-    int64_t march; /* -1: the model's */
-    double quit_after;
+    int64_t march;         /* -1: the model's */
+    int64_t preview_march; /* -1: march / PREVIEW_MARCH_DIVISOR */
+    double quit_after, fly;
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -46,6 +51,7 @@ static int parse(int argc, char **argv, args *a)
     memset(a, 0, sizeof *a);
     a->downscale = 1;
     a->march = -1;
+    a->preview_march = -1;
     const opt opts[] = {
         {OPT_MODEL(&a->model)},
         {.name = "--data", OPT_TEXT_TO(&a->data), .value = "DIR",
@@ -72,6 +78,10 @@ static int parse(int argc, char **argv, args *a)
                  "its grid's diagonal / N, {range} (default: the N\n"
                  "MODEL records, 1280 for fast): coarser draws\n"
                  "faster, as nerf-render --march-steps"},
+        {OPT_MARCH_STEPS("--preview-march", &a->preview_march),
+         .help = "while the view moves, march a marching model in N\n"
+                 "steps, {range} (default: a quarter of the still\n"
+                 "view's): coarser moves faster, at a cost in detail"},
         {.name = "--screenshot", OPT_TEXT_TO(&a->screenshot),
          .value = "FILE",
          .help = "render the start view to FILE (PNG) and exit,\n"
@@ -79,6 +89,13 @@ static int parse(int argc, char **argv, args *a)
         {OPT_OVERWRITE(&a->overwrite),
          .help = "with --screenshot: replace FILE if it exists (default\n"
                  "off: an existing FILE is refused; MODEL never is)"},
+        {.name = "--fly", OPT_REAL_IN(&a->fly, 0.0, HUGE_VAL, CLI_ABOVE_MIN),
+         .value = "S",
+         .help = "fly the view along a path for S seconds without a\n"
+                 "person (a turn around the scene; with LLFF --data, a\n"
+                 "small loop), refine where it stops, close, then print\n"
+                 "each frame's time and PSNR against the full render\n"
+                 "and a summary (default: the mouse moves the view)"},
         {.name = "--quit-after",
          OPT_REAL_IN(&a->quit_after, 0.0, HUGE_VAL, CLI_ABOVE_MIN),
          .value = "S",
@@ -99,6 +116,16 @@ static int parse(int argc, char **argv, args *a)
     if (a->screenshot != NULL &&
         out_file_check(PROG, a->screenshot, a->overwrite, NULL, inputs, 2) !=
             0) {
+        return -1;
+    }
+    if (a->preview_march >= 0 && a->screenshot != NULL) {
+        cli_usage_error(PROG, "--preview-march is for a window; "
+                        "--screenshot draws the still view");
+        return -1;
+    }
+    if (a->fly > 0.0 && a->screenshot != NULL) {
+        cli_usage_error(PROG, "--fly flies in a window; --screenshot opens "
+                        "none");
         return -1;
     }
     if (a->downscale_given && a->data == NULL) {
@@ -130,6 +157,41 @@ static void choose_size(const args *a, viewer *v)
     v->height = (uint32_t)(h > 0 ? (h < 16384 ? h : 16384) : 1);
 }
 
+/* The previews' own sampler and renderer, for a marching model whose
+ * previews march coarser than its still views (or --preview-march). */
+static int open_previews(const args *a, const nerf_renderer_options *ro,
+                         viewer *v)
+{
+    int64_t steps = a->preview_march;
+    if (steps < 0) {
+        if (!setup_marches(v->model)) {
+            return NERF_OK;
+        }
+        nerf_sampler_options so;
+        NERF_SAMPLER_OPTIONS_INIT(&so);
+        int rc = nerf_sampler_options_for(&so, v->model, v->dataset,
+                                          NERF_SAMPLER_FOR_RENDERING);
+        if (rc != NERF_OK) {
+            return rc;
+        }
+        int64_t full = a->march >= 0 ? a->march : (int64_t)so.march_steps;
+        steps = full / PREVIEW_MARCH_DIVISOR > 0
+                    ? full / PREVIEW_MARCH_DIVISOR
+                    : 1;
+        if (steps == full) {
+            return NERF_OK;
+        }
+    }
+    sampler_choice c = SAMPLER_AS_RECORDED;
+    c.march_steps = steps;
+    int rc = setup_sampler(&v->preview_sampler, v->model, v->dataset, &c);
+    if (rc == NERF_OK) {
+        rc = nerf_renderer_create(&v->preview_renderer, v->model,
+                                  v->preview_sampler, ro);
+    }
+    return rc;
+}
+
 static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
 {
     int rc = nerf_model_load(&v->model, a->model, hooks);
@@ -159,6 +221,9 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         ro.chunk_rays = a->screenshot ? ro.chunk_rays : 64;
         ro.hooks = hooks;
         rc = nerf_renderer_create(&v->renderer, v->model, v->sampler, &ro);
+        if (rc == NERF_OK && a->screenshot == NULL) {
+            rc = open_previews(a, &ro, v);
+        }
     }
     if (rc == NERF_OK) {
         /* The home view's framing depends on the image's shape. */
@@ -207,6 +272,7 @@ int main(int argc, char **argv)
     memset(&v, 0, sizeof v);
     v.mode = (view_mode)a.mode;
     v.quit_after = a.quit_after;
+    v.fly_seconds = a.fly;
     int status = 0;
     int rc = open_scene(&a, &hooks, &v);
     if (rc == NERF_OK) {
@@ -220,6 +286,8 @@ int main(int argc, char **argv)
         cli_report("nerf-viewer", rc);
         status = 1;
     }
+    nerf_renderer_destroy(v.preview_renderer);
+    nerf_sampler_destroy(v.preview_sampler);
     nerf_renderer_destroy(v.renderer);
     nerf_sampler_destroy(v.sampler);
     nerf_dataset_destroy(v.dataset);

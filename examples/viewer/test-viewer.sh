@@ -10,10 +10,14 @@
 # window:     run the interactive viewer for a second under Xvfb and check
 #             it exits 0 having drawn something; skipped (77) without
 #             xvfb-run.
+# fly:        fly --fly's path under Xvfb and check that its report is
+#             whole and agrees with itself: a line a frame, the summary's
+#             median, 95th percentile and PSNR those of the lines, the
+#             frames spanning the path; skipped (77) without xvfb-run.
 set -eu
 mode=$1 scene=$2 train=$3 viewer=$4 check=$5
 
-if [ "$mode" = window ] && ! command -v xvfb-run >/dev/null 2>&1; then
+if [ "$mode" != screenshot ] && ! command -v xvfb-run >/dev/null 2>&1; then
   echo "xvfb-run not found (Debian package xvfb): skipping"
   exit 77
 fi
@@ -117,6 +121,91 @@ window)
   fi
   if ! grep -Eq ' [1-9][0-9]* previews' "$work/viewer.log"; then
     echo "nerf-viewer did not report drawing a preview"
+    exit 1
+  fi
+  ;;
+fly)
+  # --fly needs a window: with --screenshot it is refused.
+  status=0
+  env -u DISPLAY "$viewer" --model "$work/model.nerf" --width 8 --fly 1 \
+    --screenshot "$work/fly.png" 2>"$work/refused.log" || status=$?
+  if [ "$status" -ne 2 ] || ! grep -q -- "--fly flies in a window" \
+       "$work/refused.log"; then
+    cat "$work/refused.log"
+    echo "--fly with --screenshot: status $status"
+    exit 1
+  fi
+  seconds=1.5
+  status=0
+  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
+    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 \
+    "$viewer" --model "$work/model.nerf" --width 64 --height 48 \
+    --fly $seconds >"$work/fly.out" 2>"$work/viewer.log" || status=$?
+  cat "$work/viewer.log" "$work/fly.out"
+  if [ "$status" -ne 0 ]; then
+    echo "nerf-viewer --fly exited with status $status"
+    exit 1
+  fi
+  # The frames' lines: "frame K  MS ms  WxH  psnr P dB".
+  grep '^frame ' "$work/fly.out" | awk '{ print $3, $7 }' >"$work/lines"
+  # The nearest-rank percentile P of column C of the lines.
+  ranked() {
+    n=$(wc -l <"$work/lines")
+    cut -d' ' -f"$2" "$work/lines" | sort -g |
+      awk -v p="$1" -v n="$n" 'BEGIN { k = int(p * n / 100); if (k < p * n / 100) k++; if (k < 1) k = 1 }
+                                NR == k { print }'
+  }
+  # summary WORDS: the number after WORDS in the summary
+  summary() {
+    sed -n "s/^fly: .*$1 \([0-9.]*\).*/\1/p" "$work/fly.out" | head -n 1
+  }
+  frames=$(sed -n 's/^fly: \([0-9]*\) frames shown.*/\1/p' "$work/fly.out")
+  lines=$(wc -l <"$work/lines")
+  check() {
+    if [ "$2" != "$3" ]; then
+      echo "$1: the summary says '$2', the frames' lines give '$3'"
+      exit 1
+    fi
+  }
+  [ -n "$frames" ] && [ "$frames" -ge 1 ] ||
+    { echo "no summary of the frames shown"; exit 1; }
+  check "frames" "$frames" "$lines"
+  check "median frame time" "$(summary 'frame time median')" "$(ranked 50 1)"
+  check "95th percentile" "$(summary '95th percentile')" "$(ranked 95 1)"
+  check "median PSNR" "$(summary 'median PSNR')" "$(ranked 50 2)"
+  # Each frame's time runs from the one before it was shown, the first's
+  # from the path's start, and the last frame is drawn where the path
+  # stopped: together they span the path (less the lines' rounding).
+  awk -v s=$seconds -v n="$lines" '{ t += $1 }
+    END { if (t < 1000 * s - 0.05 * n) { print "the frames span " t \
+          " ms of a " s " s path"; exit 1 } }' "$work/lines"
+  full=$(summary 'full quality')
+  awk -v f="$full" 'BEGIN { exit !(f > 0) }' ||
+    { echo "no time to full quality after the path: '$full'"; exit 1; }
+  # A marching model's previews march coarser, in a renderer of their
+  # own: the path flies there too.  --preview-march is for a window.
+  "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
+    --steps 2 --batch 64 --checkpoint-every 0 2>"$work/fast.log" ||
+    { cat "$work/fast.log"; exit 1; }
+  status=0
+  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
+    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 \
+    "$viewer" --model "$work/fast.nerf" --width 16 --height 12 \
+    --preview-march 64 --fly 0.3 >"$work/fly-fast.out" \
+    2>"$work/viewer.log" || status=$?
+  if [ "$status" -ne 0 ] || ! grep -q '^fly: full quality' "$work/fly-fast.out"; then
+    cat "$work/viewer.log" "$work/fly-fast.out"
+    echo "nerf-viewer --fly with a fast model: status $status"
+    exit 1
+  fi
+  status=0
+  env -u DISPLAY "$viewer" --model "$work/fast.nerf" --width 8 \
+    --preview-march 64 --screenshot "$work/fly.png" 2>"$work/refused.log" ||
+    status=$?
+  if [ "$status" -ne 2 ] || ! grep -q -- "--preview-march is for a window" \
+       "$work/refused.log"; then
+    cat "$work/refused.log"
+    echo "--preview-march with --screenshot: status $status"
     exit 1
   fi
   ;;

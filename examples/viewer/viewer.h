@@ -17,6 +17,10 @@ typedef struct viewer {
     nerf_dataset *dataset; /* NULL without --data */
     nerf_sampler *sampler;
     nerf_renderer *renderer;
+    /* Previews while the view moves: a marching model's coarser march;
+     * NULL: previews use sampler and renderer. */
+    nerf_sampler *preview_sampler;
+    nerf_renderer *preview_renderer;
     orbit home;             /* the view 'r' returns to */
     orbit view;             /* the current view */
     double focal_ratio;     /* focal length / image width */
@@ -24,6 +28,7 @@ typedef struct viewer {
     uint32_t width, height; /* full-resolution image size */
     view_mode mode;
     double quit_after; /* seconds; 0: run until asked to quit */
+    double fly_seconds; /* --fly: the path's length; 0: no path */
 } viewer;
 
 /*

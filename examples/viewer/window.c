@@ -13,6 +13,7 @@
 #include <SDL.h>
 
 #include "../common/progress.h"
+#include "fly.h"
 #include "viewer.h"
 
 /* Seconds without a change of view before the full render starts. */
@@ -40,7 +41,8 @@ typedef struct window {
     size_t pixels_cap;
     frame preview, full;
     frame *shown;           /* NULL before the first render */
-    double rays_per_second; /* 0 until something was rendered */
+    fly *fly;               /* --fly's path; NULL without */
+    double rays_per_second; /* previews' speed; 0 before the first */
     double deadline;        /* 0: none */
     double last_change;     /* when the view last moved */
     double last_bar;
@@ -266,7 +268,8 @@ static void measure(window *w, const frame *f)
 }
 
 /* Render the view at a reduced size: PREVIEW_MIN_FACTOR smaller on each
- * side, or more if the model is too slow for that to be quick. */
+ * side, or more if the model is too slow for that to be quick.  Sized by
+ * the previews' own speed: they may march coarser than the full view. */
 static int render_preview(window *w)
 {
     viewer *v = w->v;
@@ -281,7 +284,10 @@ static int render_preview(window *w)
     nerf_camera cam;
     int rc = viewer_camera(v, pw, ph, &cam);
     if (rc == NERF_OK) {
-        rc = frame_render(&w->preview, v->renderer, &cam);
+        rc = frame_render(&w->preview, v->preview_renderer
+                                           ? v->preview_renderer
+                                           : v->renderer,
+                          &cam);
     }
     if (rc != NERF_OK) {
         return rc;
@@ -316,7 +322,6 @@ static int render_full(window *w)
     }
     w->n_full++;
     w->need_full = 0;
-    measure(w, &w->full);
     w->shown = &w->full;
     char state[48];
     snprintf(state, sizeof state, "(%.2f s)", w->full.seconds);
@@ -351,10 +356,16 @@ static int run(window *w)
         if (w->quit) {
             break;
         }
+        if (w->fly != NULL && fly_place(w->fly, w->v, progress_now())) {
+            w->moved = 1;
+        }
         int rc = NERF_OK;
         if (w->moved) {
             w->moved = 0;
             rc = render_preview(w);
+            if (rc == NERF_OK && w->fly != NULL && w->fly->full_at == 0.0) {
+                rc = fly_record(w->fly, &w->preview, progress_now());
+            }
             shown_mode = w->v->mode;
             w->need_full = 1;
             w->last_change = progress_now();
@@ -365,6 +376,11 @@ static int run(window *w)
         } else if (w->need_full &&
                    progress_now() - w->last_change >= SETTLE_SECONDS) {
             rc = render_full(w);
+            if (rc == NERF_OK && w->fly != NULL && w->fly->stopped_at > 0.0) {
+                /* The path is over and its end is drawn in full. */
+                w->fly->full_at = progress_now();
+                w->quit = 1;
+            }
         } else {
             wait_for_input(w);
         }
@@ -384,6 +400,11 @@ int viewer_run_window(viewer *v)
     window w;
     memset(&w, 0, sizeof w);
     w.v = v;
+    fly path;
+    if (v->fly_seconds > 0.0) {
+        fly_init(&path, v, v->fly_seconds);
+        w.fly = &path;
+    }
     SDL_SetMainReady();
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
         fprintf(stderr, "nerf-viewer: cannot start SDL: %s\n", SDL_GetError());
@@ -429,5 +450,18 @@ done:
         SDL_DestroyWindow(w.win);
     }
     SDL_Quit();
+    if (w.fly != NULL) {
+        /* Scored after the window closed: the full renders it takes are
+         * no part of what the path measured. */
+        int rc = status == 0 ? fly_report(w.fly, v) : NERF_OK;
+        if (rc != NERF_OK) {
+            fprintf(stderr, "nerf-viewer: %s: %s\n", nerf_status_string(rc),
+                    nerf_last_error());
+            status = 1;
+        } else if (status == 0 && w.fly->full_at == 0.0) {
+            status = 1; /* the summary said the path did not finish */
+        }
+        fly_free(w.fly);
+    }
     return status;
 }
