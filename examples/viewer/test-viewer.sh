@@ -157,7 +157,8 @@ fly)
   }
   # summary WORDS: the number after WORDS in the summary
   summary() {
-    sed -n "s/^fly: .*$1 \([0-9.]*\).*/\1/p" "$work/fly.out" | head -n 1
+    # (a PSNR of identical images prints as inf)
+    sed -n "s/^fly: .*$1 \([0-9.inf]*\).*/\1/p" "$work/fly.out" | head -n 1
   }
   frames=$(sed -n 's/^fly: \([0-9]*\) frames shown.*/\1/p' "$work/fly.out")
   lines=$(wc -l <"$work/lines")
