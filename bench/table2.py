@@ -98,6 +98,10 @@ def parse_args(argv):
     p.add_argument("--steps", type=int, default=None,
                    help="steps a row, in place of the protocol's (for "
                         "timing it)")
+    p.add_argument("--downscale", type=int, default=None,
+                   help="images reduced this many times, in place of the "
+                        "protocol's 8 (to see what the images' size does "
+                        "to a row)")
     p.add_argument("--no-eval", action="store_true",
                    help="train only, no test renders (for timing)")
     return p.parse_args(argv)
@@ -230,6 +234,8 @@ def main(argv=None):
     proto = dict(QUICK if args.quick else PROTOCOL)
     if args.steps:
         proto["steps"] = args.steps
+    if args.downscale:
+        proto["downscale"] = args.downscale
     picked = list(range(len(ROWS)))
     if args.rows:
         try:
