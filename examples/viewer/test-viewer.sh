@@ -22,6 +22,14 @@ if [ "$mode" != screenshot ] && ! command -v xvfb-run >/dev/null 2>&1; then
   exit 77
 fi
 
+# in_window COMMAND...: COMMAND under Xvfb.  SDL's software renderer keeps
+# Mesa out: its driver threads, and its allocations that LeakSanitizer
+# reports once the driver is unloaded.
+in_window() {
+  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
+    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 "$@"
+}
+
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-viewer-test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
@@ -108,11 +116,7 @@ screenshot)
   ;;
 window)
   status=0
-  # SDL's software renderer keeps Mesa out: its driver threads, and its
-  # allocations that LeakSanitizer reports once the driver is unloaded.
-  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
-    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 \
-    "$viewer" --model "$work/model.nerf" --width 64 --height 48 \
+  in_window "$viewer" --model "$work/model.nerf" --width 64 --height 48 \
     --quit-after 1 2>"$work/viewer.log" || status=$?
   cat "$work/viewer.log"
   if [ "$status" -ne 0 ]; then
@@ -137,9 +141,7 @@ fly)
   fi
   seconds=1.5
   status=0
-  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
-    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 \
-    "$viewer" --model "$work/model.nerf" --width 64 --height 48 \
+  in_window "$viewer" --model "$work/model.nerf" --width 64 --height 48 \
     --fly $seconds >"$work/fly.out" 2>"$work/viewer.log" || status=$?
   cat "$work/viewer.log" "$work/fly.out"
   if [ "$status" -ne 0 ]; then
@@ -189,9 +191,7 @@ fly)
     --steps 2 --batch 64 --checkpoint-every 0 2>"$work/fast.log" ||
     { cat "$work/fast.log"; exit 1; }
   status=0
-  xvfb-run -a -s "-screen 0 320x240x24" env SDL_VIDEODRIVER=x11 \
-    SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 \
-    "$viewer" --model "$work/fast.nerf" --width 16 --height 12 \
+  in_window "$viewer" --model "$work/fast.nerf" --width 16 --height 12 \
     --preview-march 64 --fly 0.3 >"$work/fly-fast.out" \
     2>"$work/viewer.log" || status=$?
   if [ "$status" -ne 0 ] || ! grep -q '^fly: full quality' "$work/fly-fast.out"; then
