@@ -13,6 +13,9 @@
  * focus point the home view circles). */
 #define SWAY_YAW 0.10
 #define SWAY_PITCH 0.05
+/* Frames scored against a full render at most, evenly spread over the
+ * path: a full render of a slow model takes seconds. */
+#define MAX_SCORED 60
 
 void fly_init(fly *f, const viewer *v, double seconds)
 {
@@ -148,21 +151,28 @@ static double rank(const double *sorted, size_t n, double p)
     return sorted[k > 0 ? k - 1 : 0];
 }
 
+/* Whether frame i of n is scored when at most MAX_SCORED are. */
+static int scored(size_t i, size_t n)
+{
+    return n <= MAX_SCORED ||
+           (i + 1) * MAX_SCORED / n > i * MAX_SCORED / n;
+}
+
 static void summarise(const fly *f, const viewer *v, double *ms,
-                      double *psnr)
+                      double *psnr, size_t n_psnr)
 {
     size_t n = f->n;
     qsort(ms, n, sizeof *ms, by_value);
-    qsort(psnr, n, sizeof *psnr, by_value);
+    qsort(psnr, n_psnr, sizeof *psnr, by_value);
     printf("fly: %zu frames shown while moving, a %.1f s %s at %ux%u\n", n,
            f->seconds, f->forward_facing ? "loop" : "turn", v->width,
            v->height);
     printf("fly: frame time median %.1f ms, 95th percentile %.1f ms "
            "(nearest rank)\n",
            rank(ms, n, 50.0), rank(ms, n, 95.0));
-    printf("fly: shown frames against the full render: median PSNR "
-           "%.2f dB, lowest %.2f dB\n",
-           rank(psnr, n, 50.0), psnr[0]);
+    printf("fly: shown frames against the full render (%zu of %zu, evenly "
+           "spread): median PSNR %.2f dB, lowest %.2f dB\n",
+           n_psnr, n, rank(psnr, n_psnr, 50.0), psnr[0]);
     if (f->full_at > 0.0) {
         printf("fly: full quality %.2f s after the path stopped\n",
                f->full_at - f->stopped_at);
@@ -185,8 +195,15 @@ int fly_report(fly *f, viewer *v)
     memset(&full, 0, sizeof full);
     int rc = scaled && ms && psnr ? NERF_OK : NERF_ENOMEM;
     orbit kept = v->view;
+    size_t n_psnr = 0;
     for (size_t i = 0; i < f->n && rc == NERF_OK; i++) {
         const fly_frame *fr = &f->frames[i];
+        ms[i] = 1e3 * fr->seconds;
+        if (!scored(i, f->n)) {
+            printf("frame %4zu  %8.1f ms  %4ux%-4u  psnr      -\n", i + 1,
+                   ms[i], fr->w, fr->h);
+            continue;
+        }
         nerf_camera cam;
         path_view(f, fr->u, &v->view);
         rc = viewer_camera(v, v->width, v->height, &cam);
@@ -195,17 +212,17 @@ int fly_report(fly *f, viewer *v)
         }
         if (rc == NERF_OK) {
             scale_up(fr, v->width, v->height, scaled);
-            rc = nerf_psnr(scaled, full.rgb, pixels * 3, &psnr[i]);
+            rc = nerf_psnr(scaled, full.rgb, pixels * 3, &psnr[n_psnr]);
         }
         if (rc == NERF_OK) {
-            ms[i] = 1e3 * fr->seconds;
             printf("frame %4zu  %8.1f ms  %4ux%-4u  psnr %6.2f dB\n", i + 1,
-                   ms[i], fr->w, fr->h, psnr[i]);
+                   ms[i], fr->w, fr->h, psnr[n_psnr]);
+            n_psnr++;
         }
     }
     v->view = kept;
     if (rc == NERF_OK) {
-        summarise(f, v, ms, psnr);
+        summarise(f, v, ms, psnr, n_psnr);
     }
     frame_free(&full);
     free(scaled);

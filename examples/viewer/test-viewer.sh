@@ -148,14 +148,16 @@ fly)
     echo "nerf-viewer --fly exited with status $status"
     exit 1
   fi
-  # The frames' lines: "frame K  MS ms  WxH  psnr P dB".
+  # The frames' lines: "frame K  MS ms  WxH  psnr P dB", P "-" for a
+  # frame left unscored.
   grep '^frame ' "$work/fly.out" | awk '{ print $3, $7 }' >"$work/lines"
-  # The nearest-rank percentile P of column C of the lines.
+  # The nearest-rank percentile P of column C of the lines (unscored
+  # frames left out).
   ranked() {
-    n=$(wc -l <"$work/lines")
-    cut -d' ' -f"$2" "$work/lines" | sort -g |
-      awk -v p="$1" -v n="$n" 'BEGIN { k = int(p * n / 100); if (k < p * n / 100) k++; if (k < 1) k = 1 }
-                                NR == k { print }'
+    cut -d' ' -f"$2" "$work/lines" | grep -v '^-$' | sort -g >"$work/ranked"
+    n=$(wc -l <"$work/ranked")
+    awk -v p="$1" -v n="$n" 'BEGIN { k = int(p * n / 100); if (k < p * n / 100) k++; if (k < 1) k = 1 }
+                             NR == k { print }' "$work/ranked"
   }
   # summary WORDS: the number after WORDS in the summary
   summary() {
@@ -173,6 +175,11 @@ fly)
   [ -n "$frames" ] && [ "$frames" -ge 1 ] ||
     { echo "no summary of the frames shown"; exit 1; }
   check "frames" "$frames" "$lines"
+  # At most 60 frames are scored, the summary says how many.
+  scored=$(awk '$2 != "-"' "$work/lines" | wc -l)
+  want=$((lines < 60 ? lines : 60))
+  check "frames scored" "$(sed -n 's/^fly: .*(\([0-9]*\) of [0-9]*, evenly.*/\1/p' "$work/fly.out")" "$scored"
+  check "frames scored of $lines" "$want" "$scored"
   check "median frame time" "$(summary 'frame time median')" "$(ranked 50 1)"
   check "95th percentile" "$(summary '95th percentile')" "$(ranked 95 1)"
   check "median PSNR" "$(summary 'median PSNR')" "$(ranked 50 2)"
