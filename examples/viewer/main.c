@@ -31,7 +31,7 @@ static const char after[] =
     "  nerf-viewer --model lego.nerf --data lego --width 640 --fly 10\n";
 
 /* Default image width when none is given. */
-#define DEFAULT_WIDTH 256
+#define DEFAULT_WIDTH 640
 /* While the view moves, a marching model is drawn in this fraction of
  * the still view's march steps (docs/viewer.md, "Figures"). */
 #define PREVIEW_MARCH_DIVISOR 4
@@ -66,8 +66,8 @@ static int parse(int argc, char **argv, args *a)
          .head = "--width W, --height H",
          .help = "image size (default " CLI_STR(DEFAULT_WIDTH)
                  " wide, the data's\n"
-                 "aspect ratio); rendering on the CPU is slow, keep it\n"
-                 "small"},
+                 "aspect ratio); while the view moves it is drawn\n"
+                 "smaller, as small as the model's speed needs"},
         {OPT_IMAGE_SIDE("--height", &a->height, "H")},
         {.name = "--view", OPT_CHOICE_OF(&a->mode, view_modes),
          .value = "MODE",
