@@ -7,6 +7,7 @@
  * (nerf-bench.h says more).
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,6 +32,10 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     if (!b->marched || !b->kept || bs->total == 0 || g == NULL ||
         net->pos_enc.kind != NERF_ENCODING_HASHGRID || !net->use_viewdirs ||
         net->dir_enc.kind != NERF_ENCODING_SPHERICAL_HARMONICS) {
+        /* Said here: the library set no error for the caller to print. */
+        fprintf(stderr, "nerf-bench: the last step left no marched "
+                "samples of a hash-grid model with spherical harmonics to "
+                "time (%zu samples)\n", b->marched ? bs->total : 0);
         return -1;
     }
     const size_t n = bs->total, B = b->n_rays;
@@ -44,6 +49,23 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     nerf__render_march_options(&t->setup, g, &mo);
     nerf__march_rays rays =
         nerf__render_march_rays(&t->setup, B, t->origins, t->directions);
+    /* In NDC the step marches the warped rays, as nerf__render_march()
+     * makes them. */
+    float *ndc_o = NULL, *ndc_d = NULL;
+    if (t->setup.sampler->opts.ndc) {
+        ndc_o = malloc(3 * B * sizeof(float));
+        ndc_d = malloc(3 * B * sizeof(float));
+        if (ndc_o == NULL || ndc_d == NULL) {
+            free(ndc_o);
+            free(ndc_d);
+            return -1;
+        }
+        nerf__ndc_rays(t->setup.ndc_focal, t->setup.ndc_width,
+                       t->setup.ndc_height, 1.0f, B, t->origins,
+                       t->directions, ndc_o, ndc_d);
+        rays.origins = ndc_o;
+        rays.dirs = ndc_d;
+    }
     nerf__march_samples ms;
     nerf__march_samples_init(&ms, &m->env);
     int rc = nerf__march_run(g, &mo, &rays, &ms);
@@ -214,6 +236,8 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
     bd->ok = true;
 done:
     nerf__march_samples_release(&ms);
+    free(ndc_o);
+    free(ndc_d);
     free(points);
     free(enc);
     free(d_enc);

@@ -188,6 +188,7 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
 
     cJSON_AddNumberToObject(o, "batch_rays", BATCH_RAYS);
     cJSON_AddNumberToObject(o, "train_image_size", ri->train_side);
+    cJSON_AddNumberToObject(o, "train_image_height", ri->train_height);
     cJSON_AddNumberToObject(o, "train_views", ri->train_views);
     if (ri->data) {
         cJSON_AddStringToObject(o, "train_data", ri->data);
@@ -222,10 +223,14 @@ static cJSON *preset_json(const preset_setup *p, const figures *f,
         cJSON_AddNumberToObject(o, "render_image_side", f->render_side);
         cJSON_AddStringToObject(
             o, "render_method",
-            "nerf_renderer_render_rays on every pixel of the 800x800 view's "
-            "camera at render_image_side pixels, the model as trained; "
-            "samples counted by replaying the call in the renderer's "
-            "blocks");
+            ri->data ? "nerf_renderer_render_rays on every pixel of the "
+                       "data's first training camera at render_image_side "
+                       "pixels wide, the model as trained; samples counted "
+                       "by replaying the call in the renderer's blocks"
+                     : "nerf_renderer_render_rays on every pixel of the "
+                       "800x800 view's camera at render_image_side pixels, "
+                       "the model as trained; samples counted by replaying "
+                       "the call in the renderer's blocks");
         cJSON_AddItemToObject(o, "train_step_breakdown",
                               breakdown_json(f));
         cJSON_AddItemToObject(o, "train_step_floor", floor_json(f));

@@ -35,7 +35,7 @@ static void rss_measure(int preset, bool full, const run_info *ri,
     const uint32_t side = ri->render_side, rows = ri->rss_rows;
     preset_setup p;
     memset(res, 0, sizeof *res);
-    if (preset_make(&p, preset, ri->matmul) != 0) {
+    if (preset_make(&p, preset, ri->matmul, NULL) != 0) {
         fprintf(stderr, "nerf-bench: %s\n", nerf_last_error());
         return;
     }

@@ -50,7 +50,8 @@ unsigned render_rays(void)
     return 4 * ro.chunk_rays;
 }
 
-int measure_render(preset_setup *p, const run_info *ri, figures *f)
+int measure_render(preset_setup *p, const run_info *ri,
+                   const nerf_dataset *ds, figures *f)
 {
     const double budget = ri->seconds;
     nerf_renderer_options ro;
@@ -69,12 +70,14 @@ int measure_render(preset_setup *p, const run_info *ri, figures *f)
      * a whole view (FAST_RENDER_SIDE). */
     nerf_camera cam;
     size_t n = render_rays(), warm = render_rays() / 2;
+    if (render_camera(&cam, p->march ? FAST_RENDER_SIDE : 800, ds) != 0) {
+        nerf_renderer_destroy(r);
+        set_blas_threads(blas_before);
+        return -1;
+    }
     if (p->march) {
         f->render_side = FAST_RENDER_SIDE;
-        n = warm = (size_t)FAST_RENDER_SIDE * FAST_RENDER_SIDE;
-        view_camera(&cam, FAST_RENDER_SIDE);
-    } else {
-        view_camera(&cam, 800);
+        n = warm = (size_t)cam.width * cam.height;
     }
     float *o = malloc(n * 3 * sizeof(float));
     float *d = malloc(n * 3 * sizeof(float));

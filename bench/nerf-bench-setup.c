@@ -13,7 +13,7 @@
 
 #include "nerf-bench.h"
 
-int preset_make(preset_setup *p, int id, int matmul)
+int preset_make(preset_setup *p, int id, int matmul, const nerf_dataset *ds)
 {
     memset(p, 0, sizeof *p);
     p->id = id;
@@ -24,11 +24,23 @@ int preset_make(preset_setup *p, int id, int matmul)
     NERF_MODEL_OPTIONS_INIT(&mo);
     nerf_model_options_preset(&mo, id);
     mo.matmul = (uint32_t)matmul;
+    /* As nerf-train sets a run up: a hash-grid model in the scene's space
+     * (NDC for LLFF scenes), sampled within the scene's bounds. */
+    if (ds != NULL && nerf_model_options_for_dataset(&mo, ds) != NERF_OK) {
+        return -1;
+    }
     nerf_sampler_options so;
     NERF_SAMPLER_OPTIONS_INIT(&so);
     nerf_sampler_options_preset(&so, id);
-    if (nerf_model_create(&p->model, &mo) != NERF_OK ||
-        nerf_sampler_create(&p->train_sampler, &so) != NERF_OK) {
+    if (nerf_model_create(&p->model, &mo) != NERF_OK) {
+        return -1;
+    }
+    if (ds != NULL &&
+        nerf_sampler_options_for(&so, p->model, ds,
+                                 NERF_SAMPLER_FOR_TRAINING) != NERF_OK) {
+        return -1;
+    }
+    if (nerf_sampler_create(&p->train_sampler, &so) != NERF_OK) {
         return -1;
     }
     so.perturb = 0;
@@ -64,6 +76,27 @@ void view_camera(nerf_camera *c, uint32_t side)
     const float eye[3] = {0.0f, (float)(-2.0 * r), (float)r};
     const float target[3] = {0.0f, 0.0f, 0.0f}, up[3] = {0.0f, 0.0f, 1.0f};
     nerf_camera_look_at(c, eye, target, up);
+}
+
+int render_camera(nerf_camera *c, uint32_t width, const nerf_dataset *ds)
+{
+    if (ds == NULL) {
+        view_camera(c, width);
+        return 0;
+    }
+    NERF_CAMERA_INIT(c);
+    if (nerf_dataset_camera(ds, 0, c) != NERF_OK) {
+        return -1;
+    }
+    const float s = (float)width / (float)c->width;
+    uint32_t height = (uint32_t)lroundf((float)c->height * s);
+    c->width = width;
+    c->height = height > 0 ? height : 1;
+    c->fx *= s;
+    c->fy *= s;
+    c->cx *= s;
+    c->cy *= s;
+    return 0;
 }
 
 /* ---- the dataset: the built-in scene in a temporary folder -------------- */
@@ -142,6 +175,7 @@ nerf_dataset *load_dataset(run_info *ri)
     uint32_t w = 0, h = 0;
     nerf_dataset_image_size(ds, &w, &h);
     ri->train_side = w;
+    ri->train_height = h;
     ri->train_views = nerf_dataset_count(ds);
     return ds;
 }

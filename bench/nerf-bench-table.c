@@ -562,17 +562,22 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
     if (ri->data) {
         fprintf(out, "\nTraining: %u-ray steps on the training split of "
                 "%s (%u views of %ux%u)", BATCH_RAYS, ri->data,
-                ri->train_views, ri->train_side, ri->train_side);
+                ri->train_views, ri->train_side, ri->train_height);
     } else {
         fprintf(out, "\nTraining: %u-ray steps on the built-in scene (%u "
                 "views of %ux%u)", BATCH_RAYS, ri->train_views,
                 ri->train_side, ri->train_side);
     }
+    /* With --data the views are its first training camera's. */
+    const char *view = ri->data ? "the data's first camera, 800 pixels wide"
+                                : "an 800x800 view";
+    const char *fast_view = ri->data ? "the data's first camera" :
+                                       "the 800x800 view's camera";
     fprintf(out,
             ", after the warm-up steps.  Rendering: "
-            "nerf_renderer_render_rays on %u rays of an 800x800 view per "
+            "nerf_renderer_render_rays on %u rays of %s per "
             "call, after a warm-up call.\n",
-            render_rays());
+            render_rays(), view);
     fprintf(out, "sgemm: the products of one training step (per layer "
                  "Y = X W^T, dW = dY^T X, dX = dY W; coarse net on %u x "
                  "n_coarse samples, fine net on %u x (n_coarse + n_fine)), "
@@ -589,11 +594,11 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
                 "Samples: network evaluations (stats.samples_per_ray in "
                 "training; rendering: counted by replaying the timed call "
                 "in the renderer's blocks of %u rays).  Rendering: "
-                "nerf_renderer_render_rays on every pixel of the 800x800 "
-                "view's camera at %ux%u, model as trained, after a "
+                "nerf_renderer_render_rays on every pixel of %s "
+                "at %u pixels wide, model as trained, after a "
                 "warm-up call.\n",
                 NERF__GRID_EVERY, NERF__GRID_EVERY_WARMUP, NERF__GRID_WARMUP,
-                NERF__RENDER_BLOCK, FAST_RENDER_SIDE, FAST_RENDER_SIDE);
+                NERF__RENDER_BLOCK, fast_view, FAST_RENDER_SIDE);
         fprintf(out,
                 "fast, training step: the library's building blocks timed "
                 "one by one in the bench (no timers in the library) on the "

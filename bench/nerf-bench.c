@@ -93,7 +93,7 @@ static int measure(preset_setup *p, const nerf_dataset *ds,
     }
     if (!failed) {
         fprintf(stderr, "nerf-bench: %s: rendering...\n", p->name);
-        if (measure_render(p, ri, f) != 0) {
+        if (measure_render(p, ri, ri->data ? ds : NULL, f) != 0) {
             failed = "rendering";
         }
     }
@@ -275,6 +275,7 @@ int main(int argc, char **argv)
         usage(stderr, argv[0]);
         return 2;
     }
+    ri.train_height = ri.train_side;
     if (ri.threads_requested > 0) {
 #ifdef HAVE_OPENBLAS_SET_NUM_THREADS
         openblas_set_num_threads(ri.threads_requested);
@@ -349,7 +350,8 @@ int main(int argc, char **argv)
         if (!want[i]) {
             continue;
         }
-        if (preset_make(&ps[i], ids[i], ri.matmul) != 0) {
+        if (preset_make(&ps[i], ids[i], ri.matmul, ri.data ? ds : NULL) !=
+            0) {
             fprintf(stderr, "nerf-bench: %s\n", nerf_last_error());
             status = 1;
             break;

@@ -51,6 +51,7 @@ typedef struct run_info {
     uint32_t render_side, rss_rows;
     bool full, no_rss;
     uint32_t train_side, train_views;
+    uint32_t train_height; /* --data: its images' height; else train_side */
     const char *data; /* --data: a scene's training split, else NULL */
     uint32_t downscale;
     double load_start[3], load_end[3];
@@ -81,9 +82,14 @@ typedef struct preset_setup {
     uint32_t n_coarse, n_fine;
 } preset_setup;
 
-int preset_make(preset_setup *p, int id, int matmul);
+/* ds: NULL for the preset as it is; a dataset (--data) to place the model
+ * in its scene and sample it as nerf-train does. */
+int preset_make(preset_setup *p, int id, int matmul, const nerf_dataset *ds);
 void preset_release(preset_setup *p);
 void view_camera(nerf_camera *c, uint32_t side);
+/* The view renders are timed on, width pixels wide: with --data its first
+ * training camera (at its aspect ratio), else view_camera()'s. */
+int render_camera(nerf_camera *c, uint32_t width, const nerf_dataset *ds);
 nerf_dataset *make_dataset(uint32_t side, uint32_t views);
 nerf_dataset *load_dataset(run_info *ri);
 
@@ -244,7 +250,8 @@ int measure_training(preset_setup *p, const nerf_dataset *ds,
 
 /* nerf-bench-render.c; render_rays: rays per timed call without
  * marching. */
-int measure_render(preset_setup *p, const run_info *ri, figures *f);
+int measure_render(preset_setup *p, const run_info *ri,
+                   const nerf_dataset *ds, figures *f);
 unsigned render_rays(void);
 
 /* ---- the report (nerf-bench-table.c, nerf-bench-json.c) ----------------- */
