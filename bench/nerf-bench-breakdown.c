@@ -60,9 +60,8 @@ int time_breakdown(nerf_trainer *t, double budget, step_breakdown *bd)
             free(ndc_d);
             return -1;
         }
-        nerf__ndc_rays(t->setup.ndc_focal, t->setup.ndc_width,
-                       t->setup.ndc_height, 1.0f, B, t->origins,
-                       t->directions, ndc_o, ndc_d);
+        nerf__render_ndc_rays(&t->setup, B, t->origins, t->directions,
+                              ndc_o, ndc_d);
         rays.origins = ndc_o;
         rays.dirs = ndc_d;
     }

@@ -8,7 +8,6 @@
 #include <string.h>
 
 #include "headroom.h"
-#include "ndc.h"
 #include "parallel.h"
 #include "render_batch.h"
 
@@ -637,8 +636,8 @@ int nerf__render_march(nerf__batch *b, const nerf__render_setup *s,
     nerf__parallel_for(n_rays, 32, view_dirs, &j);
     if (s->sampler->opts.ndc) {
         /* March the warped rays: the model's grids lie over NDC space. */
-        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f,
-                       n_rays, origins, directions, b->ray_o, b->ray_d);
+        nerf__render_ndc_rays(s, n_rays, origins, directions, b->ray_o,
+                              b->ray_d);
         rays.origins = b->ray_o;
         rays.dirs = b->ray_d;
     }

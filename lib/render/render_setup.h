@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "model.h"
+#include "ndc.h"
 #include "sampler.h"
 
 /* Pass 0 is the coarse pass, pass 1 the fine one (absent when n_fine = 0). */
@@ -54,6 +55,21 @@ typedef struct nerf__render_setup {
     bool appearance;
     float code[NERF__CODE_FLOATS];
 } nerf__render_setup;
+
+/*
+ * A batch's n rays (o, d) warped into NDC as the engines sample and march
+ * them when the sampler has ndc set: the setup's frustum, with the near
+ * plane at world depth 1 as in the reference.  Also for benchmarks that
+ * replay a step's march.
+ */
+static inline void nerf__render_ndc_rays(const nerf__render_setup *s,
+                                         size_t n, const float *o,
+                                         const float *d, float *o_out,
+                                         float *d_out)
+{
+    nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f, n, o, d,
+                   o_out, d_out);
+}
 
 /* Outputs of one pass; any pointer may be NULL. */
 typedef struct nerf__pass_out {

@@ -6,7 +6,6 @@
 #include <string.h>
 
 #include "composite.h"
-#include "ndc.h"
 #include "parallel.h"
 #include "render_batch.h"
 
@@ -90,10 +89,8 @@ static void prepare_rays(void *ctx, size_t begin, size_t end)
     }
     const size_t n = end - begin;
     if (s->sampler->opts.ndc) {
-        /* The reference puts the NDC near plane at world depth 1. */
-        nerf__ndc_rays(s->ndc_focal, s->ndc_width, s->ndc_height, 1.0f, n,
-                       j->o + 3 * begin, j->d + 3 * begin,
-                       b->ray_o + 3 * begin, b->ray_d + 3 * begin);
+        nerf__render_ndc_rays(s, n, j->o + 3 * begin, j->d + 3 * begin,
+                              b->ray_o + 3 * begin, b->ray_d + 3 * begin);
     } else {
         memcpy(b->ray_o + 3 * begin, j->o + 3 * begin, 3 * n * sizeof(float));
         memcpy(b->ray_d + 3 * begin, j->d + 3 * begin, 3 * n * sizeof(float));
