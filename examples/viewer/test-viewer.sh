@@ -1,7 +1,7 @@
 #!/bin/sh
 # Tests of nerf-viewer on a tiny model trained here for a few steps.
 #
-#   test-viewer.sh screenshot|window NERF-SCENE NERF-TRAIN NERF-VIEWER PNG-CHECK
+#   test-viewer.sh screenshot|window|fly NERF-SCENE NERF-TRAIN NERF-VIEWER PNG-CHECK
 #
 # screenshot: render views headless (no display, SDL never started) and
 #             check each PNG has the right size and more than one colour
@@ -11,9 +11,10 @@
 #             it exits 0 having drawn something; skipped (77) without
 #             xvfb-run.
 # fly:        fly --fly's path under Xvfb and check that its report is
-#             whole and agrees with itself: a line a frame, the summary's
-#             median, 95th percentile and PSNR those of the lines, the
-#             frames spanning the path; skipped (77) without xvfb-run.
+#             whole and agrees with itself: a line a frame, at most 60
+#             of them scored, the summary's median, 95th percentile and
+#             PSNR those of the lines, the frames spanning the path;
+#             skipped (77) without xvfb-run.
 set -eu
 mode=$1 scene=$2 train=$3 viewer=$4 check=$5
 
