@@ -253,8 +253,9 @@ static int parse(int argc, char **argv, args *a)
         {OPT_MARCH_STEPS("--render-march-steps", &a->render_march),
          .help = "fast: record in MODEL that it renders in\n"
                  "steps of its grid's diagonal / N, {range} (it trains\n"
-                 "in 1024): finer steps integrate each ray more closely\n"
-                 "and take longer (default 1280: on lego about 0.1 dB\n"
+                 "in 1024, forward-facing and all-round scenes in 256):\n"
+                 "finer steps integrate each ray more closely and take\n"
+                 "longer (default 1280: on lego about 0.1 dB\n"
                  "more than 1024 for a fifth more time a frame;\n"
                  "docs/performance.md); nerf-eval and nerf-render\n"
                  "--march-steps override it"},

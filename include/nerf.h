@@ -1955,8 +1955,10 @@ NERF_API int nerf_model_options_for_dataset(nerf_model_options *opts,
 typedef enum nerf_sampler_use {
     NERF_SAMPLER_FOR_RENDERING = 0, /**< The march the model records. */
     NERF_SAMPLER_FOR_TRAINING = 1   /**< A marching model trains in the
-                                         fast preset's march, whatever
-                                         finer one it records for
+                                         fast preset's march (1024
+                                         steps), 256 steps in NDC and
+                                         contracted spaces (since 0.13.2),
+                                         whatever finer one it records for
                                          rendering, so that a resumed run
                                          goes on as it began. */
 } nerf_sampler_use;

@@ -1,7 +1,8 @@
 /*
  * A run as nerf-train sets it up (lib/train/run_setup.c): the presets'
  * learning rates, the fastest fp32 products, a march set finer or back,
- * the sampler for a model and a dataset, the trainer's settings for a
+ * the sampler for a model and a dataset (forward-facing and all-round
+ * scenes training in a coarser march), the trainer's settings for a
  * model, and the march a trainer records for rendering.  The programs'
  * agreement with these calls is examples/test-same-run.sh's.
  */
@@ -14,9 +15,9 @@ enum { SIDE = 16, IMAGES = 3 };
 
 static fixture fx;
 
-/* A fast-preset model with a small hash grid: the options that matter
- * here are its encoding and its marching, not its size. */
-static nerf_model *small_fast(void)
+/* A fast-preset model with a small hash grid, in space: the options that
+ * matter here are its encoding, space and marching, not its size. */
+static nerf_model *small_fast_in(uint32_t space)
 {
     nerf_model_options o;
     NERF_MODEL_OPTIONS_INIT(&o);
@@ -24,9 +25,15 @@ static nerf_model *small_fast(void)
     o.hash_levels = 4;
     o.hash_log2_size = 12;
     o.hash_max_resolution = 64;
+    o.space = space;
     nerf_model *m = NULL;
     CHECK_OK(nerf_model_create(&m, &o));
     return m;
+}
+
+static nerf_model *small_fast(void)
+{
+    return small_fast_in(NERF_SPACE_BOX);
 }
 
 static double param(const nerf_model *m, int p)
@@ -270,6 +277,37 @@ done:
     nerf_model_destroy(m);
 }
 
+/* Forward-facing and all-round scenes train in a quarter of the box's
+ * march, its cap cut with it, and render in the march they record (or, without a
+ * recording, in the fast preset's). */
+TEST(open_spaces_train_in_a_coarser_march)
+{
+    static const struct {
+        uint32_t space;
+        int train_steps;
+    } want[] = {{NERF_SPACE_BOX, 1024},
+                {NERF_SPACE_NDC, 256},
+                {NERF_SPACE_UNBOUNDED, 256}};
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        nerf_model *m = small_fast_in(want[i].space);
+        if (m == NULL) {
+            continue;
+        }
+        nerf_sampler_options so;
+        NERF_SAMPLER_OPTIONS_INIT(&so);
+        CHECK_OK(nerf_sampler_options_for(&so, m, NULL,
+                                          NERF_SAMPLER_FOR_TRAINING));
+        CHECK_EQ_INT((int)so.march_steps, want[i].train_steps);
+        CHECK_EQ_INT((int)so.max_samples, want[i].train_steps);
+        NERF_SAMPLER_OPTIONS_INIT(&so);
+        CHECK_OK(nerf_sampler_options_for(&so, m, NULL,
+                                          NERF_SAMPLER_FOR_RENDERING));
+        CHECK_EQ_INT((int)so.march_steps, 1024);
+        CHECK_EQ_INT((int)so.max_samples, 1024);
+        nerf_model_destroy(m);
+    }
+}
+
 TEST(sampler_for_a_preset_without_a_model)
 {
     nerf_sampler_options so;
@@ -319,6 +357,7 @@ int main(void)
     RUN(march_set_finer_and_back);
     RUN(trainer_options_for_a_model);
     RUN(render_march_recorded_and_sampler_for_each_use);
+    RUN(open_spaces_train_in_a_coarser_march);
     RUN(sampler_for_a_preset_without_a_model);
     RUN(model_placed_in_the_dataset);
     fixture_close(&fx);
