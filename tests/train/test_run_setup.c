@@ -278,8 +278,8 @@ done:
 }
 
 /* Forward-facing and all-round scenes train in a quarter of the box's
- * march, its cap cut with it, and render in the march they record (or, without a
- * recording, in the fast preset's). */
+ * march, its cap cut with it, and render in the march they record (or,
+ * without a recording, in the fast preset's). */
 TEST(open_spaces_train_in_a_coarser_march)
 {
     static const struct {
