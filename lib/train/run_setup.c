@@ -45,23 +45,27 @@
  * a run; one every two minutes loses little when a run is killed. */
 #define CHECKPOINT_SECONDS 120.0
 
+/* model's options into mo; false for a NULL model or one that has none. */
+static bool options_of(const nerf_model *model, nerf_model_options *mo)
+{
+    nerf_model_options_init(mo, sizeof *mo);
+    return model != NULL && nerf_model_get_options(model, mo) == NERF_OK;
+}
+
 static bool hash_grid(const nerf_model *model)
 {
     nerf_model_options mo;
-    nerf_model_options_init(&mo, sizeof mo);
-    return nerf_model_get_options(model, &mo) == NERF_OK &&
-           mo.encoding == NERF_ENCODING_HASHGRID;
+    return options_of(model, &mo) && mo.encoding == NERF_ENCODING_HASHGRID;
 }
 
 static uint32_t train_march_steps(const nerf_model *model)
 {
     nerf_model_options mo;
-    nerf_model_options_init(&mo, sizeof mo);
-    const bool open = nerf_model_get_options(model, &mo) == NERF_OK &&
-                      mo.encoding == NERF_ENCODING_HASHGRID &&
-                      (mo.space == NERF_SPACE_NDC ||
-                       mo.space == NERF_SPACE_UNBOUNDED);
-    return open ? TRAIN_MARCH_STEPS_OPEN : TRAIN_MARCH_STEPS_BOX;
+    const bool coarse = options_of(model, &mo) &&
+                        mo.encoding == NERF_ENCODING_HASHGRID &&
+                        (mo.space == NERF_SPACE_NDC ||
+                         mo.space == NERF_SPACE_UNBOUNDED);
+    return coarse ? TRAIN_MARCH_STEPS_OPEN : TRAIN_MARCH_STEPS_BOX;
 }
 
 NERF_API int nerf_model_options_for_dataset(nerf_model_options *opts,
@@ -93,9 +97,7 @@ static int sample_dataset(nerf_sampler_options *o, const nerf_model *model,
         return rc;
     }
     nerf_model_options mo;
-    nerf_model_options_init(&mo, sizeof mo);
-    if (model != NULL && nerf_model_get_options(model, &mo) == NERF_OK &&
-        mo.space == NERF_SPACE_UNBOUNDED) {
+    if (options_of(model, &mo) && mo.space == NERF_SPACE_UNBOUNDED) {
         /* A contracted scene is marched as far as the model reaches, past
          * the farthest point the capture's cameras placed. */
         o->t_far = model_far;
