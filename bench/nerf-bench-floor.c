@@ -18,15 +18,19 @@
  *    dW), at the machine's peak multiply-add rate (nerf-bench-peak.c).
  *  - Optimiser: an Adam update of what the step touched.  The layers are
  *    dense, at the rate of a pass that streams them.  The hash entries
- *    with a gradient lie scattered over four arrays of the table's size
- *    (parameters, gradients, two moments) that no cache holds, so the
- *    unit of their cost is the 64-byte line, not the parameter: the
- *    cost of updating them alone is four random read-modify-writes of
- *    each line that holds a touched entry, timed like the encoding's on
- *    the table's gradient.  Streaming the whole table is the other way,
- *    and the floor is the cheaper of the two: about the same on an Intel
- *    Xeon, while on an AMD EPYC the lines alone came to two to three
- *    times the stream.
+ *    with a gradient lie scattered over the arrays of the table's size
+ *    that the update reads and writes, which no cache holds: parameters,
+ *    gradients and two moments, and with updates corrected by each
+ *    entry's own count (the fast preset's) the two powers of the betas
+ *    as well, six in all.  So the unit of their cost is the 64-byte
+ *    line, not the parameter: the cost of updating them alone is one
+ *    random read-modify-write of each array's line that holds a touched
+ *    entry, timed like the encoding's on the table's gradient.
+ *    Streaming those arrays whole is the other way, and the floor is the
+ *    cheaper of the two: about the same on an Intel Xeon, while on an
+ *    AMD EPYC the lines alone came to two to three times the stream.
+ *    (Until 0.13.2 the floor counted four arrays for the corrected
+ *    update too, and so put it a third too low.)
  *  - Grid refresh: the density of the cells a refresh evaluates (per
  *    step: a sixteenth of them), as encoding reads plus the density
  *    layers' products.
@@ -58,9 +62,11 @@ const char floor_method[] =
     "of the 8 reads and adds per sample and level at a cached access's "
     "cost; the network's forward, dX and dW products at the measured fp32 "
     "FMA peak; Adam: the layers at a streaming pass's rate, and the table "
-    "at the lesser of 4 random 64-byte line updates (parameters, "
-    "gradients, moments) for each line holding a touched entry and a "
-    "streaming pass over all of it; a refresh's density queries per step";
+    "at the lesser of a random 64-byte line update in each array the "
+    "update moves (parameters, gradients, moments, and with corrected "
+    "updates the betas' powers: 4 or 6) for each line holding a touched "
+    "entry and a streaming pass over those arrays; a refresh's density "
+    "queries per step";
 
 static uint64_t next_random(uint64_t *s)
 {
@@ -324,8 +330,11 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
 
     const double dense = time_dense_adam(m, net);
     const double table = (double)hg->count / (double)net->count;
-    fl->table_lines = 4.0 * (double)bd->touched_lines * 1e-9 * fl->line_rmw_ns;
-    fl->table_stream = dense * table;
+    /* The dense pass moves 4 arrays; a corrected update of the table 6. */
+    fl->table_arrays = m->corrected ? 6 : 4;
+    fl->table_lines = fl->table_arrays * (double)bd->touched_lines * 1e-9 *
+                      fl->line_rmw_ns;
+    fl->table_stream = dense * table * fl->table_arrays / 4.0;
     fl->optimiser = dense * (1.0 - table) +
                     fmin(fl->table_lines, fl->table_stream);
 
@@ -334,4 +343,27 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
     fl->sum = fl->encoding + fl->mlp + fl->optimiser + fl->grid;
     fl->ok = true;
     return 0;
+}
+
+void floor_gaps(const step_breakdown *bd, const fast_floor *fl,
+                floor_gap gaps[FLOOR_PARTS])
+{
+    const step_shares sh = shares_of(bd);
+    /* The encoding's floor is the hash grid's reads and adds: it is set
+     * beside the hash forward and backward, as the table's row does. */
+    const floor_gap parts[FLOOR_PARTS] = {
+        {"encoding", bd->hash_fw + bd->hash_bw, fl->encoding, 0.0},
+        {"MLP", sh.mlp, fl->mlp, 0.0},
+        {"optimiser", sh.optimiser, fl->optimiser, 0.0},
+        {"grid refresh", sh.grid, fl->grid, 0.0},
+    };
+    for (int i = 0; i < FLOOR_PARTS; i++) {
+        floor_gap g = parts[i];
+        g.over = g.measured - g.floor;
+        int k = i;
+        for (; k > 0 && gaps[k - 1].over < g.over; k--) {
+            gaps[k] = gaps[k - 1];
+        }
+        gaps[k] = g;
+    }
 }

@@ -64,6 +64,7 @@ static cJSON *floor_json(const figures *f)
     cJSON_AddNumberToObject(o, "touched_params", (double)f->bd.touched);
     cJSON_AddNumberToObject(o, "touched_lines", (double)f->bd.touched_lines);
     cJSON_AddNumberToObject(o, "line_update_ns", fl->line_rmw_ns);
+    cJSON_AddNumberToObject(o, "table_arrays", fl->table_arrays);
     cJSON_AddNumberToObject(o, "table_lines_seconds", fl->table_lines);
     cJSON_AddNumberToObject(o, "table_stream_seconds", fl->table_stream);
     cJSON *sec = cJSON_AddObjectToObject(o, "seconds");
@@ -74,6 +75,18 @@ static cJSON *floor_json(const figures *f)
     cJSON_AddNumberToObject(sec, "sum", fl->sum);
     cJSON_AddNumberToObject(o, "fast_floor_share",
                             fl->sum / (f->train_seconds / f->train_steps));
+    /* Furthest above its floor first. */
+    floor_gap g[FLOOR_PARTS];
+    floor_gaps(&f->bd, fl, g);
+    cJSON *gaps = cJSON_AddArrayToObject(o, "above_floor");
+    for (int i = 0; i < FLOOR_PARTS; i++) {
+        cJSON *part = cJSON_CreateObject();
+        cJSON_AddStringToObject(part, "part", g[i].part);
+        cJSON_AddNumberToObject(part, "measured_seconds", g[i].measured);
+        cJSON_AddNumberToObject(part, "floor_seconds", g[i].floor);
+        cJSON_AddNumberToObject(part, "over_seconds", g[i].over);
+        cJSON_AddItemToArray(gaps, part);
+    }
     return o;
 }
 

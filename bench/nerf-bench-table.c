@@ -377,6 +377,19 @@ static void c_fl_sum(char *b, size_t s, const preset_setup *p,
 {
     floor_cell(b, s, f, f->floor.sum, f->train_seconds / f->train_steps);
 }
+/* The two parts furthest above their floor, by how much. */
+static void c_fl_furthest(char *b, size_t s, const preset_setup *p,
+                          const figures *f)
+{
+    if (!f->floor.ok) {
+        snprintf(b, s, "-");
+        return;
+    }
+    floor_gap g[FLOOR_PARTS];
+    floor_gaps(&f->bd, &f->floor, g);
+    snprintf(b, s, "%s +%.1f, %s +%.1f ms", g[0].part, 1e3 * g[0].over,
+             g[1].part, 1e3 * g[1].over);
+}
 static void c_fl_touched(char *b, size_t s, const preset_setup *p,
                          const figures *f)
 {
@@ -403,8 +416,8 @@ static void c_fl_table(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    snprintf(b, s, "%.2f / %.2f ms", 1e3 * f->floor.table_lines,
-             1e3 * f->floor.table_stream);
+    snprintf(b, s, "%d: %.2f / %.2f ms", f->floor.table_arrays,
+             1e3 * f->floor.table_lines, 1e3 * f->floor.table_stream);
 }
 static void c_prims(char *b, size_t s, const preset_setup *p,
                     const figures *f)
@@ -554,9 +567,11 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, "  optimiser", c_fl_opt, ps, fs, n);
         row(out, "  parameters touched", c_fl_touched, ps, fs, n);
         row(out, "  table lines touched, update", c_fl_lines, ps, fs, n);
-        row(out, "  table: its lines x 4 / streamed", c_fl_table, ps, fs, n);
+        row(out, "  table arrays: their lines / streamed", c_fl_table, ps, fs, n);
         row(out, "  grid refresh", c_fl_grid, ps, fs, n);
         row(out, "  floor / fast_floor_share", c_fl_sum, ps, fs, n);
+        row(out, "  furthest above their floors", c_fl_furthest, ps, fs,
+            n);
     }
 
     if (ri->data) {

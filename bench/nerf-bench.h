@@ -174,8 +174,10 @@ typedef struct fast_floor {
     double level_write_ns[NERF__HASHGRID_MAX_LEVELS]; /* all threads */
     double cached_read_ns, cached_write_ns; /* on entries in cache */
     double line_rmw_ns;   /* a random line update, all threads */
-    /* The table's update: its touched lines alone (4 random updates
-     * each), or the whole table streamed; the floor takes the less. */
+    /* The table's update: its touched lines alone (a random update in
+     * each of table_arrays arrays), or those arrays streamed whole; the
+     * floor takes the less. */
+    int table_arrays;
     double table_lines, table_stream;
     double encoding, mlp, optimiser, grid, sum;
 } fast_floor;
@@ -187,6 +189,18 @@ double peak_gflops(const char **isa_out);
 extern const char floor_method[];
 /* After time_breakdown() on the same trainer; writes the model. */
 int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
+
+/* A part of the step with a floor, and how far its measured time lies
+ * above that floor (seconds per step). */
+typedef struct floor_gap {
+    const char *part; /* "encoding", "MLP", "optimiser", "grid refresh" */
+    double measured, floor, over;
+} floor_gap;
+#define FLOOR_PARTS 4
+/* The parts, furthest above their floor first: where a faster step has
+ * the most to win. */
+void floor_gaps(const step_breakdown *bd, const fast_floor *fl,
+                floor_gap gaps[FLOOR_PARTS]);
 /* Parameters of network 0 (a hash-grid one) with a gradient in m->grads:
  * every layer parameter, and each table float whose entry got one; in
  * *lines the 64-byte lines of the table that hold them, and in
