@@ -28,13 +28,15 @@
 
 /* The march a marching model trains in, in steps of its grid's diagonal.
  * A box keeps the fast preset's, instant-ngp's 1024: its rays cross empty
- * space, which the grid skips, to hard surfaces.  A forward-facing (NDC)
- * or contracted scene's rays cross occupied cells from their first sample
- * to their last, through densities that a young model spreads over tens of
- * samples: a quarter of the steps takes a quarter of the samples, so that
- * a step trains more rays or takes less time, and in five minutes fern
- * and the built-in all-round capture scored higher in 512 steps than in
- * 1024, and higher again in 256
+ * space, which the grid skips, to hard surfaces, and ten minutes of lego
+ * in 512 and 256 made more steps but scored 0.28 and 1.87 dB less
+ * (docs/perf-log/2026-12-03-lego-march-and-the-optimiser.md).  A
+ * forward-facing (NDC) or contracted scene's rays cross occupied cells
+ * from their first sample to their last, through densities that a young
+ * model spreads over tens of samples: a quarter of the steps takes a
+ * quarter of the samples, so that a step trains more rays or takes less
+ * time, and in five minutes fern and the built-in all-round capture
+ * scored higher in 512 steps than in 1024, and higher again in 256
  * (docs/perf-log/2026-12-03-training-march-of-real-captures.md).
  * Renders keep the finer march the trainer records. */
 #define TRAIN_MARCH_STEPS_BOX NERF__MARCH_STEPS_DEFAULT
