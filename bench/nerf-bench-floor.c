@@ -29,7 +29,7 @@
  *    Streaming those arrays whole is the other way, and the floor is the
  *    cheaper of the two: about the same on an Intel Xeon, while on an
  *    AMD EPYC the lines alone came to two to three times the stream.
- *    (Until 0.13.2 the floor counted four arrays for the corrected
+ *    (Until 2026-12-03 the floor counted four arrays for the corrected
  *    update too, and so put it a third too low.)
  *  - Grid refresh: the density of the cells a refresh evaluates (per
  *    step: a sixteenth of them), as encoding reads plus the density

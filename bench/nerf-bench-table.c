@@ -567,7 +567,8 @@ void print_table(FILE *out, const run_info *ri, const preset_setup *ps,
         row(out, "  optimiser", c_fl_opt, ps, fs, n);
         row(out, "  parameters touched", c_fl_touched, ps, fs, n);
         row(out, "  table lines touched, update", c_fl_lines, ps, fs, n);
-        row(out, "  table arrays: their lines / streamed", c_fl_table, ps, fs, n);
+        row(out, "  table arrays: their lines / streamed", c_fl_table, ps,
+            fs, n);
         row(out, "  grid refresh", c_fl_grid, ps, fs, n);
         row(out, "  floor / fast_floor_share", c_fl_sum, ps, fs, n);
         row(out, "  furthest above their floors", c_fl_furthest, ps, fs,
