@@ -345,25 +345,28 @@ int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl)
     return 0;
 }
 
-void floor_gaps(const step_breakdown *bd, const fast_floor *fl,
-                floor_gap gaps[FLOOR_PARTS])
+void floor_parts(const step_breakdown *bd, const fast_floor *fl,
+                 bool by_gap, floor_part parts[FLOOR_PARTS])
 {
     const step_shares sh = shares_of(bd);
     /* The encoding's floor is the hash grid's reads and adds: it is set
-     * beside the hash forward and backward, as the table's row does. */
-    const floor_gap parts[FLOOR_PARTS] = {
-        {"encoding", bd->hash_fw + bd->hash_bw, fl->encoding, 0.0},
-        {"MLP", sh.mlp, fl->mlp, 0.0},
-        {"optimiser", sh.optimiser, fl->optimiser, 0.0},
-        {"grid refresh", sh.grid, fl->grid, 0.0},
+     * beside the hash forward and backward alone, without the SH. */
+    const floor_part in_order[FLOOR_PARTS] = {
+        [FLOOR_ENCODING] = {"encoding", bd->hash_fw + bd->hash_bw,
+                            fl->encoding},
+        [FLOOR_MLP] = {"MLP", sh.mlp, fl->mlp},
+        [FLOOR_OPTIMISER] = {"optimiser", sh.optimiser, fl->optimiser},
+        [FLOOR_GRID] = {"grid refresh", sh.grid, fl->grid},
     };
     for (int i = 0; i < FLOOR_PARTS; i++) {
-        floor_gap g = parts[i];
-        g.over = g.measured - g.floor;
+        const floor_part q = in_order[i];
         int k = i;
-        for (; k > 0 && gaps[k - 1].over < g.over; k--) {
-            gaps[k] = gaps[k - 1];
+        for (; by_gap && k > 0 &&
+               parts[k - 1].measured - parts[k - 1].floor <
+                   q.measured - q.floor;
+             k--) {
+            parts[k] = parts[k - 1];
         }
-        gaps[k] = g;
+        parts[k] = q;
     }
 }

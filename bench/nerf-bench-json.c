@@ -76,15 +76,16 @@ static cJSON *floor_json(const figures *f)
     cJSON_AddNumberToObject(o, "fast_floor_share",
                             fl->sum / (f->train_seconds / f->train_steps));
     /* Furthest above its floor first. */
-    floor_gap g[FLOOR_PARTS];
-    floor_gaps(&f->bd, fl, g);
+    floor_part g[FLOOR_PARTS];
+    floor_parts(&f->bd, fl, true, g);
     cJSON *gaps = cJSON_AddArrayToObject(o, "above_floor");
     for (int i = 0; i < FLOOR_PARTS; i++) {
         cJSON *part = cJSON_CreateObject();
-        cJSON_AddStringToObject(part, "part", g[i].part);
+        cJSON_AddStringToObject(part, "part", g[i].name);
         cJSON_AddNumberToObject(part, "measured_seconds", g[i].measured);
         cJSON_AddNumberToObject(part, "floor_seconds", g[i].floor);
-        cJSON_AddNumberToObject(part, "over_seconds", g[i].over);
+        cJSON_AddNumberToObject(part, "over_seconds",
+                                g[i].measured - g[i].floor);
         cJSON_AddItemToArray(gaps, part);
     }
     return o;

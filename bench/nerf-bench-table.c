@@ -351,26 +351,32 @@ static void c_cached(char *b, size_t s, const preset_setup *p,
              (size_t)8 * fl->levels * f->bd.samples, fl->cached_read_ns,
              fl->cached_write_ns);
 }
+/* One part's floor and its share of the measured part. */
+static void part_cell(char *b, size_t s, const figures *f, int which)
+{
+    floor_part parts[FLOOR_PARTS];
+    floor_parts(&f->bd, &f->floor, false, parts);
+    floor_cell(b, s, f, parts[which].floor, parts[which].measured);
+}
 static void c_fl_enc(char *b, size_t s, const preset_setup *p,
                      const figures *f)
 {
-    floor_cell(b, s, f, f->floor.encoding,
-               f->bd.hash_fw + f->bd.hash_bw);
+    part_cell(b, s, f, FLOOR_ENCODING);
 }
 static void c_fl_mlp(char *b, size_t s, const preset_setup *p,
                      const figures *f)
 {
-    floor_cell(b, s, f, f->floor.mlp, shares_of(&f->bd).mlp);
+    part_cell(b, s, f, FLOOR_MLP);
 }
 static void c_fl_opt(char *b, size_t s, const preset_setup *p,
                      const figures *f)
 {
-    floor_cell(b, s, f, f->floor.optimiser, shares_of(&f->bd).optimiser);
+    part_cell(b, s, f, FLOOR_OPTIMISER);
 }
 static void c_fl_grid(char *b, size_t s, const preset_setup *p,
                       const figures *f)
 {
-    floor_cell(b, s, f, f->floor.grid, shares_of(&f->bd).grid);
+    part_cell(b, s, f, FLOOR_GRID);
 }
 static void c_fl_sum(char *b, size_t s, const preset_setup *p,
                      const figures *f)
@@ -385,10 +391,11 @@ static void c_fl_furthest(char *b, size_t s, const preset_setup *p,
         snprintf(b, s, "-");
         return;
     }
-    floor_gap g[FLOOR_PARTS];
-    floor_gaps(&f->bd, &f->floor, g);
-    snprintf(b, s, "%s +%.1f, %s +%.1f ms", g[0].part, 1e3 * g[0].over,
-             g[1].part, 1e3 * g[1].over);
+    floor_part g[FLOOR_PARTS];
+    floor_parts(&f->bd, &f->floor, true, g);
+    snprintf(b, s, "%s +%.1f, %s +%.1f ms", g[0].name,
+             1e3 * (g[0].measured - g[0].floor), g[1].name,
+             1e3 * (g[1].measured - g[1].floor));
 }
 static void c_fl_touched(char *b, size_t s, const preset_setup *p,
                          const figures *f)

@@ -190,17 +190,17 @@ extern const char floor_method[];
 /* After time_breakdown() on the same trainer; writes the model. */
 int measure_floor(nerf_trainer *t, const step_breakdown *bd, fast_floor *fl);
 
-/* A part of the step with a floor, and how far its measured time lies
- * above that floor (seconds per step). */
-typedef struct floor_gap {
-    const char *part; /* "encoding", "MLP", "optimiser", "grid refresh" */
-    double measured, floor, over;
-} floor_gap;
-#define FLOOR_PARTS 4
-/* The parts, furthest above their floor first: where a faster step has
- * the most to win. */
-void floor_gaps(const step_breakdown *bd, const fast_floor *fl,
-                floor_gap gaps[FLOOR_PARTS]);
+/* A part of the step with a floor: its measured time beside that floor
+ * (seconds per step). */
+typedef struct floor_part {
+    const char *name;
+    double measured, floor;
+} floor_part;
+enum { FLOOR_ENCODING, FLOOR_MLP, FLOOR_OPTIMISER, FLOOR_GRID, FLOOR_PARTS };
+/* The parts in the enum's order.  by_gap: furthest above its floor
+ * (measured less floor) first, where a faster step has the most to win. */
+void floor_parts(const step_breakdown *bd, const fast_floor *fl,
+                 bool by_gap, floor_part parts[FLOOR_PARTS]);
 /* Parameters of network 0 (a hash-grid one) with a gradient in m->grads:
  * every layer parameter, and each table float whose entry got one; in
  * *lines the 64-byte lines of the table that hold them, and in
