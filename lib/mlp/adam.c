@@ -2,6 +2,9 @@
 
 #include <math.h>
 #include <stdbool.h>
+#if defined(NERF_HAVE_CLONES)
+#  include <immintrin.h>
+#endif
 
 #include "multiversion.h"
 #include "parallel.h"
@@ -22,6 +25,7 @@ typedef struct adam_job {
     float b1, b2, one_b1, one_b2, step, inv_sqrt_c2, eps, decay;
     float *params, *m, *v, *grads;
     float *r1, *r2; /* corrected updates: each parameter's beta^k */
+    int isa;        /* corrected updates: the kernel's (common/dispatch.h) */
 } adam_job;
 
 /* The update of parameter i with gradient g (weight decay included), the
@@ -81,14 +85,19 @@ NERF__CLONED(adam_sparse, (void *ctx, size_t begin, size_t end),
 #  define NERF__NO_ALIAS_LOOP
 #endif
 
-/* Vectorises as adam_sparse does (masked stores): the corrections are
- * each parameter's own, but come from its own stored powers, with no
- * lookup. */
-NERF__CLONED(corrected_range,
-             (const adam_job *j, size_t begin, size_t end,
-              float *restrict params, float *restrict grads, float *restrict m,
-              float *restrict v, float *restrict r1, float *restrict r2),
-             (j, begin, end, params, grads, m, v, r1, r2))
+/* Vectorises as adam_sparse does (masked stores) where the instruction
+ * set has them: the corrections are each parameter's own, but come from
+ * its own stored powers, with no lookup. */
+#if defined(NERF_HAVE_CLONES)
+#  define CORRECTED_INLINE static inline __attribute__((always_inline))
+#else
+#  define CORRECTED_INLINE static inline
+#endif
+CORRECTED_INLINE void corrected_loop(const adam_job *j, size_t begin,
+                                     size_t end, float *restrict params,
+                                     float *restrict grads, float *restrict m,
+                                     float *restrict v, float *restrict r1,
+                                     float *restrict r2)
 {
     const float b1 = j->b1, b2 = j->b2, one_b1 = j->one_b1;
     const float one_b2 = j->one_b2, step = j->step, eps = j->eps;
@@ -117,11 +126,106 @@ NERF__CLONED(corrected_range,
     }
 }
 
+#define CORRECTED_ARGS(j)                                                     \
+    (j)->params, (j)->grads, (j)->m, (j)->v, (j)->r1, (j)->r2
+
+static void corrected_portable(const adam_job *j, size_t begin, size_t end)
+{
+    corrected_loop(j, begin, end, CORRECTED_ARGS(j));
+}
+
+#if defined(NERF_HAVE_CLONES)
+__attribute__((target("avx2"))) static void
+corrected_avx2(const adam_job *j, size_t begin, size_t end)
+{
+    corrected_loop(j, begin, end, CORRECTED_ARGS(j));
+}
+
+#define T512 __attribute__((target("avx512f")))
+
+/*
+ * Sixteen parameters from i on, of which the lanes in live are in the
+ * range.  Written out because gcc's own vectorisation of corrected_loop()
+ * works on eight lanes (it prefers 256-bit vectors), and late in a lego
+ * run, with one cache line in eight touched, took 1.6 times as long as
+ * this.  A block none of whose gradients is set costs one load and a
+ * test.  The operations are corrected_loop()'s, in its order, each
+ * rounded once: the same bits.
+ */
+static inline __attribute__((always_inline)) T512 void
+corrected16(const adam_job *j, size_t i, __mmask16 live)
+{
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 g = _mm512_maskz_loadu_ps(live, j->grads + i);
+    /* Not equal, or unordered: a NaN gradient is an update, as in C. */
+    const __mmask16 k = _mm512_mask_cmp_ps_mask(live, g, zero, _CMP_NEQ_UQ);
+    if (k == 0) {
+        return;
+    }
+    const __m512 b1 = _mm512_set1_ps(j->b1), b2 = _mm512_set1_ps(j->b2);
+    const __m512 one = _mm512_set1_ps(1.0f), tiny = _mm512_set1_ps(0x1p-26f);
+    __m512 s1 = _mm512_mul_ps(b1, _mm512_maskz_loadu_ps(k, j->r1 + i));
+    __m512 s2 = _mm512_mul_ps(b2, _mm512_maskz_loadu_ps(k, j->r2 + i));
+    s1 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(s1, tiny, _CMP_GE_OQ), s1);
+    s2 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(s2, tiny, _CMP_GE_OQ), s2);
+    _mm512_mask_storeu_ps(j->r1 + i, k, s1);
+    _mm512_mask_storeu_ps(j->r2 + i, k, s2);
+    const __m512 m_ = _mm512_add_ps(
+        _mm512_mul_ps(b1, _mm512_maskz_loadu_ps(k, j->m + i)),
+        _mm512_mul_ps(_mm512_set1_ps(j->one_b1), g));
+    const __m512 v_ = _mm512_add_ps(
+        _mm512_mul_ps(b2, _mm512_maskz_loadu_ps(k, j->v + i)),
+        _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(j->one_b2), g), g));
+    _mm512_mask_storeu_ps(j->m + i, k, m_);
+    _mm512_mask_storeu_ps(j->v + i, k, v_);
+    const __m512 num = _mm512_mul_ps(_mm512_set1_ps(j->step),
+                                     _mm512_div_ps(m_, _mm512_sub_ps(one, s1)));
+    const __m512 den = _mm512_add_ps(
+        _mm512_sqrt_ps(_mm512_div_ps(v_, _mm512_sub_ps(one, s2))),
+        _mm512_set1_ps(j->eps));
+    const __m512 p = _mm512_maskz_loadu_ps(k, j->params + i);
+    _mm512_mask_storeu_ps(j->params + i, k,
+                          _mm512_sub_ps(p, _mm512_div_ps(num, den)));
+    _mm512_mask_storeu_ps(j->grads + i, k, zero);
+}
+
+/* Blocks aligned on the gradients' cache lines, the array every block
+ * reads. */
+T512 static void corrected_avx512(const adam_job *j, size_t begin, size_t end)
+{
+    size_t i = begin;
+    const size_t misaligned = ((uintptr_t)(j->grads + i) / sizeof(float)) % 16;
+    if (misaligned != 0 && i < end) {
+        const size_t lanes = end - i < 16 - misaligned ? end - i
+                                                       : 16 - misaligned;
+        corrected16(j, i, (__mmask16)((1u << lanes) - 1));
+        i += lanes;
+    }
+    for (; i + 16 <= end; i += 16) {
+        corrected16(j, i, 0xffff);
+    }
+    if (i < end) {
+        corrected16(j, i, (__mmask16)((1u << (end - i)) - 1));
+    }
+}
+#endif
+
 static void adam_corrected(void *ctx, size_t begin, size_t end)
 {
     const adam_job *j = ctx;
-    corrected_range(j, begin, end, j->params, j->grads, j->m, j->v, j->r1,
-                    j->r2);
+#if defined(NERF_HAVE_CLONES)
+    switch (j->isa) {
+    case NERF__ISA_AVX512:
+        corrected_avx512(j, begin, end);
+        return;
+    case NERF__ISA_AVX2:
+        corrected_avx2(j, begin, end);
+        return;
+    default:
+        break;
+    }
+#endif
+    corrected_portable(j, begin, end);
 }
 
 void nerf__adam_update(const nerf__adam *hp, uint64_t t, double lr, size_t n,
@@ -152,6 +256,15 @@ void nerf__adam_update_corrected(const nerf__adam *hp, double lr, size_t n,
                                  float *params, float *grads, float *m,
                                  float *v, float *r1, float *r2)
 {
+    nerf__adam_update_corrected_isa(nerf__isa(), hp, lr, n, params, grads, m,
+                                    v, r1, r2);
+}
+
+void nerf__adam_update_corrected_isa(int isa, const nerf__adam *hp,
+                                     double lr, size_t n, float *params,
+                                     float *grads, float *m, float *v,
+                                     float *r1, float *r2)
+{
     adam_job j = {
         .b1 = (float)hp->beta1,
         .b2 = (float)hp->beta2,
@@ -161,6 +274,7 @@ void nerf__adam_update_corrected(const nerf__adam *hp, double lr, size_t n,
         .eps = (float)hp->eps,
         .params = params, .m = m, .v = v, .grads = grads,
         .r1 = r1, .r2 = r2,
+        .isa = isa < nerf__isa_cpu() ? isa : nerf__isa_cpu(),
     };
     nerf__parallel_for(n, 4, adam_corrected, &j);
 }

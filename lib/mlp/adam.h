@@ -72,4 +72,12 @@ void nerf__adam_update_corrected(const nerf__adam *hp, double lr, size_t n,
                                  float *params, float *grads, float *m,
                                  float *v, float *r1, float *r2);
 
+/* The same through the kernel of instruction set isa (common/dispatch.h;
+ * never wider than the processor's), whatever NERF_ISA says: for the
+ * tests that hold the kernels to the same bits. */
+void nerf__adam_update_corrected_isa(int isa, const nerf__adam *hp,
+                                     double lr, size_t n, float *params,
+                                     float *grads, float *m, float *v,
+                                     float *r1, float *r2);
+
 #endif

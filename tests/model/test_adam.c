@@ -5,6 +5,7 @@
 
 #include "../harness.h"
 #include "adam.h"
+#include "dispatch.h"
 #include "model.h"
 #include "small_grid.h"
 
@@ -270,6 +271,83 @@ TEST(corrected_update_in_blocks)
     CHECK(r1[OFF + 2 * 16 + 5] == 1.0f && r1[OFF + 4 * 16 + 7] < 1.0f);
 }
 
+/* The corrected update through each kernel the processor can run (the
+ * portable loop, AVX2's, AVX-512's) gives the same bits: every operation
+ * is one IEEE rounding, in the same order.  Ranges that start at each
+ * offset within a cache line, blocks touched whole, in part or not at
+ * all, gradients of -0 (untouched), subnormal and NaN, and powers on
+ * either side of their flush to 0, in blocks whose powers have all
+ * flushed or all but one. */
+TEST(corrected_kernels_agree)
+{
+    nerf__adam hp = {1e-2, 1e-3, 100.0, 0.9, 0.99, 1e-15, 0.0, 0.0, 0.0};
+    enum { N = 16 * 12 + 7, ARRAYS = 6, STEPS = 5 };
+    static float want[ARRAYS][N], got[ARRAYS][N];
+    static const int isas[] = {NERF__ISA_AVX2, NERF__ISA_AVX512};
+    const char *isa_names[] = {"avx2", "avx512"};
+    int compared = 0;
+    for (size_t k = 0; k < sizeof isas / sizeof isas[0]; k++) {
+        if (isas[k] > nerf__isa_cpu()) {
+            continue;
+        }
+        for (int off = 0; off < 16; off++) {
+            float (*a[2])[N] = {want, got};
+            for (int w = 0; w < 2; w++) {
+                uint32_t s = 12345u;
+                for (int i = 0; i < N; i++) {
+                    s = s * 1664525u + 1013904223u;
+                    a[w][0][i] = (float)(s >> 8) * 0x1p-24f - 0.5f;
+                    a[w][2][i] = a[w][3][i] = 0.0f;
+                    /* Some powers a step from their flush, and blocks
+                     * whose powers have all flushed but one, or all. */
+                    a[w][4][i] = i % 11 == 0 ? 0x1p-26f / 0.9f * 1.0001f
+                                             : 1.0f;
+                    a[w][5][i] = i % 13 == 0 ? 0x1p-26f : 1.0f;
+                    if (i / 16 == 7 || (i / 16 == 8 && i % 16 != 4)) {
+                        a[w][4][i] = a[w][5][i] = 0.0f;
+                    }
+                }
+            }
+            for (int step = 0; step < STEPS; step++) {
+                for (int i = 0; i < N; i++) {
+                    const int block = i / 16;
+                    float g = 0.05f * (float)((i * 7 + step) % 9) - 0.2f;
+                    if (i == 100 && step == STEPS - 1) {
+                        g = NAN;
+                    } else if (block == 3 || (block == 5 && i % 16 != 9) ||
+                               (i * 3 + step) % 4 == 0) {
+                        g = 0.0f;
+                    } else if (i % 17 == 0) {
+                        g = -0.0f;
+                    } else if (i % 19 == 0) {
+                        g = 0x1p-140f;
+                    }
+                    want[1][i] = got[1][i] = g;
+                }
+                const size_t n = N - (size_t)off;
+                nerf__adam_update_corrected_isa(NERF__ISA_BASELINE, &hp, 1e-2,
+                                                n, want[0] + off,
+                                                want[1] + off, want[2] + off,
+                                                want[3] + off, want[4] + off,
+                                                want[5] + off);
+                nerf__adam_update_corrected_isa(isas[k], &hp, 1e-2, n,
+                                                got[0] + off, got[1] + off,
+                                                got[2] + off, got[3] + off,
+                                                got[4] + off, got[5] + off);
+            }
+            CHECK(memcmp(want, got, sizeof want) == 0);
+            CHECK(isnan(got[0][100]) == (off <= 100));
+        }
+        printf("  %s kernel: the same bits as the portable loop\n",
+               isa_names[k]);
+        compared++;
+    }
+    if (compared == 0) {
+        printf("  no other kernel on this processor than the portable "
+               "loop\n");
+    }
+}
+
 /* A hash-grid model keeps corrections for its table's parameters, not
  * for its layers'. */
 TEST(model_corrections)
@@ -367,6 +445,7 @@ int main(void)
     RUN(model_regions);
     RUN(corrected_update);
     RUN(corrected_update_in_blocks);
+    RUN(corrected_kernels_agree);
     RUN(model_corrections);
     RUN(schedule);
     RUN(schedule_with_a_start);
