@@ -145,12 +145,14 @@ corrected_avx2(const adam_job *j, size_t begin, size_t end)
 
 /*
  * Sixteen parameters from i on, of which the lanes in live are in the
- * range.  Written out because gcc's own vectorisation of corrected_loop()
- * works on eight lanes (it prefers 256-bit vectors), and late in a lego
- * run, with one cache line in eight touched, took 1.6 times as long as
- * this.  A block none of whose gradients is set costs one load and a
- * test.  The operations are corrected_loop()'s, in its order, each
- * rounded once: the same bits.
+ * range.  Written out rather than left to the compiler: on the fast
+ * preset's table with one line in eight touched, as late in a lego run,
+ * gcc's own AVX-512 loop took 1.5 to 1.9 times as long as this
+ * (docs/perf-log/2026-12-03-adam-kernel-by-hand.md).  Blocks here are
+ * aligned on the gradients' cache lines, so that a touched line is one
+ * block, and one with no gradient set costs a load and a test.  The
+ * operations are corrected_loop()'s, in its order, each rounded once:
+ * the same bits.
  */
 static inline __attribute__((always_inline)) T512 void
 corrected16(const adam_job *j, size_t i, __mmask16 live)
