@@ -28,6 +28,14 @@
 
 #include "dispatch.h"
 
+/* For the bodies that kernels of several instruction sets share: inlined
+ * into each, so that each compiles them for its own target. */
+#if defined(__GNUC__)
+#  define NERF__ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#  define NERF__ALWAYS_INLINE inline
+#endif
+
 #if defined(NERF_HAVE_CLONES)
 #  define NERF__CLONED(name, params, args)                                  \
       static inline __attribute__((always_inline)) void name##_body params; \

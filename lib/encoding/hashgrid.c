@@ -41,11 +41,6 @@
  * they save. */
 #define MIN_SAMPLES_PER_THREAD 4096
 
-#if defined(__GNUC__)
-#  define ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#  define ALWAYS_INLINE inline
-#endif
 
 /* ---- configuration ------------------------------------------------------ */
 
@@ -172,7 +167,7 @@ typedef struct tile {
  * comparison so that the compiler can use the SIMD min and max, whose
  * handling of NaN (the second operand wins) sends NaN to 0.
  */
-static ALWAYS_INLINE void load_positions(const nerf__hashgrid *hg,
+static NERF__ALWAYS_INLINE void load_positions(const nerf__hashgrid *hg,
                                          size_t m, const float *restrict in,
                                          size_t in_stride, tile *restrict t)
 {
@@ -220,7 +215,7 @@ static inline void weights(tile *restrict t, size_t s, float fx, float fy,
 }
 
 /* Corner entries and weights at level l of the m positions in t->u. */
-static ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l,
+static NERF__ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l,
                                   size_t m, tile *restrict t)
 {
     const float N = (float)hg->resolution[l];
@@ -277,7 +272,7 @@ static ALWAYS_INLINE void corners(const nerf__hashgrid *hg, uint32_t l,
 
 /* F is a constant in each instantiation below, so the feature loops
  * unroll. */
-static ALWAYS_INLINE void gather(const tile *restrict t, size_t m,
+static NERF__ALWAYS_INLINE void gather(const tile *restrict t, size_t m,
                                  const float *restrict table, uint32_t F,
                                  float *restrict out, size_t out_stride)
 {
@@ -303,7 +298,7 @@ static ALWAYS_INLINE void gather(const tile *restrict t, size_t m,
     }
 }
 
-static ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
+static NERF__ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
                                   float *restrict grad, uint32_t F,
                                   const float *restrict d, size_t d_stride)
 {
@@ -326,7 +321,7 @@ static ALWAYS_INLINE void scatter(const tile *restrict t, size_t m,
     }
 }
 
-static ALWAYS_INLINE void gather_any(const tile *t, size_t m,
+static NERF__ALWAYS_INLINE void gather_any(const tile *t, size_t m,
                                      const float *table, uint32_t F,
                                      float *out, size_t out_stride)
 {
@@ -339,9 +334,10 @@ static ALWAYS_INLINE void gather_any(const tile *t, size_t m,
     }
 }
 
-static ALWAYS_INLINE void scatter_any(const tile *t, size_t m, float *grad,
-                                      uint32_t F, const float *d,
-                                      size_t d_stride)
+static NERF__ALWAYS_INLINE void
+scatter_any(const tile *t, size_t m, float *grad,
+            uint32_t F, const float *d,
+            size_t d_stride)
 {
     switch (F) {
     case 1: scatter(t, m, grad, 1, d, d_stride); break;

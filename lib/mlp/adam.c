@@ -88,16 +88,10 @@ NERF__CLONED(adam_sparse, (void *ctx, size_t begin, size_t end),
 /* Vectorises as adam_sparse does (masked stores) where the instruction
  * set has them: the corrections are each parameter's own, but come from
  * its own stored powers, with no lookup. */
-#if defined(NERF_HAVE_CLONES)
-#  define CORRECTED_INLINE static inline __attribute__((always_inline))
-#else
-#  define CORRECTED_INLINE static inline
-#endif
-CORRECTED_INLINE void corrected_loop(const adam_job *j, size_t begin,
-                                     size_t end, float *restrict params,
-                                     float *restrict grads, float *restrict m,
-                                     float *restrict v, float *restrict r1,
-                                     float *restrict r2)
+static NERF__ALWAYS_INLINE void
+corrected_loop(const adam_job *j, size_t begin, size_t end,
+               float *restrict params, float *restrict grads, float *restrict m,
+               float *restrict v, float *restrict r1, float *restrict r2)
 {
     const float b1 = j->b1, b2 = j->b2, one_b1 = j->one_b1;
     const float one_b2 = j->one_b2, step = j->step, eps = j->eps;

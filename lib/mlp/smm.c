@@ -1,6 +1,7 @@
 #include "smm.h"
 
 #include "dispatch.h"
+#include "multiversion.h"
 
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -17,11 +18,6 @@ typedef struct job {
     size_t ldc;
 } job;
 
-#if defined(__GNUC__)
-#define ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define ALWAYS_INLINE inline
-#endif
 
 /* ---- portable ------------------------------------------------------------
  * Tiles of 4 rows by 2 vectors of 4 floats through the compilers' generic
@@ -35,7 +31,7 @@ typedef int32_t v4i __attribute__((vector_size(16)));
 #define PR 4
 #define PV 2
 
-static ALWAYS_INLINE v4 load4(const float *p, int n)
+static NERF__ALWAYS_INLINE v4 load4(const float *p, int n)
 {
     v4 x = {0.0f, 0.0f, 0.0f, 0.0f};
     if (n >= 4) {
@@ -48,7 +44,7 @@ static ALWAYS_INLINE v4 load4(const float *p, int n)
     return x;
 }
 
-static ALWAYS_INLINE void store4(float *p, v4 x, int n)
+static NERF__ALWAYS_INLINE void store4(float *p, v4 x, int n)
 {
     if (n >= 4) {
         memcpy(p, &x, sizeof x);
@@ -63,9 +59,10 @@ static ALWAYS_INLINE void store4(float *p, v4 x, int n)
     OP(0, 0) OP(0, 1) OP(1, 0) OP(1, 1) OP(2, 0) OP(2, 1) OP(3, 0) OP(3, 1)
 
 /* R rows, V vectors, the last holding `tail` columns (1 to 4). */
-static ALWAYS_INLINE void tile_portable(const job *j, size_t i0, const int R,
-                                        uint32_t n0, const int V,
-                                        const int tail)
+static NERF__ALWAYS_INLINE void
+tile_portable(const job *j, size_t i0, const int R,
+              uint32_t n0, const int V,
+              const int tail)
 {
     const bool add = j->flags & NERF__SMM_ADD;
     float *const c = j->c + i0 * j->ldc + n0;
@@ -198,9 +195,10 @@ static void run_portable(const job *j, size_t m, uint32_t n)
     OP(2, 0) OP(2, 1) OP(2, 2) OP(2, 3) OP(3, 0) OP(3, 1) OP(3, 2) OP(3, 3) \
     OP(4, 0) OP(4, 1) OP(4, 2) OP(4, 3) OP(5, 0) OP(5, 1) OP(5, 2) OP(5, 3)
 
-static ALWAYS_INLINE T512 void tile512(const job *j, size_t i0, const int R,
-                                       uint32_t n0, const int V,
-                                       __mmask16 last)
+static NERF__ALWAYS_INLINE T512 void
+tile512(const job *j, size_t i0, const int R,
+        uint32_t n0, const int V,
+        __mmask16 last)
 {
     const __mmask16 m0 = V == 1 ? last : 0xffff, m1 = V == 2 ? last : 0xffff;
     const __mmask16 m2 = V == 3 ? last : 0xffff, m3 = last;
@@ -293,9 +291,10 @@ static T512 void run512(const job *j, size_t m, uint32_t n)
 #define GRID4x2(OP)                                                         \
     OP(0, 0) OP(0, 1) OP(1, 0) OP(1, 1) OP(2, 0) OP(2, 1) OP(3, 0) OP(3, 1)
 
-static ALWAYS_INLINE T256 void tile256(const job *j, size_t i0, const int R,
-                                       uint32_t n0, const int V,
-                                       const int masked, __m256i last)
+static NERF__ALWAYS_INLINE T256 void
+tile256(const job *j, size_t i0, const int R,
+        uint32_t n0, const int V,
+        const int masked, __m256i last)
 {
 #define LOAD256(v, p)                                                       \
     (masked && (v) == V - 1 ? _mm256_maskload_ps((p), last)                 \
