@@ -236,10 +236,12 @@ typedef enum nerf_progress_kind {
     NERF_PROGRESS_RENDER = 1, /**< done and total count rays. */
     NERF_PROGRESS_TRAIN = 2,  /**< done and total count steps; loss and
                                    psnr are those of the last step. */
-    NERF_PROGRESS_GEOMETRY = 3 /**< nerf_mesh_extract() and
+    NERF_PROGRESS_GEOMETRY = 3, /**< nerf_mesh_extract() and
                                    nerf_density_grid_write(): done and total
                                    count planes of grid samples.
                                    @since 0.5 */
+    NERF_PROGRESS_BAKE = 4     /**< nerf_bake_create(): done and total
+                                   count occupancy cells.  @since 0.14 */
 } nerf_progress_kind;
 
 /**
@@ -2770,6 +2772,116 @@ NERF_API int nerf_ssim_masked(const float *a, const float *b,
                               const uint8_t *mask, uint32_t width,
                               uint32_t height, uint32_t channels,
                               double *out);
+
+/* ===========================================================================
+ * 18. Baked models
+ * ======================================================================== */
+
+typedef struct nerf_bake nerf_bake; /**< A model baked for fast renders. */
+
+/**
+ * Options of nerf_bake_create().  Versioned: fill with
+ * nerf_bake_options_init() (or NERF_BAKE_OPTIONS_INIT), then set fields.
+ * @since 0.14
+ */
+typedef struct nerf_bake_options {
+    uint32_t struct_size;   /**< Set by nerf_bake_options_init(). */
+    uint32_t subdivisions;  /**< Baked voxels along each edge of an
+                                 occupancy cell, 1..16; default 4 (a
+                                 128-cell grid bakes at 512 voxels
+                                 across). */
+    uint32_t sh_degree;     /**< Degree of the spherical harmonics that
+                                 hold each point's colour as seen from
+                                 every direction, 0..2 (0: one colour
+                                 whatever the view); default 1. */
+    uint32_t directions;    /**< Directions each point's colour is
+                                 evaluated in to fit them, at least
+                                 (sh_degree + 1)^2, at most 1024; default
+                                 8.  The bake's time grows with it. */
+    uint64_t max_bytes;     /**< Refuse a bake larger than this (NERF_ENOMEM,
+                                 saying how large it would be); default
+                                 2 GiB. */
+    uint32_t march_steps;   /**< Steps of a render across the bound's
+                                 diagonal; 0 (the default): the model's
+                                 recorded march (nerf_model_render_settings()). */
+    uint32_t appearance;    /**< Which appearance code colours the bake
+                                 (nerf_renderer_options.appearance):
+                                 NERF_APPEARANCE_NEUTRAL (the default) or a
+                                 training image's. */
+    nerf_progress_cb progress; /**< NULL, or called as the bake goes (kind
+                                 NERF_PROGRESS_BAKE); nonzero cancels with
+                                 NERF_ECANCELLED. */
+    void *progress_user;    /**< Passed to progress. */
+    const nerf_hooks *hooks; /**< Allocation and logging; NULL = defaults. */
+} nerf_bake_options;
+
+/**
+ * Fill @p opts with the defaults and record @p struct_size (or use
+ * NERF_BAKE_OPTIONS_INIT).
+ * @return NERF_OK, or NERF_EINVAL for a NULL or too small struct.
+ * @since 0.14
+ */
+NERF_API int nerf_bake_options_init(nerf_bake_options *opts,
+                                    size_t struct_size);
+#define NERF_BAKE_OPTIONS_INIT(o) nerf_bake_options_init((o), sizeof *(o))
+
+/**
+ * Bake @p model: on every cell its occupancy grid marks occupied, the
+ * density and the colour as seen from every direction (fitted with
+ * spherical harmonics) at the corners of subdivisions^3 voxels, so that a
+ * render looks them up instead of evaluating the networks
+ * (docs/viewer.md, "The baked model").  The bake copies what it needs: the
+ * model may change or go afterwards.  The renders composite on the
+ * model's recorded background (nerf_model_render_settings()).
+ *
+ * Bakes only what it can hold faithfully: a model with an occupancy grid
+ * (the fast preset) whose space is a box (a Blender-like scene, or the
+ * built-in one); other models are refused with NERF_EINVAL, saying why.
+ * @return NERF_OK; NERF_EINVAL (NULL argument, options out of range, a
+ * model it cannot bake, weights that are not finite); NERF_ENOMEM (out of
+ * memory, or a bake above max_bytes); NERF_ECANCELLED; NERF_EVERSION for
+ * an options struct from a newer header with non-zero unknown fields.
+ * @since 0.14
+ */
+NERF_API int nerf_bake_create(nerf_bake **out, const nerf_model *model,
+                              const nerf_bake_options *opts);
+
+/** Release a bake.  NULL is a no-op.  @since 0.14 */
+NERF_API void nerf_bake_destroy(nerf_bake *bake);
+
+/** What a bake holds: nerf_bake_stats(). @since 0.14 */
+typedef struct nerf_bake_stats {
+    uint32_t struct_size;   /**< Set by the caller (sizeof). */
+    uint32_t resolution;    /**< Voxels across the bound. */
+    uint64_t bricks;        /**< Occupancy cells baked. */
+    uint64_t points;        /**< Points whose colour was fitted. */
+    uint64_t bytes;         /**< Memory the bake holds. */
+} nerf_bake_stats;
+
+/**
+ * Fill @p stats (its struct_size set by the caller).
+ * @return NERF_OK, or NERF_EINVAL (NULL argument or bad struct).
+ * @since 0.14
+ */
+NERF_API int nerf_bake_stats_get(const nerf_bake *bake,
+                                 nerf_bake_stats *stats);
+
+/**
+ * Render every pixel of @p camera from the bake, with the outputs of
+ * nerf_renderer_render_image() (colour composited on the background,
+ * depth as sum(w t) along the unnormalised ray, opacity).  Work is spread
+ * over the library's threads; the output is the same bits for every
+ * thread count.  Reentrant: several threads may render one bake at once.
+ * @return NERF_OK; NERF_EINVAL (NULL bake or camera, invalid camera, all
+ * outputs NULL, capacity too small); NERF_EVERSION as
+ * nerf_renderer_render_image().
+ * @since 0.14
+ */
+NERF_API int nerf_bake_render_image(const nerf_bake *bake,
+                                    const nerf_camera *camera,
+                                    float *rgb_out, float *depth_out,
+                                    float *opacity_out,
+                                    size_t pixel_capacity);
 
 #ifdef __cplusplus
 }

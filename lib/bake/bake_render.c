@@ -1,0 +1,267 @@
+/* nerf_bake_render_image(): marching the bake's bricks (bake.h). */
+#include <math.h>
+
+#include "bake.h"
+#include "camera.h"
+#include "error.h"
+#include "parallel.h"
+
+#define FN "nerf_bake_render_image"
+/* Pixels along each side of a task's square of the image. */
+#define TILE_SIDE 16u
+/* A ray stops once less than this of its light can still get through,
+ * as the networks' march stops (instant-ngp's threshold). */
+#define MIN_TRANSMITTANCE 1e-4f
+/* In steps; far above the rounding of an exit (relative 1e-7 of a
+ * distance of at most some thousands of steps). */
+#define SKIP_MARGIN 0.01f
+
+typedef struct ray_out {
+    float rgb[3];
+    float depth;
+    float opacity;
+} ray_out;
+
+/* Distance along the ray from o to where it leaves the box [blo, bhi]
+ * it is in, given the inverses of its unit direction (an axis the ray
+ * runs along gives an infinity or a NaN, which fminf passes over). */
+static inline float exit_of(const float o[3], const float inv[3],
+                            const float blo[3], const float bhi[3])
+{
+    float s = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        s = fminf(s, ((inv[a] >= 0.0f ? bhi[a] : blo[a]) - o[a]) * inv[a]);
+    }
+    return s;
+}
+
+/*
+ * One sample inside brick `brick` at lattice coordinates u (in occupancy
+ * cells) of cell c: its density, and its colour as the density-weighted
+ * mean of its corners' (a corner baked empty has no colour to give).
+ * Returns the density; rgb is set when it is positive.
+ */
+static float sample(const nerf_bake *b, int32_t brick, const float u[3],
+                    const uint32_t c[3], const float *y, float rgb[3])
+{
+    const uint32_t k = b->k, e = k + 1, stride = b->stride;
+    uint32_t v[3];
+    float f[3];
+    for (int a = 0; a < 3; a++) {
+        float l = (u[a] - (float)c[a]) * (float)k;
+        l = l < 0.0f ? 0.0f : l;
+        uint32_t i = (uint32_t)l;
+        i = i > k - 1 ? k - 1 : i;
+        v[a] = i;
+        f[a] = fminf(l - (float)i, 1.0f);
+    }
+    const uint16_t *base = b->data + ((size_t)brick * b->corners +
+                                      v[0] + e * (v[1] + e * v[2])) *
+                                         stride;
+    const size_t dy = (size_t)e * stride, dz = (size_t)e * e * stride;
+    const uint16_t *at[8];
+    float w[8];
+    float sigma = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        const int x = i & 1, yy = i >> 1 & 1, z = i >> 2;
+        at[i] = base + x * stride + yy * dy + z * dz;
+        const float wx = x ? f[0] : 1.0f - f[0];
+        const float wy = yy ? f[1] : 1.0f - f[1];
+        const float wz = z ? f[2] : 1.0f - f[2];
+        w[i] = wx * wy * wz * nerf__bf16_to(at[i][0]);
+        sigma += w[i];
+    }
+    if (!(sigma > 0.0f)) {
+        return 0.0f;
+    }
+    /* The corners' coefficients, weighted, then the basis once. */
+    float acc[1 + 3 * NERF__BAKE_MAX_COEFS] = {0.0f};
+    for (int i = 0; i < 8; i++) {
+        if (w[i] > 0.0f) {
+            for (uint32_t j = 1; j < stride; j++) {
+                acc[j] += w[i] * nerf__bf16_to(at[i][j]);
+            }
+        }
+    }
+    const float inv_sigma = 1.0f / sigma;
+    for (uint32_t ch = 0; ch < 3; ch++) {
+        const float *q = acc + 1 + ch * b->coefs;
+        float x = 0.0f;
+        for (uint32_t j = 0; j < b->coefs; j++) {
+            x += q[j] * y[j];
+        }
+        x *= inv_sigma;
+        rgb[ch] = x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x;
+    }
+    return sigma;
+}
+
+static void march(const nerf_bake *b, const float o[3], const float d[3],
+                  ray_out *out)
+{
+    memset(out, 0, sizeof *out);
+    const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (!(len > 0.0f)) {
+        return;
+    }
+    const float dn[3] = {d[0] / len, d[1] / len, d[2] / len};
+    float inv[3];
+    float s0 = b->t_near * len, s1 = b->t_far * len;
+    for (int a = 0; a < 3; a++) {
+        inv[a] = 1.0f / dn[a];
+        if (dn[a] == 0.0f) {
+            if (o[a] < b->lo[a] || o[a] > b->hi[a]) {
+                return;
+            }
+            continue;
+        }
+        const float ta = (b->lo[a] - o[a]) * inv[a];
+        const float tb = (b->hi[a] - o[a]) * inv[a];
+        s0 = fmaxf(s0, fminf(ta, tb));
+        s1 = fminf(s1, fmaxf(ta, tb));
+    }
+    if (!(s0 < s1)) {
+        return;
+    }
+    float y[NERF__BAKE_MAX_COEFS];
+    nerf__bake_basis(b->degree, dn, y);
+    const float dt = b->step, inv_dt = 1.0f / dt;
+    const float r = (float)b->res;
+    float T = 1.0f;
+    for (uint64_t i = 0;; i++) {
+        const float s = s0 + ((float)i + 0.5f) * dt;
+        if (!(s < s1)) {
+            break;
+        }
+        float u[3];
+        uint32_t c[3];
+        for (int a = 0; a < 3; a++) {
+            u[a] = (o[a] + s * dn[a] - b->lo[a]) * b->inv_cell[a];
+            u[a] = u[a] < 0.0f ? 0.0f : u[a] >= r ? nextafterf(r, 0.0f) : u[a];
+            c[a] = (uint32_t)u[a];
+        }
+        const size_t cell = c[0] + (size_t)b->res * (c[1] + (size_t)b->res *
+                                                              c[2]);
+        const uint32_t far = b->empty[cell];
+        if (far > 0) {
+            /* Leave the cube of empty cells around this one. */
+            float blo[3], bhi[3];
+            for (int a = 0; a < 3; a++) {
+                blo[a] = b->lo[a] + ((float)c[a] - (float)(far - 1)) * b->cell[a];
+                bhi[a] = b->lo[a] + ((float)c[a] + (float)far) * b->cell[a];
+            }
+            const float s_exit = exit_of(o, inv, blo, bhi);
+            /* The first sample past the exit, less SKIP_MARGIN of a step
+             * so that rounding cannot jump over one beyond it: at worst
+             * a sample in an empty cell is taken again, and skips. */
+            const float next =
+                floorf((s_exit - s0) * inv_dt - 0.5f - SKIP_MARGIN) + 1.0f;
+            if (next > (float)i + 1.0f) {
+                i = (uint64_t)next - 1;
+            }
+            continue;
+        }
+        const int32_t brick = b->brick_of[cell];
+        if (brick < 0) {
+            continue; /* Only when the distances are not set: a test's. */
+        }
+        float rgb[3];
+        const float sigma = sample(b, brick, u, c, y, rgb);
+        if (sigma > 0.0f) {
+            const float alpha = 1.0f - expf(-sigma * dt);
+            const float weight = T * alpha;
+            for (int ch = 0; ch < 3; ch++) {
+                out->rgb[ch] += weight * rgb[ch];
+            }
+            out->depth += weight * (s / len);
+            out->opacity += weight;
+            T *= 1.0f - alpha;
+            if (T < MIN_TRANSMITTANCE) {
+                break;
+            }
+        }
+    }
+}
+
+typedef struct render_job {
+    const nerf_bake *b;
+    const nerf_camera *cam;
+    uint32_t tiles_x;      /* tiles across the image */
+    float *rgb, *depth, *opacity;
+} render_job;
+
+/* Tiles of TILE_SIDE x TILE_SIDE pixels: their rays meet the same bricks,
+ * which stay in cache from one ray to the next (rows of pixels would
+ * fetch each brick once a row). */
+static void render_tiles(void *ctx, size_t begin, size_t end)
+{
+    const render_job *j = ctx;
+    const nerf_bake *b = j->b;
+    const uint32_t w = j->cam->width, h = j->cam->height;
+    float o[3 * TILE_SIDE], d[3 * TILE_SIDE], rgb[3 * TILE_SIDE];
+    float op[TILE_SIDE];
+    for (size_t t = begin; t < end; t++) {
+        const uint32_t x0 = (uint32_t)(t % j->tiles_x) * TILE_SIDE;
+        const uint32_t y0 = (uint32_t)(t / j->tiles_x) * TILE_SIDE;
+        const uint32_t n = w - x0 < TILE_SIDE ? w - x0 : TILE_SIDE;
+        for (uint32_t row = y0; row < y0 + TILE_SIDE && row < h; row++) {
+            const size_t first = (size_t)row * w + x0;
+            nerf__camera_rays(j->cam, first, n, o, d);
+            for (uint32_t i = 0; i < n; i++) {
+                ray_out r;
+                march(b, o + 3 * i, d + 3 * i, &r);
+                for (int ch = 0; ch < 3; ch++) {
+                    rgb[3 * i + ch] =
+                        r.rgb[ch] + (1.0f - r.opacity) * b->background;
+                }
+                op[i] = r.opacity;
+                if (j->depth) {
+                    j->depth[first + i] = r.depth;
+                }
+            }
+            if (b->appearance) {
+                nerf__appearance_apply(b->code, n, rgb, op, NULL,
+                                       b->background);
+            }
+            if (j->rgb) {
+                memcpy(j->rgb + 3 * first, rgb, 3 * n * sizeof(float));
+            }
+            if (j->opacity) {
+                memcpy(j->opacity + first, op, n * sizeof(float));
+            }
+        }
+    }
+}
+
+NERF_API int nerf_bake_render_image(const nerf_bake *bake,
+                                    const nerf_camera *camera,
+                                    float *rgb_out, float *depth_out,
+                                    float *opacity_out,
+                                    size_t pixel_capacity)
+{
+    if (bake == NULL || camera == NULL) {
+        return nerf__error(NERF_EINVAL, FN ": NULL %s",
+                           bake ? "camera" : "bake");
+    }
+    if (rgb_out == NULL && depth_out == NULL && opacity_out == NULL) {
+        return nerf__error(NERF_EINVAL, FN ": every output is NULL");
+    }
+    nerf_camera cam;
+    int rc = nerf__camera_read(&cam, camera, FN);
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const size_t pixels = (size_t)cam.width * cam.height;
+    if (pixel_capacity < pixels) {
+        return nerf__error(NERF_EINVAL, FN ": capacity %zu is below the "
+                           "camera's %zu pixels", pixel_capacity, pixels);
+    }
+    const uint32_t tx = (cam.width + TILE_SIDE - 1) / TILE_SIDE;
+    const uint32_t ty = (cam.height + TILE_SIDE - 1) / TILE_SIDE;
+    render_job j = {.b = bake, .cam = &cam, .tiles_x = tx, .rgb = rgb_out,
+                    .depth = depth_out, .opacity = opacity_out};
+    /* A tile's rays cost from a few hundred operations (empty) to tens of
+     * thousands (opaque surfaces). */
+    nerf__parallel_for((size_t)tx * ty, 64 * 1000, render_tiles, &j);
+    return NERF_OK;
+}

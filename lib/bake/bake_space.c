@@ -1,0 +1,50 @@
+/* How far each empty cell of a bake is from a brick (bake.h). */
+#include "bake.h"
+#include "error.h"
+
+/*
+ * Two raster passes of the 26-neighbour chamfer with unit weights, which
+ * is exact for the Chebyshev distance: each cell takes one more than the
+ * least of its neighbours already visited, forwards then backwards.
+ */
+static void pass(uint8_t *d, uint32_t r, int dir)
+{
+    const int64_t n = r;
+    for (int64_t q = 0; q < n * n * n; q++) {
+        const int64_t i = dir > 0 ? q : n * n * n - 1 - q;
+        const int64_t x = i % n, y = i / n % n, z = i / n / n;
+        unsigned best = d[i];
+        if (best == 0) {
+            continue;
+        }
+        for (int dz = -1; dz <= 1; dz++) {
+            for (int dy = -1; dy <= 1; dy++) {
+                for (int dx = -1; dx <= 1; dx++) {
+                    const int64_t xx = x + dx, yy = y + dy, zz = z + dz;
+                    if ((dx | dy | dz) == 0 || xx < 0 || yy < 0 || zz < 0 ||
+                        xx >= n || yy >= n || zz >= n) {
+                        continue;
+                    }
+                    const unsigned v = d[xx + n * (yy + n * zz)] + 1u;
+                    best = v < best ? v : best;
+                }
+            }
+        }
+        d[i] = (uint8_t)best;
+    }
+}
+
+int nerf__bake_empty_space(nerf_bake *b)
+{
+    const size_t cells = (size_t)b->res * b->res * b->res;
+    b->empty = nerf__alloc(&b->env, cells);
+    if (b->empty == NULL) {
+        return nerf__error(NERF_ENOMEM, "nerf_bake_create: out of memory");
+    }
+    for (size_t c = 0; c < cells; c++) {
+        b->empty[c] = b->brick_of[c] >= 0 ? 0 : 255;
+    }
+    pass(b->empty, b->res, 1);
+    pass(b->empty, b->res, -1);
+    return NERF_OK;
+}
