@@ -175,6 +175,25 @@ FROZEN(nerf_mesh_options, progress_user, 64);
 FROZEN(nerf_mesh_options, hooks, 72);
 SIZE(nerf_mesh_options, 80);
 
+FROZEN(nerf_bake_options, struct_size, 0);
+FROZEN(nerf_bake_options, subdivisions, 4);
+FROZEN(nerf_bake_options, sh_degree, 8);
+FROZEN(nerf_bake_options, directions, 12);
+FROZEN(nerf_bake_options, max_bytes, 16);
+FROZEN(nerf_bake_options, march_steps, 24);
+FROZEN(nerf_bake_options, appearance, 28);
+FROZEN(nerf_bake_options, progress, 32);
+FROZEN(nerf_bake_options, progress_user, 40);
+FROZEN(nerf_bake_options, hooks, 48);
+SIZE(nerf_bake_options, 56);
+
+FROZEN(nerf_bake_stats, struct_size, 0);
+FROZEN(nerf_bake_stats, resolution, 4);
+FROZEN(nerf_bake_stats, bricks, 8);
+FROZEN(nerf_bake_stats, points, 16);
+FROZEN(nerf_bake_stats, bytes, 24);
+SIZE(nerf_bake_stats, 32);
+
 FROZEN(nerf_dataset_options, struct_size, 0);
 FROZEN(nerf_dataset_options, split, 4);
 FROZEN(nerf_dataset_options, downscale, 8);

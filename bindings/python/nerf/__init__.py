@@ -79,13 +79,16 @@ from .structs import (PROGRESS_RENDER, PROGRESS_TRAIN, Camera,
                       SceneOptions, TrainerOptions, TrainStats,
                       TrainStatsStruct)
 from .train import Trainer
+from .bake import Bake
 from .mesh import (MESH_COLOUR_NONE, MESH_COLOUR_NORMAL, MESH_FORMAT_AUTO,
                    MESH_FORMAT_OBJ, MESH_FORMAT_PLY, MESH_FORMAT_PLY_ASCII,
                    Mesh)
 from .structs import (EXCHANGE_MAX_SPARSE, POINTS_DEFAULT_MAX,
                       POINTS_DEFAULT_OPACITY, POINTS_PLY_ASCII,
-                      POINTS_PLY_BINARY, PROGRESS_GEOMETRY, SCHEDULE_FITTED,
-                      SCHEDULE_MEASURING, SCHEDULE_STEPS, MeshOptions)
+                      POINTS_PLY_BINARY, PROGRESS_BAKE, PROGRESS_GEOMETRY,
+                      SCHEDULE_FITTED,
+                      SCHEDULE_MEASURING, SCHEDULE_STEPS, BakeOptions,
+                      MeshOptions)
 
 #: The version of the loaded library, "major.minor.patch".
 __version__ = version_string()
@@ -94,7 +97,7 @@ __all__ = [
     # Handles and helpers.
     "Model", "Sampler", "Renderer", "Dataset", "Trainer", "Camera",
     "RenderResult", "Progress", "TrainStats", "DepthResult", "PointCloud",
-    "Mesh", "MeshOptions",
+    "Mesh", "MeshOptions", "Bake", "BakeOptions",
     "write_scene", "read_image", "read_png", "write_png", "psnr", "ssim",
     "write_npy",
     "load_camera_path",
@@ -137,6 +140,7 @@ __all__ = [
     "SCENE_LAYOUT_COLMAP_TEXT", "SCENE_LAYOUT_COLMAP_BINARY",
     "CAMERA_PATH_FILE_SIZE", "CAMERA_PATH_FILE_INTRINSICS",
     "MESH_COLOUR_NONE", "MESH_COLOUR_NORMAL", "PROGRESS_GEOMETRY",
+    "PROGRESS_BAKE",
     "MODEL_HAS_BATCH_RECORD", "MODEL_HAS_ADAM_CORRECTIONS",
     "MODEL_HAS_NONFINITE_WEIGHTS", "SCENE_MIN_SIDE", "SCENE_MAX_SIDE",
     "SCENE_MAX_VIEWS", "MESH_FORMAT_AUTO", "MESH_FORMAT_PLY",

@@ -17,7 +17,8 @@ from ctypes import (POINTER, c_char_p, c_double, c_float, c_int, c_size_t,
                     c_uint, c_uint8, c_uint32, c_uint64, c_void_p)
 
 from . import _loader, errors
-from .structs import (LOG_CB, PROGRESS_CB, Camera, CameraPathOptions,
+from .structs import (LOG_CB, PROGRESS_CB, BakeOptions, BakeStats,
+                      Camera, CameraPathOptions,
                       DatasetOptions, Hooks, MeshOptions, ModelOptions,
                       PointsOptions, RendererOptions, SamplerOptions,
                       SceneOptions, ScheduleStruct, TrainerOptions,
@@ -61,6 +62,10 @@ class nerf_mesh(_Opaque):
     pass
 
 
+class nerf_bake(_Opaque):
+    pass
+
+
 ModelP = POINTER(nerf_model)
 SamplerP = POINTER(nerf_sampler)
 RendererP = POINTER(nerf_renderer)
@@ -69,6 +74,7 @@ TrainerP = POINTER(nerf_trainer)
 CameraPathP = POINTER(nerf_camera_path)
 PointsP = POINTER(nerf_points)
 MeshP = POINTER(nerf_mesh)
+BakeP = POINTER(nerf_bake)
 
 _F = POINTER(c_float)
 _D = POINTER(c_double)
@@ -127,6 +133,14 @@ _PROTOTYPES = {
     # Since 0.13: per-image appearance codes.
     "nerf_model_appearance_count": (c_int, [ModelP, _U32], True),
     "nerf_model_appearance_code": (c_int, [ModelP, c_uint32, _F], True),
+    # Since 0.14: baked models.
+    "nerf_bake_options_init": (c_int, [POINTER(BakeOptions), c_size_t], True),
+    "nerf_bake_create": (c_int, [POINTER(BakeP), ModelP,
+                                 POINTER(BakeOptions)], True),
+    "nerf_bake_destroy": (None, [BakeP], False),
+    "nerf_bake_stats_get": (c_int, [BakeP, POINTER(BakeStats)], True),
+    "nerf_bake_render_image": (c_int, [BakeP, POINTER(Camera), _F, _F, _F,
+                                       c_size_t], True),
     # Since 0.5: meshes and density grids.
     "nerf_mesh_options_init": (c_int, [POINTER(MeshOptions), c_size_t], True),
     "nerf_mesh_extract": (c_int, [POINTER(MeshP), ModelP,

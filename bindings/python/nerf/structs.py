@@ -507,6 +507,41 @@ class PointsOptions(_Versioned):
         ("progress_user", c_void_p),
     ]
 
+class BakeOptions(_Versioned):
+    """``nerf_bake_options`` (since libnerf 0.14): the voxels, colours and
+    memory of :class:`nerf.Bake`."""
+
+    _c_name_ = "nerf_bake_options"
+    _c_init_ = "nerf_bake_options_init"
+    _private_ = ("struct_size", "hooks", "progress", "progress_user")
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("subdivisions", c_uint32),
+        ("sh_degree", c_uint32),
+        ("directions", c_uint32),
+        ("max_bytes", ctypes.c_uint64),
+        ("march_steps", c_uint32),
+        ("appearance", c_uint32),
+        ("progress", PROGRESS_CB),
+        ("progress_user", c_void_p),
+        ("hooks", POINTER(Hooks)),
+    ]
+
+
+class BakeStats(_Versioned):
+    """``nerf_bake_stats`` (since libnerf 0.14), filled by
+    :attr:`nerf.Bake.stats`."""
+
+    _c_name_ = "nerf_bake_stats"
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("resolution", c_uint32),
+        ("bricks", ctypes.c_uint64),
+        ("points", ctypes.c_uint64),
+        ("bytes", ctypes.c_uint64),
+    ]
+
+
 class MeshOptions(_Versioned):
     """``nerf_mesh_options`` (since libnerf 0.5): the grid, threshold and
     filters of :meth:`nerf.Model.mesh` and
@@ -689,8 +724,9 @@ def read_covered(struct: ctypes.Structure, size: int) -> Dict[str, Any]:
 PROGRESS_RENDER = 1
 PROGRESS_TRAIN = 2
 PROGRESS_GEOMETRY = 3
+PROGRESS_BAKE = 4
 PROGRESS_KINDS = {PROGRESS_RENDER: "render", PROGRESS_TRAIN: "train",
-                  PROGRESS_GEOMETRY: "geometry"}
+                  PROGRESS_GEOMETRY: "geometry", PROGRESS_BAKE: "bake"}
 
 # nerf_points_format (libnerf 0.5)
 POINTS_PLY_BINARY = 0
@@ -908,7 +944,7 @@ ALL_STRUCTS = (Hooks, ModelOptions, SceneOptions, Camera, SamplerOptions,
                ProgressStruct, RendererOptions, DatasetOptions,
                TrainerOptions, TrainStatsStruct, CameraPathOptions,
                ScheduleStruct, PointsOptions, MeshOptions,
-               ExchangeStruct)
+               ExchangeStruct, BakeOptions, BakeStats)
 
 for _cls in ALL_STRUCTS:
     _check_fields(_cls)

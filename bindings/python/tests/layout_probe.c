@@ -199,6 +199,27 @@ static void structs(void)
     FIELD(nerf_mesh_options, hooks);
     end_struct();
 
+    BEGIN(nerf_bake_options);
+    FIELD(nerf_bake_options, struct_size);
+    FIELD(nerf_bake_options, subdivisions);
+    FIELD(nerf_bake_options, sh_degree);
+    FIELD(nerf_bake_options, directions);
+    FIELD(nerf_bake_options, max_bytes);
+    FIELD(nerf_bake_options, march_steps);
+    FIELD(nerf_bake_options, appearance);
+    FIELD(nerf_bake_options, progress);
+    FIELD(nerf_bake_options, progress_user);
+    FIELD(nerf_bake_options, hooks);
+    end_struct();
+
+    BEGIN(nerf_bake_stats);
+    FIELD(nerf_bake_stats, struct_size);
+    FIELD(nerf_bake_stats, resolution);
+    FIELD(nerf_bake_stats, bricks);
+    FIELD(nerf_bake_stats, points);
+    FIELD(nerf_bake_stats, bytes);
+    end_struct();
+
     BEGIN(nerf_dataset_options);
     FIELD(nerf_dataset_options, struct_size);
     FIELD(nerf_dataset_options, split);
