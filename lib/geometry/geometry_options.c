@@ -2,10 +2,10 @@
 
 #include <math.h>
 #include <string.h>
-#include <time.h>
 
 #include "error.h"
 #include "options.h"
+#include "progress.h"
 #include "space.h"
 
 static void defaults(nerf_mesh_options *o)
@@ -97,33 +97,17 @@ int nerf__geometry_setup(const nerf_model *model, const nerf_mesh_options *opts,
     return nerf__grid_box_init(grid, lo, hi, o->resolution, who);
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 void nerf__geometry_reporter_init(nerf__geometry_reporter *r,
                                   const nerf_mesh_options *o)
 {
     r->cb = o->progress;
     r->user = o->progress_user;
-    r->start = now();
+    r->start = nerf__seconds();
 }
 
 int nerf__geometry_report(void *ctx, uint64_t done, uint64_t total)
 {
     const nerf__geometry_reporter *r = ctx;
-    if (r->cb == NULL) {
-        return 0;
-    }
-    nerf_progress p;
-    memset(&p, 0, sizeof p);
-    p.struct_size = sizeof p;
-    p.kind = NERF_PROGRESS_GEOMETRY;
-    p.done = done;
-    p.total = total;
-    p.elapsed = now() - r->start;
-    return r->cb(&p, r->user);
+    return nerf__progress_report(r->cb, r->user, NERF_PROGRESS_GEOMETRY, done,
+                                 total, r->start);
 }

@@ -9,9 +9,9 @@
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
-#include <time.h>
 
 #include "parallel.h"
+#include "progress.h"
 #include "renderer.h"
 
 #define MSG_MAX 512
@@ -38,26 +38,10 @@ typedef struct worker_arg {
     nerf__worker *w;
 } worker_arg;
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static int report(nerf_renderer *r, size_t done, size_t total, double t0)
 {
-    if (r->progress == NULL) {
-        return 0;
-    }
-    nerf_progress p;
-    memset(&p, 0, sizeof p);
-    p.struct_size = sizeof p;
-    p.kind = NERF_PROGRESS_RENDER;
-    p.done = done;
-    p.total = total;
-    p.elapsed = now_seconds() - t0;
-    return r->progress(&p, r->progress_user);
+    return nerf__progress_report(r->progress, r->progress_user,
+                                 NERF_PROGRESS_RENDER, done, total, t0);
 }
 
 int nerf__renderer_ensure_workers(nerf_renderer *r, uint32_t count)
@@ -232,7 +216,7 @@ int nerf__renderer_run(nerf_renderer *r, size_t n, nerf__chunk_fn fn,
     if (n == 0) {
         return NERF_OK;
     }
-    double t0 = now_seconds();
+    double t0 = nerf__seconds();
     size_t n_chunks = (n + r->chunk - 1) / r->chunk;
     uint32_t threads = r->threads;
     if (threads > n_chunks) {

@@ -2,9 +2,9 @@
  * cancellation and periodic checkpoints. */
 #include <math.h>
 #include <string.h>
-#include <time.h>
 
 #include "occupancy.h"
+#include "progress.h"
 #include "trainer.h"
 
 /*
@@ -235,13 +235,6 @@ NERF_API int nerf_trainer_step(nerf_trainer *t, nerf_train_stats *stats_out)
     return rc;
 }
 
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static int save_checkpoint(nerf_trainer *t, nerf__run *r)
 {
     if (!nerf__model_finite(t->model)) {
@@ -280,13 +273,13 @@ void nerf__run_begin(nerf_trainer *t, nerf__run *r, uint64_t total)
 {
     atomic_store(&t->cancel, 0);
     memset(r, 0, sizeof *r);
-    r->start = seconds();
+    r->start = nerf__seconds();
     r->total = total;
 }
 
 double nerf__run_elapsed(const nerf__run *r)
 {
-    return seconds() - r->start;
+    return nerf__seconds() - r->start;
 }
 
 int nerf__run_step(nerf_trainer *t, nerf__run *r, nerf_train_stats *stats_out)
