@@ -232,23 +232,6 @@ static int check_targets(const char *program, const args *a, int mesh)
                : out_file_check(program, path, a->overwrite, NULL, &model, 1);
 }
 
-typedef struct bar_state {
-    progress bar;
-    int started;
-    const char *label;
-} bar_state;
-
-static int on_progress(const nerf_progress *p, void *user)
-{
-    bar_state *b = user;
-    if (!b->started) {
-        progress_begin(&b->bar, b->label, p->total);
-        b->started = 1;
-    }
-    progress_update(&b->bar, p->done, NULL);
-    return 0;
-}
-
 static int run(int argc, char **argv, int mesh)
 {
     const char *program = mesh ? "nerf-export mesh" : "nerf-export grid";
@@ -267,17 +250,15 @@ static int run(int argc, char **argv, int mesh)
     hooks.log_cb = cli_log;
     hooks.log_user = "nerf-export";
     a.o.hooks = &hooks;
-    bar_state bar = {.label = program};
-    a.o.progress = on_progress;
+    progress_reports bar = {.label = program};
+    a.o.progress = progress_on_report;
     a.o.progress_user = &bar;
     nerf_model *m = NULL;
     nerf_mesh *mesh_out = NULL;
     int rc = nerf_model_load(&m, a.model, &hooks);
     if (rc == NERF_OK && mesh) {
         rc = nerf_mesh_extract(&mesh_out, m, &a.o);
-        if (bar.started) {
-            progress_end(&bar.bar, NULL);
-        }
+        progress_reports_end(&bar);
         if (rc == NERF_OK) {
             rc = nerf_mesh_write(mesh_out, a.out,
                                  a.ascii ? NERF_MESH_FORMAT_PLY_ASCII
@@ -294,9 +275,7 @@ static int run(int argc, char **argv, int mesh)
         }
     } else if (rc == NERF_OK) {
         rc = nerf_density_grid_write(m, a.out, &a.o);
-        if (bar.started) {
-            progress_end(&bar.bar, NULL);
-        }
+        progress_reports_end(&bar);
         if (rc == NERF_OK) {
             fprintf(stderr, "%s: wrote %s and its .json sidecar\n", program,
                     a.out);

@@ -4,6 +4,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <nerf.h>
+
 /* Without a terminal, one line per this many seconds keeps logs short. */
 #define PLAIN_INTERVAL 10.0
 
@@ -62,4 +64,23 @@ void progress_end(progress *p, const char *note)
     }
     fprintf(stderr, "%s: done in %.1fs %s\n", p->label,
             progress_now() - p->start, note ? note : "");
+}
+
+int progress_on_report(const nerf_progress *p, void *user)
+{
+    progress_reports *r = user;
+    if (!r->started) {
+        progress_begin(&r->bar, r->label, p->total);
+        r->started = 1;
+    }
+    progress_update(&r->bar, p->done, NULL);
+    return 0;
+}
+
+void progress_reports_end(progress_reports *r)
+{
+    if (r->started) {
+        progress_end(&r->bar, NULL);
+        r->started = 0;
+    }
 }

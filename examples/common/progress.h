@@ -26,4 +26,20 @@ void progress_end(progress *p, const char *note);
 
 double progress_now(void);
 
+/*
+ * A bar drawn from a library call's nerf_progress reports: pass
+ * progress_on_report as the callback and the progress_reports as its user
+ * pointer; the bar starts at the first report, labelled label.
+ * progress_reports_end() finishes it if it started.
+ */
+typedef struct progress_reports {
+    progress bar;
+    int started;
+    const char *label;
+} progress_reports;
+
+struct nerf_progress;
+int progress_on_report(const struct nerf_progress *p, void *user);
+void progress_reports_end(progress_reports *r);
+
 #endif
