@@ -2802,8 +2802,8 @@ typedef struct nerf_bake_options {
                                  saying how large it would be); default
                                  2 GiB. */
     uint32_t march_steps;   /**< Steps of a render across the bound's
-                                 diagonal; 0 (the default): the model's
-                                 recorded march (nerf_model_render_settings()). */
+                                 diagonal; 0 (the default): steps of one
+                                 voxel's edge. */
     uint32_t appearance;    /**< Which appearance code colours the bake
                                  (nerf_renderer_options.appearance):
                                  NERF_APPEARANCE_NEUTRAL (the default) or a
@@ -2834,9 +2834,11 @@ NERF_API int nerf_bake_options_init(nerf_bake_options *opts,
  * model may change or go afterwards.  The renders composite on the
  * model's recorded background (nerf_model_render_settings()).
  *
- * Bakes only what it can hold faithfully: a model with an occupancy grid
- * (the fast preset) whose space is a box (a Blender-like scene, or the
- * built-in one); other models are refused with NERF_EINVAL, saying why.
+ * Bakes a model with an occupancy grid (the fast preset) whose space is a
+ * box (a Blender-like scene, the built-in one) or NDC (a forward-facing
+ * scene, marched in the frustum its trainer recorded); other models
+ * (without a grid, or unbounded) are refused with NERF_EINVAL, saying
+ * why.
  * @return NERF_OK; NERF_EINVAL (NULL argument, options out of range, a
  * model it cannot bake, weights that are not finite); NERF_ENOMEM (out of
  * memory, or a bake above max_bytes); NERF_ECANCELLED; NERF_EVERSION for

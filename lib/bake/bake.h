@@ -40,6 +40,8 @@ struct nerf_bake {
     uint32_t coefs;        /* (degree + 1)^2 a channel */
     uint32_t stride;       /* values a point: 1 + 3 coefs */
     float lo[3], hi[3];
+    /* The box of the cells with bricks: rays start and end on it. */
+    float used_lo[3], used_hi[3];
     float inv_cell[3];     /* res / (hi - lo) */
     float cell[3];         /* (hi - lo) / res */
     int32_t *brick_of;     /* [res^3]: brick index, -1 for none */
@@ -52,7 +54,12 @@ struct nerf_bake {
     uint64_t bricks;
     uint64_t points;       /* points whose colour was fitted */
     float step;            /* world distance between samples */
+    float inv_step;        /* 1 / step */
     float t_near, t_far;   /* the model's range of t */
+    /* A forward-facing model's rays are marched in NDC, the frustum's
+     * (focal 0: the camera's own, as nerf_renderer_render_image()). */
+    bool ndc;
+    float ndc_focal, ndc_width, ndc_height;
     float background;      /* 1 white, 0 black */
     bool appearance;       /* whether code maps the colours */
     float code[NERF__CODE_FLOATS];
@@ -77,19 +84,21 @@ static inline float nerf__bf16_to(uint16_t h)
 
 /*
  * The fit of colours seen in n_dirs directions to spherical harmonics of
- * degree: dirs [n_dirs, 3] unit directions spread over the sphere, and
- * proj [coefs, n_dirs], the least-squares projection, so that a point's
- * coefficients for one channel are proj times its colours in dirs.
- * NERF_ENOMEM, or NERF_EINVAL if the directions cannot determine the
- * coefficients.
+ * degree: dirs [n_dirs, 3] unit directions spread evenly over the cap of
+ * the sphere within max_angle (radians, up to pi: the whole sphere) of
+ * -z, and proj [coefs, n_dirs], the least-squares projection, so that a
+ * point's coefficients for one channel are proj times its colours in
+ * dirs.  NERF_ENOMEM, or NERF_EINVAL if the directions cannot determine
+ * the coefficients.
  */
 int nerf__bake_fit_init(const nerf__env *env, uint32_t degree,
-                        uint32_t n_dirs, float **dirs, float **proj);
+                        uint32_t n_dirs, double max_angle, float **dirs,
+                        float **proj);
 
 /* The n = (degree + 1)^2 basis values of a unit direction d. */
 void nerf__bake_basis(uint32_t degree, const float d[3], float *y);
 
-/* Fill b->empty from b->brick_of. */
+/* Fill b->empty and the box of the bricks from b->brick_of. */
 int nerf__bake_empty_space(nerf_bake *b);
 
 /* Fill the bricks of b (brick_of, data, bricks, points) from model. */

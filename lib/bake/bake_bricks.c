@@ -1,12 +1,12 @@
 /* Filling a bake's bricks from the model's networks (bake.h). */
 #include <math.h>
-#include <time.h>
 
 #include "bake.h"
 #include "error.h"
 #include "model.h"
 #include "model_field.h"
 #include "occupancy.h"
+#include "progress.h"
 
 /* Bricks evaluated together: their corners' densities in one call. */
 #define CHUNK_BRICKS 128u
@@ -19,13 +19,8 @@
  * density-weighted colours of the samples around it (bake_render.c).
  */
 #define MIN_ALPHA 1e-3
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+/* The cap of view directions a forward-facing bake fits, about -z. */
+#define NDC_CAP_RADIANS (60.0 * 3.14159265358979323846 / 180.0)
 
 typedef struct bake_work {
     nerf_bake *b;
@@ -33,7 +28,8 @@ typedef struct bake_work {
     uint32_t n_dirs;
     float *dirs, *proj;       /* the fit (nerf__bake_fit_init) */
     float *pts, *sigma;       /* [CHUNK_BRICKS corners] */
-    float *cpts, *cdirs, *rgb; /* [COLOUR_POINTS n_dirs] */
+    float *cpts;              /* [COLOUR_POINTS]: the dense points */
+    float *cdirs, *rgb;       /* [COLOUR_POINTS n_dirs] */
     uint32_t *dense;          /* [COLOUR_POINTS]: their chunk indices */
     uint16_t *out;            /* [CHUNK_BRICKS corners stride] */
     float sigma_min;
@@ -59,7 +55,13 @@ static int work_init(bake_work *w, nerf_bake *b, const nerf_model *model,
     const nerf__env *env = &b->env;
     int rc = nerf__model_field_init(&w->field, model, 0);
     if (rc == NERF_OK) {
-        rc = nerf__bake_fit_init(env, b->degree, w->n_dirs, &w->dirs,
+        /* A forward-facing scene is seen only from in front (NDC takes
+         * rays looking down -z): the networks' colours in directions no
+         * photo saw are guesses, which would spoil the fit of those it
+         * saw.  Its cap reaches past the field of view of a phone's
+         * camera turned some way about. */
+        const double angle = b->ndc ? NDC_CAP_RADIANS : 3.14159265358979323846;
+        rc = nerf__bake_fit_init(env, b->degree, w->n_dirs, angle, &w->dirs,
                                  &w->proj);
     }
     if (rc != NERF_OK) {
@@ -69,7 +71,7 @@ static int work_init(bake_work *w, nerf_bake *b, const nerf_model *model,
     const size_t rows = (size_t)COLOUR_POINTS * w->n_dirs;
     w->pts = nerf__alloc(env, pts * 3 * sizeof(float));
     w->sigma = nerf__alloc(env, pts * sizeof(float));
-    w->cpts = nerf__alloc(env, rows * 3 * sizeof(float));
+    w->cpts = nerf__alloc(env, (size_t)COLOUR_POINTS * 3 * sizeof(float));
     w->cdirs = nerf__alloc(env, rows * 3 * sizeof(float));
     w->rgb = nerf__alloc(env, rows * 3 * sizeof(float));
     w->dense = nerf__alloc(env, COLOUR_POINTS * sizeof(uint32_t));
@@ -121,13 +123,11 @@ static int fit_colours(bake_work *w, uint32_t m)
     nerf_bake *b = w->b;
     const uint32_t nd = w->n_dirs, nc = b->coefs;
     for (uint32_t i = 0; i < m; i++) {
-        const float *p = w->pts + 3 * (size_t)w->dense[i];
-        for (uint32_t d = 0; d < nd; d++) {
-            memcpy(w->cpts + 3 * ((size_t)i * nd + d), p, 3 * sizeof(float));
-        }
+        memcpy(w->cpts + 3 * (size_t)i, w->pts + 3 * (size_t)w->dense[i],
+               3 * sizeof(float));
     }
-    int rc = nerf__model_field_colour(&w->field, (size_t)m * nd, w->cpts,
-                                      w->cdirs, w->rgb);
+    int rc = nerf__model_field_colour_views(&w->field, m, w->cpts, nd,
+                                            w->cdirs, w->rgb);
     if (rc != NERF_OK) {
         return rc;
     }
@@ -189,17 +189,8 @@ static int bake_chunk(bake_work *w, const uint32_t *cells, size_t n,
 static int report(const nerf_bake_options *o, uint64_t done, uint64_t total,
                   double start)
 {
-    if (o->progress == NULL) {
-        return NERF_OK;
-    }
-    nerf_progress p;
-    memset(&p, 0, sizeof p);
-    p.struct_size = sizeof p;
-    p.kind = NERF_PROGRESS_BAKE;
-    p.done = done;
-    p.total = total;
-    p.elapsed = now() - start;
-    if (o->progress(&p, o->progress_user) != 0) {
+    if (nerf__progress_report(o->progress, o->progress_user,
+                              NERF_PROGRESS_BAKE, done, total, start) != 0) {
         return nerf__error(NERF_ECANCELLED, "nerf_bake_create: cancelled");
     }
     return NERF_OK;
@@ -244,7 +235,7 @@ int nerf__bake_bricks(nerf_bake *b, const nerf_model *model,
     }
     bake_work w;
     int rc = work_init(&w, b, model, o);
-    const double start = now();
+    const double start = nerf__seconds();
     bool kept[CHUNK_BRICKS];
     for (size_t at = 0; rc == NERF_OK && at < n_list; at += CHUNK_BRICKS) {
         const size_t n = n_list - at < CHUNK_BRICKS ? n_list - at

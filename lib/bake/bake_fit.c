@@ -11,13 +11,15 @@ void nerf__bake_basis(uint32_t degree, const float d[3], float *y)
     nerf__sh_forward(degree + 1, 1, d, 3, y, NERF__BAKE_MAX_COEFS);
 }
 
-/* n directions on a Fibonacci spiral: each covers about the same area of
- * the sphere, so no view direction is far from a fitted one. */
-static void spiral(uint32_t n, float *dirs)
+/* n directions on a Fibonacci spiral over the cap within max_angle of
+ * -z: each covers about the same area of it, so no view direction in the
+ * cap is far from a fitted one. */
+static void spiral(uint32_t n, double max_angle, float *dirs)
 {
     const double golden = 3.14159265358979323846 * (3.0 - sqrt(5.0));
+    const double height = 1.0 - cos(max_angle);
     for (uint32_t i = 0; i < n; i++) {
-        double z = 1.0 - (2.0 * i + 1.0) / n;
+        double z = -1.0 + height * (i + 0.5) / n;
         double r = sqrt(1.0 - z * z);
         double phi = golden * i;
         dirs[3 * i] = (float)(r * cos(phi));
@@ -51,7 +53,8 @@ static bool cholesky(double *a, uint32_t m)
 }
 
 int nerf__bake_fit_init(const nerf__env *env, uint32_t degree,
-                        uint32_t n_dirs, float **dirs_out, float **proj_out)
+                        uint32_t n_dirs, double max_angle, float **dirs_out,
+                        float **proj_out)
 {
     const uint32_t m = (degree + 1) * (degree + 1);
     float *dirs = nerf__alloc(env, (size_t)n_dirs * 3 * sizeof(float));
@@ -64,7 +67,7 @@ int nerf__bake_fit_init(const nerf__env *env, uint32_t degree,
         nerf__free(env, y);
         return NERF_ENOMEM;
     }
-    spiral(n_dirs, dirs);
+    spiral(n_dirs, max_angle, dirs);
     for (uint32_t d = 0; d < n_dirs; d++) {
         float yf[NERF__BAKE_MAX_COEFS];
         nerf__bake_basis(degree, dirs + 3 * d, yf);

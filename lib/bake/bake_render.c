@@ -3,6 +3,7 @@
 
 #include "bake.h"
 #include "camera.h"
+#include "ndc.h"
 #include "error.h"
 #include "parallel.h"
 
@@ -96,89 +97,115 @@ static float sample(const nerf_bake *b, int32_t brick, const float u[3],
     return sigma;
 }
 
-static void march(const nerf_bake *b, const float o[3], const float d[3],
-                  ray_out *out)
+/* A ray on its way through the bake. */
+typedef struct ray {
+    float o[3], dn[3], inv[3]; /* origin, unit direction, its inverses */
+    float s0, s1, len;         /* the span marched, |d| */
+    float T;                   /* transmittance so far */
+    uint32_t i;                /* the next sample: s0 + (i + 0.5) step */
+    bool live;
+    float y[NERF__BAKE_MAX_COEFS]; /* the colours' basis along dn */
+    ray_out out;
+} ray;
+
+/* Set r up for the ray o + t d, seen along the unit direction view: live
+ * when it crosses the box of the bricks within the model's range of t. */
+static void ray_begin(const nerf_bake *b, const float o[3], const float d[3],
+                      const float view[3], ray *r)
 {
-    memset(out, 0, sizeof *out);
+    memset(&r->out, 0, sizeof r->out);
+    r->live = false;
     const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     if (!(len > 0.0f)) {
         return;
     }
-    const float dn[3] = {d[0] / len, d[1] / len, d[2] / len};
-    float inv[3];
     float s0 = b->t_near * len, s1 = b->t_far * len;
     for (int a = 0; a < 3; a++) {
-        inv[a] = 1.0f / dn[a];
-        if (dn[a] == 0.0f) {
-            if (o[a] < b->lo[a] || o[a] > b->hi[a]) {
+        r->o[a] = o[a];
+        r->dn[a] = d[a] / len;
+        r->inv[a] = 1.0f / r->dn[a];
+        if (r->dn[a] == 0.0f) {
+            if (o[a] < b->used_lo[a] || o[a] > b->used_hi[a]) {
                 return;
             }
             continue;
         }
-        const float ta = (b->lo[a] - o[a]) * inv[a];
-        const float tb = (b->hi[a] - o[a]) * inv[a];
+        const float ta = (b->used_lo[a] - o[a]) * r->inv[a];
+        const float tb = (b->used_hi[a] - o[a]) * r->inv[a];
         s0 = fmaxf(s0, fminf(ta, tb));
         s1 = fminf(s1, fmaxf(ta, tb));
     }
     if (!(s0 < s1)) {
         return;
     }
-    float y[NERF__BAKE_MAX_COEFS];
-    nerf__bake_basis(b->degree, dn, y);
-    const float dt = b->step, inv_dt = 1.0f / dt;
-    const float r = (float)b->res;
-    float T = 1.0f;
-    for (uint64_t i = 0;; i++) {
-        const float s = s0 + ((float)i + 0.5f) * dt;
-        if (!(s < s1)) {
-            break;
-        }
-        float u[3];
-        uint32_t c[3];
+    r->s0 = s0;
+    r->s1 = s1;
+    r->len = len;
+    r->T = 1.0f;
+    r->i = 0;
+    r->live = true;
+    nerf__bake_basis(b->degree, view, r->y);
+}
+
+/* One sample of a live ray: skip the empty space it is in, or take the
+ * sample and composite it.  Clears r->live when the ray is done. */
+static void ray_step(const nerf_bake *b, ray *r)
+{
+    const float dt = b->step;
+    const float s = r->s0 + ((float)r->i + 0.5f) * dt;
+    if (!(s < r->s1)) {
+        r->live = false;
+        return;
+    }
+    const float res = (float)b->res;
+    float u[3];
+    uint32_t c[3];
+    for (int a = 0; a < 3; a++) {
+        u[a] = (r->o[a] + s * r->dn[a] - b->lo[a]) * b->inv_cell[a];
+        u[a] = u[a] < 0.0f ? 0.0f : u[a] >= res ? nextafterf(res, 0.0f) : u[a];
+        c[a] = (uint32_t)u[a];
+    }
+    const size_t cell = c[0] + (size_t)b->res * (c[1] + (size_t)b->res * c[2]);
+    const uint32_t far = b->empty[cell];
+    if (far > 0) {
+        /* Leave the cube of empty cells around this one. */
+        float blo[3], bhi[3];
         for (int a = 0; a < 3; a++) {
-            u[a] = (o[a] + s * dn[a] - b->lo[a]) * b->inv_cell[a];
-            u[a] = u[a] < 0.0f ? 0.0f : u[a] >= r ? nextafterf(r, 0.0f) : u[a];
-            c[a] = (uint32_t)u[a];
+            blo[a] = b->lo[a] + ((float)c[a] - (float)(far - 1)) * b->cell[a];
+            bhi[a] = b->lo[a] + ((float)c[a] + (float)far) * b->cell[a];
         }
-        const size_t cell = c[0] + (size_t)b->res * (c[1] + (size_t)b->res *
-                                                              c[2]);
-        const uint32_t far = b->empty[cell];
-        if (far > 0) {
-            /* Leave the cube of empty cells around this one. */
-            float blo[3], bhi[3];
-            for (int a = 0; a < 3; a++) {
-                blo[a] = b->lo[a] + ((float)c[a] - (float)(far - 1)) * b->cell[a];
-                bhi[a] = b->lo[a] + ((float)c[a] + (float)far) * b->cell[a];
-            }
-            const float s_exit = exit_of(o, inv, blo, bhi);
-            /* The first sample past the exit, less SKIP_MARGIN of a step
-             * so that rounding cannot jump over one beyond it: at worst
-             * a sample in an empty cell is taken again, and skips. */
-            const float next =
-                floorf((s_exit - s0) * inv_dt - 0.5f - SKIP_MARGIN) + 1.0f;
-            if (next > (float)i + 1.0f) {
-                i = (uint64_t)next - 1;
-            }
-            continue;
+        const float s_exit = exit_of(r->o, r->inv, blo, bhi);
+        /* The first sample past the exit, less SKIP_MARGIN of a step so
+         * that rounding cannot jump over one beyond it: at worst a sample
+         * in an empty cell is taken again, and skips. */
+        const float next =
+            floorf((s_exit - r->s0) * b->inv_step - 0.5f - SKIP_MARGIN) +
+            1.0f;
+        if (!(next < (float)UINT32_MAX)) {
+            r->live = false;
+            return;
         }
-        const int32_t brick = b->brick_of[cell];
-        if (brick < 0) {
-            continue; /* Only when the distances are not set: a test's. */
+        r->i = next > (float)r->i + 1.0f ? (uint32_t)next : r->i + 1;
+        return;
+    }
+    r->i++;
+    const int32_t brick = b->brick_of[cell];
+    if (brick < 0) {
+        return; /* Only when the distances are not set: a test's. */
+    }
+    float rgb[3];
+    const float sigma = sample(b, brick, u, c, r->y, rgb);
+    if (sigma > 0.0f) {
+        const float alpha = 1.0f - expf(-sigma * dt);
+        const float weight = r->T * alpha;
+        for (int ch = 0; ch < 3; ch++) {
+            r->out.rgb[ch] += weight * rgb[ch];
         }
-        float rgb[3];
-        const float sigma = sample(b, brick, u, c, y, rgb);
-        if (sigma > 0.0f) {
-            const float alpha = 1.0f - expf(-sigma * dt);
-            const float weight = T * alpha;
-            for (int ch = 0; ch < 3; ch++) {
-                out->rgb[ch] += weight * rgb[ch];
-            }
-            out->depth += weight * (s / len);
-            out->opacity += weight;
-            T *= 1.0f - alpha;
-            if (T < MIN_TRANSMITTANCE) {
-                break;
-            }
+        r->out.depth += weight * (s / r->len);
+        r->out.opacity += weight;
+        r->T *= 1.0f - alpha;
+        if (r->T < MIN_TRANSMITTANCE) {
+            r->live = false;
         }
     }
 }
@@ -187,6 +214,7 @@ typedef struct render_job {
     const nerf_bake *b;
     const nerf_camera *cam;
     uint32_t tiles_x;      /* tiles across the image */
+    float ndc_focal, ndc_width, ndc_height; /* the frustum of NDC */
     float *rgb, *depth, *opacity;
 } render_job;
 
@@ -199,6 +227,7 @@ static void render_tiles(void *ctx, size_t begin, size_t end)
     const nerf_bake *b = j->b;
     const uint32_t w = j->cam->width, h = j->cam->height;
     float o[3 * TILE_SIDE], d[3 * TILE_SIDE], rgb[3 * TILE_SIDE];
+    float view[3 * TILE_SIDE];
     float op[TILE_SIDE];
     for (size_t t = begin; t < end; t++) {
         const uint32_t x0 = (uint32_t)(t % j->tiles_x) * TILE_SIDE;
@@ -207,16 +236,45 @@ static void render_tiles(void *ctx, size_t begin, size_t end)
         for (uint32_t row = y0; row < y0 + TILE_SIDE && row < h; row++) {
             const size_t first = (size_t)row * w + x0;
             nerf__camera_rays(j->cam, first, n, o, d);
+            /* The colours' view directions are the camera's rays', in
+             * NDC too (the networks were trained so). */
             for (uint32_t i = 0; i < n; i++) {
-                ray_out r;
-                march(b, o + 3 * i, d + 3 * i, &r);
+                const float *di = d + 3 * i;
+                const float len =
+                    sqrtf(di[0] * di[0] + di[1] * di[1] + di[2] * di[2]);
+                for (int a = 0; a < 3; a++) {
+                    view[3 * i + a] = di[a] / len;
+                }
+            }
+            if (b->ndc) {
+                nerf__ndc_rays(j->ndc_focal, j->ndc_width, j->ndc_height,
+                               1.0f, n, o, d, o, d);
+            }
+            ray rays[TILE_SIDE];
+            for (uint32_t i = 0; i < n; i++) {
+                ray_begin(b, o + 3 * i, d + 3 * i, view + 3 * i, &rays[i]);
+            }
+            /* The row's rays a step each in turn: their chains of loads
+             * and branches overlap, where one ray at a time waits on
+             * each. */
+            for (bool any = true; any;) {
+                any = false;
+                for (uint32_t i = 0; i < n; i++) {
+                    if (rays[i].live) {
+                        ray_step(b, &rays[i]);
+                        any = true;
+                    }
+                }
+            }
+            for (uint32_t i = 0; i < n; i++) {
+                const ray_out *r = &rays[i].out;
                 for (int ch = 0; ch < 3; ch++) {
                     rgb[3 * i + ch] =
-                        r.rgb[ch] + (1.0f - r.opacity) * b->background;
+                        r->rgb[ch] + (1.0f - r->opacity) * b->background;
                 }
-                op[i] = r.opacity;
+                op[i] = r->opacity;
                 if (j->depth) {
-                    j->depth[first + i] = r.depth;
+                    j->depth[first + i] = r->depth;
                 }
             }
             if (b->appearance) {
@@ -259,7 +317,16 @@ NERF_API int nerf_bake_render_image(const nerf_bake *bake,
     const uint32_t tx = (cam.width + TILE_SIDE - 1) / TILE_SIDE;
     const uint32_t ty = (cam.height + TILE_SIDE - 1) / TILE_SIDE;
     render_job j = {.b = bake, .cam = &cam, .tiles_x = tx, .rgb = rgb_out,
-                    .depth = depth_out, .opacity = opacity_out};
+                    .depth = depth_out, .opacity = opacity_out,
+                    .ndc_focal = bake->ndc_focal,
+                    .ndc_width = bake->ndc_width,
+                    .ndc_height = bake->ndc_height};
+    if (bake->ndc && bake->ndc_focal == 0.0f) {
+        /* No scene frustum recorded: the camera's own. */
+        j.ndc_focal = cam.fx;
+        j.ndc_width = (float)cam.width;
+        j.ndc_height = (float)cam.height;
+    }
     /* A tile's rays cost from a few hundred operations (empty) to tens of
      * thousands (opaque surfaces). */
     nerf__parallel_for((size_t)tx * ty, 64 * 1000, render_tiles, &j);

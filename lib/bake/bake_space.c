@@ -41,8 +41,25 @@ int nerf__bake_empty_space(nerf_bake *b)
     if (b->empty == NULL) {
         return nerf__error(NERF_ENOMEM, "nerf_bake_create: out of memory");
     }
+    uint32_t first[3] = {b->res, b->res, b->res}, last[3] = {0, 0, 0};
     for (size_t c = 0; c < cells; c++) {
         b->empty[c] = b->brick_of[c] >= 0 ? 0 : 255;
+        if (b->brick_of[c] >= 0) {
+            const uint32_t v[3] = {(uint32_t)(c % b->res),
+                                   (uint32_t)(c / b->res % b->res),
+                                   (uint32_t)(c / b->res / b->res)};
+            for (int a = 0; a < 3; a++) {
+                first[a] = v[a] < first[a] ? v[a] : first[a];
+                last[a] = v[a] > last[a] ? v[a] : last[a];
+            }
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        /* No brick: an empty box, which every ray misses. */
+        b->used_lo[a] = b->lo[a] + (float)first[a] * b->cell[a];
+        b->used_hi[a] = first[a] > last[a]
+                            ? b->used_lo[a]
+                            : b->lo[a] + (float)(last[a] + 1) * b->cell[a];
     }
     pass(b->empty, b->res, 1);
     pass(b->empty, b->res, -1);

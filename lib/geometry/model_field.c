@@ -26,7 +26,8 @@ int nerf__model_field_init(nerf__model_field *f, const nerf_model *model,
     const nerf__env *env = nerf__model_env(model);
     f->ws = nerf__calloc(env, f->blocks, sizeof *f->ws);
     f->mapped = nerf__alloc(env, (size_t)f->blocks * CHUNK * 3 * sizeof(float));
-    if (f->ws == NULL || f->mapped == NULL) {
+    f->sigma = nerf__alloc(env, (size_t)f->blocks * CHUNK * sizeof(float));
+    if (f->ws == NULL || f->mapped == NULL || f->sigma == NULL) {
         nerf__model_field_release(f);
         return NERF_ENOMEM;
     }
@@ -43,18 +44,50 @@ void nerf__model_field_release(nerf__model_field *f)
     }
     nerf__free(env, f->ws);
     nerf__free(env, f->mapped);
+    nerf__free(env, f->sigma);
     f->ws = NULL;
     f->mapped = NULL;
+    f->sigma = NULL;
 }
 
 typedef struct job {
     nerf__model_field *f;
     size_t n;
     const float *points, *dirs;
-    float *out; /* density [n] or rgb [n x 3] */
+    float *out; /* density [n] or rgb [n x 3] (n x views x 3) */
     int colour;
+    uint32_t views; /* > 0: colour_views() */
     int status[1024]; /* per block; blocks <= the pool's threads */
 } job;
+
+/* Colours of k points (pos) in j->views directions each: the head once a
+ * point, its row repeated for each view, then the colour branch. */
+static int colour_views(const job *j, nerf__workspace *ws, size_t k,
+                        const float *pos, const float *dirs, float *rgb,
+                        float *sigma)
+{
+    const nerf_model *m = j->f->model;
+    const size_t rows = k * j->views;
+    int rc = nerf__model_reserve(m, j->f->net, ws, rows, false);
+    if (rc == NERF_OK) {
+        rc = nerf__model_head(m, j->f->net, ws, k, pos, sigma);
+    }
+    if (rc != NERF_OK) {
+        return rc;
+    }
+    const size_t hw = nerf__network_head_width(&m->nets[j->f->net]);
+    /* Backwards, so that no row is overwritten before it is copied. */
+    for (size_t p = k; p-- > 0;) {
+        for (uint32_t d = j->views; d-- > 0;) {
+            const size_t to = p * j->views + d;
+            if (to != p) {
+                memcpy(ws->head + to * hw, ws->head + p * hw,
+                       hw * sizeof(float));
+            }
+        }
+    }
+    return nerf__model_colour(m, j->f->net, ws, rows, dirs, rgb);
+}
 
 static void run_block(void *ctx, size_t block)
 {
@@ -66,8 +99,11 @@ static void run_block(void *ctx, size_t block)
     const size_t end = j->n * (block + 1) / f->blocks;
     float *mapped = f->mapped + block * CHUNK * 3;
     int rc = NERF_OK;
-    for (size_t at = begin; at < end && rc == NERF_OK; at += CHUNK) {
-        const size_t k = end - at < CHUNK ? end - at : CHUNK;
+    /* Points a network call takes: CHUNK rows. */
+    const size_t step = j->views ? (CHUNK / j->views ? CHUNK / j->views : 1)
+                                 : CHUNK;
+    for (size_t at = begin; at < end && rc == NERF_OK; at += step) {
+        const size_t k = end - at < step ? end - at : step;
         const float *pos = j->points + 3 * at;
         if (space->kind == NERF__SPACE_CONTRACT) {
             /* World points reach an unbounded model's networks
@@ -77,7 +113,12 @@ static void run_block(void *ctx, size_t block)
             }
             pos = mapped;
         }
-        if (j->colour) {
+        if (j->views) {
+            rc = colour_views(j, &f->ws[block], k, pos,
+                              j->dirs + 3 * at * j->views,
+                              j->out + 3 * at * j->views,
+                              f->sigma + block * CHUNK);
+        } else if (j->colour) {
             rc = nerf__model_evaluate(m, f->net, &f->ws[block], k, pos,
                                       j->dirs + 3 * at, j->out + 3 * at, NULL);
         } else {
@@ -114,21 +155,10 @@ static int run(job *j)
     return NERF_OK;
 }
 
-int nerf__model_field_density(void *ctx, size_t n, const float *points,
-                              float *out)
-{
-    job j;
-    memset(&j, 0, sizeof j);
-    j.f = ctx;
-    j.n = n;
-    j.points = points;
-    j.out = out;
-    return run(&j);
-}
-
-int nerf__model_field_colour(nerf__model_field *f, size_t n,
-                             const float *points, const float *dirs,
-                             float *rgb)
+/* A job over n points: densities (colour 0, views 0), colours (colour 1)
+ * or colours in several views each (views > 0). */
+static int run_job(nerf__model_field *f, size_t n, const float *points,
+                   const float *dirs, float *out, int colour, uint32_t views)
 {
     job j;
     memset(&j, 0, sizeof j);
@@ -136,7 +166,28 @@ int nerf__model_field_colour(nerf__model_field *f, size_t n,
     j.n = n;
     j.points = points;
     j.dirs = dirs;
-    j.out = rgb;
-    j.colour = 1;
+    j.out = out;
+    j.colour = colour;
+    j.views = views;
     return run(&j);
+}
+
+int nerf__model_field_density(void *ctx, size_t n, const float *points,
+                              float *out)
+{
+    return run_job(ctx, n, points, NULL, out, 0, 0);
+}
+
+int nerf__model_field_colour(nerf__model_field *f, size_t n,
+                             const float *points, const float *dirs,
+                             float *rgb)
+{
+    return run_job(f, n, points, dirs, rgb, 1, 0);
+}
+
+int nerf__model_field_colour_views(nerf__model_field *f, size_t n,
+                                   const float *points, uint32_t views,
+                                   const float *dirs, float *rgb)
+{
+    return run_job(f, n, points, dirs, rgb, 1, views);
 }

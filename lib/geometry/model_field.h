@@ -21,6 +21,7 @@ typedef struct nerf__model_field {
     unsigned blocks;       /* threads, one workspace each */
     nerf__workspace *ws;   /* [blocks] */
     float *mapped;         /* [blocks][CHUNK x 3]: contracted points */
+    float *sigma;          /* [blocks][CHUNK]: colour_views' densities */
 } nerf__model_field;
 
 /* threads 0: every core of the library's pool. */
@@ -38,5 +39,14 @@ int nerf__model_field_density(void *ctx, size_t n, const float *points,
 int nerf__model_field_colour(nerf__model_field *f, size_t n,
                              const float *points, const float *dirs,
                              float *rgb);
+
+/*
+ * Colours in [0, 1] at each of n points seen along views unit directions:
+ * dirs and rgb have n x views rows, row p views + d for point p's view d.
+ * The density network runs once a point, not once a row.
+ */
+int nerf__model_field_colour_views(nerf__model_field *f, size_t n,
+                                   const float *points, uint32_t views,
+                                   const float *dirs, float *rgb);
 
 #endif

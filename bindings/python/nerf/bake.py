@@ -11,13 +11,14 @@ from . import _handle
 from ._capi import BakeP, lib
 from .mesh import run_with_progress
 from .model import Model
-from .render import RenderResult, _camera_arg, _image_outputs
+from .render import RenderResult, render_image_call
 from .structs import BakeOptions, BakeStats, Camera
 
 
 class Bake(_handle.Handle):
-    """``nerf_bake_create``: bake ``model`` (a marching model in a box: the
-    fast preset on a Blender-like or the built-in scene).
+    """``nerf_bake_create``: bake ``model`` (a marching model in a box or in
+    NDC: the fast preset on a Blender-like, forward-facing or the built-in
+    scene).
 
     ``subdivisions`` voxels along each occupancy cell's edge, colours as
     spherical harmonics of ``sh_degree`` fitted in ``directions``
@@ -57,14 +58,14 @@ class Bake(_handle.Handle):
         :meth:`nerf.Renderer.render_image`."""
         if not (rgb or depth or opacity):
             raise ValueError("render_image: ask for at least one output")
-        cam = _camera_arg(camera, "render_image: camera")
-        outs = _image_outputs("render_image", cam, (
-            ("rgb", 3, rgb), ("depth", 1, depth), ("opacity", 1, opacity)))
-        ptrs = [o.ptr if o else None for o in outs]
-        with self._using() as ptr:
-            lib.nerf_bake_render_image(ptr, ctypes.byref(cam), *ptrs,
-                                       cam.pixel_count)
-        return RenderResult(*(o.release() if o else None for o in outs))
+
+        def call(cam: Camera, ptrs: list) -> None:
+            with self._using() as ptr:
+                lib.nerf_bake_render_image(ptr, ctypes.byref(cam), *ptrs,
+                                           cam.pixel_count)
+        return render_image_call("render_image", camera, (
+            ("rgb", 3, rgb), ("depth", 1, depth), ("opacity", 1, opacity)),
+            call)
 
 
 __all__: Sequence[str] = ("Bake",)

@@ -268,6 +268,16 @@ def _image_outputs(fn: str, cam: Camera, wanted: Any) -> list:
     return out
 
 
+def render_image_call(fn: str, camera: Any, wanted: Any,
+                      call: Callable[[Camera, list], Any]) -> RenderResult:
+    """An image render: the camera checked, the outputs of wanted (as
+    _image_outputs) allocated, call(camera, their pointers) made."""
+    cam = _camera_arg(camera, fn + ": camera")
+    outs = _image_outputs(fn, cam, wanted)
+    call(cam, [o.ptr if o else None for o in outs])
+    return RenderResult(*(o.release() if o else None for o in outs))
+
+
 class Renderer(_handle.ProgressHandle):
     """Draws a model with a sampler's samples (``nerf_renderer``).
 
@@ -343,15 +353,15 @@ class Renderer(_handle.ProgressHandle):
         """
         if not (rgb or depth or opacity):
             raise ValueError("render_image: ask for at least one output")
-        cam = _camera_arg(camera, "render_image: camera")
-        outs = _image_outputs("render_image", cam, (
-            ("rgb", 3, rgb), ("depth", 1, depth), ("opacity", 1, opacity)))
-        ptrs = [o.ptr if o else None for o in outs]
-        with self._using() as ptr:
-            self._slot.run(lib.nerf_renderer_render_image, ptr,
-                           ctypes.byref(cam), *ptrs, cam.pixel_count,
-                           progress=progress)
-        return RenderResult(*(o.release() if o else None for o in outs))
+
+        def call(cam: Camera, ptrs: list) -> None:
+            with self._using() as ptr:
+                self._slot.run(lib.nerf_renderer_render_image, ptr,
+                               ctypes.byref(cam), *ptrs, cam.pixel_count,
+                               progress=progress)
+        return render_image_call("render_image", camera, (
+            ("rgb", 3, rgb), ("depth", 1, depth), ("opacity", 1, opacity)),
+            call)
 
     def render_image_u8(self, camera: Camera, *, depth: bool = False,
                         opacity: bool = False,
@@ -359,15 +369,14 @@ class Renderer(_handle.ProgressHandle):
         """As :meth:`render_image` with 8-bit colours, round(255 clamp(c)):
         ``rgb`` is height x width x 3 uint8 (``bytes``-like without NumPy).
         """
-        cam = _camera_arg(camera, "render_image_u8: camera")
-        outs = _image_outputs("render_image_u8", cam, (
-            ("rgb8", 3, True), ("depth", 1, depth), ("opacity", 1, opacity)))
-        ptrs = [o.ptr if o else None for o in outs]
-        with self._using() as ptr:
-            self._slot.run(lib.nerf_renderer_render_image_u8, ptr,
-                           ctypes.byref(cam), *ptrs, cam.pixel_count,
-                           progress=progress)
-        return RenderResult(*(o.release() if o else None for o in outs))
+        def call(cam: Camera, ptrs: list) -> None:
+            with self._using() as ptr:
+                self._slot.run(lib.nerf_renderer_render_image_u8, ptr,
+                               ctypes.byref(cam), *ptrs, cam.pixel_count,
+                               progress=progress)
+        return render_image_call("render_image_u8", camera, (
+            ("rgb8", 3, True), ("depth", 1, depth), ("opacity", 1, opacity)),
+            call)
 
     def render_rays(self, origins: Any, directions: Any, *, rgb: bool = True,
                     depth: bool = True, opacity: bool = True,

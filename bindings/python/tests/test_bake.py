@@ -1,6 +1,6 @@
 """nerf.Bake (libnerf 0.14): its options' defaults, and the models and
 sizes it refuses, each with the library's reason.  The bake's renders are
-tested in C (tests/render/test_bake.c), on a trained model."""
+tested in C (tests/train/test_bake.c), on models it trains."""
 
 import _support
 from _support import TestCase, nerf
