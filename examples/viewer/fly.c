@@ -208,7 +208,7 @@ int fly_report(fly *f, viewer *v)
         path_view(f, fr->u, &v->view);
         rc = viewer_camera(v, v->width, v->height, &cam);
         if (rc == NERF_OK) {
-            rc = frame_render(&full, v->renderer, &cam);
+            rc = frame_render(&full, v->renderer, NULL, &cam);
         }
         if (rc == NERF_OK) {
             scale_up(fr, v->width, v->height, scaled);

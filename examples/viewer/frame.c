@@ -35,7 +35,8 @@ static int frame_reserve(frame *f, size_t pixels)
     return NERF_OK;
 }
 
-int frame_render(frame *f, nerf_renderer *r, const nerf_camera *cam)
+int frame_render(frame *f, nerf_renderer *r, const nerf_bake *bake,
+                 const nerf_camera *cam)
 {
     size_t pixels = (size_t)cam->width * cam->height;
     int rc = frame_reserve(f, pixels);
@@ -46,8 +47,10 @@ int frame_render(frame *f, nerf_renderer *r, const nerf_camera *cam)
     f->height = cam->height;
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    rc = nerf_renderer_render_image(r, cam, f->rgb, f->depth, f->opacity,
-                                    f->capacity);
+    rc = bake ? nerf_bake_render_image(bake, cam, f->rgb, f->depth,
+                                       f->opacity, f->capacity)
+              : nerf_renderer_render_image(r, cam, f->rgb, f->depth,
+                                           f->opacity, f->capacity);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     f->seconds = (double)(t1.tv_sec - t0.tv_sec) +
                  1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);

@@ -32,9 +32,11 @@ typedef struct frame {
 extern const opt_choice view_modes[];
 const char *view_mode_name(view_mode mode);
 
-/* Render cam (whose size the frame takes) with r.  Returns a libnerf
- * status; NERF_ECANCELLED leaves a partial frame. */
-int frame_render(frame *f, nerf_renderer *r, const nerf_camera *cam);
+/* Render cam (whose size the frame takes) with r, or from bake when it
+ * is not NULL.  Returns a libnerf status; NERF_ECANCELLED leaves a
+ * partial frame. */
+int frame_render(frame *f, nerf_renderer *r, const nerf_bake *bake,
+                 const nerf_camera *cam);
 
 /*
  * The pixels of one view as floats in [0, 1]: RGB (3 channels) or grey

@@ -10,6 +10,7 @@
 #include "../common/options.h"
 #include "../common/opt_table.h"
 #include "../common/out_file.h"
+#include "../common/progress.h"
 #include "../common/scene_setup.h"
 #include "../common/shared_opts.h"
 #include "viewer.h"
@@ -22,8 +23,8 @@ static const char about[] =
 static const char after[] =
     "Mouse: left drag orbits, right drag or shift + left drag pans, the\n"
     "wheel zooms.  Keys: 1 colour, 2 depth, 3 opacity, r reset the view,\n"
-    "q or Esc quit.  While the view moves it is drawn at a reduced\n"
-    "resolution, then refined when it stops.\n"
+    "q or Esc quit.  While the view moves it is drawn from the bake\n"
+    "(--bake), or at a reduced resolution, then refined when it stops.\n"
     "Examples:\n"
     "  nerf-viewer --model lego.nerf\n"
     "  nerf-viewer --model fern.nerf --data fern --downscale 8 --width 320\n"
@@ -44,6 +45,7 @@ typedef struct args {
     int64_t march;         /* -1: the model's */
     int64_t preview_march; /* -1: march / PREVIEW_MARCH_DIVISOR */
     double quit_after, fly;
+    int64_t bake; /* subdivisions; -1: 4 when the model can be baked */
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -52,6 +54,7 @@ static int parse(int argc, char **argv, args *a)
     a->downscale = 1;
     a->march = -1;
     a->preview_march = -1;
+    a->bake = -1;
     const opt opts[] = {
         {OPT_MODEL(&a->model)},
         {.name = "--data", OPT_TEXT_TO(&a->data), .value = "DIR",
@@ -82,6 +85,11 @@ static int parse(int argc, char **argv, args *a)
          .help = "while the view moves, march a marching model in N\n"
                  "steps, {range} (default: a quarter of the still\n"
                  "view's): coarser moves faster, at a cost in detail"},
+        {.name = "--bake", OPT_INT_IN(&a->bake, 0, 16), .value = "K",
+         .help = "bake MODEL at load, K voxels along each cell of its\n"
+                 "grid, {range}, and draw the moving view from the bake\n"
+                 "at up to full size (0: do not; default: 4 for a model\n"
+                 "that can be baked, the fast preset in a box)"},
         {.name = "--screenshot", OPT_TEXT_TO(&a->screenshot),
          .value = "FILE",
          .help = "render the start view to FILE (PNG) and exit,\n"
@@ -116,6 +124,11 @@ static int parse(int argc, char **argv, args *a)
     if (a->screenshot != NULL &&
         out_file_check(PROG, a->screenshot, a->overwrite, NULL, inputs, 2) !=
             0) {
+        return -1;
+    }
+    if (a->bake > 0 && a->screenshot != NULL) {
+        cli_usage_error(PROG, "--bake is for a window's moving views; "
+                        "--screenshot draws the still view");
         return -1;
     }
     if (a->preview_march >= 0 && a->screenshot != NULL) {
@@ -192,6 +205,36 @@ static int open_previews(const args *a, const nerf_renderer_options *ro,
     return rc;
 }
 
+/* The bake the previews draw from: asked for with --bake K, or by
+ * default where the model allows one (otherwise the previews go on with
+ * the networks, and say why). */
+static int open_bake(const args *a, const nerf_hooks *hooks, viewer *v)
+{
+    if (a->bake == 0) {
+        return NERF_OK;
+    }
+    nerf_bake_options o;
+    NERF_BAKE_OPTIONS_INIT(&o);
+    if (a->bake > 0) {
+        o.subdivisions = (uint32_t)a->bake;
+    }
+    if (a->march >= 0) {
+        o.march_steps = (uint32_t)a->march;
+    }
+    progress_reports bar = {.label = "nerf-viewer: baking"};
+    o.progress = progress_on_report;
+    o.progress_user = &bar;
+    o.hooks = hooks;
+    int rc = nerf_bake_create(&v->bake, v->model, &o);
+    progress_reports_end(&bar);
+    if (rc != NERF_OK && a->bake < 0) {
+        fprintf(stderr, "nerf-viewer: moving views use the networks: %s\n",
+                nerf_last_error());
+        return NERF_OK;
+    }
+    return rc;
+}
+
 static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
 {
     int rc = nerf_model_load(&v->model, a->model, hooks);
@@ -224,6 +267,9 @@ static int open_scene(const args *a, const nerf_hooks *hooks, viewer *v)
         if (rc == NERF_OK && a->screenshot == NULL) {
             rc = open_previews(a, &ro, v);
         }
+        if (rc == NERF_OK && a->screenshot == NULL) {
+            rc = open_bake(a, hooks, v);
+        }
     }
     if (rc == NERF_OK) {
         /* The home view's framing depends on the image's shape. */
@@ -240,7 +286,7 @@ static int screenshot(viewer *v, const char *path)
     nerf_camera cam;
     int rc = viewer_camera(v, v->width, v->height, &cam);
     if (rc == NERF_OK) {
-        rc = frame_render(&f, v->renderer, &cam);
+        rc = frame_render(&f, v->renderer, NULL, &cam);
     }
     if (rc == NERF_OK) {
         uint32_t channels;
@@ -286,6 +332,7 @@ int main(int argc, char **argv)
         cli_report("nerf-viewer", rc);
         status = 1;
     }
+    nerf_bake_destroy(v.bake);
     nerf_renderer_destroy(v.preview_renderer);
     nerf_sampler_destroy(v.preview_sampler);
     nerf_renderer_destroy(v.renderer);

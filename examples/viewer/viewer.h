@@ -21,6 +21,9 @@ typedef struct viewer {
      * NULL: previews use sampler and renderer. */
     nerf_sampler *preview_sampler;
     nerf_renderer *preview_renderer;
+    /* The model baked (--bake): previews render from it, at up to the
+     * full size; NULL: they render with the networks. */
+    nerf_bake *bake;
     orbit home;             /* the view 'r' returns to */
     orbit view;             /* the current view */
     double focal_ratio;     /* focal length / image width */

@@ -22,6 +22,10 @@
 #define PREVIEW_SECONDS 0.1
 #define PREVIEW_MIN_FACTOR 4
 #define PREVIEW_MAX_FACTOR 32
+/* A baked model's previews: what one may take, so that a frame with its
+ * drawing stays within 50 ms, at any size up to the window's. */
+#define BAKED_PREVIEW_SECONDS 0.045
+#define BAKED_PREVIEW_MIN_FACTOR 1
 /* Radians turned per pixel dragged, and distance kept per wheel notch. */
 #define ORBIT_PER_PIXEL 0.01
 #define ZOOM_PER_NOTCH 0.9
@@ -269,15 +273,21 @@ static void measure(window *w, const frame *f)
 
 /* Render the view at a reduced size: PREVIEW_MIN_FACTOR smaller on each
  * side, or more if the model is too slow for that to be quick.  Sized by
- * the previews' own speed: they may march coarser than the full view. */
+ * the previews' own speed: they may march coarser than the full view.  A
+ * baked model's previews may be any size up to the full one, so that
+ * they are as sharp as the time allows. */
 static int render_preview(window *w)
 {
     viewer *v = w->v;
     double factor = PREVIEW_MAX_FACTOR;
     if (w->rays_per_second > 0.0) {
         double pixels = (double)v->width * v->height;
-        factor = ceil(sqrt(pixels / (w->rays_per_second * PREVIEW_SECONDS)));
-        factor = fmin(fmax(factor, PREVIEW_MIN_FACTOR), PREVIEW_MAX_FACTOR);
+        double budget = v->bake ? BAKED_PREVIEW_SECONDS : PREVIEW_SECONDS;
+        factor = sqrt(pixels / (w->rays_per_second * budget));
+        factor = v->bake ? factor : ceil(factor);
+        factor = fmin(fmax(factor, v->bake ? BAKED_PREVIEW_MIN_FACTOR
+                                           : PREVIEW_MIN_FACTOR),
+                      PREVIEW_MAX_FACTOR);
     }
     uint32_t pw = (uint32_t)fmax(1.0, floor(v->width / factor));
     uint32_t ph = (uint32_t)fmax(1.0, floor(v->height / factor));
@@ -287,7 +297,7 @@ static int render_preview(window *w)
         rc = frame_render(&w->preview, v->preview_renderer
                                            ? v->preview_renderer
                                            : v->renderer,
-                          &cam);
+                          v->bake, &cam);
     }
     if (rc != NERF_OK) {
         return rc;
@@ -311,7 +321,7 @@ static int render_full(window *w)
     }
     w->refining = 1;
     w->last_bar = progress_now();
-    rc = frame_render(&w->full, v->renderer, &cam);
+    rc = frame_render(&w->full, v->renderer, NULL, &cam);
     w->refining = 0;
     if (rc == NERF_ECANCELLED) {
         w->n_cancelled++;
