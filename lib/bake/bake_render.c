@@ -2,6 +2,7 @@
 #include <math.h>
 
 #include "bake.h"
+#include "box_span.h"
 #include "camera.h"
 #include "ndc.h"
 #include "error.h"
@@ -119,22 +120,17 @@ static void ray_begin(const nerf_bake *b, const float o[3], const float d[3],
     if (!(len > 0.0f)) {
         return;
     }
-    float s0 = b->t_near * len, s1 = b->t_far * len;
     for (int a = 0; a < 3; a++) {
         r->o[a] = o[a];
         r->dn[a] = d[a] / len;
         r->inv[a] = 1.0f / r->dn[a];
-        if (r->dn[a] == 0.0f) {
-            if (o[a] < b->used_lo[a] || o[a] > b->used_hi[a]) {
-                return;
-            }
-            continue;
-        }
-        const float ta = (b->used_lo[a] - o[a]) * r->inv[a];
-        const float tb = (b->used_hi[a] - o[a]) * r->inv[a];
-        s0 = fmaxf(s0, fminf(ta, tb));
-        s1 = fminf(s1, fmaxf(ta, tb));
     }
+    float s0, s1;
+    if (!nerf__box_span(r->o, r->dn, b->used_lo, b->used_hi, &s0, &s1)) {
+        return;
+    }
+    s0 = fmaxf(s0, b->t_near * len);
+    s1 = fminf(s1, b->t_far * len);
     if (!(s0 < s1)) {
         return;
     }

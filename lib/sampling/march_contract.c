@@ -1,6 +1,7 @@
 /* Ray marching through a grid over contracted space (see march.h). */
 #include <math.h>
 
+#include "box_span.h"
 #include "march_ray.h"
 #include "space.h"
 
@@ -24,29 +25,6 @@ static float warp_u(const warp *w, float s)
     return room > 0.0f ? w->D * w->D / room - w->a : INFINITY;
 }
 
-
-/* Where the ray is inside the cube [-half, half]^3, t in [*t_in, *t_out)
- * (t_in may be negative); false if it never is. */
-static bool cube_span(const float o[3], const float d[3], float half,
-                      float *t_in, float *t_out)
-{
-    float tn = -INFINITY, tf = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        if (d[a] == 0.0f) {
-            if (!(fabsf(o[a]) <= half)) {
-                return false;
-            }
-            continue;
-        }
-        const float inv = 1.0f / d[a];
-        float ta = (-half - o[a]) * inv, tb = (half - o[a]) * inv;
-        tn = fmaxf(tn, fminf(ta, tb));
-        tf = fminf(tf, fmaxf(ta, tb));
-    }
-    *t_in = tn;
-    *t_out = tf;
-    return tn < tf;
-}
 
 /* The first lattice index whose t = base + k dt_t is not below t_end,
  * by the linear march's own arithmetic. */
@@ -109,7 +87,10 @@ uint32_t nerf__march_ray_contract(const nerf__occupancy *g,
     nerf__space_contract(&space, mo->contract);
     const float inner = mo->contract, step = mo->step;
     float t_in = t0, tc = t0, t_out_cube;
-    const bool hit = cube_span(o, d, inner, &t_in, &t_out_cube) &&
+    const float cube_lo[3] = {-inner, -inner, -inner};
+    const float cube_hi[3] = {inner, inner, inner};
+    const bool hit = nerf__box_span(o, d, cube_lo, cube_hi, &t_in,
+                                    &t_out_cube) &&
                      t_out_cube > t0;
     if (hit) {
         tc = t_out_cube;
