@@ -2787,9 +2787,9 @@ typedef struct nerf_bake nerf_bake; /**< A model baked for fast renders. */
 typedef struct nerf_bake_options {
     uint32_t struct_size;   /**< Set by nerf_bake_options_init(). */
     uint32_t subdivisions;  /**< Baked voxels along each edge of an
-                                 occupancy cell, 1..16; default 4 (a
-                                 128-cell grid bakes at 512 voxels
-                                 across). */
+                                 occupancy cell, 1..16; default 6 (a
+                                 128-cell grid bakes at 768 voxels
+                                 across; before 0.15, 4). */
     uint32_t sh_degree;     /**< Degree of the spherical harmonics that
                                  hold each point's colour as seen from
                                  every direction, 0..2 (0: one colour
@@ -2802,8 +2802,8 @@ typedef struct nerf_bake_options {
                                  saying how large it would be); default
                                  2 GiB. */
     uint32_t march_steps;   /**< Steps of a render across the bound's
-                                 diagonal; 0 (the default): steps of one
-                                 voxel's edge. */
+                                 diagonal; default 512 (before 0.15, 0);
+                                 0: steps of one voxel's edge. */
     uint32_t appearance;    /**< Which appearance code colours the bake
                                  (nerf_renderer_options.appearance):
                                  NERF_APPEARANCE_NEUTRAL (the default) or a

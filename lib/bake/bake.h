@@ -50,6 +50,14 @@ struct nerf_bake {
      * distance d crosses the cube of cells within d - 1 of it without
      * looking (bake_space.c). */
     uint8_t *empty;
+    /* The cells with a brick that touch a cell without one (or the
+     * grid's side): a ray that does not start among the bricks meets one
+     * of these first (bake_hits.c). */
+    uint32_t *surface;
+    size_t n_surface;
+    /* Whether renders start rays at bounds of their first brick from the
+     * surface cells (a test turns it off to compare). */
+    bool first_hits;
     uint16_t *data;        /* [bricks][corners][stride] bfloat16 */
     uint64_t bricks;
     uint64_t points;       /* points whose colour was fitted */
@@ -98,7 +106,29 @@ int nerf__bake_fit_init(const nerf__env *env, uint32_t degree,
 /* The n = (degree + 1)^2 basis values of a unit direction d. */
 void nerf__bake_basis(uint32_t degree, const float d[3], float *y);
 
-/* Fill b->empty and the box of the bricks from b->brick_of. */
+/* Pixels along each side of the squares that share bounds. */
+#define NERF__BAKE_HIT_BLOCK 4u
+
+static inline uint32_t nerf__bake_hit_blocks(uint32_t pixels)
+{
+    return (pixels + NERF__BAKE_HIT_BLOCK - 1) / NERF__BAKE_HIT_BLOCK;
+}
+
+/*
+ * For each square of NERF__BAKE_HIT_BLOCK pixels a side of cam (row by
+ * row, nerf__bake_hit_blocks() of them across and down), distances along
+ * its pixels' rays (from the camera's centre, in world units) before near
+ * and after far of which they meet no cell with a brick: near INFINITY
+ * where they meet none.  A ray
+ * that meets a brick meets a surface cell first and last, so the surface
+ * cells' boxes bound it.  False, with near and far untouched, when the
+ * bounds cannot be had cheaply: lens distortion, a model in NDC, a camera
+ * among the bricks.
+ */
+bool nerf__bake_first_hits(const nerf_bake *b, const nerf_camera *cam,
+                           float *near, float *far);
+
+/* Fill b->empty, b->surface and the box of the bricks from b->brick_of. */
 int nerf__bake_empty_space(nerf_bake *b);
 
 /* Fill the bricks of b (brick_of, data, bricks, points) from model. */

@@ -34,6 +34,54 @@ static void pass(uint8_t *d, uint32_t r, int dir)
     }
 }
 
+/* Whether brick cell (x, y, z) touches a cell without a brick, or the
+ * grid's side, across a face, an edge or a corner. */
+static bool on_surface(const nerf_bake *b, int64_t x, int64_t y, int64_t z)
+{
+    const int64_t n = b->res;
+    for (int dz = -1; dz <= 1; dz++) {
+        for (int dy = -1; dy <= 1; dy++) {
+            for (int dx = -1; dx <= 1; dx++) {
+                const int64_t xx = x + dx, yy = y + dy, zz = z + dz;
+                if (xx < 0 || yy < 0 || zz < 0 || xx >= n || yy >= n ||
+                    zz >= n || b->brick_of[xx + n * (yy + n * zz)] < 0) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
+}
+
+/* b->surface: where a ray from outside the bricks meets its first. */
+static int surface_cells(nerf_bake *b)
+{
+    const size_t n = b->res, cells = n * n * n;
+    for (int round = 0; round < 2; round++) {
+        size_t count = 0;
+        for (size_t c = 0; c < cells; c++) {
+            if (b->brick_of[c] >= 0 &&
+                on_surface(b, (int64_t)(c % n), (int64_t)(c / n % n),
+                           (int64_t)(c / n / n))) {
+                if (round == 1) {
+                    b->surface[count] = (uint32_t)c;
+                }
+                count++;
+            }
+        }
+        if (round == 0) {
+            b->n_surface = count;
+            b->surface = nerf__alloc(&b->env,
+                                     (count ? count : 1) * sizeof(uint32_t));
+            if (b->surface == NULL) {
+                return nerf__error(NERF_ENOMEM,
+                                   "nerf_bake_create: out of memory");
+            }
+        }
+    }
+    return NERF_OK;
+}
+
 int nerf__bake_empty_space(nerf_bake *b)
 {
     const size_t cells = (size_t)b->res * b->res * b->res;
@@ -63,5 +111,5 @@ int nerf__bake_empty_space(nerf_bake *b)
     }
     pass(b->empty, b->res, 1);
     pass(b->empty, b->res, -1);
-    return NERF_OK;
+    return surface_cells(b);
 }

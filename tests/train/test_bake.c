@@ -318,13 +318,63 @@ TEST(forward_facing_renders_follow_the_networks)
     fixture_close(&f);
 }
 
+static size_t px_of(const nerf_camera *cam)
+{
+    return (size_t)cam->width * cam->height;
+}
+
+/* Whether b renders cam to the same bits with the first-hit bounds and
+ * the distance field as with neither (every sample of every ray looked
+ * at), with something opaque in view if asked; says which camera when
+ * not. */
+static bool same_bits_without_skips(nerf_bake *b, const nerf_camera *cam,
+                                    const char *what, bool opaque)
+{
+    const size_t px = (size_t)cam->width * cam->height;
+    const size_t cells = (size_t)b->res * b->res * b->res;
+    float *a = malloc(px * 5 * sizeof(float));
+    float *c = malloc(px * 5 * sizeof(float));
+    uint8_t *saved = malloc(cells);
+    bool same = false;
+    if (a && c && saved) {
+        CHECK_OK(nerf_bake_render_image(b, cam, a, a + 3 * px, a + 4 * px,
+                                        px));
+        memcpy(saved, b->empty, cells);
+        memset(b->empty, 0, cells);
+        b->first_hits = false;
+        CHECK_OK(nerf_bake_render_image(b, cam, c, c + 3 * px, c + 4 * px,
+                                        px));
+        b->first_hits = true;
+        memcpy(b->empty, saved, cells);
+        same = memcmp(a, c, px * 5 * sizeof(float)) == 0;
+        /* A render that met nothing would prove little (a model trained
+         * for the sanitizers' few steps is mostly haze). */
+        float most = 0.0f;
+        for (size_t p = 0; p < px; p++) {
+            most = fmaxf(most, a[4 * px + p]);
+        }
+        if (opaque && !(most > (quick() ? 0.0f : 0.5f))) {
+            printf("  %s: nothing opaque in view\n", what);
+            same = false;
+        }
+    }
+    if (!same) {
+        printf("  %s: the skips changed the render\n", what);
+    }
+    free(saved);
+    free(a);
+    free(c);
+    return same;
+}
+
 /*
  * A render that skips empty space takes the same samples in cells with
- * bricks as one that visits every sample (the skip lands on the ray's
- * lattice of steps, short of the exit by a margin far above its
+ * bricks as one that visits every sample (a skip, from the distance
+ * field or from the bounds drawn from the surface cells, lands on the
+ * ray's lattice of steps, short of the exit by a margin far above its
  * rounding), and samples in cells without bricks add nothing: the same
- * bits.  Also, each pixel is its ray's alone: a view cropped out of a
- * larger one has the same pixels.
+ * bits, whatever the camera.  Also, each pixel is its ray's alone: a view
+ * cropped out of a larger one has the same pixels.
  */
 TEST(skipping_and_cropping_change_no_pixel)
 {
@@ -337,22 +387,72 @@ TEST(skipping_and_cropping_change_no_pixel)
     nerf_camera cam;
     NERF_CAMERA_INIT(&cam);
     CHECK_OK(nerf_dataset_camera(fx.test, 0, &cam));
+    CHECK(same_bits_without_skips(b, &cam, "a test view", true));
+    nerf_camera corner = cam;
+    corner.flags |= NERF_CAMERA_PIXEL_CORNER;
+    CHECK(same_bits_without_skips(b, &corner, "rays through pixel corners",
+                                  true));
+    /* A pose that is no rotation: its rays R (x, y, -1) are twice as
+     * long, and the bounds must follow them (they undo R). */
+    nerf_camera scaled = cam;
+    for (int r = 0; r < 3; r++) {
+        for (int k = 0; k < 3; k++) {
+            scaled.c2w[4 * r + k] *= 2.0f;
+        }
+    }
+    scaled.fx *= 2.0f;
+    scaled.fy *= 2.0f;
+    CHECK(same_bits_without_skips(b, &scaled, "a scaled pose", true));
+    /* Looking past the bricks, 70 degrees aside, with a wide view: the
+     * camera's plane cuts through them, and cells that cross it have no
+     * bounded image. */
+    float centre[3], eye[3], target[3];
+    for (int a = 0; a < 3; a++) {
+        centre[a] = 0.5f * (b->used_lo[a] + b->used_hi[a]);
+    }
+    const float reach = b->used_hi[1] - b->used_lo[1];
+    const float up[3] = {0.0f, 0.0f, 1.0f};
+    for (int a = 0; a < 3; a++) {
+        eye[a] = centre[a];
+        target[a] = centre[a];
+    }
+    eye[1] -= 1.5f * reach;
+    target[0] += 1.5f * reach * sinf(1.25f);
+    target[1] = eye[1] + 1.5f * reach * cosf(1.25f);
+    nerf_camera aside = cam;
+    CHECK_OK(nerf_camera_look_at(&aside, eye, target, up));
+    aside.fx = aside.fy = 0.15f * (float)aside.width;
+    /* (The sanitizers' bricks, a central cube, are out of its view.) */
+    CHECK(same_bits_without_skips(b, &aside, "a view past the bricks",
+                                  !quick()));
+    /* Among the bricks: no bounds at all (and, nearer than the model's
+     * t_near to most of them, little to see). */
+    size_t inner = 0;
+    while (b->brick_of[inner] < 0) {
+        inner++;
+    }
+    for (int a = 0; a < 3; a++) {
+        const size_t v = a == 0 ? inner % b->res
+                         : a == 1 ? inner / b->res % b->res
+                                  : inner / b->res / b->res;
+        eye[a] = b->lo[a] + ((float)v + 0.5f) * b->cell[a];
+    }
+    nerf_camera inside = cam;
+    CHECK_OK(nerf_camera_look_at(&inside, eye, centre, up));
+    float *bounds = malloc(2 * px_of(&inside) * sizeof(float));
+    CHECK(bounds && !nerf__bake_first_hits(b, &inside, bounds,
+                                           bounds + px_of(&inside)));
+    free(bounds);
+    CHECK(same_bits_without_skips(b, &inside, "a camera among the bricks",
+                                  false));
+
     const uint32_t w = cam.width, h = cam.height;
     const size_t px = (size_t)w * h;
     float *a = malloc(px * 3 * sizeof(float));
     float *c = malloc(px * 3 * sizeof(float));
-    float *da = malloc(px * sizeof(float));
-    float *dc = malloc(px * sizeof(float));
-    CHECK_OK(nerf_bake_render_image(b, &cam, a, da, NULL, px));
-    const size_t cells = (size_t)b->res * b->res * b->res;
-    uint8_t *saved = malloc(cells);
-    memcpy(saved, b->empty, cells);
-    memset(b->empty, 0, cells);
-    CHECK_OK(nerf_bake_render_image(b, &cam, c, dc, NULL, px));
-    CHECK(memcmp(a, c, px * 3 * sizeof(float)) == 0);
-    CHECK(memcmp(da, dc, px * sizeof(float)) == 0);
-    memcpy(b->empty, saved, cells);
-    /* The lower right quarter, on its own. */
+    CHECK_OK(nerf_bake_render_image(b, &cam, a, NULL, NULL, px));
+    /* The lower right quarter, on its own (its squares of shared bounds
+     * fall elsewhere). */
     nerf_camera q = cam;
     q.width = w / 2 + 3;
     q.height = h / 2 + 1;
@@ -364,11 +464,8 @@ TEST(skipping_and_cropping_change_no_pixel)
         CHECK(memcmp(a + 3 * from, c + 3 * (size_t)y * q.width,
                      3 * q.width * sizeof(float)) == 0);
     }
-    free(saved);
     free(a);
     free(c);
-    free(da);
-    free(dc);
     nerf_bake_destroy(b);
 }
 

@@ -9,8 +9,8 @@ from _support import TestCase, nerf
 class Bake(TestCase):
     def test_defaults(self):
         o = nerf.BakeOptions()
-        self.assertEqual((o.subdivisions, o.sh_degree, o.directions),
-                         (4, 1, 8))
+        self.assertEqual((o.subdivisions, o.sh_degree, o.directions,
+                          o.march_steps), (6, 1, 8, 512))
         self.assertEqual(o.max_bytes, 2 << 30)
 
     def test_refuses_a_model_without_a_grid(self):
