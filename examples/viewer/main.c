@@ -45,7 +45,8 @@ typedef struct args {
     int64_t march;         /* -1: the model's */
     int64_t preview_march; /* -1: march / PREVIEW_MARCH_DIVISOR */
     double quit_after, fly;
-    int64_t bake; /* subdivisions; -1: 4 when the model can be baked */
+    int64_t bake; /* subdivisions; -1: the library's default (6) when the
+                   * model can be baked */
 } args;
 
 static int parse(int argc, char **argv, args *a)
@@ -88,7 +89,7 @@ static int parse(int argc, char **argv, args *a)
         {.name = "--bake", OPT_INT_IN(&a->bake, 0, 16), .value = "K",
          .help = "bake MODEL at load, K voxels along each cell of its\n"
                  "grid, {range}, and draw the moving view from the bake\n"
-                 "at up to full size (0: do not; default: 4 for a model\n"
+                 "at up to full size (0: do not; default: 6 for a model\n"
                  "that can be baked, the fast preset in a box)"},
         {.name = "--screenshot", OPT_TEXT_TO(&a->screenshot),
          .value = "FILE",

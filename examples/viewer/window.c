@@ -22,10 +22,17 @@
 #define PREVIEW_SECONDS 0.1
 #define PREVIEW_MIN_FACTOR 4
 #define PREVIEW_MAX_FACTOR 32
-/* A baked model's previews: what one may take, so that a frame with its
- * drawing stays within 50 ms, at any size up to the window's. */
-#define BAKED_PREVIEW_SECONDS 0.045
+/* A baked model's previews: what a frame may take, its drawing and the
+ * rest of the loop included, so that it stays within 50 ms; the preview
+ * is any size up to the window's. */
+#define BAKED_FRAME_SECONDS 0.045
 #define BAKED_PREVIEW_MIN_FACTOR 1
+/* The least a baked preview's render is given, whatever the rest takes. */
+#define BAKED_RENDER_MIN_SECONDS 0.01
+/* Previews closer together than this, with nothing else in between, are
+ * one movement: the time between them, less the render, is what a frame
+ * costs besides the render. */
+#define MOVING_GAP_SECONDS 0.25
 /* Radians turned per pixel dragged, and distance kept per wheel notch. */
 #define ORBIT_PER_PIXEL 0.01
 #define ZOOM_PER_NOTCH 0.9
@@ -47,6 +54,11 @@ typedef struct window {
     frame *shown;           /* NULL before the first render */
     fly *fly;               /* --fly's path; NULL without */
     double rays_per_second; /* previews' speed; 0 before the first */
+    double preview_began;   /* when the last preview's render began */
+    double frame_extra;     /* a moving frame's seconds besides its render:
+                             * drawing, events (a running mean) */
+    int paused;             /* the loop waited or did other work since
+                             * the last preview */
     double deadline;        /* 0: none */
     double last_change;     /* when the view last moved */
     double last_bar;
@@ -279,10 +291,24 @@ static void measure(window *w, const frame *f)
 static int render_preview(window *w)
 {
     viewer *v = w->v;
+    double began = progress_now();
+    if (w->preview_began > 0.0 && !w->paused &&
+        began - w->preview_began < MOVING_GAP_SECONDS) {
+        double extra = fmax(0.0, began - w->preview_began -
+                                     w->preview.seconds);
+        w->frame_extra = w->frame_extra > 0.0
+                             ? 0.8 * w->frame_extra + 0.2 * extra
+                             : extra;
+    }
+    w->preview_began = began;
+    w->paused = 0;
     double factor = PREVIEW_MAX_FACTOR;
     if (w->rays_per_second > 0.0) {
         double pixels = (double)v->width * v->height;
-        double budget = v->bake ? BAKED_PREVIEW_SECONDS : PREVIEW_SECONDS;
+        double budget =
+            v->bake ? fmax(BAKED_FRAME_SECONDS - w->frame_extra,
+                           BAKED_RENDER_MIN_SECONDS)
+                    : PREVIEW_SECONDS;
         factor = sqrt(pixels / (w->rays_per_second * budget));
         factor = v->bake ? factor : ceil(factor);
         factor = fmin(fmax(factor, v->bake ? BAKED_PREVIEW_MIN_FACTOR
@@ -380,11 +406,13 @@ static int run(window *w)
             w->need_full = 1;
             w->last_change = progress_now();
         } else if (shown_mode != w->v->mode) {
+            w->paused = 1;
             shown_mode = w->v->mode;
             set_title(w, w->need_full ? "(preview)" : "");
             rc = show(w) == 0 ? NERF_OK : NERF_ERROR;
         } else if (w->need_full &&
                    progress_now() - w->last_change >= SETTLE_SECONDS) {
+            w->paused = 1;
             rc = render_full(w);
             if (rc == NERF_OK && w->fly != NULL && w->fly->stopped_at > 0.0) {
                 /* The path is over and its end is drawn in full. */
@@ -392,6 +420,7 @@ static int run(window *w)
                 w->quit = 1;
             }
         } else {
+            w->paused = 1;
             wait_for_input(w);
         }
         if (rc != NERF_OK && rc != NERF_ECANCELLED) {
