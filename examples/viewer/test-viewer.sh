@@ -1,7 +1,7 @@
 #!/bin/sh
 # Tests of nerf-viewer on a tiny model trained here for a few steps.
 #
-#   test-viewer.sh screenshot|window|fly NERF-SCENE NERF-TRAIN NERF-VIEWER PNG-CHECK
+#   test-viewer.sh screenshot|window|fly|fly-bake NERF-SCENE NERF-TRAIN NERF-VIEWER PNG-CHECK
 #
 # screenshot: render views headless (no display, SDL never started) and
 #             check each PNG has the right size and more than one colour
@@ -15,6 +15,12 @@
 #             of them scored, the summary's median, 95th percentile and
 #             PSNR those of the lines, the frames spanning the path;
 #             skipped (77) without xvfb-run.
+# fly-bake:   the same with the moving views drawn from a bake, of a fast
+#             model trained until its grid is carved (300 steps): the
+#             report agrees with itself and some frames are drawn at the
+#             window's full size, which only a bake's previews are;
+#             skipped (77) without xvfb-run, and in the sanitizers' run
+#             (NERF_TEST_QUICK), where the training takes minutes.
 set -eu
 mode=$1 scene=$2 train=$3 viewer=$4 check=$5
 
@@ -31,6 +37,11 @@ in_window() {
     SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0 "$@"
 }
 
+if [ "$mode" = fly-bake ] && [ -n "${NERF_TEST_QUICK:-}" ]; then
+  echo "NERF_TEST_QUICK: skipping (the training takes minutes here)"
+  exit 77
+fi
+
 work=$(mktemp -d "${TMPDIR:-/tmp}/nerf-viewer-test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
@@ -40,6 +51,56 @@ trap 'rm -rf "$work"' EXIT
   --test 0 2>"$work/scene.log" || { cat "$work/scene.log"; exit 1; }
 "$train" --data "$work/scene" --out "$work/model.nerf" --steps 10 \
   --batch 128 2>"$work/train.log" || { cat "$work/train.log"; exit 1; }
+
+# check_fly_report FILE SECONDS: --fly's report in FILE, of a path of
+# SECONDS, is whole and agrees with itself.
+check_fly_report() {
+  report=$1 seconds_flown=$2
+  # The frames' lines: "frame K  MS ms  WxH  psnr P dB", P "-" for a
+  # frame left unscored.
+  grep '^frame ' "$report" | awk '{ print $3, $7 }' >"$work/lines"
+  # The nearest-rank percentile P of column C of the lines (unscored
+  # frames left out).
+  ranked() {
+    cut -d' ' -f"$2" "$work/lines" | grep -v '^-$' | sort -g >"$work/ranked"
+    n=$(wc -l <"$work/ranked")
+    awk -v p="$1" -v n="$n" 'BEGIN { k = int(p * n / 100); if (k < p * n / 100) k++; if (k < 1) k = 1 }
+                             NR == k { print }' "$work/ranked"
+  }
+  # summary WORDS: the number after WORDS in the summary
+  summary() {
+    # (a PSNR of identical images prints as inf)
+    sed -n "s/^fly: .*$1 \([0-9.inf]*\).*/\1/p" "$report" | head -n 1
+  }
+  frames=$(sed -n 's/^fly: \([0-9]*\) frames shown.*/\1/p' "$report")
+  lines=$(wc -l <"$work/lines")
+  check() {
+    if [ "$2" != "$3" ]; then
+      echo "$1: the summary says '$2', the frames' lines give '$3'"
+      exit 1
+    fi
+  }
+  [ -n "$frames" ] && [ "$frames" -ge 1 ] ||
+    { echo "no summary of the frames shown"; exit 1; }
+  check "frames" "$frames" "$lines"
+  # At most 60 frames are scored, the summary says how many.
+  scored=$(awk '$2 != "-"' "$work/lines" | wc -l)
+  want=$((lines < 60 ? lines : 60))
+  check "frames scored" "$(sed -n 's/^fly: .*(\([0-9]*\) of [0-9]*, evenly.*/\1/p' "$report")" "$scored"
+  check "frames scored of $lines" "$want" "$scored"
+  check "median frame time" "$(summary 'frame time median')" "$(ranked 50 1)"
+  check "95th percentile" "$(summary '95th percentile')" "$(ranked 95 1)"
+  check "median PSNR" "$(summary 'median PSNR')" "$(ranked 50 2)"
+  # Each frame's time runs from the one before it was shown, the first's
+  # from the path's start, and the last frame is drawn where the path
+  # stopped: together they span the path (less the lines' rounding).
+  awk -v s="$seconds_flown" -v n="$lines" '{ t += $1 }
+    END { if (t < 1000 * s - 0.05 * n) { print "the frames span " t \
+          " ms of a " s " s path"; exit 1 } }' "$work/lines"
+  full=$(summary 'full quality')
+  awk -v f="$full" 'BEGIN { exit !(f > 0) }' ||
+    { echo "no time to full quality after the path: '$full'"; exit 1; }
+}
 
 case $mode in
 screenshot)
@@ -149,50 +210,7 @@ fly)
     echo "nerf-viewer --fly exited with status $status"
     exit 1
   fi
-  # The frames' lines: "frame K  MS ms  WxH  psnr P dB", P "-" for a
-  # frame left unscored.
-  grep '^frame ' "$work/fly.out" | awk '{ print $3, $7 }' >"$work/lines"
-  # The nearest-rank percentile P of column C of the lines (unscored
-  # frames left out).
-  ranked() {
-    cut -d' ' -f"$2" "$work/lines" | grep -v '^-$' | sort -g >"$work/ranked"
-    n=$(wc -l <"$work/ranked")
-    awk -v p="$1" -v n="$n" 'BEGIN { k = int(p * n / 100); if (k < p * n / 100) k++; if (k < 1) k = 1 }
-                             NR == k { print }' "$work/ranked"
-  }
-  # summary WORDS: the number after WORDS in the summary
-  summary() {
-    # (a PSNR of identical images prints as inf)
-    sed -n "s/^fly: .*$1 \([0-9.inf]*\).*/\1/p" "$work/fly.out" | head -n 1
-  }
-  frames=$(sed -n 's/^fly: \([0-9]*\) frames shown.*/\1/p' "$work/fly.out")
-  lines=$(wc -l <"$work/lines")
-  check() {
-    if [ "$2" != "$3" ]; then
-      echo "$1: the summary says '$2', the frames' lines give '$3'"
-      exit 1
-    fi
-  }
-  [ -n "$frames" ] && [ "$frames" -ge 1 ] ||
-    { echo "no summary of the frames shown"; exit 1; }
-  check "frames" "$frames" "$lines"
-  # At most 60 frames are scored, the summary says how many.
-  scored=$(awk '$2 != "-"' "$work/lines" | wc -l)
-  want=$((lines < 60 ? lines : 60))
-  check "frames scored" "$(sed -n 's/^fly: .*(\([0-9]*\) of [0-9]*, evenly.*/\1/p' "$work/fly.out")" "$scored"
-  check "frames scored of $lines" "$want" "$scored"
-  check "median frame time" "$(summary 'frame time median')" "$(ranked 50 1)"
-  check "95th percentile" "$(summary '95th percentile')" "$(ranked 95 1)"
-  check "median PSNR" "$(summary 'median PSNR')" "$(ranked 50 2)"
-  # Each frame's time runs from the one before it was shown, the first's
-  # from the path's start, and the last frame is drawn where the path
-  # stopped: together they span the path (less the lines' rounding).
-  awk -v s=$seconds -v n="$lines" '{ t += $1 }
-    END { if (t < 1000 * s - 0.05 * n) { print "the frames span " t \
-          " ms of a " s " s path"; exit 1 } }' "$work/lines"
-  full=$(summary 'full quality')
-  awk -v f="$full" 'BEGIN { exit !(f > 0) }' ||
-    { echo "no time to full quality after the path: '$full'"; exit 1; }
+  check_fly_report "$work/fly.out" $seconds
   # A marching model's previews march coarser, in a renderer of their
   # own: the path flies there too.  --preview-march is for a window.
   "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
@@ -217,6 +235,28 @@ fly)
     echo "--preview-march with --screenshot: status $status"
     exit 1
   fi
+  ;;
+fly-bake)
+  "$train" --data "$work/scene" --out "$work/fast.nerf" --preset fast \
+    --steps 300 --batch 128 --checkpoint-every 0 2>"$work/fast.log" ||
+    { cat "$work/fast.log"; exit 1; }
+  seconds=1.5
+  status=0
+  in_window "$viewer" --model "$work/fast.nerf" --width 64 --height 48 \
+    --bake 1 --fly $seconds >"$work/fly.out" 2>"$work/viewer.log" ||
+    status=$?
+  cat "$work/viewer.log" "$work/fly.out"
+  if [ "$status" -ne 0 ]; then
+    echo "nerf-viewer --bake 1 --fly exited with status $status"
+    exit 1
+  fi
+  grep -q '^nerf-viewer: baking: done' "$work/viewer.log" ||
+    { echo "nerf-viewer did not say it baked"; exit 1; }
+  check_fly_report "$work/fly.out" $seconds
+  # Previews from the networks are a quarter of the window's side at
+  # most; a bake's take the window's whole size when they are quick.
+  grep -q '^frame .*  64x48 ' "$work/fly.out" ||
+    { echo "no frame drawn at the window's size"; exit 1; }
   ;;
 *)
   echo "unknown mode '$mode'"
