@@ -14,8 +14,8 @@
 #include "bake.h"
 #include "parallel.h"
 
-/* (Minima and maxima are written out: fminf and fmaxf are calls at the
- * baseline's flags, and these values are never NaN.) */
+/* (The drawing loop's minima and maxima are written out: fminf and fmaxf
+ * are calls at the baseline's flags, and these values are never NaN.) */
 
 /* Cells grow by this fraction of their edge on each side before they
  * are drawn, and the pixels they cover by PIXEL_MARGIN, far above the
@@ -67,30 +67,23 @@ static bool invert(const float c2w[12], double inv[3][3])
     return true;
 }
 
-/* Whether the camera's centre is in or next to a cell with a brick (or
- * so close to the grid's cells that rounding could put it there). */
+/* Whether a brick may lie within two cells of the camera's centre (or
+ * so close that rounding could put it among them), from the distance
+ * field: the distance of the grid's cell nearest the centre is at most
+ * the centre's own, so a centre whose nearest cell is more than two from
+ * any brick is too. */
 static bool among_bricks(const nerf_bake *b, const float c[3])
 {
-    int64_t v[3];
-    for (int a = 0; a < 3; a++) {
+    size_t cell = 0;
+    for (int a = 2; a >= 0; a--) {
         const double u = ((double)c[a] - b->lo[a]) * b->inv_cell[a];
         if (!(u > -2.0 && u < (double)b->res + 2.0)) {
             return false;
         }
-        v[a] = (int64_t)floor(u);
+        const double v = u < 0.0 ? 0.0 : fmin(floor(u), b->res - 1.0);
+        cell = cell * b->res + (size_t)v;
     }
-    const int64_t n = b->res;
-    for (int64_t z = v[2] - 2; z <= v[2] + 2; z++) {
-        for (int64_t y = v[1] - 2; y <= v[1] + 2; y++) {
-            for (int64_t x = v[0] - 2; x <= v[0] + 2; x++) {
-                if (x >= 0 && y >= 0 && z >= 0 && x < n && y < n && z < n &&
-                    b->brick_of[x + n * (y + n * z)] >= 0) {
-                    return true;
-                }
-            }
-        }
-    }
-    return false;
+    return b->empty[cell] <= 2;
 }
 
 /* Distances from p to the nearest and the farthest point of the box
